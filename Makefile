@@ -1,0 +1,45 @@
+# The workspace's commands. `make demo` and `make test` are the two a user needs; both install what is
+# missing and build first. catkin and rostest must run on Debian's python (/usr/bin/python3, which has
+# catkin_pkg), not on a pyenv python that may come first in PATH.
+SHELL := /bin/bash
+export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
+export ROS_HOME := $(CURDIR)/build/ros_home
+export ROSCONSOLE_FORMAT := [$${severity}] [$${time}] [$${node}]: $${message}
+export PYTHONDONTWRITEBYTECODE := 1
+
+BUILD_TYPE ?= Release
+JOBS ?= 2
+CATKIN_MAKE := catkin_make -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPYTHON_EXECUTABLE=/usr/bin/python3 -j$(JOBS)
+SETUP := source $(CURDIR)/devel/setup.bash
+
+.PHONY: deps build test demo campaign bench eval lint clean
+
+deps:
+	@scripts/install-deps.sh
+
+build: deps
+	$(CATKIN_MAKE)
+
+# Builds and runs every gtest and rostest, then prints one line `N passed, N failed`.
+test: build
+	@rm -rf build/test_results
+	@$(SETUP) && $(CATKIN_MAKE) run_tests 2>&1 | tee build/run_tests.log | grep -E '^\[ *(RUN|OK|FAILED|PASSED) *\]|^\[(ROSTEST|Testcase)|FAILURE|^rostest|Error' || true
+	@/usr/bin/python3 scripts/test_summary.py build/test_results
+
+demo: build
+	@$(SETUP) && scripts/run_demo.sh
+
+campaign: build
+	@$(SETUP) && scripts/run_campaign.sh
+
+bench: build
+	@$(SETUP) && scripts/run_bench.sh
+
+eval: build
+	@$(SETUP) && scripts/run_eval.sh
+
+lint: deps
+	@$(SETUP) && catkin_lint -W2 --strict src
+
+clean:
+	rm -rf build devel install results

@@ -1,0 +1,54 @@
+// The topic and frame names shared by every package: one place to read them, one place to change them.
+// Topic names are relative, so that a launch file can push a whole robot into a namespace.
+#pragma once
+
+namespace docking_msgs {
+namespace topics {
+// Base
+constexpr const char kCmdVel[] = "cmd_vel";                  // geometry_msgs/Twist, base_link
+constexpr const char kOdom[] = "odom";                       // nav_msgs/Odometry, odom -> base_link
+constexpr const char kEStop[] = "e_stop";                    // std_msgs/Bool, true latches a stop
+constexpr const char kWheelCommand[] = "wheels/command";     // docking_msgs/WheelCommand
+constexpr const char kWheelEncoders[] = "wheels/encoders";   // docking_msgs/WheelEncoders
+constexpr const char kWheelState[] = "wheels/state";         // docking_msgs/WheelState
+
+// Cameras (image_transport bases; camera_info beside each)
+constexpr const char kStereoLeftImageRaw[] = "stereo/left/image_raw";
+constexpr const char kStereoRightImageRaw[] = "stereo/right/image_raw";
+constexpr const char kStereoLeftImageRect[] = "stereo/left/image_rect";
+constexpr const char kStereoDisparity[] = "stereo/disparity";  // stereo_msgs/DisparityImage
+constexpr const char kIrImageRaw[] = "ir/image_raw";
+constexpr const char kIrImageRect[] = "ir/image_rect";
+
+// Perception
+constexpr const char kDisparityEstimate[] = "perception/disparity/estimate";        // TargetEstimate
+constexpr const char kMonoVisibleEstimate[] = "perception/mono_visible/estimate";  // TargetEstimate
+constexpr const char kMonoIrEstimate[] = "perception/mono_ir/estimate";            // TargetEstimate
+constexpr const char kTargetEstimate[] = "target/estimate";    // TargetEstimate (FUSED)
+constexpr const char kTargetPose[] = "target/pose";            // geometry_msgs/PoseWithCovarianceStamped
+constexpr const char kTargetTwist[] = "target/twist";          // geometry_msgs/TwistWithCovarianceStamped
+constexpr const char kArbiterStatus[] = "target/arbiter_status";  // std_msgs/String
+
+// Planner
+constexpr const char kDockingState[] = "docking/state";        // docking_msgs/DockingState
+constexpr const char kDockingPath[] = "docking/path";          // nav_msgs/Path
+
+// Simulator ground truth: nav_msgs/Odometry of the target in each camera's optical frame, at each
+// image stamp (header.frame_id = camera optical frame, child_frame_id = target).
+constexpr const char kTruthStereoLeft[] = "sim/truth/stereo_left";
+constexpr const char kTruthIr[] = "sim/truth/ir";
+constexpr const char kTruthChaserOdom[] = "sim/truth/chaser";  // nav_msgs/Odometry, world -> chaser_truth
+}  // namespace topics
+
+namespace frames {
+constexpr const char kWorld[] = "world";          // simulator only
+constexpr const char kOdom[] = "odom";
+constexpr const char kBaseLink[] = "base_link";
+constexpr const char kStereoLeftOptical[] = "stereo_left_optical_frame";
+constexpr const char kStereoRightOptical[] = "stereo_right_optical_frame";
+constexpr const char kIrOptical[] = "ir_optical_frame";
+constexpr const char kTarget[] = "target";        // the docking port: origin at its centre, x out of the face
+constexpr const char kChaserTruth[] = "chaser_truth";  // simulator only
+constexpr const char kTargetTruth[] = "target_truth";  // simulator only (the port, true pose)
+}  // namespace frames
+}  // namespace docking_msgs
