@@ -1,0 +1,30 @@
+# arbiter: chooses among the disparity, visible-mono and IR-mono estimates (see README.md, "arbiter").
+# Included by ../CMakeLists.txt after catkin_package().
+
+# ROS-free core: the choice (range regime with hysteresis, quality, staleness, order).
+add_library(docking_perception_arbiter_core
+  src/arbiter/source_arbiter.cpp
+  src/arbiter/frame_change.cpp
+)
+
+# Node: tf2 into one output frame, publishes the FUSED estimate, pose, twist, tf, status, diagnostics.
+add_executable(arbiter src/arbiter/arbiter_node.cpp)
+target_link_libraries(arbiter docking_perception_arbiter_core ${catkin_LIBRARIES})
+add_dependencies(arbiter ${catkin_EXPORTED_TARGETS})
+if(PERCEPTION_CFGS)
+  add_dependencies(arbiter ${PROJECT_NAME}_gencfg)
+endif()
+
+install(TARGETS docking_perception_arbiter_core arbiter
+  ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+  LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+  RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+
+if(CATKIN_ENABLE_TESTING)
+  catkin_add_gtest(test_arbiter_core test/arbiter/test_source_arbiter.cpp
+    test/arbiter/test_frame_change.cpp)
+  if(TARGET test_arbiter_core)
+    # Debian's catkin links GTest::gtest only; the tests use gtest's own main().
+    target_link_libraries(test_arbiter_core docking_perception_arbiter_core GTest::gtest_main)
+  endif()
+endif()

@@ -1,0 +1,98 @@
+// Chooses which target estimate to trust: stereo disparity far away, a monocular pose near, the IR
+// camera when the visible image is dark or washed out, and whatever still works when the preferred
+// source drops out. ROS-free: the node converts messages into EstimateSummary and back.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace docking_perception {
+namespace arbiter {
+
+/// The estimators, numbered as TargetEstimate.SOURCE_* so the node can cast between them.
+enum class Source : std::uint8_t { kDisparity = 0, kMonoVisible = 1, kMonoIr = 2 };
+constexpr std::size_t kSourceCount = 3;
+
+const char* sourceName(Source source);
+
+/// What the arbiter needs to know about one estimate (not the estimate itself).
+struct EstimateSummary {
+  Source source{Source::kDisparity};
+  double stamp_s{0.0};             ///< image stamp, s (any epoch, the same as `now_s` below)
+  bool valid{false};               ///< the estimator found the target
+  bool position_valid{false};
+  bool orientation_valid{false};
+  double range_m{0.0};             ///< camera to target, m
+  std::uint32_t feature_inliers{0};
+  double reprojection_error_px{0.0};
+  std::string status;              ///< the estimator's own reason when not valid
+};
+
+struct ArbiterConfig {
+  double switch_range_m{2.0};      ///< disparity beyond, mono inside
+  double hysteresis_m{0.2};        ///< switch to mono below switch - h, back to disparity above switch + h
+  double timeout_s{0.5};           ///< an estimate older than this (against `now`) is never used
+  double future_tolerance_s{0.05}; ///< stamps this far ahead of `now` are accepted (clock skew)
+  std::uint32_t min_mono_inliers{12};          ///< fewer: the mono estimate is poor
+  double max_mono_reprojection_error_px{2.5};  ///< larger: the mono estimate is poor
+};
+
+/// Throws std::invalid_argument naming the bad field.
+void validate(const ArbiterConfig& config);
+
+enum class RangeRegime : std::uint8_t { kUnknown, kFar, kNear };
+const char* regimeName(RangeRegime regime);
+
+struct Decision {
+  bool valid{false};               ///< a source was chosen
+  Source source{Source::kDisparity};
+  bool is_new{false};              ///< the chosen estimate has not been returned before: publish it
+  double stamp_s{0.0};             ///< stamp of the chosen estimate
+  RangeRegime regime{RangeRegime::kUnknown};
+  std::string reason;              ///< why this source (or why none)
+};
+
+struct OfferResult {
+  bool accepted{false};
+  std::string reason;              ///< why it was rejected
+};
+
+class SourceArbiter {
+ public:
+  /// Throws std::invalid_argument for an invalid configuration.
+  explicit SourceArbiter(const ArbiterConfig& config);
+
+  /// Records the latest estimate of one source. Rejects stamps that are not finite, or not newer
+  /// than the last estimate accepted from that source (out of order or duplicate).
+  OfferResult offer(const EstimateSummary& estimate);
+
+  /// Chooses among the latest estimates at time `now_s`. An estimate is returned as new only once,
+  /// and never with a stamp older than one already returned (the output stays in order even when
+  /// the sources have different latencies).
+  Decision decide(double now_s);
+
+  const ArbiterConfig& config() const { return config_; }
+  RangeRegime regime() const { return regime_; }
+  std::uint64_t rejectedCount() const { return rejected_; }
+  /// The latest accepted estimate of a source, if any.
+  const std::optional<EstimateSummary>& latest(Source source) const;
+
+ private:
+  /// Empty when usable; otherwise why not ("stale 0.80 s", "no target: <status>", ...).
+  std::string unusableReason(const EstimateSummary& e, double now_s) const;
+  /// Empty when a mono estimate's quality is good enough; otherwise why not.
+  std::string poorQualityReason(const EstimateSummary& e) const;
+  void updateRegime(double range_m);
+
+  ArbiterConfig config_;
+  std::array<std::optional<EstimateSummary>, kSourceCount> latest_{};
+  RangeRegime regime_{RangeRegime::kUnknown};
+  std::optional<double> last_output_stamp_s_;
+  std::optional<Source> last_output_source_;
+  std::uint64_t rejected_{0};
+};
+
+}  // namespace arbiter
+}  // namespace docking_perception

@@ -1,0 +1,281 @@
+// arbiter: a thin node around SourceArbiter. Subscribes the three estimators' TargetEstimates, lets
+// the core choose one, re-expresses it in `output_frame` with tf2, and publishes it as the FUSED
+// estimate, as pose and twist, as tf output_frame -> target, and its choice on a status topic and in
+// diagnostics. Parameters: config/arbiter.yaml (see README.md).
+#include <array>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <docking_msgs/TargetEstimate.h>
+#include <docking_msgs/names.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <geometry_msgs/TwistWithCovarianceStamped.h>
+#include <ros/ros.h>
+#include <std_msgs/String.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "docking_perception/arbiter/frame_change.h"
+#include "docking_perception/arbiter/source_arbiter.h"
+
+namespace docking_perception {
+namespace arbiter {
+namespace {
+
+template <typename T>
+T requireParam(const ros::NodeHandle& nh, const std::string& name) {
+  T value;
+  if (!nh.getParam(name, value)) {
+    throw std::invalid_argument("missing parameter '" + nh.resolveName(name) + "'");
+  }
+  return value;
+}
+
+ArbiterConfig loadConfig(const ros::NodeHandle& pnh) {
+  ArbiterConfig c;
+  c.switch_range_m = requireParam<double>(pnh, "switch_range_m");
+  c.hysteresis_m = requireParam<double>(pnh, "hysteresis_m");
+  c.timeout_s = requireParam<double>(pnh, "timeout_s");
+  c.future_tolerance_s = requireParam<double>(pnh, "future_tolerance_s");
+  const int inliers = requireParam<int>(pnh, "min_mono_inliers");
+  if (inliers < 0) throw std::invalid_argument("parameter 'min_mono_inliers' must be >= 0");
+  c.min_mono_inliers = static_cast<std::uint32_t>(inliers);
+  c.max_mono_reprojection_error_px = requireParam<double>(pnh, "max_mono_reprojection_error_px");
+  try {
+    validate(c);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("parameter ") + e.what());
+  }
+  return c;
+}
+
+Matrix6d toMatrix(const boost::array<double, 36>& a) {
+  Matrix6d m;
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) m(r, c) = a[static_cast<std::size_t>(r * 6 + c)];
+  return m;
+}
+
+void fromMatrix(const Matrix6d& m, boost::array<double, 36>& a) {
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) a[static_cast<std::size_t>(r * 6 + c)] = m(r, c);
+}
+
+EstimateSummary summarize(const docking_msgs::TargetEstimate& msg, Source source) {
+  EstimateSummary s;
+  s.source = source;
+  s.stamp_s = msg.header.stamp.toSec();
+  s.valid = msg.valid;
+  s.position_valid = msg.position_valid;
+  s.orientation_valid = msg.orientation_valid;
+  s.range_m = msg.range_m;
+  s.feature_inliers = msg.feature_inliers;
+  s.reprojection_error_px = msg.reprojection_error_px;
+  s.status = msg.status;
+  return s;
+}
+
+class ArbiterNode {
+ public:
+  ArbiterNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+      : arbiter_(loadConfig(pnh)), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
+    output_frame_ = pnh.param<std::string>("output_frame", docking_msgs::frames::kStereoLeftOptical);
+    if (output_frame_.empty()) throw std::invalid_argument("parameter 'output_frame' is empty");
+    const double status_rate_hz = requireParam<double>(pnh, "status_rate_hz");
+    if (!(status_rate_hz > 0.0)) throw std::invalid_argument("parameter 'status_rate_hz' must be > 0");
+    const double tf_timeout_s = requireParam<double>(pnh, "tf_timeout_s");
+    if (!(tf_timeout_s >= 0.0)) throw std::invalid_argument("parameter 'tf_timeout_s' must be >= 0");
+    tf_timeout_ = ros::Duration(tf_timeout_s);
+
+    estimate_pub_ = nh.advertise<docking_msgs::TargetEstimate>(docking_msgs::topics::kTargetEstimate, 10);
+    pose_pub_ = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>(docking_msgs::topics::kTargetPose, 10);
+    twist_pub_ = nh.advertise<geometry_msgs::TwistWithCovarianceStamped>(docking_msgs::topics::kTargetTwist, 10);
+    status_pub_ = nh.advertise<std_msgs::String>(docking_msgs::topics::kArbiterStatus, 10, true);
+
+    subscribe(nh, docking_msgs::topics::kDisparityEstimate, Source::kDisparity);
+    subscribe(nh, docking_msgs::topics::kMonoVisibleEstimate, Source::kMonoVisible);
+    subscribe(nh, docking_msgs::topics::kMonoIrEstimate, Source::kMonoIr);
+
+    diagnostics_.setHardwareID("none");
+    diagnostics_.add("target source", this, &ArbiterNode::diagnose);
+    timer_ = nh.createTimer(ros::Duration(1.0 / status_rate_hz), &ArbiterNode::onTimer, this);
+  }
+
+ private:
+  void subscribe(ros::NodeHandle& nh, const char* topic, Source source) {
+    subscribers_.push_back(nh.subscribe<docking_msgs::TargetEstimate>(
+        topic, 10, [this, source](const docking_msgs::TargetEstimateConstPtr& msg) { onEstimate(msg, source); }));
+  }
+
+  void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg, Source source) {
+    if (msg->source != static_cast<std::uint8_t>(source)) {
+      ROS_WARN_THROTTLE(5.0, "arbiter: estimate on the %s topic says source %u; treated as %s", sourceName(source),
+                        msg->source, sourceName(source));
+    }
+    const OfferResult offered = arbiter_.offer(summarize(*msg, source));
+    if (!offered.accepted) {
+      ROS_WARN_THROTTLE(2.0, "arbiter: rejected an estimate: %s", offered.reason.c_str());
+      return;
+    }
+    latest_msgs_[static_cast<std::size_t>(source)] = msg;
+    decideAndPublish(false);
+  }
+
+  void onTimer(const ros::TimerEvent&) {
+    decideAndPublish(true);
+    diagnostics_.update();
+  }
+
+  // Called on every estimate and on the timer; `periodic` re-publishes "nothing valid" at the timer's
+  // rate so that subscribers see the loss even when no estimator publishes at all.
+  void decideAndPublish(bool periodic) {
+    const Decision d = arbiter_.decide(ros::Time::now().toSec());
+    const bool changed = d.valid != last_decision_.valid || d.source != last_decision_.source ||
+                         d.reason != last_decision_.reason;
+    last_decision_ = d;
+    if (changed || periodic) {
+      std_msgs::String status;
+      status.data = d.valid ? std::string(sourceName(d.source)) + ": " + d.reason : "none: " + d.reason;
+      status_pub_.publish(status);
+    }
+    if (d.valid && d.is_new) {
+      publishChosen(*latest_msgs_[static_cast<std::size_t>(d.source)], d.source);
+    } else if (!d.valid && (periodic || changed)) {
+      publishNothing(d.reason);
+    }
+  }
+
+  void publishNothing(const std::string& reason) {
+    docking_msgs::TargetEstimate out;
+    out.header.stamp = ros::Time::now();
+    out.header.frame_id = output_frame_;
+    out.source = docking_msgs::TargetEstimate::SOURCE_FUSED;
+    out.selected_source = docking_msgs::TargetEstimate::SOURCE_FUSED;
+    out.valid = false;
+    out.status = reason;
+    estimate_pub_.publish(out);
+  }
+
+  void publishChosen(const docking_msgs::TargetEstimate& in, Source source) {
+    Eigen::Isometry3d out_from_in;
+    try {
+      out_from_in = tf2::transformToEigen(
+          tf_buffer_.lookupTransform(output_frame_, in.header.frame_id, in.header.stamp, tf_timeout_));
+    } catch (const tf2::TransformException& e) {
+      ++tf_failures_;
+      last_tf_error_ = e.what();
+      ROS_WARN_THROTTLE(2.0, "arbiter: cannot bring the %s estimate from '%s' into '%s': %s", sourceName(source),
+                        in.header.frame_id.c_str(), output_frame_.c_str(), e.what());
+      return;
+    }
+    PoseWithCovariance3 pose_in;
+    pose_in.position = Eigen::Vector3d(in.pose.pose.position.x, in.pose.pose.position.y, in.pose.pose.position.z);
+    const auto& q = in.pose.pose.orientation;
+    pose_in.orientation = Eigen::Quaterniond(q.w, q.x, q.y, q.z);
+    if (!in.orientation_valid || pose_in.orientation.norm() < 1e-6) {
+      pose_in.orientation = Eigen::Quaterniond::Identity();  // undefined: keep the message well-formed
+    }
+    pose_in.orientation.normalize();
+    pose_in.covariance = toMatrix(in.pose.covariance);
+    TwistWithCovariance3 twist_in;
+    twist_in.linear = Eigen::Vector3d(in.twist.twist.linear.x, in.twist.twist.linear.y, in.twist.twist.linear.z);
+    twist_in.angular = Eigen::Vector3d(in.twist.twist.angular.x, in.twist.twist.angular.y, in.twist.twist.angular.z);
+    twist_in.covariance = toMatrix(in.twist.covariance);
+
+    const PoseWithCovariance3 pose_out = changeFrame(out_from_in, pose_in);
+    const TwistWithCovariance3 twist_out = changeFrameRigidMount(out_from_in.rotation(), twist_in);
+
+    docking_msgs::TargetEstimate out = in;
+    out.header.frame_id = output_frame_;
+    out.source = docking_msgs::TargetEstimate::SOURCE_FUSED;
+    out.selected_source = static_cast<std::uint8_t>(source);
+    out.pose.pose.position = tf2::toMsg(pose_out.position);
+    out.pose.pose.orientation = tf2::toMsg(pose_out.orientation);
+    fromMatrix(pose_out.covariance, out.pose.covariance);
+    tf2::toMsg(twist_out.linear, out.twist.twist.linear);
+    tf2::toMsg(twist_out.angular, out.twist.twist.angular);
+    fromMatrix(twist_out.covariance, out.twist.covariance);
+    out.range_m = pose_out.position.norm();  // from the output camera, not the source camera
+    out.status = last_decision_.reason;
+    estimate_pub_.publish(out);
+    ++published_;
+
+    geometry_msgs::PoseWithCovarianceStamped pose_msg;
+    pose_msg.header = out.header;
+    pose_msg.pose = out.pose;
+    pose_pub_.publish(pose_msg);
+    if (out.twist_valid) {
+      geometry_msgs::TwistWithCovarianceStamped twist_msg;
+      twist_msg.header = out.header;
+      twist_msg.twist = out.twist;
+      twist_pub_.publish(twist_msg);
+    }
+    // tf needs a full pose: a position-only estimate (disparity) publishes none rather than a guess.
+    if (out.orientation_valid) {
+      geometry_msgs::TransformStamped t = tf2::eigenToTransform(
+          Eigen::Isometry3d(Eigen::Translation3d(pose_out.position) * pose_out.orientation));
+      t.header = out.header;
+      t.child_frame_id = docking_msgs::frames::kTarget;
+      tf_broadcaster_.sendTransform(t);
+    }
+  }
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    const Decision& d = last_decision_;
+    if (d.valid) {
+      stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "using %s", sourceName(d.source));
+    } else {
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no usable estimate");
+    }
+    stat.add("reason", d.reason);
+    stat.add("regime", regimeName(d.regime));
+    stat.add("output frame", output_frame_);
+    const double now = ros::Time::now().toSec();
+    for (Source s : {Source::kDisparity, Source::kMonoVisible, Source::kMonoIr}) {
+      const auto& latest = arbiter_.latest(s);
+      stat.add(std::string(sourceName(s)) + " age (s)", latest ? std::to_string(now - latest->stamp_s) : "never");
+    }
+    stat.add("published", published_);
+    stat.add("rejected (out of order / bad stamp)", arbiter_.rejectedCount());
+    stat.add("tf failures", tf_failures_);
+    if (tf_failures_ > 0) stat.add("last tf error", last_tf_error_);
+  }
+
+  SourceArbiter arbiter_;
+  std::string output_frame_;
+  ros::Duration tf_timeout_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  diagnostic_updater::Updater diagnostics_;
+  ros::Publisher estimate_pub_, pose_pub_, twist_pub_, status_pub_;
+  std::vector<ros::Subscriber> subscribers_;
+  ros::Timer timer_;
+  std::array<docking_msgs::TargetEstimateConstPtr, kSourceCount> latest_msgs_{};
+  Decision last_decision_;
+  std::uint64_t published_{0};
+  std::uint64_t tf_failures_{0};
+  std::string last_tf_error_;
+};
+
+}  // namespace
+}  // namespace arbiter
+}  // namespace docking_perception
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "arbiter");
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  try {
+    docking_perception::arbiter::ArbiterNode node(nh, pnh);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL("arbiter: %s", e.what());
+    return 1;
+  }
+  return 0;
+}
