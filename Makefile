@@ -9,7 +9,7 @@ export PYTHONDONTWRITEBYTECODE := 1
 
 BUILD_TYPE ?= Release
 JOBS ?= 2
-CATKIN_MAKE := catkin_make -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPYTHON_EXECUTABLE=/usr/bin/python3 -j$(JOBS)
+CATKIN_MAKE := catkin_make -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCATKIN_WHITELIST_PACKAGES="" -DPYTHON_EXECUTABLE=/usr/bin/python3 -j$(JOBS)
 SETUP := source $(CURDIR)/devel/setup.bash
 
 .PHONY: deps build test demo campaign bench eval lint clean
