@@ -1,0 +1,150 @@
+// Loaders for the files the simulator reads: config/sim.yaml, config/target.yaml, config/robot.yaml
+// (+ the camera calibrations it names) and config/omni_base.yaml. ROS-free; every loader throws
+// ConfigError naming the file and the field.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "omni_base/kinematics.h"
+
+namespace docking_sim {
+
+// ---- config/sim.yaml ------------------------------------------------------------------------------
+
+/// What one band of cameras (visible or IR) sees under one lighting scenario.
+struct BandLighting {
+  double illumination{1.0};   ///< scene brightness factor (1 = the room lights on)
+  double noise_sigma{2.0};    ///< Gaussian sensor noise, grey levels
+};
+
+/// A bright spot that saturates part of the visible image (sun through a window, a lamp).
+struct GlareSpot {
+  bool enabled{false};
+  double center_u_frac{0.7};  ///< spot centre as a fraction of the image width
+  double center_v_frac{0.3};  ///< ... and of the height
+  double radius_frac{0.2};    ///< 1/e radius as a fraction of the image width
+  double peak{400.0};         ///< added grey levels at the centre (> 255 saturates)
+};
+
+struct LightingScenario {
+  std::string name;
+  BandLighting visible;
+  BandLighting ir;
+  double led_intensity{1.0};  ///< IR LED brightness, 1 = full scale (independent of the room light)
+  GlareSpot glare;            ///< visible cameras only
+};
+
+/// Per-band optics and sensor: how the raw image departs from an ideal pinhole render.
+struct CameraEffects {
+  double exposure{1.0};        ///< multiplies the scene brightness
+  double blur_sigma_px{0.6};   ///< Gaussian optical blur
+  double vignetting{0.25};     ///< relative darkening at the image corners
+};
+
+struct ClutterBox {
+  std::string name;
+  double x_m{0}, y_m{0}, yaw_rad{0};           ///< centre of the footprint on the floor
+  double size_x_m{0}, size_y_m{0}, size_z_m{0};
+  std::string material;                         ///< wood | cardboard | metal | fabric | plastic
+  cv::Vec3b color_bgr{128, 128, 128};
+};
+
+struct RoomConfig {
+  double x_min_m{-2}, x_max_m{8}, y_min_m{-3.5}, y_max_m{3.5}, height_m{2.6};
+  std::vector<ClutterBox> clutter;
+};
+
+struct SimSettings {
+  double physics_rate_hz{200.0};
+  double camera_rate_hz{30.0};
+  double encoder_rate_hz{100.0};
+  double truth_tf_rate_hz{50.0};
+  double real_time_factor{1.0};      ///< <= 0: as fast as possible
+  double command_timeout_s{0.25};    ///< wheel commands older than this: set-points zero
+  Eigen::Vector3d light_direction{0.3, 0.2, -1.0};  ///< direction the key light travels (world)
+  double ambient{0.45};              ///< shading floor: fraction of light every surface gets
+  CameraEffects visible_effects;
+  CameraEffects ir_effects;
+  std::map<std::string, LightingScenario> lighting;
+  RoomConfig room;
+  std::string file;                  ///< where it was read from (for messages)
+};
+
+SimSettings loadSimSettings(const std::string& path);
+
+// ---- config/target.yaml ---------------------------------------------------------------------------
+
+struct TargetModel {
+  std::string frame_id;
+  double face_width_m{0}, face_height_m{0};
+  std::string texture_path;                  ///< resolved against the file's folder
+  std::vector<Eigen::Vector3d> markers_m;    ///< in frame `target` (the port)
+  double marker_radius_m{0}, led_radius_m{0}, port_radius_m{0};
+  double body_depth_m{0};
+  cv::Vec3b body_bgr{150, 150, 155};
+  double panel_span_m{0}, panel_height_m{0}, panel_offset_x_m{0};
+  cv::Vec3b panel_bgr{110, 40, 20};
+  Eigen::Isometry3d robot_T_port{Eigen::Isometry3d::Identity()};  ///< the mount
+  std::string file;
+};
+
+TargetModel loadTargetModel(const std::string& path);
+
+// ---- config/robot.yaml + config/cameras/*.yaml ----------------------------------------------------
+
+/// The camera_calibration_parsers YAML format, read with yaml-cpp (the core stays ROS-free).
+struct CameraCalibration {
+  std::string name;
+  int width{0}, height{0};
+  cv::Matx33d K;
+  std::vector<double> D;          ///< plumb_bob: k1 k2 p1 p2 k3
+  cv::Matx34d P;
+  std::string file;
+};
+
+CameraCalibration loadCameraCalibration(const std::string& path);
+
+enum class Band { kVisible, kInfrared };
+
+struct CameraMount {
+  std::string key;                 ///< stereo_left | stereo_right | ir
+  std::string frame_id;
+  std::string calibration_file;    ///< resolved path
+  Eigen::Isometry3d base_T_camera{Eigen::Isometry3d::Identity()};
+  CameraCalibration calibration;
+  Band band{Band::kVisible};
+};
+
+/// The three cameras in a fixed order: kStereoLeft, kStereoRight, kIr.
+struct RobotModel {
+  static constexpr int kStereoLeft = 0, kStereoRight = 1, kIr = 2;
+  std::array<CameraMount, 3> cameras;
+  double footprint_radius_m{0.18};
+  std::string file;
+};
+
+RobotModel loadRobotModel(const std::string& path);
+
+// ---- config/omni_base.yaml ------------------------------------------------------------------------
+
+struct OmniBaseModel {
+  omni_base::WheelLayout layout;
+  double motor_time_constant_s{0.02};
+  double encoder_counts_per_rev{1320};
+  std::string file;
+};
+
+OmniBaseModel loadOmniBaseModel(const std::string& path);
+
+/// Folder part of a path ("" -> "."), for resolving paths relative to a config file.
+std::string folderOf(const std::string& path);
+/// `relative` resolved against `folder` unless it is absolute.
+std::string resolvePath(const std::string& folder, const std::string& relative);
+
+}  // namespace docking_sim

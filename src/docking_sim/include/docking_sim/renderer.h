@@ -1,0 +1,68 @@
+// Renders one camera: planar textured polygons with perspective-correct texturing and a z-buffer onto
+// an ideal pinhole image, then lens distortion (plumb_bob, precomputed remap), blur, glare, vignetting,
+// noise. ROS-free; deterministic for a seed; no heap work per frame after the first.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "docking_sim/configs.h"
+#include "docking_sim/scene.h"
+
+namespace docking_sim {
+
+struct RenderOptions {
+  bool distortion{true};
+  bool effects{true};   ///< blur, glare, vignetting, noise (false: the clean distorted render)
+};
+
+class CameraRenderer {
+ public:
+  /// band decides the output: kVisible -> CV_8UC3 (bgr8), kInfrared -> CV_8UC1 (mono8).
+  CameraRenderer(const CameraCalibration& calibration, Band band, const CameraEffects& effects,
+                 const LightingScenario& lighting, uint64_t seed, const RenderOptions& options = {});
+
+  /// Renders the scene seen from a camera at world_T_camera (optical frame: z forward, x right, y down).
+  const cv::Mat& render(const Scene& scene, const Eigen::Isometry3d& world_T_camera);
+
+  /// The undistorted pinhole render of the last frame (with a margin; see idealPrincipalOffset()).
+  const cv::Mat& idealImage() const { return ideal_; }
+  /// Pixel (u, v) of the output's pinhole model sits at (u + dx, v + dy) in idealImage().
+  cv::Point2i idealPrincipalOffset() const { return pad_; }
+  Band band() const { return band_; }
+
+ private:
+  template <int kChannels>
+  void rasterize(const Scene& scene, const Eigen::Isometry3d& camera_T_world);
+  template <int kChannels>
+  void drawSurface(const Surface& surface, const Eigen::Isometry3d& camera_T_world);
+  void applyEffects();
+
+  CameraCalibration calibration_;
+  Band band_;
+  CameraEffects effects_;
+  LightingScenario lighting_;
+  RenderOptions options_;
+  double noise_sigma_{0.0};
+  cv::Point2i pad_{0, 0};
+  cv::Matx33d ideal_K_;
+  cv::Mat ideal_;          ///< pinhole render with margin
+  cv::Mat depth_;          ///< CV_32F, 1/z (0 = nothing)
+  cv::Mat map1_, map2_;    ///< distortion remap (fixed point)
+  cv::Mat distorted_;
+  cv::Mat blurred_;
+  cv::Mat glare_;          ///< additive, same type as the output (empty: no glare)
+  std::vector<uint16_t> vignette_;  ///< per pixel, 256 = no darkening
+  std::vector<int8_t> noise_table_;
+  std::mt19937_64 rng_;
+  cv::Mat output_;
+  // Scratch polygons (kept to avoid per-frame allocation).
+  std::vector<Eigen::Vector3d> clip_a_, clip_b_;
+  std::vector<Eigen::Vector2d> projected_;
+};
+
+}  // namespace docking_sim

@@ -1,0 +1,76 @@
+// The world as planar textured polygons: room, clutter, the target robot and its mockup (ROS-free).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "docking_sim/configs.h"
+
+namespace docking_sim {
+
+/// A texture with its mip pyramid, in colour (visible band) and grey (IR band).
+struct Texture {
+  std::vector<cv::Mat> bgr;    ///< level 0 = full size, CV_8UC3
+  std::vector<cv::Mat> gray;   ///< CV_8UC1, same sizes
+  bool repeat{false};          ///< wraps (sizes are powers of two) instead of clamping
+};
+
+/// Builds a texture's pyramid. repeat requires power-of-two sizes (checked).
+std::shared_ptr<Texture> makeTexture(const cv::Mat& bgr, bool repeat);
+
+enum BandMask : unsigned { kVisibleBand = 1u, kInfraredBand = 2u, kBothBands = 3u };
+
+/// A flat convex polygon. Points are origin + s * edge_u + t * edge_v with (s, t) on `outline`
+/// (default: the unit square); the texture spans s, t in [0, 1] `repeat_u` / `repeat_v` times.
+struct Surface {
+  Eigen::Vector3d origin{Eigen::Vector3d::Zero()};
+  Eigen::Vector3d edge_u{Eigen::Vector3d::UnitX()};
+  Eigen::Vector3d edge_v{Eigen::Vector3d::UnitY()};
+  std::vector<Eigen::Vector2d> outline{{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::shared_ptr<const Texture> texture;  ///< null: flat colour
+  cv::Vec3b color{128, 128, 128};          ///< flat colour, or the tint of a grey texture
+  double repeat_u{1.0}, repeat_v{1.0};
+  double offset_u{0.0}, offset_v{0.0};     ///< texture coordinate at s = 0, t = 0 (in repeats)
+  unsigned bands{kBothBands};
+  bool emissive{false};          ///< lights itself (IR LEDs): not shaded, not scaled by the room light
+  double emission{1.0};          ///< brightness of an emissive surface relative to led_intensity
+  bool moves_with_target{false}; ///< defined in the target robot's frame
+  // Filled per frame by Scene::update: the brightness factor in each band.
+  double gain_visible{1.0};
+  double gain_ir{1.0};
+};
+
+class Scene {
+ public:
+  /// Room and clutter from the settings, the target robot and mockup from the model. Loads the face
+  /// texture (ConfigError naming target.yaml's face.texture if it cannot be read).
+  Scene(const SimSettings& settings, const TargetModel& target, const LightingScenario& lighting, uint64_t seed);
+  /// An empty scene for tests: add surfaces yourself.
+  Scene() = default;
+
+  void addSurface(const Surface& s) { local_.push_back(s); }
+  /// Places the target surfaces at world_T_target_robot and recomputes the shading of every surface.
+  void update(const Eigen::Isometry3d& world_T_target_robot);
+  const std::vector<Surface>& surfaces() const { return world_; }
+
+  void setLighting(const LightingScenario& lighting, const Eigen::Vector3d& light_direction, double ambient,
+                   const CameraEffects& visible, const CameraEffects& ir);
+
+ private:
+  void addBox(const Eigen::Isometry3d& pose, const Eigen::Vector3d& size, const std::shared_ptr<Texture>& tex,
+              const cv::Vec3b& color, double texture_scale_m, bool moves_with_target, bool bottom);
+  void addTargetRobot(const TargetModel& target);
+
+  std::vector<Surface> local_;   ///< static surfaces in world, target surfaces in the robot frame
+  std::vector<Surface> world_;
+  LightingScenario lighting_;
+  Eigen::Vector3d light_direction_{0.3, 0.2, -1.0};
+  double ambient_{0.45};
+  double visible_exposure_{1.0}, ir_exposure_{1.0};
+};
+
+}  // namespace docking_sim

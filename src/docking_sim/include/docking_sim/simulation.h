@@ -1,0 +1,80 @@
+// The whole simulated test bed without ROS: the chaser base, the scripted target, the scene and the
+// three camera renderers, advanced in sim time. The node wraps this; tools and tests use it directly.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <memory>
+#include <string>
+
+#include "docking_sim/chaser_base.h"
+#include "docking_sim/configs.h"
+#include "docking_sim/renderer.h"
+#include "docking_sim/scenario.h"
+#include "docking_sim/scene.h"
+
+namespace docking_sim {
+
+struct SimulationFiles {
+  std::string sim_config;        ///< config/sim.yaml
+  std::string scenario;          ///< config/scenarios/<name>.yaml
+  std::string target_config;     ///< config/target.yaml
+  std::string robot_config;      ///< config/robot.yaml
+  std::string omni_base_config;  ///< config/omni_base.yaml
+};
+
+/// Pose and velocity of the target's docking port relative to a camera, in the camera's optical frame.
+struct RelativeTruth {
+  Eigen::Isometry3d camera_T_port{Eigen::Isometry3d::Identity()};
+  Eigen::Vector3d linear_m_s{Eigen::Vector3d::Zero()};    ///< d/dt of the port origin in camera coordinates
+  Eigen::Vector3d angular_rad_s{Eigen::Vector3d::Zero()}; ///< target minus camera angular velocity, camera axes
+};
+
+class Simulation {
+ public:
+  /// Loads and validates every file; throws ConfigError naming the file and field.
+  explicit Simulation(const SimulationFiles& files, const RenderOptions& render_options = {});
+
+  double time() const { return time_s_; }
+  /// Advances the physics by dt_s (any positive step; the motors and poses integrate exactly).
+  void advance(double dt_s);
+
+  CommandResult wheelCommand(bool enable, const std::vector<double>& wheel_rad_s) {
+    return chaser_.command(enable, wheel_rad_s, time_s_);
+  }
+  const ChaserBase& chaser() const { return chaser_; }
+
+  Eigen::Isometry3d worldTChaser() const;          ///< base_link, on the floor
+  Eigen::Isometry3d worldTTargetRobot() const;
+  Eigen::Isometry3d worldTPort() const;            ///< target_truth
+  Eigen::Isometry3d worldTCamera(int camera) const;
+  /// Chaser velocity in world: linear (m/s) of base_link's origin and angular (rad/s).
+  void chaserVelocityWorld(Eigen::Vector3d* linear, Eigen::Vector3d* angular) const;
+  RelativeTruth truthInCamera(int camera) const;
+
+  /// Renders camera RobotModel::kStereoLeft / kStereoRight / kIr at the current time.
+  const cv::Mat& render(int camera);
+
+  const SimSettings& settings() const { return settings_; }
+  const Scenario& scenario() const { return scenario_; }
+  const TargetModel& target() const { return target_; }
+  const RobotModel& robot() const { return robot_; }
+  const LightingScenario& lighting() const { return lighting_; }
+
+ private:
+  SimSettings settings_;
+  Scenario scenario_;
+  TargetModel target_;
+  RobotModel robot_;
+  OmniBaseModel base_model_;
+  LightingScenario lighting_;
+  ChaserBase chaser_;
+  Scene scene_;
+  std::array<std::unique_ptr<CameraRenderer>, 3> renderers_;
+  double time_s_{0.0};
+  double scene_time_s_{-1.0};
+};
+
+}  // namespace docking_sim

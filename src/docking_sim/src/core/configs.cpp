@@ -1,0 +1,236 @@
+#include "docking_sim/configs.h"
+
+#include <cmath>
+#include <set>
+
+#include "yaml_field.h"
+
+namespace docking_sim {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+cv::Vec3b readColor(const YamlField& field) {
+  const auto c = field.asVector(3);
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (c[i] < 0 || c[i] > 255) field.at(i).fail("colour components must be within [0, 255]");
+  }
+  return cv::Vec3b(static_cast<uchar>(c[0]), static_cast<uchar>(c[1]), static_cast<uchar>(c[2]));
+}
+
+BandLighting readBand(const YamlField& f) {
+  BandLighting b;
+  b.illumination = f["illumination"].asDouble(0.0, 10.0);
+  b.noise_sigma = f["noise_sigma"].asDouble(0.0, 60.0);
+  return b;
+}
+
+CameraEffects readEffects(const YamlField& f) {
+  CameraEffects e;
+  e.exposure = f["exposure"].asDouble(0.0, 20.0);
+  e.blur_sigma_px = f["blur_sigma_px"].asDouble(0.0, 10.0);
+  e.vignetting = f["vignetting"].asDouble(0.0, 0.95);
+  return e;
+}
+
+Eigen::Isometry3d poseFromXyzRpy(const std::vector<double>& xyz, const std::vector<double>& rpy) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+  // Fixed-axis roll, pitch, yaw (the URDF / tf convention): R = Rz(yaw) Ry(pitch) Rx(roll).
+  t.linear() = (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  return t;
+}
+
+}  // namespace
+
+std::string folderOf(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  if (slash == std::string::npos) return ".";
+  if (slash == 0) return "/";
+  return path.substr(0, slash);
+}
+
+std::string resolvePath(const std::string& folder, const std::string& relative) {
+  if (!relative.empty() && relative[0] == '/') return relative;
+  return folder + "/" + relative;
+}
+
+SimSettings loadSimSettings(const std::string& path) {
+  const YamlField root = YamlField::open(path);
+  SimSettings s;
+  s.file = path;
+  const YamlField sim = root["sim"];
+  s.physics_rate_hz = sim["physics_rate_hz"].asDouble(10.0, 5000.0);
+  s.camera_rate_hz = sim["camera_rate_hz"].asDouble(0.1, 200.0);
+  s.encoder_rate_hz = sim["encoder_rate_hz"].asDouble(1.0, 1000.0);
+  s.truth_tf_rate_hz = sim["truth_tf_rate_hz"].asDouble(1.0, 1000.0);
+  s.real_time_factor = sim["real_time_factor"].asDouble(0.0, 100.0);
+  s.command_timeout_s = sim["command_timeout_s"].asDouble(0.01, 10.0);
+
+  const YamlField shading = root["shading"];
+  const auto dir = shading["light_direction"].asVector(3);
+  s.light_direction = Eigen::Vector3d(dir[0], dir[1], dir[2]);
+  if (s.light_direction.norm() < 1e-6) shading["light_direction"].fail("must not be the zero vector");
+  s.light_direction.normalize();
+  s.ambient = shading["ambient"].asDouble(0.0, 1.0);
+
+  s.visible_effects = readEffects(root["cameras"]["visible"]);
+  s.ir_effects = readEffects(root["cameras"]["ir"]);
+
+  const YamlField lighting = root["lighting"];
+  for (const auto& name : lighting.keys()) {
+    const YamlField l = lighting[name];
+    LightingScenario ls;
+    ls.name = name;
+    ls.visible = readBand(l["visible"]);
+    ls.ir = readBand(l["ir"]);
+    ls.led_intensity = l["led_intensity"].asDouble(0.0, 10.0);
+    if (l.has("glare")) {
+      const YamlField g = l["glare"];
+      const auto center = g["center"].asVector(2);
+      ls.glare.enabled = true;
+      ls.glare.center_u_frac = center[0];
+      ls.glare.center_v_frac = center[1];
+      ls.glare.radius_frac = g["radius"].asDouble(0.01, 2.0);
+      ls.glare.peak = g["peak"].asDouble(0.0, 5000.0);
+    }
+    s.lighting[name] = ls;
+  }
+  if (s.lighting.empty()) lighting.fail("needs at least one lighting scenario");
+
+  const YamlField room = root["room"];
+  const auto xr = room["x_m"].asVector(2);
+  const auto yr = room["y_m"].asVector(2);
+  if (!(xr[1] - xr[0] > 1.0)) room["x_m"].fail("needs [min, max] with max - min > 1 m");
+  if (!(yr[1] - yr[0] > 1.0)) room["y_m"].fail("needs [min, max] with max - min > 1 m");
+  s.room.x_min_m = xr[0];
+  s.room.x_max_m = xr[1];
+  s.room.y_min_m = yr[0];
+  s.room.y_max_m = yr[1];
+  s.room.height_m = room["height_m"].asDouble(1.0, 20.0);
+  static const std::set<std::string> kMaterials{"wood", "cardboard", "metal", "fabric", "plastic"};
+  if (room.has("clutter")) {
+    const YamlField clutter = room["clutter"];
+    for (std::size_t i = 0; i < clutter.size(); ++i) {
+      const YamlField c = clutter.at(i);
+      ClutterBox box;
+      box.name = c["name"].asString();
+      const auto xy = c["xy_m"].asVector(2);
+      box.x_m = xy[0];
+      box.y_m = xy[1];
+      box.yaw_rad = c["yaw_deg"].asDouble(-360.0, 360.0) * kDegToRad;
+      const auto size = c["size_m"].asVector(3);
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (!(size[k] > 0.0)) c["size_m"].at(k).fail("must be > 0");
+      }
+      box.size_x_m = size[0];
+      box.size_y_m = size[1];
+      box.size_z_m = size[2];
+      box.material = c["material"].asString();
+      if (!kMaterials.count(box.material)) {
+        c["material"].fail("unknown material '" + box.material + "' (wood, cardboard, metal, fabric, plastic)");
+      }
+      box.color_bgr = readColor(c["color_bgr"]);
+      s.room.clutter.push_back(box);
+    }
+  }
+  return s;
+}
+
+TargetModel loadTargetModel(const std::string& path) {
+  const YamlField root = YamlField::open(path);
+  const YamlField t = root["target"];
+  TargetModel m;
+  m.file = path;
+  m.frame_id = t["frame_id"].asString();
+  m.face_width_m = t["face"]["width_m"].asDouble(0.01, 5.0);
+  m.face_height_m = t["face"]["height_m"].asDouble(0.01, 5.0);
+  m.texture_path = resolvePath(folderOf(path), t["face"]["texture"].asString());
+  const YamlField markers = t["markers_m"];
+  if (markers.size() != 5) markers.fail("expected 5 markers, got " + std::to_string(markers.size()));
+  for (std::size_t i = 0; i < markers.size(); ++i) {
+    const auto p = markers.at(i).asVector(3);
+    if (std::abs(p[1]) > m.face_width_m / 2 || std::abs(p[2]) > m.face_height_m / 2) {
+      markers.at(i).fail("marker lies outside the face");
+    }
+    m.markers_m.emplace_back(p[0], p[1], p[2]);
+  }
+  m.marker_radius_m = t["marker_radius_m"].asDouble(0.0005, 0.5);
+  m.led_radius_m = t["led_radius_m"].asDouble(0.0005, 0.5);
+  m.port_radius_m = t["port_radius_m"].asDouble(0.001, 1.0);
+  m.body_depth_m = t["body"]["depth_m"].asDouble(0.01, 5.0);
+  m.body_bgr = readColor(t["body"]["color_bgr"]);
+  m.panel_span_m = t["solar_panels"]["span_m"].asDouble(0.0, 5.0);
+  m.panel_height_m = t["solar_panels"]["height_m"].asDouble(0.0, 5.0);
+  m.panel_offset_x_m = t["solar_panels"]["offset_x_m"].asDouble(-5.0, 0.0);
+  m.panel_bgr = readColor(t["solar_panels"]["color_bgr"]);
+  const auto mount_xyz = t["mount"]["xyz_m"].asVector(3);
+  const double mount_yaw = t["mount"]["yaw_rad"].asDouble(-2 * M_PI, 2 * M_PI);
+  m.robot_T_port = poseFromXyzRpy(mount_xyz, {0.0, 0.0, mount_yaw});
+  if (mount_xyz[2] - m.face_height_m / 2 < 0.0) t["mount"]["xyz_m"].fail("puts the face below the floor");
+  return m;
+}
+
+CameraCalibration loadCameraCalibration(const std::string& path) {
+  const YamlField root = YamlField::open(path);
+  CameraCalibration c;
+  c.file = path;
+  c.name = root["camera_name"].asString();
+  c.width = static_cast<int>(root["image_width"].asInteger(16, 10000));
+  c.height = static_cast<int>(root["image_height"].asInteger(16, 10000));
+  const auto k = root["camera_matrix"]["data"].asVector(9);
+  c.K = cv::Matx33d(k.data());
+  if (!(c.K(0, 0) > 0 && c.K(1, 1) > 0)) root["camera_matrix"]["data"].fail("focal lengths must be > 0");
+  const std::string model = root["distortion_model"].asString();
+  if (model != "plumb_bob") root["distortion_model"].fail("only plumb_bob is supported, got '" + model + "'");
+  c.D = root["distortion_coefficients"]["data"].asVector(5);
+  const auto p = root["projection_matrix"]["data"].asVector(12);
+  c.P = cv::Matx34d(p.data());
+  return c;
+}
+
+RobotModel loadRobotModel(const std::string& path) {
+  const YamlField root = YamlField::open(path);
+  const YamlField chaser = root["chaser"];
+  RobotModel r;
+  r.file = path;
+  r.footprint_radius_m = chaser["footprint_radius_m"].asDouble(0.01, 2.0);
+  const char* keys[3] = {"stereo_left", "stereo_right", "ir"};
+  for (int i = 0; i < 3; ++i) {
+    const YamlField cam = chaser["cameras"][keys[i]];
+    CameraMount& m = r.cameras[static_cast<std::size_t>(i)];
+    m.key = keys[i];
+    m.band = (i == RobotModel::kIr) ? Band::kInfrared : Band::kVisible;
+    m.frame_id = cam["frame_id"].asString();
+    m.calibration_file = resolvePath(folderOf(path), cam["calibration"].asString());
+    m.base_T_camera = poseFromXyzRpy(cam["xyz_m"].asVector(3), cam["rpy_rad"].asVector(3));
+    try {
+      m.calibration = loadCameraCalibration(m.calibration_file);
+    } catch (const ConfigError& e) {
+      // Name both: the robot file's field that points there, and the calibration's own problem.
+      throw ConfigError(path, cam["calibration"].name(), e.what());
+    }
+  }
+  return r;
+}
+
+OmniBaseModel loadOmniBaseModel(const std::string& path) {
+  const YamlField root = YamlField::open(path);
+  OmniBaseModel m;
+  m.file = path;
+  const YamlField wheels = root["wheels"];
+  const YamlField angles = wheels["drive_angles_deg"];
+  const std::size_t n = angles.size();
+  if (n < 3) angles.fail("needs at least 3 wheels");
+  for (std::size_t i = 0; i < n; ++i) m.layout.drive_angles_rad.push_back(angles.at(i).asDouble() * kDegToRad);
+  m.layout.center_distance_m = wheels["center_distance_m"].asPositive();
+  m.layout.wheel_radius_m = wheels["radius_m"].asPositive();
+  m.encoder_counts_per_rev = wheels["encoder_counts_per_rev"].asPositive();
+  m.motor_time_constant_s = root["motor"]["time_constant_s"].asDouble(0.0, 10.0);
+  return m;
+}
+
+}  // namespace docking_sim

@@ -1,0 +1,318 @@
+#include "docking_sim/renderer.h"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace docking_sim {
+namespace {
+
+constexpr double kNearPlaneM = 0.02;
+
+}  // namespace
+
+CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, const CameraEffects& effects,
+                               const LightingScenario& lighting, uint64_t seed, const RenderOptions& options)
+    : calibration_(calibration), band_(band), effects_(effects), lighting_(lighting), options_(options), rng_(seed) {
+  const int w = calibration.width, h = calibration.height;
+  const int type = band == Band::kVisible ? CV_8UC3 : CV_8UC1;
+  noise_sigma_ = band == Band::kVisible ? lighting.visible.noise_sigma : lighting.ir.noise_sigma;
+
+  // Where each raw (distorted) pixel looks in the ideal pinhole image: undistort every pixel centre
+  // once. Barrel distortion looks beyond the pinhole frame, so the ideal image gets a margin.
+  cv::Mat map_points;
+  if (options.distortion) {
+    std::vector<cv::Point2f> raw;
+    raw.reserve(static_cast<std::size_t>(w) * h);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) raw.emplace_back(static_cast<float>(x), static_cast<float>(y));
+    }
+    std::vector<cv::Point2f> ideal;
+    cv::undistortPoints(raw, ideal, cv::Mat(calibration.K), cv::Mat(calibration.D), cv::noArray(),
+                        cv::Mat(calibration.K), cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-9));
+    float min_x = 0, min_y = 0, max_x = static_cast<float>(w - 1), max_y = static_cast<float>(h - 1);
+    for (const auto& p : ideal) {
+      min_x = std::min(min_x, p.x);
+      min_y = std::min(min_y, p.y);
+      max_x = std::max(max_x, p.x);
+      max_y = std::max(max_y, p.y);
+    }
+    pad_.x = static_cast<int>(std::ceil(std::max(-min_x, max_x - (w - 1)))) + 2;
+    pad_.y = static_cast<int>(std::ceil(std::max(-min_y, max_y - (h - 1)))) + 2;
+    cv::Mat mapx(h, w, CV_32F), mapy(h, w, CV_32F);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const auto& p = ideal[static_cast<std::size_t>(y) * w + x];
+        mapx.at<float>(y, x) = p.x + pad_.x;
+        mapy.at<float>(y, x) = p.y + pad_.y;
+      }
+    }
+    cv::convertMaps(mapx, mapy, map1_, map2_, CV_16SC2);  // fixed point: the fast remap path
+  }
+  ideal_K_ = calibration.K;
+  ideal_K_(0, 2) += pad_.x;
+  ideal_K_(1, 2) += pad_.y;
+  ideal_.create(h + 2 * pad_.y, w + 2 * pad_.x, type);
+  depth_.create(ideal_.size(), CV_32F);
+  output_.create(h, w, type);
+
+  // Vignetting: cos^4-like fall-off, `vignetting` darker at the corners.
+  vignette_.resize(static_cast<std::size_t>(w) * h);
+  const double cx = calibration.K(0, 2), cy = calibration.K(1, 2);
+  const double r_corner2 = cx * cx + cy * cy;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double r2 = ((x - cx) * (x - cx) + (y - cy) * (y - cy)) / r_corner2;
+      vignette_[static_cast<std::size_t>(y) * w + x] =
+          static_cast<uint16_t>(std::lround(256.0 * (1.0 - effects.vignetting * r2)));
+    }
+  }
+
+  // Noise: a table twice the frame size; each frame reads it from a random offset (no RNG per pixel).
+  const std::size_t frame_bytes = static_cast<std::size_t>(w) * h * output_.channels();
+  noise_table_.resize(2 * frame_bytes);
+  std::normal_distribution<double> normal(0.0, std::max(noise_sigma_, 1e-9));
+  for (auto& n : noise_table_) n = static_cast<int8_t>(std::clamp(std::lround(normal(rng_)), -127L, 127L));
+
+  // Glare: an additive bright spot with a faint horizontal streak (visible cameras only).
+  if (band == Band::kVisible && lighting.glare.enabled) {
+    cv::Mat glare(h, w, CV_32F);
+    const double gx = lighting.glare.center_u_frac * w, gy = lighting.glare.center_v_frac * h;
+    const double radius = lighting.glare.radius_frac * w;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const double dx = (x - gx) / radius, dy = (y - gy) / radius;
+        const double spot = std::exp(-(dx * dx + dy * dy));
+        const double streak = 0.25 * std::exp(-dy * dy * 60.0) * std::exp(-std::abs(dx) * 0.8);
+        glare.at<float>(y, x) = static_cast<float>(lighting.glare.peak * (spot + streak));
+      }
+    }
+    cv::Mat glare8;
+    glare.convertTo(glare8, CV_8U);
+    cv::cvtColor(glare8, glare_, cv::COLOR_GRAY2BGR);
+    // Warm the spot slightly (a lamp, not a white card).
+    cv::multiply(glare_, cv::Scalar(0.92, 0.98, 1.0), glare_);
+  }
+}
+
+const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3d& world_T_camera) {
+  const Eigen::Isometry3d camera_T_world = world_T_camera.inverse();
+  ideal_.setTo(cv::Scalar::all(0));
+  depth_.setTo(cv::Scalar(0.0f));
+  if (band_ == Band::kVisible) {
+    rasterize<3>(scene, camera_T_world);
+  } else {
+    rasterize<1>(scene, camera_T_world);
+  }
+  if (options_.distortion) {
+    cv::remap(ideal_, distorted_, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  } else {
+    ideal_(cv::Rect(pad_.x, pad_.y, output_.cols, output_.rows)).copyTo(distorted_);
+  }
+  if (options_.effects) {
+    applyEffects();
+  } else {
+    distorted_.copyTo(output_);
+  }
+  return output_;
+}
+
+void CameraRenderer::applyEffects() {
+  const cv::Mat* src = &distorted_;
+  if (effects_.blur_sigma_px > 0.05) {
+    cv::GaussianBlur(distorted_, blurred_, cv::Size(0, 0), effects_.blur_sigma_px);
+    src = &blurred_;
+  }
+  if (!glare_.empty()) {
+    cv::add(*src, glare_, blurred_);  // saturating
+    src = &blurred_;
+  }
+  // Vignetting and noise in one pass.
+  const int channels = output_.channels();
+  const std::size_t frame_bytes = output_.total() * channels;
+  std::uniform_int_distribution<std::size_t> offset_dist(0, noise_table_.size() - frame_bytes);
+  const int8_t* noise = noise_table_.data() + offset_dist(rng_);
+  const uint16_t* vig = vignette_.data();
+  for (int y = 0; y < output_.rows; ++y) {
+    const uchar* in = src->ptr<uchar>(y);
+    uchar* out = output_.ptr<uchar>(y);
+    for (int x = 0; x < output_.cols; ++x, ++vig) {
+      const int v = *vig;
+      for (int c = 0; c < channels; ++c) {
+        const int value = ((in[c] * v) >> 8) + *noise++;
+        out[c] = static_cast<uchar>(value < 0 ? 0 : (value > 255 ? 255 : value));
+      }
+      in += channels;
+      out += channels;
+    }
+  }
+}
+
+template <int kChannels>
+void CameraRenderer::rasterize(const Scene& scene, const Eigen::Isometry3d& camera_T_world) {
+  for (const auto& surface : scene.surfaces()) {
+    const unsigned band_bit = band_ == Band::kVisible ? kVisibleBand : kInfraredBand;
+    if (surface.bands & band_bit) drawSurface<kChannels>(surface, camera_T_world);
+  }
+}
+
+template <int kChannels>
+void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d& camera_T_world) {
+  const Eigen::Matrix3d R = camera_T_world.linear();
+  const Eigen::Vector3d O = camera_T_world * surface.origin;
+  const Eigen::Vector3d U = R * surface.edge_u;
+  const Eigen::Vector3d V = R * surface.edge_v;
+
+  // The outline in camera coordinates, clipped to z >= near (Sutherland-Hodgman against one plane).
+  clip_a_.clear();
+  for (const auto& st : surface.outline) clip_a_.push_back(O + st.x() * U + st.y() * V);
+  clip_b_.clear();
+  for (std::size_t i = 0; i < clip_a_.size(); ++i) {
+    const Eigen::Vector3d& a = clip_a_[i];
+    const Eigen::Vector3d& b = clip_a_[(i + 1) % clip_a_.size()];
+    const bool a_in = a.z() >= kNearPlaneM, b_in = b.z() >= kNearPlaneM;
+    if (a_in) clip_b_.push_back(a);
+    if (a_in != b_in) {
+      const double t = (kNearPlaneM - a.z()) / (b.z() - a.z());
+      clip_b_.push_back(a + t * (b - a));
+    }
+  }
+  if (clip_b_.size() < 3) return;
+
+  const double fx = ideal_K_(0, 0), fy = ideal_K_(1, 1), cx = ideal_K_(0, 2), cy = ideal_K_(1, 2);
+  const int width = ideal_.cols, height = ideal_.rows;
+  projected_.clear();
+  double min_x = 1e300, max_x = -1e300, min_y = 1e300, max_y = -1e300;
+  for (const auto& p : clip_b_) {
+    const Eigen::Vector2d q(fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy);
+    projected_.push_back(q);
+    min_x = std::min(min_x, q.x());
+    max_x = std::max(max_x, q.x());
+    min_y = std::min(min_y, q.y());
+    max_y = std::max(max_y, q.y());
+  }
+  if (max_x < 0 || min_x > width - 1 || max_y < 0 || min_y > height - 1) return;
+
+  // Pixel -> surface coordinates: (s, t, 1) ~ H (x, y, 1) with H = (K [U V O])^-1; the third row of
+  // H gives 1/z directly, affine in the pixel (the z-buffer value).
+  Eigen::Matrix3d K;
+  K << fx, 0, cx, 0, fy, cy, 0, 0, 1;
+  Eigen::Matrix3d M;
+  M.col(0) = U;
+  M.col(1) = V;
+  M.col(2) = O;
+  const Eigen::Matrix3d G = K * M;
+  if (std::abs(G.determinant()) < 1e-12) return;  // seen exactly edge-on
+  const Eigen::Matrix3d H = G.inverse();
+
+  // Texture set-up.
+  const Texture* tex = surface.texture.get();
+  const std::vector<cv::Mat>* levels = nullptr;
+  if (tex) levels = kChannels == 3 ? &tex->bgr : &tex->gray;
+  const double gain = band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir;
+  const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
+  uchar flat[3];
+  if (kChannels == 3) {
+    for (int c = 0; c < 3; ++c) flat[c] = cv::saturate_cast<uchar>((surface.color[c] * gain_fixed) >> 8);
+  } else {
+    const double luma = 0.114 * surface.color[0] + 0.587 * surface.color[1] + 0.299 * surface.color[2];
+    flat[0] = cv::saturate_cast<uchar>(luma * gain_fixed / 256.0);
+  }
+  const double su = surface.repeat_u, sv = surface.repeat_v;
+  const double ou = surface.offset_u, ov = surface.offset_v;
+
+  const int y_begin = std::max(0, static_cast<int>(std::ceil(min_y)));
+  const int y_end = std::min(height - 1, static_cast<int>(std::floor(max_y)));
+  const std::size_t n = projected_.size();
+  for (int y = y_begin; y <= y_end; ++y) {
+    // Span of a convex polygon on this row (pixel centres at integer coordinates).
+    double xl = 1e300, xr = -1e300;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector2d& a = projected_[i];
+      const Eigen::Vector2d& b = projected_[(i + 1) % n];
+      if ((a.y() <= y && b.y() > y) || (b.y() <= y && a.y() > y)) {
+        const double x = a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
+        xl = std::min(xl, x);
+        xr = std::max(xr, x);
+      }
+    }
+    if (xl > xr) continue;
+    const int x0 = std::max(0, static_cast<int>(std::ceil(xl)));
+    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(xr)) - 1);
+    if (x0 > x1) continue;
+
+    double nw = H(2, 0) * x0 + H(2, 1) * y + H(2, 2);
+    double ns = H(0, 0) * x0 + H(0, 1) * y + H(0, 2);
+    double nt = H(1, 0) * x0 + H(1, 1) * y + H(1, 2);
+    float* depth = depth_.ptr<float>(y);
+    uchar* row = ideal_.ptr<uchar>(y);
+
+    if (!tex) {
+      for (int x = x0; x <= x1; ++x, nw += H(2, 0)) {
+        const float inv_z = static_cast<float>(nw);
+        if (inv_z <= depth[x]) continue;
+        depth[x] = inv_z;
+        for (int c = 0; c < kChannels; ++c) row[x * kChannels + c] = flat[c];
+      }
+      continue;
+    }
+
+    // Texture level for this span: the texel footprint of one pixel at the span's middle.
+    const cv::Mat& base = (*levels)[0];
+    const double xm = 0.5 * (x0 + x1);
+    auto uv_at = [&](double px, double py) {
+      const double w = H(2, 0) * px + H(2, 1) * py + H(2, 2);
+      return Eigen::Vector2d((H(0, 0) * px + H(0, 1) * py + H(0, 2)) / w * su * base.cols,
+                             (H(1, 0) * px + H(1, 1) * py + H(1, 2)) / w * sv * base.rows);
+    };
+    const Eigen::Vector2d c0 = uv_at(xm, y);
+    const double footprint = std::max((uv_at(xm + 1, y) - c0).norm(), (uv_at(xm, y + 1) - c0).norm());
+    int level = footprint > 1.0 ? static_cast<int>(std::log2(footprint)) : 0;
+    level = std::min(level, static_cast<int>(levels->size()) - 1);
+    const cv::Mat& img = (*levels)[static_cast<std::size_t>(level)];
+    const int tw = img.cols, th = img.rows;
+    const double scale_u = su * tw, scale_v = sv * th;
+    const double off_u = ou * tw, off_v = ov * th;
+    const uchar* texels = img.data;
+    const std::size_t stride = img.step;
+
+    if (tex->repeat) {
+      const int mask_u = tw - 1, mask_v = th - 1;
+      const double bias_u = off_u + 4096.0 * tw, bias_v = off_v + 4096.0 * th;  // keeps the cast positive
+      for (int x = x0; x <= x1; ++x, nw += H(2, 0), ns += H(0, 0), nt += H(1, 0)) {
+        const float inv_z = static_cast<float>(nw);
+        if (inv_z <= depth[x]) continue;
+        depth[x] = inv_z;
+        const double z = 1.0 / nw;
+        const int iu = static_cast<int>(ns * z * scale_u + bias_u) & mask_u;
+        const int iv = static_cast<int>(nt * z * scale_v + bias_v) & mask_v;
+        const uchar* t = texels + iv * stride + iu * kChannels;
+        for (int c = 0; c < kChannels; ++c) {
+          const int value = (t[c] * gain_fixed) >> 8;
+          row[x * kChannels + c] = static_cast<uchar>(value > 255 ? 255 : value);
+        }
+      }
+    } else {
+      for (int x = x0; x <= x1; ++x, nw += H(2, 0), ns += H(0, 0), nt += H(1, 0)) {
+        const float inv_z = static_cast<float>(nw);
+        if (inv_z <= depth[x]) continue;
+        depth[x] = inv_z;
+        const double z = 1.0 / nw;
+        const int iu = std::clamp(static_cast<int>(ns * z * scale_u + off_u), 0, tw - 1);
+        const int iv = std::clamp(static_cast<int>(nt * z * scale_v + off_v), 0, th - 1);
+        const uchar* t = texels + iv * stride + iu * kChannels;
+        for (int c = 0; c < kChannels; ++c) {
+          const int value = (t[c] * gain_fixed) >> 8;
+          row[x * kChannels + c] = static_cast<uchar>(value > 255 ? 255 : value);
+        }
+      }
+    }
+  }
+}
+
+template void CameraRenderer::rasterize<1>(const Scene&, const Eigen::Isometry3d&);
+template void CameraRenderer::rasterize<3>(const Scene&, const Eigen::Isometry3d&);
+
+}  // namespace docking_sim

@@ -1,0 +1,511 @@
+#include "docking_sim/scene.h"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+
+#include "docking_sim/config_error.h"
+
+namespace docking_sim {
+namespace {
+
+bool isPowerOfTwo(int n) { return n > 0 && (n & (n - 1)) == 0; }
+
+// ---- Procedural textures: deterministic for the seed, so every run sees the same room. -----------
+
+/// Smooth random field in [0, 1]: noise at a coarse grid, upsampled with cubic interpolation (wraps
+/// when the result is tiled, because the coarse grid is drawn with a wrapped border).
+cv::Mat smoothNoise(cv::RNG& rng, int size, int cells) {
+  cv::Mat coarse(cells, cells, CV_32F);
+  rng.fill(coarse, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::Mat padded;
+  cv::copyMakeBorder(coarse, padded, 2, 2, 2, 2, cv::BORDER_WRAP);
+  const double scale = static_cast<double>(size) / cells;
+  cv::Mat big;
+  cv::resize(padded, big, cv::Size(), scale, scale, cv::INTER_CUBIC);
+  const int off = static_cast<int>(std::round(2 * scale));
+  return big(cv::Rect(off, off, size, size)).clone();
+}
+
+/// Grey detail map (mean about 1) tinted by a colour: the clutter materials.
+cv::Mat tint(const cv::Mat& detail, const cv::Vec3b& color) {
+  cv::Mat out(detail.size(), CV_8UC3);
+  for (int y = 0; y < detail.rows; ++y) {
+    for (int x = 0; x < detail.cols; ++x) {
+      const float d = detail.at<float>(y, x);
+      cv::Vec3b& p = out.at<cv::Vec3b>(y, x);
+      for (int c = 0; c < 3; ++c) p[c] = cv::saturate_cast<uchar>(color[c] * d);
+    }
+  }
+  return out;
+}
+
+cv::Mat materialDetail(const std::string& material, cv::RNG& rng, int size) {
+  cv::Mat d(size, size, CV_32F, cv::Scalar(1.0));
+  cv::Mat fine(size, size, CV_32F);
+  rng.fill(fine, cv::RNG::NORMAL, 0.0, 1.0);
+  if (material == "wood") {
+    // Grain: stretched noise along u, rings from a wavy sine.
+    cv::Mat stretched;
+    cv::resize(smoothNoise(rng, size, 8), stretched, cv::Size(size, size));
+    for (int y = 0; y < size; ++y) {
+      for (int x = 0; x < size; ++x) {
+        const double ring = std::sin((y + 18.0 * stretched.at<float>(y, x)) * 0.35);
+        d.at<float>(y, x) = static_cast<float>(0.85 + 0.12 * ring + 0.03 * fine.at<float>(y, x));
+      }
+    }
+  } else if (material == "cardboard") {
+    cv::Mat blotch = smoothNoise(rng, size, 6);
+    for (int y = 0; y < size; ++y) {
+      for (int x = 0; x < size; ++x) {
+        d.at<float>(y, x) = static_cast<float>(0.9 + 0.1 * blotch.at<float>(y, x) + 0.04 * fine.at<float>(y, x));
+      }
+    }
+    // Packing tape across the middle and a printed label.
+    cv::rectangle(d, cv::Rect(0, size / 2 - size / 16, size, size / 8), cv::Scalar(1.15), -1);
+    cv::rectangle(d, cv::Rect(size / 8, size / 8, size / 4, size / 6), cv::Scalar(1.35), -1);
+    cv::putText(d, "FRAGILE", cv::Point(size / 2, size - size / 6), cv::FONT_HERSHEY_SIMPLEX, size / 300.0,
+                cv::Scalar(0.25), 2, cv::LINE_AA);
+    cv::line(d, cv::Point(size * 5 / 8, size / 8), cv::Point(size * 7 / 8, size * 3 / 8), cv::Scalar(0.3), 3);
+  } else if (material == "metal") {
+    // Brushed: noise smeared along u.
+    cv::Mat brushed;
+    cv::blur(fine, brushed, cv::Size(31, 1), cv::Point(-1, -1), cv::BORDER_REFLECT_101);
+    d = 1.0 + 0.25 * brushed;
+    for (int k = 1; k < 4; ++k) {
+      cv::line(d, cv::Point(0, k * size / 4), cv::Point(size, k * size / 4), cv::Scalar(0.55), 2);
+    }
+    cv::circle(d, cv::Point(size * 7 / 8, size / 8), size / 40, cv::Scalar(0.4), -1, cv::LINE_AA);
+  } else if (material == "fabric") {
+    for (int y = 0; y < size; ++y) {
+      for (int x = 0; x < size; ++x) {
+        const double weave = ((x / 2 + y / 2) % 2) ? 0.06 : -0.06;
+        d.at<float>(y, x) = static_cast<float>(0.95 + weave + 0.08 * fine.at<float>(y, x));
+      }
+    }
+  } else {  // plastic
+    cv::Mat blotch = smoothNoise(rng, size, 4);
+    d = 0.95 + 0.08 * blotch + 0.015 * fine;
+    cv::rectangle(d, cv::Rect(size / 10, size / 10, size * 8 / 10, size * 8 / 10), cv::Scalar(0.7), 2);
+  }
+  return d;
+}
+
+cv::Mat floorTexture(cv::RNG& rng) {
+  // 2 m x 2 m of vinyl tiles, 0.5 m each, with grout, per-tile shade, speckle and scuffs.
+  const int size = 1024, tiles = 4, tile_px = size / tiles;
+  cv::Mat blotch = smoothNoise(rng, size, 16);
+  cv::Mat speckle(size, size, CV_32F);
+  rng.fill(speckle, cv::RNG::NORMAL, 0.0, 1.0);
+  cv::Mat img(size, size, CV_8UC3);
+  std::vector<double> tile_shade(tiles * tiles);
+  for (auto& s : tile_shade) s = rng.uniform(0.88, 1.08);
+  const cv::Vec3d base(150, 160, 168);  // light grey-beige
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      const int tx = x / tile_px, ty = y / tile_px;
+      const bool grout = (x % tile_px) < 3 || (y % tile_px) < 3;
+      double f = grout ? 0.55 : tile_shade[static_cast<std::size_t>(ty * tiles + tx)] *
+                                    (0.9 + 0.2 * blotch.at<float>(y, x)) + 0.05 * speckle.at<float>(y, x);
+      cv::Vec3b& p = img.at<cv::Vec3b>(y, x);
+      for (int c = 0; c < 3; ++c) p[c] = cv::saturate_cast<uchar>(base[c] * f);
+    }
+  }
+  for (int i = 0; i < 40; ++i) {  // scuff marks
+    cv::Point a(rng.uniform(0, size), rng.uniform(0, size));
+    cv::Point b = a + cv::Point(rng.uniform(-60, 60), rng.uniform(-20, 20));
+    cv::line(img, a, b, cv::Scalar(90, 95, 100), rng.uniform(1, 4), cv::LINE_AA);
+  }
+  return img;
+}
+
+cv::Mat wallTexture(cv::RNG& rng) {
+  // 2 m x 2 m of painted plaster: soft blotches and fine speckle (enough texture for stereo).
+  const int size = 512;
+  cv::Mat blotch = smoothNoise(rng, size, 12);
+  cv::Mat speckle(size, size, CV_32F);
+  rng.fill(speckle, cv::RNG::NORMAL, 0.0, 1.0);
+  cv::Mat img(size, size, CV_8UC3);
+  const cv::Vec3d base(200, 212, 218);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      const double f = 0.86 + 0.14 * blotch.at<float>(y, x) + 0.035 * speckle.at<float>(y, x);
+      cv::Vec3b& p = img.at<cv::Vec3b>(y, x);
+      for (int c = 0; c < 3; ++c) p[c] = cv::saturate_cast<uchar>(base[c] * f);
+    }
+  }
+  return img;
+}
+
+cv::Mat ceilingTexture(cv::RNG& rng) {
+  // 2 m x 2 m of 0.5 m acoustic tiles.
+  const int size = 512;
+  cv::Mat speckle(size, size, CV_32F);
+  rng.fill(speckle, cv::RNG::NORMAL, 0.0, 1.0);
+  cv::Mat img(size, size, CV_8UC3);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      const bool grid = (x % 128) < 3 || (y % 128) < 3;
+      const double f = grid ? 0.7 : 0.93 + 0.05 * speckle.at<float>(y, x);
+      cv::Vec3b& p = img.at<cv::Vec3b>(y, x);
+      for (int c = 0; c < 3; ++c) p[c] = cv::saturate_cast<uchar>(225 * f);
+    }
+  }
+  return img;
+}
+
+cv::Mat posterTexture(cv::RNG& rng) {
+  const int w = 256, h = 256;
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(235, 238, 240));
+  for (int i = 0; i < 12; ++i) {
+    const cv::Scalar col(rng.uniform(0, 255), rng.uniform(0, 255), rng.uniform(0, 255));
+    const cv::Point a(rng.uniform(10, w - 60), rng.uniform(40, h - 60));
+    if (i % 3 == 0) {
+      cv::circle(img, a, rng.uniform(8, 30), col, -1, cv::LINE_AA);
+    } else {
+      cv::rectangle(img, a, a + cv::Point(rng.uniform(15, 60), rng.uniform(10, 50)), col, -1);
+    }
+  }
+  cv::putText(img, "SAFETY FIRST", cv::Point(12, 28), cv::FONT_HERSHEY_SIMPLEX, 0.75, cv::Scalar(30, 30, 160), 2,
+              cv::LINE_AA);
+  cv::rectangle(img, cv::Rect(0, 0, w, h), cv::Scalar(40, 40, 40), 4);
+  return img;
+}
+
+cv::Mat doorTexture() {
+  cv::Mat img(512, 256, CV_8UC3, cv::Scalar(60, 90, 130));
+  cv::rectangle(img, cv::Rect(20, 20, 216, 200), cv::Scalar(45, 70, 105), 4);
+  cv::rectangle(img, cv::Rect(20, 260, 216, 230), cv::Scalar(45, 70, 105), 4);
+  cv::circle(img, cv::Point(220, 250), 9, cv::Scalar(180, 180, 185), -1, cv::LINE_AA);
+  cv::rectangle(img, cv::Rect(0, 0, 256, 512), cv::Scalar(200, 200, 200), 6);
+  return img;
+}
+
+cv::Mat solarTexture() {
+  // Dark blue cells with silver bus bars.
+  cv::Mat img(128, 256, CV_8UC3, cv::Scalar(110, 40, 20));
+  for (int x = 0; x < 256; x += 32) cv::line(img, cv::Point(x, 0), cv::Point(x, 127), cv::Scalar(170, 170, 170), 2);
+  for (int y = 0; y < 128; y += 32) cv::line(img, cv::Point(0, y), cv::Point(255, y), cv::Scalar(170, 170, 170), 2);
+  for (int y = 16; y < 128; y += 32) cv::line(img, cv::Point(0, y), cv::Point(255, y), cv::Scalar(140, 90, 70), 1);
+  cv::rectangle(img, cv::Rect(0, 0, 256, 128), cv::Scalar(200, 200, 200), 3);
+  return img;
+}
+
+/// Normal of a surface (not normalised away from zero: edges are never parallel).
+Eigen::Vector3d normalOf(const Surface& s) { return s.edge_u.cross(s.edge_v).normalized(); }
+
+}  // namespace
+
+std::shared_ptr<Texture> makeTexture(const cv::Mat& bgr, bool repeat) {
+  if (bgr.empty() || bgr.type() != CV_8UC3) throw std::invalid_argument("makeTexture needs a CV_8UC3 image");
+  if (repeat && (!isPowerOfTwo(bgr.cols) || !isPowerOfTwo(bgr.rows))) {
+    throw std::invalid_argument("a repeating texture needs power-of-two sizes");
+  }
+  auto tex = std::make_shared<Texture>();
+  tex->repeat = repeat;
+  tex->bgr.push_back(bgr.clone());
+  while (tex->bgr.back().cols > 4 && tex->bgr.back().rows > 4) {
+    const cv::Mat& prev = tex->bgr.back();
+    cv::Mat next;
+    if (repeat) {
+      // pyrDown has no wrapping border: pad with a wrapped copy, reduce, crop.
+      cv::Mat padded, reduced;
+      cv::copyMakeBorder(prev, padded, 4, 4, 4, 4, cv::BORDER_WRAP);
+      cv::pyrDown(padded, reduced);
+      next = reduced(cv::Rect(2, 2, prev.cols / 2, prev.rows / 2)).clone();
+    } else {
+      cv::pyrDown(prev, next, cv::Size(prev.cols / 2, prev.rows / 2));
+    }
+    tex->bgr.push_back(next);
+  }
+  for (const auto& level : tex->bgr) {
+    cv::Mat g;
+    cv::cvtColor(level, g, cv::COLOR_BGR2GRAY);
+    tex->gray.push_back(g);
+  }
+  return tex;
+}
+
+void Scene::addBox(const Eigen::Isometry3d& pose, const Eigen::Vector3d& size, const std::shared_ptr<Texture>& tex,
+                   const cv::Vec3b& color, double texture_scale_m, bool moves_with_target, bool bottom) {
+  // pose: centre of the bottom face; the box spans +-size/2 in x, y and 0..size.z in z.
+  const Eigen::Vector3d h(size.x() / 2, size.y() / 2, size.z());
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  auto add = [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& eu, const Eigen::Vector3d& ev) {
+    Surface s;
+    s.origin = pose * origin;
+    s.edge_u = pose.linear() * eu;
+    s.edge_v = pose.linear() * ev;
+    s.texture = tex;
+    s.color = color;
+    if (tex && tex->repeat && texture_scale_m > 0) {
+      s.repeat_u = eu.norm() / texture_scale_m;
+      s.repeat_v = ev.norm() / texture_scale_m;
+    }
+    s.moves_with_target = moves_with_target;
+    local_.push_back(s);
+  };
+  // Four sides, each seen upright from outside: origin top-left, u to the viewer's right (z x n).
+  const Eigen::Vector3d normals[4] = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitX(),
+                                      -Eigen::Vector3d::UnitY()};
+  for (const auto& n : normals) {
+    const Eigen::Vector3d right = z.cross(n);
+    const double half_width = std::abs(right.dot(h));
+    const double half_depth = std::abs(n.dot(h));
+    const Eigen::Vector3d center = n * half_depth + z * (size.z() / 2);
+    add(center - right * half_width + z * (size.z() / 2), right * (2 * half_width), -z * size.z());
+  }
+  add(Eigen::Vector3d(-h.x(), h.y(), size.z()), Eigen::Vector3d(2 * h.x(), 0, 0), Eigen::Vector3d(0, -2 * h.y(), 0));
+  if (bottom) add(Eigen::Vector3d(-h.x(), -h.y(), 0), Eigen::Vector3d(2 * h.x(), 0, 0), Eigen::Vector3d(0, 2 * h.y(), 0));
+}
+
+void Scene::addTargetRobot(const TargetModel& t) {
+  cv::Mat face = cv::imread(t.texture_path, cv::IMREAD_COLOR);
+  if (face.empty()) {
+    throw ConfigError(t.file, "target.face.texture", "cannot read the image '" + t.texture_path + "'");
+  }
+  const auto face_tex = makeTexture(face, false);
+  const Eigen::Isometry3d& rp = t.robot_T_port;
+  const double w = t.face_width_m, h = t.face_height_m, d = t.body_depth_m;
+  auto addInPortFrame = [&](Surface s) {
+    s.origin = rp * s.origin;
+    s.edge_u = rp.linear() * s.edge_u;
+    s.edge_v = rp.linear() * s.edge_v;
+    s.moves_with_target = true;
+    local_.push_back(s);
+  };
+
+  // The docking face (x = 0 in the port frame): column u along +y, row v along -z (target.yaml).
+  Surface face_surface;
+  face_surface.origin = Eigen::Vector3d(0, -w / 2, h / 2);
+  face_surface.edge_u = Eigen::Vector3d(0, w, 0);
+  face_surface.edge_v = Eigen::Vector3d(0, 0, -h);
+  face_surface.texture = face_tex;
+  addInPortFrame(face_surface);
+
+  // Body: the box behind the face (its front is the face itself), brushed-foil look.
+  cv::RNG rng(4242);
+  const auto foil = makeTexture(tint(materialDetail("metal", rng, 256), t.body_bgr), true);
+  auto body_side = [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& eu, const Eigen::Vector3d& ev) {
+    Surface s;
+    s.origin = origin;
+    s.edge_u = eu;
+    s.edge_v = ev;
+    s.texture = foil;
+    s.repeat_u = eu.norm() / 0.3;
+    s.repeat_v = ev.norm() / 0.3;
+    addInPortFrame(s);
+  };
+  body_side({-d, w / 2, h / 2}, {0, -w, 0}, {0, 0, -h});       // back
+  body_side({0, w / 2, h / 2}, {-d, 0, 0}, {0, 0, -h});        // +y side
+  body_side({-d, -w / 2, h / 2}, {d, 0, 0}, {0, 0, -h});       // -y side
+  body_side({-d, -w / 2, h / 2}, {0, w, 0}, {d, 0, 0});        // top
+  body_side({-d, -w / 2, -h / 2}, {0, w, 0}, {d, 0, 0});       // bottom
+
+  // Solar panels: flat wings beside the box, in the plane x = offset.
+  if (t.panel_span_m > 0 && t.panel_height_m > 0) {
+    cv::Mat solar = solarTexture();
+    // Recolour the cells to the configured colour (keep the bus bars).
+    solar.setTo(cv::Scalar(t.panel_bgr[0], t.panel_bgr[1], t.panel_bgr[2]), [&] {
+      cv::Mat mask;
+      cv::inRange(solar, cv::Scalar(110, 40, 20), cv::Scalar(110, 40, 20), mask);
+      return mask;
+    }());
+    const auto solar_tex = makeTexture(solar, false);
+    for (int side = -1; side <= 1; side += 2) {
+      Surface s;
+      const double y0 = side * w / 2;
+      s.origin = Eigen::Vector3d(t.panel_offset_x_m, side > 0 ? y0 : y0 - t.panel_span_m, t.panel_height_m / 2);
+      s.edge_u = Eigen::Vector3d(0, t.panel_span_m, 0);
+      s.edge_v = Eigen::Vector3d(0, 0, -t.panel_height_m);
+      s.texture = solar_tex;
+      addInPortFrame(s);
+    }
+  }
+
+  // IR LEDs at the marker positions: a bright disc and a dimmer halo (the glow a real LED makes on
+  // the sensor), just in front of the face; IR cameras only.
+  for (const auto& m : t.markers_m) {
+    for (int layer = 0; layer < 2; ++layer) {
+      const double r = layer == 0 ? t.led_radius_m * 2.2 : t.led_radius_m;
+      Surface s;
+      s.origin = m + Eigen::Vector3d(layer == 0 ? 0.001 : 0.002, 0, 0);
+      s.edge_u = Eigen::Vector3d(0, r, 0);
+      s.edge_v = Eigen::Vector3d(0, 0, -r);
+      s.outline.clear();
+      for (int k = 0; k < 24; ++k) {
+        const double a = 2 * M_PI * k / 24;
+        s.outline.emplace_back(std::cos(a), std::sin(a));
+      }
+      s.color = cv::Vec3b(255, 255, 255);
+      s.bands = kInfraredBand;
+      s.emissive = true;
+      s.emission = layer == 0 ? 0.35 : 1.0;
+      addInPortFrame(s);
+    }
+  }
+
+  // The target robot under the mockup: a dark base on a low wheel block, filling the gap up to the face.
+  const double base_top = rp.translation().z() - h / 2;
+  if (base_top > 0.05) {
+    cv::RNG rng_base(99);
+    const auto plastic = makeTexture(tint(materialDetail("plastic", rng_base, 128), cv::Vec3b(60, 60, 62)), true);
+    Eigen::Isometry3d wheels = Eigen::Isometry3d::Identity();
+    addBox(wheels, Eigen::Vector3d(0.22, 0.22, 0.04), nullptr, cv::Vec3b(25, 25, 25), 0, true, false);
+    Eigen::Isometry3d deck = Eigen::Isometry3d::Identity();
+    deck.translation().z() = 0.04;
+    addBox(deck, Eigen::Vector3d(0.34, 0.34, base_top - 0.04), plastic, cv::Vec3b(60, 60, 62), 0.34, true, false);
+  }
+}
+
+Scene::Scene(const SimSettings& settings, const TargetModel& target, const LightingScenario& lighting, uint64_t seed) {
+  cv::RNG rng(seed ^ 0x5eed);
+  const RoomConfig& room = settings.room;
+  const auto floor_tex = makeTexture(floorTexture(rng), true);
+  const auto wall_tex = makeTexture(wallTexture(rng), true);
+  const auto ceiling_tex = makeTexture(ceilingTexture(rng), true);
+
+  // Floor and ceiling in 1 m (floor) and 2 m (ceiling) pieces: small polygons keep the per-span
+  // texture level accurate across a receding plane.
+  auto tiles = [&](double z, double step, const std::shared_ptr<Texture>& tex, bool facing_up) {
+    for (double x = room.x_min_m; x < room.x_max_m - 1e-9; x += step) {
+      for (double y = room.y_min_m; y < room.y_max_m - 1e-9; y += step) {
+        Surface s;
+        const double sx = std::min(step, room.x_max_m - x), sy = std::min(step, room.y_max_m - y);
+        s.origin = Eigen::Vector3d(x, y, z);
+        s.edge_u = Eigen::Vector3d(sx, 0, 0);
+        s.edge_v = Eigen::Vector3d(0, sy, 0);
+        if (!facing_up) std::swap(s.edge_u, s.edge_v);
+        s.texture = tex;
+        // The pattern tiles every 2 m; offsets continue it across pieces.
+        s.repeat_u = s.edge_u.norm() / 2.0;
+        s.repeat_v = s.edge_v.norm() / 2.0;
+        const double ou = (facing_up ? x - room.x_min_m : y - room.y_min_m) / 2.0;
+        const double ov = (facing_up ? y - room.y_min_m : x - room.x_min_m) / 2.0;
+        s.offset_u = ou - std::floor(ou);
+        s.offset_v = ov - std::floor(ov);
+        local_.push_back(s);
+      }
+    }
+  };
+  tiles(0.0, 1.0, floor_tex, true);
+  tiles(room.height_m, 2.0, ceiling_tex, false);
+
+  // Walls in 1 m pieces, with a dark skirting board.
+  const Eigen::Vector2d corners[4] = {{room.x_min_m, room.y_min_m}, {room.x_max_m, room.y_min_m},
+                                      {room.x_max_m, room.y_max_m}, {room.x_min_m, room.y_max_m}};
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d a = corners[i], b = corners[(i + 1) % 4];
+    const double length = (b - a).norm();
+    const Eigen::Vector2d dir = (b - a) / length;
+    for (double pos = 0; pos < length - 1e-9; pos += 1.0) {
+      const double piece = std::min(1.0, length - pos);
+      const Eigen::Vector2d p = a + dir * pos;
+      Surface s;
+      s.origin = Eigen::Vector3d(p.x(), p.y(), room.height_m);
+      s.edge_u = Eigen::Vector3d(dir.x(), dir.y(), 0) * piece;
+      s.edge_v = Eigen::Vector3d(0, 0, -room.height_m);
+      s.texture = wall_tex;
+      s.repeat_u = piece / 2.0;
+      s.repeat_v = room.height_m / 2.0;
+      s.offset_u = (pos + i * 0.37) / 2.0 - std::floor((pos + i * 0.37) / 2.0);
+      local_.push_back(s);
+      Surface skirting = s;
+      const Eigen::Vector3d inward(-dir.y(), dir.x(), 0);  // corners run counter-clockwise
+      skirting.origin = Eigen::Vector3d(p.x(), p.y(), 0.08) + inward * 0.01;
+      skirting.edge_v = Eigen::Vector3d(0, 0, -0.08);
+      skirting.texture = nullptr;
+      skirting.color = cv::Vec3b(70, 70, 75);
+      local_.push_back(skirting);
+    }
+    // Wall decorations: a door on the first wall, posters on the others, 1 cm in front of the wall.
+    const Eigen::Vector3d inward(-dir.y(), dir.x(), 0);
+    const Eigen::Vector3d along(dir.x(), dir.y(), 0);
+    if (i == 0 && length > 3.0) {
+      Surface door;
+      door.origin = Eigen::Vector3d(a.x(), a.y(), 2.05) + along * (length * 0.3) + inward * 0.01;
+      door.edge_u = along * 0.9;
+      door.edge_v = Eigen::Vector3d(0, 0, -2.05);
+      door.texture = makeTexture(doorTexture(), false);
+      local_.push_back(door);
+    }
+    const int posters = static_cast<int>(length / 2.5);
+    for (int k = 0; k < posters; ++k) {
+      Surface poster;
+      const double at = (k + 0.5 + rng.uniform(-0.2, 0.2)) * length / posters;
+      if (i == 0 && std::abs(at - length * 0.3 - 0.45) < 1.2) continue;  // not over the door
+      const double size = rng.uniform(0.5, 0.9);
+      poster.origin = Eigen::Vector3d(a.x(), a.y(), rng.uniform(1.3, 1.8)) + along * at + inward * 0.01;
+      poster.edge_u = along * size;
+      poster.edge_v = Eigen::Vector3d(0, 0, -size * rng.uniform(0.7, 1.3));
+      poster.texture = makeTexture(posterTexture(rng), false);
+      local_.push_back(poster);
+    }
+  }
+
+  // Ceiling lights: bright panels just under the ceiling (lit from inside, off in the dark).
+  for (double x = room.x_min_m + 1.5; x < room.x_max_m - 1.0; x += 3.0) {
+    for (double y = room.y_min_m + 1.5; y < room.y_max_m - 1.0; y += 3.0) {
+      Surface lamp;
+      lamp.origin = Eigen::Vector3d(x, y, room.height_m - 0.01);
+      lamp.edge_u = Eigen::Vector3d(0, 0.6, 0);
+      lamp.edge_v = Eigen::Vector3d(1.2, 0, 0);
+      lamp.color = cv::Vec3b(250, 252, 255);
+      lamp.bands = kBothBands;
+      lamp.emission = -1.0;  // marks a lamp: lit by the room-light level, not by shading
+      local_.push_back(lamp);
+    }
+  }
+
+  for (const auto& c : room.clutter) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = Eigen::Vector3d(c.x_m, c.y_m, 0);
+    pose.linear() = Eigen::AngleAxisd(c.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const auto tex = makeTexture(tint(materialDetail(c.material, rng, 256), c.color_bgr), true);
+    // Materials repeat every 0.5 m (cardboard: once per face, so the label shows whole).
+    const double scale = c.material == "cardboard" ? std::max(c.size_x_m, c.size_y_m) : 0.5;
+    addBox(pose, Eigen::Vector3d(c.size_x_m, c.size_y_m, c.size_z_m), tex, c.color_bgr, scale, false, false);
+  }
+
+  addTargetRobot(target);
+  setLighting(lighting, settings.light_direction, settings.ambient, settings.visible_effects, settings.ir_effects);
+  update(Eigen::Isometry3d::Identity());
+}
+
+void Scene::setLighting(const LightingScenario& lighting, const Eigen::Vector3d& light_direction, double ambient,
+                        const CameraEffects& visible, const CameraEffects& ir) {
+  lighting_ = lighting;
+  light_direction_ = light_direction.normalized();
+  ambient_ = ambient;
+  visible_exposure_ = visible.exposure;
+  ir_exposure_ = ir.exposure;
+}
+
+void Scene::update(const Eigen::Isometry3d& world_T_target_robot) {
+  if (world_.size() != local_.size()) world_ = local_;
+  for (std::size_t i = 0; i < world_.size(); ++i) {
+    Surface& s = world_[i];
+    const Surface& l = local_[i];
+    if (l.moves_with_target) {
+      s.origin = world_T_target_robot * l.origin;
+      s.edge_u = world_T_target_robot.linear() * l.edge_u;
+      s.edge_v = world_T_target_robot.linear() * l.edge_v;
+    }
+    if (s.emissive) {
+      s.gain_visible = lighting_.led_intensity * s.emission * visible_exposure_;
+      s.gain_ir = lighting_.led_intensity * s.emission * ir_exposure_;
+    } else if (s.emission < 0) {  // lamp
+      s.gain_visible = std::min(1.0, lighting_.visible.illumination) * visible_exposure_ * 1.1;
+      s.gain_ir = std::min(1.0, lighting_.ir.illumination) * ir_exposure_ * 1.1;
+    } else {
+      // Lambert with an ambient floor; surfaces are two-sided.
+      const double lambert = std::abs(normalOf(s).dot(light_direction_));
+      const double shade = ambient_ + (1.0 - ambient_) * lambert;
+      s.gain_visible = shade * lighting_.visible.illumination * visible_exposure_;
+      s.gain_ir = shade * lighting_.ir.illumination * ir_exposure_;
+    }
+  }
+}
+
+}  // namespace docking_sim

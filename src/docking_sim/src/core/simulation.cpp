@@ -1,0 +1,134 @@
+#include "docking_sim/simulation.h"
+
+#include <cmath>
+
+#include "docking_sim/config_error.h"
+
+namespace docking_sim {
+namespace {
+
+const LightingScenario& pickLighting(const SimSettings& settings, const Scenario& scenario) {
+  const auto it = settings.lighting.find(scenario.lighting);
+  if (it == settings.lighting.end()) {
+    std::string known;
+    for (const auto& kv : settings.lighting) known += (known.empty() ? "" : ", ") + kv.first;
+    throw ConfigError(scenario.file, "scenario.lighting",
+                      "unknown lighting '" + scenario.lighting + "' (" + settings.file + " defines: " + known + ")");
+  }
+  return it->second;
+}
+
+Scenario validated(Scenario scenario, const SimSettings& settings, const RobotModel& robot) {
+  const RoomConfig& room = settings.room;
+  auto inside = [&](const omni_base::Pose2D& p, double margin) {
+    return p.x > room.x_min_m + margin && p.x < room.x_max_m - margin && p.y > room.y_min_m + margin &&
+           p.y < room.y_max_m - margin;
+  };
+  const double target_radius = 0.25;  // the mockup's box half-diagonal, roughly
+  if (!inside(scenario.chaser_start, robot.footprint_radius_m)) {
+    throw ConfigError(scenario.file, "scenario.chaser", "start pose is outside the room of " + settings.file);
+  }
+  if (!inside(scenario.target_start, target_radius)) {
+    throw ConfigError(scenario.file, "scenario.target", "start pose is outside the room of " + settings.file);
+  }
+  const double gap = std::hypot(scenario.chaser_start.x - scenario.target_start.x,
+                                scenario.chaser_start.y - scenario.target_start.y);
+  if (gap < robot.footprint_radius_m + target_radius) {
+    throw ConfigError(scenario.file, "scenario.target", "start pose overlaps the chaser");
+  }
+  return scenario;
+}
+
+Eigen::Isometry3d planarPose(double x, double y, double yaw) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = Eigen::Vector3d(x, y, 0.0);
+  t.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return t;
+}
+
+}  // namespace
+
+Simulation::Simulation(const SimulationFiles& files, const RenderOptions& render_options)
+    : settings_(loadSimSettings(files.sim_config)),
+      scenario_(loadScenario(files.scenario)),
+      target_(loadTargetModel(files.target_config)),
+      robot_(loadRobotModel(files.robot_config)),
+      base_model_(loadOmniBaseModel(files.omni_base_config)),
+      lighting_(pickLighting(settings_, scenario_)),
+      chaser_(base_model_, settings_.command_timeout_s, scenario_.chaser_start),
+      scene_(settings_, target_, lighting_, scenario_.seed) {
+  scenario_ = validated(scenario_, settings_, robot_);
+  for (int i = 0; i < 3; ++i) {
+    const CameraMount& cam = robot_.cameras[static_cast<std::size_t>(i)];
+    const CameraEffects& effects = cam.band == Band::kVisible ? settings_.visible_effects : settings_.ir_effects;
+    renderers_[static_cast<std::size_t>(i)] = std::make_unique<CameraRenderer>(
+        cam.calibration, cam.band, effects, lighting_, scenario_.seed * 3 + static_cast<uint64_t>(i), render_options);
+  }
+}
+
+void Simulation::advance(double dt_s) {
+  if (!(dt_s > 0.0)) return;
+  chaser_.step(time_s_, dt_s);
+  time_s_ += dt_s;
+}
+
+Eigen::Isometry3d Simulation::worldTChaser() const {
+  const auto& p = chaser_.pose();
+  return planarPose(p.x, p.y, p.yaw);
+}
+
+Eigen::Isometry3d Simulation::worldTTargetRobot() const {
+  const auto& s = scenario_.target_start;
+  const auto& m = scenario_.target_motion;
+  return planarPose(s.x + m.velocity_x_m_s * time_s_, s.y + m.velocity_y_m_s * time_s_,
+                    s.yaw + m.yaw_rate_rad_s * time_s_);
+}
+
+Eigen::Isometry3d Simulation::worldTPort() const { return worldTTargetRobot() * target_.robot_T_port; }
+
+Eigen::Isometry3d Simulation::worldTCamera(int camera) const {
+  return worldTChaser() * robot_.cameras.at(static_cast<std::size_t>(camera)).base_T_camera;
+}
+
+void Simulation::chaserVelocityWorld(Eigen::Vector3d* linear, Eigen::Vector3d* angular) const {
+  const auto twist = chaser_.twist();
+  const double yaw = chaser_.pose().yaw;
+  *linear = Eigen::Vector3d(std::cos(yaw) * twist.vx - std::sin(yaw) * twist.vy,
+                            std::sin(yaw) * twist.vx + std::cos(yaw) * twist.vy, 0.0);
+  *angular = Eigen::Vector3d(0.0, 0.0, twist.wz);
+}
+
+RelativeTruth Simulation::truthInCamera(int camera) const {
+  const Eigen::Isometry3d world_T_camera = worldTCamera(camera);
+  const Eigen::Isometry3d world_T_port = worldTPort();
+  const Eigen::Isometry3d world_T_target = worldTTargetRobot();
+  RelativeTruth truth;
+  truth.camera_T_port = world_T_camera.inverse() * world_T_port;
+
+  // Velocities in world: the port rides on the rotating, translating target robot; the camera rides
+  // on the chaser.
+  const Eigen::Vector3d target_w(0, 0, scenario_.target_motion.yaw_rate_rad_s);
+  const Eigen::Vector3d target_v(scenario_.target_motion.velocity_x_m_s, scenario_.target_motion.velocity_y_m_s, 0);
+  const Eigen::Vector3d port_v =
+      target_v + target_w.cross(world_T_port.translation() - world_T_target.translation());
+  Eigen::Vector3d chaser_v, chaser_w;
+  chaserVelocityWorld(&chaser_v, &chaser_w);
+  const Eigen::Vector3d camera_v =
+      chaser_v + chaser_w.cross(world_T_camera.translation() - worldTChaser().translation());
+  const Eigen::Matrix3d camera_R_world = world_T_camera.linear().transpose();
+  const Eigen::Vector3d offset = world_T_port.translation() - world_T_camera.translation();
+  // d/dt [R_cw (p - c)] = R_cw [(v_p - v_c) - w_c x (p - c)]
+  truth.linear_m_s = camera_R_world * ((port_v - camera_v) - chaser_w.cross(offset));
+  truth.angular_rad_s = camera_R_world * (target_w - chaser_w);
+  return truth;
+}
+
+const cv::Mat& Simulation::render(int camera) {
+  if (scene_time_s_ != time_s_) {
+    scene_.update(worldTTargetRobot());
+    scene_time_s_ = time_s_;
+  }
+  return renderers_.at(static_cast<std::size_t>(camera))->render(scene_, worldTCamera(camera));
+}
+
+}  // namespace docking_sim
