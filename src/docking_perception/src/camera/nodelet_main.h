@@ -1,0 +1,25 @@
+// Loads one nodelet into this process, for the camera executables that run without a nodelet manager.
+#pragma once
+
+#include <nodelet/loader.h>
+#include <ros/ros.h>
+
+#include <string>
+
+namespace docking_perception {
+
+inline int runNodeletStandalone(int argc, char** argv, const std::string& node_name, const std::string& type) {
+  ros::init(argc, argv, node_name);
+  nodelet::Loader loader(false);  // no load/unload services: this process runs just this nodelet
+  const nodelet::M_string remappings(ros::names::getRemappings());
+  const nodelet::V_string nodelet_argv(argv + 1, argv + argc);
+  // The nodelet logs why it did not start (e.g. the parameter that is missing).
+  if (!loader.load(ros::this_node::getName(), type, remappings, nodelet_argv)) {
+    ROS_FATAL("%s: could not start %s", ros::this_node::getName().c_str(), type.c_str());
+    return 1;
+  }
+  ros::spin();
+  return 0;
+}
+
+}  // namespace docking_perception
