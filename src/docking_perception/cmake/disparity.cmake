@@ -1,0 +1,71 @@
+# disparity_detector: the far-range target detector on the stereo disparity image (issue 4).
+# Included by the package CMakeLists.txt after catkin_package().
+
+# ROS-free core: the paper's detector made robust (no ros:: here; gtests need no roscore).
+add_library(docking_perception_disparity_core
+  src/disparity/disparity_detector.cpp
+)
+target_link_libraries(docking_perception_disparity_core ${OpenCV_LIBRARIES})
+
+# Test and benchmark support: a synthetic rectified stereo pair with known geometry, and the
+# matcher settings read from config/stereo_image_proc.yaml (the ones the launch file uses).
+add_library(docking_perception_disparity_synthetic STATIC
+  test/disparity/synthetic_stereo.cpp
+)
+target_link_libraries(docking_perception_disparity_synthetic ${OpenCV_LIBRARIES})
+
+set(DISPARITY_CONFIG_DIR ${PROJECT_SOURCE_DIR}/../../config)
+
+# Nodelet: thin ROS wrapper (parameters, dynamic_reconfigure, diagnostics, message conversion).
+if(EXISTS ${PROJECT_SOURCE_DIR}/src/disparity/disparity_detector_nodelet.cpp)
+  add_library(docking_perception_disparity_nodelet
+    src/disparity/disparity_detector_nodelet.cpp
+  )
+  add_dependencies(docking_perception_disparity_nodelet ${PROJECT_NAME}_gencfg ${catkin_EXPORTED_TARGETS})
+  target_link_libraries(docking_perception_disparity_nodelet
+    docking_perception_disparity_core ${catkin_LIBRARIES} ${OpenCV_LIBRARIES})
+
+  # Standalone node: loads the nodelet in-process.
+  add_executable(disparity_detector src/disparity/disparity_detector_node.cpp)
+  target_link_libraries(disparity_detector ${catkin_LIBRARIES})
+  add_dependencies(disparity_detector docking_perception_disparity_nodelet)
+
+  install(TARGETS docking_perception_disparity_nodelet disparity_detector
+    ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+    LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+    RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+endif()
+
+# Benchmark (a program that prints figures, never a test): rectify + disparity + detection.
+add_executable(bench_disparity src/disparity/bench_disparity.cpp)
+target_link_libraries(bench_disparity
+  docking_perception_disparity_core docking_perception_disparity_synthetic ${OpenCV_LIBRARIES})
+target_include_directories(bench_disparity PRIVATE test/disparity)
+target_compile_definitions(bench_disparity PRIVATE
+  DISPARITY_CONFIG_DIR="${DISPARITY_CONFIG_DIR}")
+
+install(TARGETS docking_perception_disparity_core
+  ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+  LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION})
+install(TARGETS bench_disparity RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+install(DIRECTORY include/${PROJECT_NAME}/disparity/
+  DESTINATION ${CATKIN_PACKAGE_INCLUDE_DESTINATION}/disparity)
+
+if(CATKIN_ENABLE_TESTING)
+  # The detector on synthetic disparity images with known answers.
+  catkin_add_gtest(test_disparity_detector test/disparity/test_disparity_detector.cpp)
+  if(TARGET test_disparity_detector)
+    target_link_libraries(test_disparity_detector docking_perception_disparity_core gtest_main)
+  endif()
+
+  # The whole far-range pipeline on rendered stereo pairs: matcher with the launch file's settings,
+  # then the detector.
+  catkin_add_gtest(test_disparity_pipeline test/disparity/test_disparity_pipeline.cpp)
+  if(TARGET test_disparity_pipeline)
+    target_link_libraries(test_disparity_pipeline
+      docking_perception_disparity_core docking_perception_disparity_synthetic ${OpenCV_LIBRARIES}
+      gtest_main)
+    target_compile_definitions(test_disparity_pipeline PRIVATE
+      DISPARITY_CONFIG_DIR="${DISPARITY_CONFIG_DIR}")
+  endif()
+endif()

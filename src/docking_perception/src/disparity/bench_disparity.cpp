@@ -1,0 +1,208 @@
+// bench_disparity: single-thread timing of the far-range pipeline on a fixed rendered 640x480 pair.
+// A program that prints figures, never a test (timings depend on the machine and its load).
+//
+//   bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]
+//
+// Stages: rectify (cv::remap of both raw images with the maps of config/cameras/stereo_*.yaml),
+// disparity (the matcher of config/stereo_image_proc.yaml, converted to float as stereo_image_proc
+// does), detection (DisparityDetector with config/disparity_detector.yaml), and disparity_total
+// (all three, timed as one). Times are the thread's CPU time (clock_gettime
+// CLOCK_THREAD_CPUTIME_ID), medians over the frames; the wall time is printed beside. Writes {"image": "640x480", "threads": 1, "stages": {NAME: {"ms_median",
+// "hz"}}} to OUTPUT.json.
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "docking_perception/disparity/disparity_detector.h"
+#include "synthetic_stereo.h"
+
+namespace {
+
+using docking_perception::disparity::DisparityDetector;
+using docking_perception::disparity::Detection;
+using docking_perception::disparity::StereoGeometry;
+namespace testing = docking_perception::disparity::testing;
+
+double medianOf(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// The raw (distorted) image a camera with `calibration` would take of the rectified `rectified`:
+// for each raw pixel, look up where it lands after rectification.
+cv::Mat distort(const cv::Mat& rectified, const testing::CameraCalibration& calibration) {
+  std::vector<cv::Point2f> raw_pixels;
+  raw_pixels.reserve(static_cast<std::size_t>(calibration.size.area()));
+  for (int v = 0; v < calibration.size.height; ++v) {
+    for (int u = 0; u < calibration.size.width; ++u) raw_pixels.emplace_back(u, v);
+  }
+  std::vector<cv::Point2f> rectified_pixels;
+  cv::undistortPoints(raw_pixels, rectified_pixels, calibration.camera_matrix,
+                      calibration.distortion, calibration.rectification, calibration.projection);
+  cv::Mat map(calibration.size, CV_32FC2);
+  for (int v = 0; v < calibration.size.height; ++v) {
+    for (int u = 0; u < calibration.size.width; ++u) {
+      const cv::Point2f& p = rectified_pixels[static_cast<std::size_t>(v * calibration.size.width + u)];
+      map.at<cv::Vec2f>(v, u) = cv::Vec2f(p.x, p.y);
+    }
+  }
+  cv::Mat raw;
+  cv::remap(rectified, raw, map, cv::noArray(), cv::INTER_LINEAR);
+  return raw;
+}
+
+void rectifyMaps(const testing::CameraCalibration& calibration, cv::Mat* map1, cv::Mat* map2) {
+  // image_geometry's rectification: fixed-point maps, bilinear remap (image_proc's default).
+  cv::initUndistortRectifyMap(calibration.camera_matrix, calibration.distortion,
+                              calibration.rectification, calibration.projection, calibration.size,
+                              CV_16SC2, *map1, *map2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string output_path;
+  std::string config_dir = DISPARITY_CONFIG_DIR;
+  int frames = 100;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--frames" && i + 1 < argc) {
+      frames = std::max(1, std::atoi(argv[++i]));
+    } else if (arg == "--config-dir" && i + 1 < argc) {
+      config_dir = argv[++i];
+    } else if (!arg.empty() && arg[0] != '-' && output_path.empty()) {
+      output_path = arg;
+    } else {
+      std::cerr << "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]\n";
+      return 2;
+    }
+  }
+  if (output_path.empty()) {
+    std::cerr << "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]\n";
+    return 2;
+  }
+
+  cv::setNumThreads(1);
+  try {
+    const auto left_calibration = testing::loadCameraCalibration(config_dir + "/cameras/stereo_left.yaml");
+    const auto right_calibration =
+        testing::loadCameraCalibration(config_dir + "/cameras/stereo_right.yaml");
+    const auto settings = testing::loadMatcherSettings(config_dir + "/stereo_image_proc.yaml");
+    const auto params = testing::loadDetectorParams(config_dir + "/disparity_detector.yaml");
+
+    // The fixed scene: the target face-on at 3 m, slightly off-axis, floor and a wall at 8 m.
+    const double truth_x = 0.3, truth_y = 0.0, truth_z = 3.0;
+    testing::SyntheticScene scene = testing::targetScene(truth_x, truth_y, truth_z, 8.0);
+    scene.focal_px = left_calibration.projection.at<double>(0, 0);
+    scene.cx_px = left_calibration.projection.at<double>(0, 2);
+    scene.cy_px = left_calibration.projection.at<double>(1, 2);
+    scene.baseline_m = -right_calibration.projection.at<double>(0, 3) /
+                       right_calibration.projection.at<double>(0, 0);
+    cv::Mat left_rectified_truth, right_rectified_truth;
+    testing::renderStereoPair(scene, &left_rectified_truth, &right_rectified_truth);
+    const cv::Mat left_raw = distort(left_rectified_truth, left_calibration);
+    const cv::Mat right_raw = distort(right_rectified_truth, right_calibration);
+
+    cv::Mat left_map1, left_map2, right_map1, right_map2;
+    rectifyMaps(left_calibration, &left_map1, &left_map2);
+    rectifyMaps(right_calibration, &right_map1, &right_map2);
+    auto matcher = testing::createMatcher(settings);
+    const DisparityDetector detector(params);
+    StereoGeometry geometry;
+    geometry.focal_px = scene.focal_px;
+    geometry.cx_px = scene.cx_px;
+    geometry.cy_px = scene.cy_px;
+    geometry.baseline_m = scene.baseline_m;
+    const int range = (settings.disparity_range / 16) * 16;
+    const int blind = settings.min_disparity + range + settings.correlation_window_size / 2;
+    const cv::Rect valid_region(blind, 0, left_raw.cols - blind, left_raw.rows);
+
+    // CPU time of this thread: on a shared machine, wall time measures the other users too.
+    struct Clock {
+      static double now() {
+        timespec ts{};
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+        return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+      }
+    };
+    auto ms_since = [](double start_ms) { return Clock::now() - start_ms; };
+    const auto wall_start = std::chrono::steady_clock::now();
+    std::map<std::string, std::vector<double>> samples;
+    Detection detection;
+    const int warmup = 3;
+    for (int frame = 0; frame < frames + warmup; ++frame) {
+      const auto start = Clock::now();
+      cv::Mat left_rect, right_rect;
+      cv::remap(left_raw, left_rect, left_map1, left_map2, cv::INTER_LINEAR);
+      cv::remap(right_raw, right_rect, right_map1, right_map2, cv::INTER_LINEAR);
+      const double rectify_ms = ms_since(start);
+      const auto disparity_start = Clock::now();
+      const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
+      const double disparity_ms = ms_since(disparity_start);
+      const auto detection_start = Clock::now();
+      detection = detector.detect(disparity, geometry, settings.min_disparity,
+                                  settings.min_disparity + range - 1, valid_region);
+      const double detection_ms = ms_since(detection_start);
+      const double total_ms = ms_since(start);
+      if (frame < warmup) continue;
+      samples["rectify"].push_back(rectify_ms);
+      samples["disparity"].push_back(disparity_ms);
+      samples["detection"].push_back(detection_ms);
+      samples["disparity_total"].push_back(total_ms);
+    }
+
+    const double wall_ms = std::chrono::duration<double, std::milli>(
+                               std::chrono::steady_clock::now() - wall_start).count() /
+                           (frames + warmup);
+    double cpu_total_ms = 0.0;
+    for (double ms : samples["disparity_total"]) cpu_total_ms += ms;
+    std::cout << "bench_disparity: 640x480, 1 thread, " << frames << " frames, matcher "
+              << (settings.stereo_algorithm == 0 ? "StereoBM" : "StereoSGBM") << " range " << range
+              << " window " << (settings.correlation_window_size | 1) << "\n";
+    std::ofstream json(output_path);
+    if (!json) {
+      std::cerr << "bench_disparity: cannot write " << output_path << "\n";
+      return 1;
+    }
+    json << std::fixed << std::setprecision(3);
+    json << "{\"image\": \"" << left_raw.cols << "x" << left_raw.rows
+         << "\", \"threads\": 1, \"stages\": {";
+    bool first = true;
+    for (const char* stage : {"rectify", "disparity", "detection", "disparity_total"}) {
+      const double ms = medianOf(samples[stage]);
+      const double hz = ms > 0.0 ? 1000.0 / ms : 0.0;
+      std::cout << "  " << std::left << std::setw(16) << stage << std::right << std::fixed
+                << std::setprecision(2) << std::setw(8) << ms << " ms median  " << std::setw(8)
+                << hz << " Hz\n";
+      json << (first ? "" : ", ") << "\"" << stage << "\": {\"ms_median\": " << ms
+           << ", \"hz\": " << hz << "}";
+      first = false;
+    }
+    json << "}}\n";
+    std::cout << std::setprecision(2) << "  (thread CPU time; wall time per frame " << wall_ms
+              << " ms against " << cpu_total_ms / frames
+              << " ms CPU: the difference is other load on the machine)\n";
+    std::cout << std::setprecision(3) << "  detection: "
+              << (detection.found ? "found" : "NOT found: " + detection.reason) << ", position ("
+              << detection.position_m.x() << ", " << detection.position_m.y() << ", "
+              << detection.position_m.z() << ") m, truth (" << truth_x << ", " << truth_y << ", "
+              << truth_z << ") m\n"
+              << "  wrote " << output_path << "\n";
+  } catch (const std::exception& error) {
+    std::cerr << "bench_disparity: " << error.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
