@@ -49,3 +49,18 @@ if(CATKIN_ENABLE_TESTING)
       DOCKING_CONFIG_DIR="${PROJECT_SOURCE_DIR}/../../config")
   endif()
 endif()
+
+# Node tests (rostest): one executable, one .test file per scenario.
+if(CATKIN_ENABLE_TESTING)
+  find_package(rostest REQUIRED)
+  catkin_add_executable_with_gtest(camera_nodes_rostest test/camera/camera_nodes_rostest.cpp EXCLUDE_FROM_ALL)
+  if(TARGET camera_nodes_rostest)
+    target_link_libraries(camera_nodes_rostest ${catkin_LIBRARIES} yaml-cpp)
+    add_dependencies(camera_nodes_rostest ${catkin_EXPORTED_TARGETS})
+    foreach(camera_test camera_sequence camera_failures camera_frames)
+      add_rostest(test/camera/${camera_test}.test
+        DEPENDENCIES camera_nodes_rostest stereo_camera ir_camera camera_frames_publisher
+                     docking_perception_camera_nodelets)
+    endforeach()
+  endif()
+endif()
