@@ -1,0 +1,124 @@
+// The docking state machine around SafeCircleApproach (ROS-free). The node feeds it the target
+// estimates (already in odom) and the chaser's odometry, and calls update() at a fixed rate.
+//
+//   SEARCH   no target: stop; after search_wait_s turn slowly in place to look for it
+//   APPROACH straight to the safe circle (see safe_circle_approach.h)
+//   ALIGN    along the safe circle to the port axis
+//   FINAL    along the port axis to contact; near contact, on odometry (the target pose held in odom)
+//   DOCKED   within the docked tolerances: zero velocity, latched until reset()
+//   HOLD     target lost (or odometry bad): zero velocity; back to where it was when the target
+//            returns; after hold_timeout_s ABORT (inside the safe circle) or SEARCH
+//   ABORT    lost too long near the target, or errors growing: back off to the safe circle on the held
+//            target pose, then SEARCH
+// Every failure path commands zero velocity: bad odometry, NaN, no target, HOLD, DOCKED.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "docking_planner/safe_circle_approach.h"
+#include "docking_planner/target_track.h"
+
+namespace docking_planner {
+
+/// Numbered as DockingState's constants.
+enum class DockingPhase : std::uint8_t {
+  kSearch = 0,
+  kApproach = 1,
+  kAlign = 2,
+  kFinal = 3,
+  kDocked = 4,
+  kHold = 5,
+  kAbort = 6
+};
+const char* stateName(DockingPhase state);
+
+struct PlannerConfig {
+  ApproachConfig law;
+  TrackConfig track;
+  double estimate_timeout_s{0.6};          ///< the target is visible while its last estimate is younger
+  double odom_timeout_s{0.3};              ///< older odometry: zero velocity (HOLD)
+  double orientation_timeout_s{15.0};      ///< a held port axis older than this is forgotten (>= max_blind_s)
+  double search_wait_s{2.0};               ///< SEARCH: stand still this long before turning
+  double search_yaw_rate_radps{0.3};       ///< SEARCH: then turn in place at this rate
+  double hold_timeout_s{3.0};              ///< HOLD: then ABORT or SEARCH
+  double abort_timeout_s{20.0};            ///< ABORT: give up backing off after this (-> SEARCH)
+  double approach_goal_tolerance_m{0.05};  ///< APPROACH -> ALIGN within this of the goal on the circle
+  double circle_tolerance_m{0.05};         ///< "on the safe circle": |r - R| within this
+  double align_lateral_tolerance_m{0.02};  ///< ALIGN -> FINAL: off the port axis by less than this...
+  double align_yaw_tolerance_rad{0.05};    ///< ...and heading error below this
+  double docked_position_tolerance_m{0.005};  ///< DOCKED: probe tip within this of the port centre...
+  double docked_yaw_tolerance_rad{0.0087};    ///< ...and heading error within this
+  double final_abort_lateral_m{0.08};      ///< FINAL -> ABORT when off the axis by more than this...
+  double final_abort_yaw_rad{0.3};         ///< ...or the heading error exceeds this
+  double divergence_margin_m{0.3};         ///< APPROACH/ALIGN -> ABORT when the goal distance grows this much
+  double blind_final_range_m{0.35};        ///< FINAL: with the probe tip this near, a lost target is dead-reckoned
+  double odometry_only_range_m{0.12};      ///< FINAL: with the probe tip this near, estimates are ignored
+  double max_blind_s{10.0};                ///< FINAL on odometry for longer than this -> ABORT
+};
+
+/// Throws std::invalid_argument naming the bad field.
+void validate(const PlannerConfig& config);
+
+/// The chaser's odometry: pose of base_link in odom, body-frame twist.
+struct ChaserOdometry {
+  double stamp_s{0.0};
+  Pose2D pose;
+  BodyTwist twist;
+};
+
+struct PlannerOutput {
+  DockingPhase state{DockingPhase::kSearch};
+  std::string reason;
+  double time_in_state_s{0.0};
+  BodyTwist command;                   ///< base_link; all zero on every failure path
+  bool target_visible{false};          ///< a valid, fresh estimate was used this cycle
+  bool on_odometry{false};             ///< FINAL runs on the held target pose, not on fresh estimates
+  std::uint8_t estimate_source{0};     ///< source of the last estimate used
+  bool has_target{false};              ///< the errors below are meaningful (a target pose is held)
+  ApproachGeometry geometry;           ///< errors against the (held or fresh) port pose
+  double goal_distance_m{0.0};
+  std::optional<PortState> port;       ///< the port pose the command was computed from
+  std::vector<Pose2D> path;            ///< planned path in odom (empty without a target)
+};
+
+class DockingPlanner {
+ public:
+  /// Throws std::invalid_argument for an invalid configuration.
+  explicit DockingPlanner(const PlannerConfig& config);
+
+  /// Gives the planner an estimate. Invalid, NaN and out-of-order ones are not used; the returned
+  /// reason says why (and shows up in the next update's reason while the target is not visible).
+  TrackUpdate addObservation(const TargetObservation& observation);
+
+  /// One planner cycle at time `now_s` with the latest odometry (absent: none received yet).
+  PlannerOutput update(double now_s, const std::optional<ChaserOdometry>& odometry);
+
+  /// Back to SEARCH, forgetting the target (e.g. after DOCKED, to start again).
+  void reset(double now_s);
+
+  DockingPhase state() const { return state_; }
+  const PlannerConfig& config() const { return config_; }
+
+ private:
+  void enter(DockingPhase state, double now_s, const std::string& reason);
+  PlannerOutput stop(PlannerOutput out, const std::string& reason) const;
+  bool targetVisible(double now_s) const;
+  std::string lostReason(double now_s) const;
+
+  PlannerConfig config_;
+  SafeCircleApproach law_;
+  TargetTrack track_;
+  DockingPhase state_{DockingPhase::kSearch};
+  std::string state_reason_{"started: no target yet"};
+  std::optional<double> state_since_s_;
+  DockingPhase resume_state_{DockingPhase::kApproach};  // where HOLD returns to
+  double min_goal_distance_m_{0.0};                     // divergence check within APPROACH / ALIGN
+  double last_tip_error_m_{1e9};                        // to ignore estimates at contact range
+  std::string last_rejection_;
+  bool nan_estimate_{false};  // the latest estimate offered had a NaN: treated as no target
+};
+
+}  // namespace docking_planner

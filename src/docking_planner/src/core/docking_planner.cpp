@@ -1,0 +1,373 @@
+#include "docking_planner/docking_planner.h"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace docking_planner {
+namespace {
+
+std::string fmt(const char* format, double value) {
+  char buffer[96];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+std::string fmt2(const char* format, double a, double b) {
+  char buffer[128];
+  std::snprintf(buffer, sizeof(buffer), format, a, b);
+  return buffer;
+}
+
+void requirePositive(double value, const char* name) {
+  if (!std::isfinite(value) || value <= 0.0) {
+    throw std::invalid_argument(std::string(name) + " must be a positive number");
+  }
+}
+
+bool finite(const ChaserOdometry& o) {
+  return std::isfinite(o.stamp_s) && std::isfinite(o.pose.x) && std::isfinite(o.pose.y) &&
+         std::isfinite(o.pose.yaw) && std::isfinite(o.twist.vx) && std::isfinite(o.twist.vy) &&
+         std::isfinite(o.twist.wz);
+}
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+// Orbit without a known port axis: the axis is placed this far ahead, so the ALIGN law moves the chaser
+// along the circle (counter-clockwise seen from above) at its speed limit.
+constexpr double kOrbitLeadRad = 0.5;
+
+}  // namespace
+
+const char* stateName(DockingPhase state) {
+  switch (state) {
+    case DockingPhase::kSearch:
+      return "SEARCH";
+    case DockingPhase::kApproach:
+      return "APPROACH";
+    case DockingPhase::kAlign:
+      return "ALIGN";
+    case DockingPhase::kFinal:
+      return "FINAL";
+    case DockingPhase::kDocked:
+      return "DOCKED";
+    case DockingPhase::kHold:
+      return "HOLD";
+    case DockingPhase::kAbort:
+      return "ABORT";
+  }
+  return "UNKNOWN";
+}
+
+void validate(const PlannerConfig& c) {
+  validate(c.law);
+  validate(c.track);
+  requirePositive(c.estimate_timeout_s, "estimate_timeout_s");
+  requirePositive(c.odom_timeout_s, "odom_timeout_s");
+  requirePositive(c.orientation_timeout_s, "orientation_timeout_s");
+  requirePositive(c.search_wait_s, "search_wait_s");
+  if (!std::isfinite(c.search_yaw_rate_radps) || std::abs(c.search_yaw_rate_radps) > c.law.max_yaw_rate_radps) {
+    throw std::invalid_argument("search_yaw_rate_radps must be finite and within max_yaw_rate_radps");
+  }
+  requirePositive(c.hold_timeout_s, "hold_timeout_s");
+  requirePositive(c.abort_timeout_s, "abort_timeout_s");
+  requirePositive(c.approach_goal_tolerance_m, "approach_goal_tolerance_m");
+  requirePositive(c.circle_tolerance_m, "circle_tolerance_m");
+  requirePositive(c.align_lateral_tolerance_m, "align_lateral_tolerance_m");
+  requirePositive(c.align_yaw_tolerance_rad, "align_yaw_tolerance_rad");
+  requirePositive(c.docked_position_tolerance_m, "docked_position_tolerance_m");
+  requirePositive(c.docked_yaw_tolerance_rad, "docked_yaw_tolerance_rad");
+  requirePositive(c.final_abort_lateral_m, "final_abort_lateral_m");
+  requirePositive(c.final_abort_yaw_rad, "final_abort_yaw_rad");
+  if (c.final_abort_lateral_m <= c.align_lateral_tolerance_m || c.final_abort_yaw_rad <= c.align_yaw_tolerance_rad) {
+    throw std::invalid_argument(
+        "final_abort_lateral_m / final_abort_yaw_rad must exceed align_lateral_tolerance_m / align_yaw_tolerance_rad");
+  }
+  requirePositive(c.divergence_margin_m, "divergence_margin_m");
+  requirePositive(c.blind_final_range_m, "blind_final_range_m");
+  if (!std::isfinite(c.odometry_only_range_m) || c.odometry_only_range_m < 0.0 ||
+      c.odometry_only_range_m > c.blind_final_range_m) {
+    throw std::invalid_argument("odometry_only_range_m must be in [0, blind_final_range_m]");
+  }
+  requirePositive(c.max_blind_s, "max_blind_s");
+  if (c.orientation_timeout_s < c.max_blind_s) {
+    throw std::invalid_argument("orientation_timeout_s must be >= max_blind_s (the blind finish needs the port axis)");
+  }
+}
+
+DockingPlanner::DockingPlanner(const PlannerConfig& config)
+    : config_((validate(config), config)), law_(config.law), track_(config.track) {}
+
+void DockingPlanner::reset(double now_s) {
+  track_.reset();
+  last_rejection_.clear();
+  nan_estimate_ = false;
+  last_tip_error_m_ = 1e9;
+  enter(DockingPhase::kSearch, now_s, "reset: no target yet");
+}
+
+void DockingPlanner::enter(DockingPhase state, double now_s, const std::string& reason) {
+  state_ = state;
+  state_reason_ = reason;
+  state_since_s_ = now_s;
+  min_goal_distance_m_ = INFINITY;
+}
+
+TrackUpdate DockingPlanner::addObservation(const TargetObservation& observation) {
+  if (state_ == DockingPhase::kFinal && last_tip_error_m_ < config_.odometry_only_range_m) {
+    // Near contact the cameras see only part of the target: finish on the pose held in odom.
+    return TrackUpdate{false, "inside the odometry-only range: estimate not used"};
+  }
+  TrackUpdate result = track_.update(observation);
+  if (result.accepted) {
+    last_rejection_.clear();
+    nan_estimate_ = false;
+  } else {
+    last_rejection_ = result.reason;
+    if (observation.valid && result.reason.find("NaN") != std::string::npos) nan_estimate_ = true;
+  }
+  return result;
+}
+
+bool DockingPlanner::targetVisible(double now_s) const {
+  if (nan_estimate_ || !track_.hasPosition()) return false;
+  const double age = now_s - track_.lastStamp();
+  return age <= config_.estimate_timeout_s && age >= -config_.estimate_timeout_s;
+}
+
+std::string DockingPlanner::lostReason(double now_s) const {
+  if (nan_estimate_) return "latest estimate contains NaN";
+  std::string reason = track_.hasPosition() ? fmt("target not seen for %.1f s", now_s - track_.lastStamp())
+                                            : std::string("no target estimate yet");
+  if (!last_rejection_.empty()) reason += " (" + last_rejection_ + ")";
+  return reason;
+}
+
+PlannerOutput DockingPlanner::stop(PlannerOutput out, const std::string& reason) const {
+  out.command = BodyTwist{};
+  out.reason = reason;
+  return out;
+}
+
+PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdometry>& odometry) {
+  PlannerOutput out;
+  if (!std::isfinite(now_s)) {
+    out.state = state_;
+    return stop(out, "planner time is not finite");
+  }
+  if (!state_since_s_) state_since_s_ = now_s;
+
+  std::string odom_problem;
+  if (!odometry) {
+    odom_problem = "no odometry yet";
+  } else if (!finite(*odometry)) {
+    odom_problem = "odometry contains NaN or infinity";
+  } else if (now_s - odometry->stamp_s > config_.odom_timeout_s) {
+    odom_problem = fmt("odometry stale (%.2f s old)", now_s - odometry->stamp_s);
+  }
+
+  const bool visible = targetVisible(now_s);
+  const bool orientation_known =
+      track_.hasOrientation() && now_s - track_.lastOrientationStamp() <= config_.orientation_timeout_s;
+  PortState port;
+  if (track_.hasPosition()) port = track_.predict(now_s);
+  Pose2D chaser;
+  if (odom_problem.empty()) chaser = odometry->pose;
+  if (track_.hasPosition() && odom_problem.empty() && !orientation_known) {
+    // Position only (far away, disparity): take the port as facing us, which makes the approach goal
+    // the point of the safe circle on the line of sight; no rotation is fed forward.
+    port.pose.yaw = std::atan2(chaser.y - port.pose.y, chaser.x - port.pose.x);
+    port.yaw_rate = 0.0;
+  }
+  out.has_target = track_.hasPosition() && odom_problem.empty();
+  if (out.has_target) {
+    out.geometry = law_.measure(chaser, port.pose);
+    out.port = port;
+    last_tip_error_m_ = out.geometry.tip_error_m;
+  }
+  out.target_visible = visible && odom_problem.empty();
+  out.estimate_source = track_.lastSource();
+
+  const auto moving = [](DockingPhase s) {
+    return s == DockingPhase::kApproach || s == DockingPhase::kAlign || s == DockingPhase::kFinal ||
+           s == DockingPhase::kAbort;
+  };
+  auto finish = [&](PlannerOutput o) {
+    o.state = state_;
+    o.time_in_state_s = now_s - *state_since_s_;
+    return o;
+  };
+
+  if (!odom_problem.empty()) {
+    if (moving(state_)) {
+      resume_state_ = state_;
+      enter(DockingPhase::kHold, now_s, odom_problem);
+    }
+    return finish(stop(out, odom_problem));
+  }
+  if (nan_estimate_ && moving(state_)) {
+    resume_state_ = state_;
+    enter(DockingPhase::kHold, now_s, "latest estimate contains NaN");
+  }
+
+  const double r_safe = config_.law.safe_radius_m;
+  auto drive = [&](PlannerOutput o, Phase phase, const std::string& reason) {
+    const LawCommand cmd = law_.command(phase, chaser, port);
+    o.command = cmd.twist;
+    o.goal_distance_m = cmd.goal_distance_m;
+    o.path = law_.plannedPath(phase, chaser, port.pose);
+    o.reason = reason + (cmd.fov_limited ? " (heading held at the edge of the camera's view)" : "");
+    return o;
+  };
+
+  // A transition re-evaluates the new state in the same cycle, so that no cycle is lost; the state
+  // graph has no loop that can be taken without time passing, the bound is only a guard.
+  for (int pass = 0; pass < 6; ++pass) {
+    const double in_state_s = now_s - *state_since_s_;
+    switch (state_) {
+      case DockingPhase::kDocked:
+        return finish(stop(out, state_reason_));
+
+      case DockingPhase::kSearch:
+        if (out.target_visible) {
+          enter(DockingPhase::kApproach, now_s, "target found");
+          continue;
+        }
+        if (in_state_s < config_.search_wait_s) return finish(stop(out, lostReason(now_s) + ": waiting"));
+        out.command = BodyTwist{0.0, 0.0, config_.search_yaw_rate_radps};
+        out.reason = lostReason(now_s) + ": turning to look for it";
+        return finish(out);
+
+      case DockingPhase::kHold:
+        if (out.target_visible) {
+          enter(resume_state_, now_s, "target back after a hold");
+          continue;
+        }
+        if (in_state_s > config_.hold_timeout_s) {
+          if (out.has_target && out.geometry.range_m < r_safe - config_.circle_tolerance_m) {
+            enter(DockingPhase::kAbort, now_s, lostReason(now_s) + ": backing off to the safe circle");
+          } else {
+            enter(DockingPhase::kSearch, now_s, lostReason(now_s));
+          }
+          continue;
+        }
+        return finish(stop(out, "holding: " + lostReason(now_s)));
+
+      case DockingPhase::kAbort: {
+        if (!out.has_target) {
+          enter(DockingPhase::kSearch, now_s, "abort: no target pose held");
+          continue;
+        }
+        // ABORT lasts at least one cycle (zero velocity outside the circle), so that it is published.
+        if (in_state_s > 0.0 && out.geometry.range_m >= r_safe - config_.circle_tolerance_m) {
+          enter(DockingPhase::kSearch, now_s, "backed off to the safe circle after: " + state_reason_);
+          continue;
+        }
+        if (in_state_s > config_.abort_timeout_s) {
+          enter(DockingPhase::kSearch, now_s, "backing off took too long");
+          continue;
+        }
+        return finish(drive(out, Phase::kBackOff, "abort: " + state_reason_));
+      }
+
+      case DockingPhase::kApproach:
+      case DockingPhase::kAlign:
+      case DockingPhase::kFinal: {
+        const ApproachGeometry& g = out.geometry;
+        bool on_odometry = false;
+        std::string blind_reason;
+        if (!out.target_visible) {
+          const double blind_s = now_s - track_.lastStamp();
+          const bool near_contact = out.has_target && g.tip_error_m < config_.blind_final_range_m;
+          if (state_ == DockingPhase::kFinal && near_contact && orientation_known && !nan_estimate_) {
+            if (blind_s > config_.max_blind_s) {
+              enter(DockingPhase::kAbort, now_s, fmt("final approach on odometry for too long (%.1f s)", blind_s));
+              continue;
+            }
+            on_odometry = true;
+            blind_reason = g.tip_error_m < config_.odometry_only_range_m
+                               ? fmt("on odometry: probe tip within %.2f m, estimates no longer used",
+                                     config_.odometry_only_range_m)
+                               : fmt("on odometry: target not seen for %.1f s, pose held in odom", blind_s);
+          } else {
+            resume_state_ = state_;
+            enter(DockingPhase::kHold, now_s, lostReason(now_s));
+            continue;
+          }
+        }
+        out.on_odometry = on_odometry;
+
+        if (state_ == DockingPhase::kApproach) {
+          if (!orientation_known) {
+            const LawCommand cmd = law_.command(Phase::kApproach, chaser, port);
+            if (cmd.goal_distance_m > config_.approach_goal_tolerance_m) {
+              return finish(drive(out, Phase::kApproach, "approaching on position only (port orientation unknown)"));
+            }
+            // On the circle and the port face still not seen (it faces away): orbit, always the same
+            // way, until a camera sees the face. Done with the ALIGN law around an axis kept a fixed
+            // angle ahead of the chaser.
+            port.pose.yaw = wrapAngle(port.pose.yaw + kOrbitLeadRad);
+            return finish(drive(out, Phase::kAlign, "orbiting the safe circle to find the port face"));
+          }
+          const LawCommand cmd = law_.command(Phase::kApproach, chaser, port);
+          if (cmd.goal_distance_m < config_.approach_goal_tolerance_m) {
+            enter(DockingPhase::kAlign, now_s,
+                  fmt("on the safe circle, %.0f deg off the port axis", g.polar_angle_rad * kRadToDeg));
+            continue;
+          }
+          if (cmd.goal_distance_m > min_goal_distance_m_ + config_.divergence_margin_m) {
+            enter(DockingPhase::kAbort, now_s,
+                  fmt2("approach diverging: goal %.2f m away, was %.2f m", cmd.goal_distance_m, min_goal_distance_m_));
+            continue;
+          }
+          min_goal_distance_m_ = std::min(min_goal_distance_m_, cmd.goal_distance_m);
+          return finish(drive(out, Phase::kApproach, "straight to the safe circle"));
+        }
+
+        if (state_ == DockingPhase::kAlign) {
+          const double arc_m = std::abs(g.polar_angle_rad) * r_safe;
+          if (arc_m < config_.align_lateral_tolerance_m &&
+              std::abs(g.yaw_error_rad) < config_.align_yaw_tolerance_rad &&
+              std::abs(g.range_m - r_safe) < config_.circle_tolerance_m) {
+            enter(DockingPhase::kFinal, now_s, "aligned with the port axis");
+            continue;
+          }
+          if (std::abs(g.range_m - r_safe) > 4.0 * config_.circle_tolerance_m) {
+            enter(DockingPhase::kApproach, now_s, fmt("off the safe circle by %.2f m", g.range_m - r_safe));
+            continue;
+          }
+          if (arc_m > min_goal_distance_m_ + config_.divergence_margin_m) {
+            enter(DockingPhase::kAbort, now_s, fmt2("alignment diverging: %.2f m of arc left, was %.2f m", arc_m,
+                                                    min_goal_distance_m_));
+            continue;
+          }
+          min_goal_distance_m_ = std::min(min_goal_distance_m_, arc_m);
+          return finish(drive(out, Phase::kAlign,
+                              fmt("on the safe circle towards the port axis, %.0f deg to go",
+                                  g.polar_angle_rad * kRadToDeg)));
+        }
+
+        // FINAL
+        if (g.tip_error_m <= config_.docked_position_tolerance_m &&
+            std::abs(g.yaw_error_rad) <= config_.docked_yaw_tolerance_rad) {
+          enter(DockingPhase::kDocked, now_s,
+                fmt2("docked: probe tip %.1f mm from the port, yaw error %.2f deg", g.tip_error_m * 1000.0,
+                     g.yaw_error_rad * kRadToDeg) +
+                    (on_odometry ? " (final approach on odometry)" : ""));
+          continue;
+        }
+        if (std::abs(g.lateral_m) > config_.final_abort_lateral_m ||
+            std::abs(g.yaw_error_rad) > config_.final_abort_yaw_rad) {
+          enter(DockingPhase::kAbort, now_s,
+                fmt2("final approach errors growing: lateral %.3f m, yaw %.1f deg", g.lateral_m,
+                     g.yaw_error_rad * kRadToDeg));
+          continue;
+        }
+        return finish(drive(out, Phase::kFinal,
+                            on_odometry ? "final approach " + blind_reason : std::string("final approach along the port axis")));
+      }
+    }
+  }
+  return finish(stop(out, "state machine did not settle: " + state_reason_));
+}
+
+}  // namespace docking_planner

@@ -1,0 +1,322 @@
+// planner: a thin node around DockingPlanner. Brings each FUSED target estimate into odom with tf2 at
+// the estimate's stamp, feeds it and the odometry to the core on a ros::Timer (sim-time friendly),
+// and publishes cmd_vel, DockingState, the planned path and diagnostics. Parameters:
+// config/planner.yaml (see README.md); a missing or invalid one stops the node, naming it.
+#include <csignal>
+#include <deque>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <docking_msgs/DockingState.h>
+#include <docking_msgs/TargetEstimate.h>
+#include <docking_msgs/names.h>
+#include <geometry_msgs/Twist.h>
+#include <nav_msgs/Odometry.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <tf2/utils.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_geometry_msgs/tf2_geometry_msgs.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "docking_planner/docking_planner.h"
+
+namespace docking_planner {
+namespace {
+
+double requireDouble(const ros::NodeHandle& nh, const std::string& name) {
+  double value;
+  if (!nh.getParam(name, value)) throw std::invalid_argument("missing parameter '" + nh.resolveName(name) + "'");
+  return value;
+}
+
+bool requireBool(const ros::NodeHandle& nh, const std::string& name) {
+  bool value;
+  if (!nh.getParam(name, value)) throw std::invalid_argument("missing parameter '" + nh.resolveName(name) + "'");
+  return value;
+}
+
+PlannerConfig loadConfig(const ros::NodeHandle& p) {
+  PlannerConfig c;
+  ApproachConfig& l = c.law;
+  l.safe_radius_m = requireDouble(p, "safe_radius_m");
+  l.probe_x_m = requireDouble(p, "probe_x_m");
+  l.camera_half_fov_rad = requireDouble(p, "camera_half_fov_rad");
+  l.fov_margin_rad = requireDouble(p, "fov_margin_rad");
+  l.tangent_margin_rad = requireDouble(p, "tangent_margin_rad");
+  l.approach_gain = requireDouble(p, "approach_gain");
+  l.radial_gain = requireDouble(p, "radial_gain");
+  l.tangential_gain = requireDouble(p, "tangential_gain");
+  l.axial_gain = requireDouble(p, "axial_gain");
+  l.lateral_gain = requireDouble(p, "lateral_gain");
+  l.yaw_gain = requireDouble(p, "yaw_gain");
+  l.max_speed_mps = requireDouble(p, "max_speed_mps");
+  l.max_yaw_rate_radps = requireDouble(p, "max_yaw_rate_radps");
+  l.align_speed_mps = requireDouble(p, "align_speed_mps");
+  l.final_speed_mps = requireDouble(p, "final_speed_mps");
+  l.final_slow_speed_mps = requireDouble(p, "final_slow_speed_mps");
+  l.final_slow_distance_m = requireDouble(p, "final_slow_distance_m");
+  l.final_lateral_gate_m = requireDouble(p, "final_lateral_gate_m");
+  l.final_yaw_gate_rad = requireDouble(p, "final_yaw_gate_rad");
+  TrackConfig& t = c.track;
+  t.velocity_filter_time_s = requireDouble(p, "velocity_filter_time_s");
+  t.min_difference_dt_s = requireDouble(p, "min_difference_dt_s");
+  t.max_port_speed_mps = requireDouble(p, "max_port_speed_mps");
+  t.max_port_yaw_rate_radps = requireDouble(p, "max_port_yaw_rate_radps");
+  t.use_estimate_yaw_rate = requireBool(p, "use_estimate_yaw_rate");
+  c.estimate_timeout_s = requireDouble(p, "estimate_timeout_s");
+  c.odom_timeout_s = requireDouble(p, "odom_timeout_s");
+  c.orientation_timeout_s = requireDouble(p, "orientation_timeout_s");
+  c.search_wait_s = requireDouble(p, "search_wait_s");
+  c.search_yaw_rate_radps = requireDouble(p, "search_yaw_rate_radps");
+  c.hold_timeout_s = requireDouble(p, "hold_timeout_s");
+  c.abort_timeout_s = requireDouble(p, "abort_timeout_s");
+  c.approach_goal_tolerance_m = requireDouble(p, "approach_goal_tolerance_m");
+  c.circle_tolerance_m = requireDouble(p, "circle_tolerance_m");
+  c.align_lateral_tolerance_m = requireDouble(p, "align_lateral_tolerance_m");
+  c.align_yaw_tolerance_rad = requireDouble(p, "align_yaw_tolerance_rad");
+  c.docked_position_tolerance_m = requireDouble(p, "docked_position_tolerance_m");
+  c.docked_yaw_tolerance_rad = requireDouble(p, "docked_yaw_tolerance_rad");
+  c.final_abort_lateral_m = requireDouble(p, "final_abort_lateral_m");
+  c.final_abort_yaw_rad = requireDouble(p, "final_abort_yaw_rad");
+  c.divergence_margin_m = requireDouble(p, "divergence_margin_m");
+  c.blind_final_range_m = requireDouble(p, "blind_final_range_m");
+  c.odometry_only_range_m = requireDouble(p, "odometry_only_range_m");
+  c.max_blind_s = requireDouble(p, "max_blind_s");
+  try {
+    validate(c);  // messages start with the field name, which is the parameter name
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("parameter ~" + std::string(e.what()));
+  }
+  return c;
+}
+
+volatile std::sig_atomic_t g_stop_requested = 0;
+void onSigint(int) { g_stop_requested = 1; }
+
+class PlannerNode {
+ public:
+  PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+      : planner_(loadConfig(pnh)), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
+    odom_frame_ = pnh.param<std::string>("odom_frame", docking_msgs::frames::kOdom);
+    base_frame_ = pnh.param<std::string>("base_frame", docking_msgs::frames::kBaseLink);
+    const double rate_hz = requireDouble(pnh, "rate_hz");
+    if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) throw std::invalid_argument("parameter ~rate_hz must be in (0, 1000]");
+    tf_wait_s_ = requireDouble(pnh, "tf_wait_s");
+    if (!(tf_wait_s_ >= 0.0)) throw std::invalid_argument("parameter ~tf_wait_s must be >= 0");
+
+    cmd_pub_ = nh.advertise<geometry_msgs::Twist>(docking_msgs::topics::kCmdVel, 1);
+    state_pub_ = nh.advertise<docking_msgs::DockingState>(docking_msgs::topics::kDockingState, 10);
+    path_pub_ = nh.advertise<nav_msgs::Path>(docking_msgs::topics::kDockingPath, 1, true);
+    estimate_sub_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 10, &PlannerNode::onEstimate, this);
+    odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometry, this);
+
+    diagnostics_.setHardwareID("none");
+    diagnostics_.add("docking planner", this, &PlannerNode::diagnose);
+    timer_ = nh.createTimer(ros::Duration(1.0 / rate_hz), &PlannerNode::onTimer, this);
+  }
+
+  /// Zero velocity on the way out (the base would also stop on its own after its cmd_vel timeout).
+  void publishStop() { cmd_pub_.publish(geometry_msgs::Twist()); }
+
+ private:
+  void onOdometry(const nav_msgs::OdometryConstPtr& msg) {
+    if (!msg->header.frame_id.empty() && msg->header.frame_id != odom_frame_) {
+      ROS_WARN_THROTTLE(5.0, "planner: odometry in frame '%s', expected '%s'", msg->header.frame_id.c_str(),
+                        odom_frame_.c_str());
+    }
+    ChaserOdometry o;
+    o.stamp_s = msg->header.stamp.toSec();
+    o.pose.x = msg->pose.pose.position.x;
+    o.pose.y = msg->pose.pose.position.y;
+    o.pose.yaw = tf2::getYaw(msg->pose.pose.orientation);
+    o.twist.vx = msg->twist.twist.linear.x;  // nav_msgs/Odometry: twist in child_frame_id (base_link)
+    o.twist.vy = msg->twist.twist.linear.y;
+    o.twist.wz = msg->twist.twist.angular.z;
+    odometry_ = o;
+  }
+
+  void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg) {
+    if (msg->source != docking_msgs::TargetEstimate::SOURCE_FUSED) {
+      ROS_WARN_ONCE("planner: estimates on %s are not SOURCE_FUSED; using them anyway",
+                    docking_msgs::topics::kTargetEstimate);
+    }
+    pending_.push_back(msg);
+    processPending();
+  }
+
+  // Estimates wait here until tf can place the camera in odom at their stamp (odometry may lag the
+  // image by a cycle), for at most tf_wait_s.
+  void processPending() {
+    while (!pending_.empty()) {
+      const auto& msg = pending_.front();
+      if (!msg->valid) {
+        TargetObservation o;
+        o.stamp_s = msg->header.stamp.toSec();
+        o.valid = false;
+        o.status = msg->status;
+        planner_.addObservation(o);
+        pending_.pop_front();
+        continue;
+      }
+      std::string error;
+      if (!tf_buffer_.canTransform(odom_frame_, msg->header.frame_id, msg->header.stamp, &error)) {
+        if ((ros::Time::now() - msg->header.stamp).toSec() <= tf_wait_s_) return;  // try again next cycle
+        ++tf_failures_;
+        last_tf_error_ = error;
+        ROS_WARN_THROTTLE(2.0, "planner: dropped an estimate: no transform %s -> %s at its stamp: %s",
+                          msg->header.frame_id.c_str(), odom_frame_.c_str(), error.c_str());
+        pending_.pop_front();
+        continue;
+      }
+      const Eigen::Isometry3d odom_from_camera =
+          tf2::transformToEigen(tf_buffer_.lookupTransform(odom_frame_, msg->header.frame_id, msg->header.stamp));
+      const TrackUpdate result = planner_.addObservation(toObservation(*msg, odom_from_camera));
+      if (!result.accepted) ROS_DEBUG("planner: estimate not used: %s", result.reason.c_str());
+      pending_.pop_front();
+    }
+  }
+
+  TargetObservation toObservation(const docking_msgs::TargetEstimate& msg, const Eigen::Isometry3d& odom_from_camera) {
+    TargetObservation o;
+    o.stamp_s = msg.header.stamp.toSec();
+    o.valid = msg.valid && msg.position_valid;
+    o.status = msg.position_valid ? msg.status : "no position";
+    o.source = msg.selected_source;
+    const auto& p = msg.pose.pose.position;
+    const Eigen::Vector3d position = odom_from_camera * Eigen::Vector3d(p.x, p.y, p.z);
+    o.pose.x = position.x();
+    o.pose.y = position.y();
+    o.orientation_valid = msg.orientation_valid;
+    if (msg.orientation_valid) {
+      const auto& q = msg.pose.pose.orientation;
+      // The port axis is target x; its direction in the odom plane is the port's yaw.
+      const Eigen::Vector3d axis =
+          odom_from_camera.rotation() * (Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized() * Eigen::Vector3d::UnitX());
+      o.pose.yaw = std::atan2(axis.y(), axis.x());
+    }
+    if (msg.twist_valid && odometry_) {
+      // The twist is relative to the camera, which turns with base_link: add the chaser's own yaw rate.
+      const auto& w = msg.twist.twist.angular;
+      const Eigen::Vector3d relative = odom_from_camera.rotation() * Eigen::Vector3d(w.x, w.y, w.z);
+      o.yaw_rate_valid = true;
+      o.yaw_rate = relative.z() + odometry_->twist.wz;
+    }
+    return o;
+  }
+
+  void onTimer(const ros::TimerEvent&) {
+    processPending();
+    const ros::Time now = ros::Time::now();
+    last_ = planner_.update(now.toSec(), odometry_);
+
+    geometry_msgs::Twist cmd;
+    cmd.linear.x = last_.command.vx;
+    cmd.linear.y = last_.command.vy;
+    cmd.angular.z = last_.command.wz;
+    cmd_pub_.publish(cmd);
+
+    docking_msgs::DockingState state;
+    state.header.stamp = now;
+    state.header.frame_id = base_frame_;
+    state.state = static_cast<std::uint8_t>(last_.state);
+    state.state_name = stateName(last_.state);
+    state.reason = last_.reason;
+    state.time_in_state_s = last_.time_in_state_s;
+    state.estimate_source = last_.estimate_source;
+    state.target_visible = last_.target_visible;
+    const double unknown = std::numeric_limits<double>::quiet_NaN();  // no target pose held
+    state.range_m = last_.has_target ? last_.geometry.range_m : unknown;
+    state.goal_distance_m = last_.has_target ? last_.goal_distance_m : unknown;
+    state.lateral_error_m = last_.has_target ? last_.geometry.lateral_m : unknown;
+    state.axial_distance_m = last_.has_target ? last_.geometry.axial_m : unknown;
+    state.yaw_error_rad = last_.has_target ? last_.geometry.yaw_error_rad : unknown;
+    state.bearing_rad = last_.has_target ? last_.geometry.bearing_rad : unknown;
+    state_pub_.publish(state);
+
+    if (last_.state != last_state_) {
+      ROS_INFO("planner: %s -> %s: %s", stateName(last_state_), stateName(last_.state), last_.reason.c_str());
+      last_state_ = last_.state;
+    }
+
+    nav_msgs::Path path;
+    path.header.stamp = now;
+    path.header.frame_id = odom_frame_;
+    for (const Pose2D& p : last_.path) {
+      geometry_msgs::PoseStamped ps;
+      ps.header = path.header;
+      ps.pose.position.x = p.x;
+      ps.pose.position.y = p.y;
+      ps.pose.orientation.z = std::sin(p.yaw / 2.0);
+      ps.pose.orientation.w = std::cos(p.yaw / 2.0);
+      path.poses.push_back(ps);
+    }
+    path_pub_.publish(path);
+    diagnostics_.update();
+  }
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    using diagnostic_msgs::DiagnosticStatus;
+    const bool failing = last_.state == DockingPhase::kHold || last_.state == DockingPhase::kAbort;
+    stat.summaryf(failing ? DiagnosticStatus::WARN : DiagnosticStatus::OK, "%s: %s", stateName(last_.state),
+                  last_.reason.c_str());
+    stat.add("state", stateName(last_.state));
+    stat.add("time in state (s)", last_.time_in_state_s);
+    stat.add("target visible", last_.target_visible);
+    stat.add("on odometry", last_.on_odometry);
+    if (last_.has_target) {
+      stat.add("range (m)", last_.geometry.range_m);
+      stat.add("lateral error (m)", last_.geometry.lateral_m);
+      stat.add("yaw error (rad)", last_.geometry.yaw_error_rad);
+      stat.add("probe tip error (m)", last_.geometry.tip_error_m);
+    }
+    stat.add("estimates dropped (no tf)", tf_failures_);
+    if (tf_failures_ > 0) stat.add("last tf error", last_tf_error_);
+  }
+
+  DockingPlanner planner_;
+  std::string odom_frame_, base_frame_;
+  double tf_wait_s_{0.2};
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  diagnostic_updater::Updater diagnostics_;
+  ros::Publisher cmd_pub_, state_pub_, path_pub_;
+  ros::Subscriber estimate_sub_, odom_sub_;
+  ros::Timer timer_;
+  std::optional<ChaserOdometry> odometry_;
+  std::deque<docking_msgs::TargetEstimateConstPtr> pending_;
+  PlannerOutput last_;
+  DockingPhase last_state_{DockingPhase::kSearch};
+  std::uint64_t tf_failures_{0};
+  std::string last_tf_error_;
+};
+
+}  // namespace
+}  // namespace docking_planner
+
+int main(int argc, char** argv) {
+  // Own SIGINT handling, so that a last zero cmd_vel goes out before the node shuts down.
+  ros::init(argc, argv, "planner", ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, docking_planner::onSigint);
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  try {
+    docking_planner::PlannerNode node(nh, pnh);
+    while (ros::ok() && !docking_planner::g_stop_requested) {
+      ros::spinOnce();
+      ros::WallDuration(0.002).sleep();
+    }
+    node.publishStop();
+    ros::WallDuration(0.1).sleep();  // let the zero command leave
+  } catch (const std::exception& e) {
+    ROS_FATAL("planner: %s", e.what());
+    ros::shutdown();
+    return 1;
+  }
+  ros::shutdown();
+  return 0;
+}

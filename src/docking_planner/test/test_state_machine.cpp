@@ -1,0 +1,280 @@
+// State transitions of DockingPlanner, driven cycle by cycle with hand-placed chaser poses.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "docking_planner/docking_planner.h"
+
+using namespace docking_planner;
+
+namespace {
+
+constexpr double kDt = 0.05;
+
+bool isZero(const BodyTwist& t) { return t.vx == 0.0 && t.vy == 0.0 && t.wz == 0.0; }
+
+ChaserOdometry odomAt(double t, const Pose2D& pose) {
+  ChaserOdometry o;
+  o.stamp_s = t;
+  o.pose = pose;
+  return o;
+}
+
+TargetObservation portAt(double t, const Pose2D& port) {
+  TargetObservation o;
+  o.stamp_s = t;
+  o.valid = true;
+  o.orientation_valid = true;
+  o.pose = port;
+  o.source = 1;
+  return o;
+}
+
+// A port at the origin, axis along +x; the chaser placed by the test.
+class StateMachineTest : public ::testing::Test {
+ protected:
+  const Pose2D port_{0.0, 0.0, 0.0};
+  DockingPlanner planner_{PlannerConfig{}};
+  double t_{100.0};
+
+  // One cycle: optionally an estimate, then update with odometry at `chaser`.
+  PlannerOutput step(const Pose2D& chaser, bool see_target) {
+    t_ += kDt;
+    if (see_target) planner_.addObservation(portAt(t_, port_));
+    return planner_.update(t_, odomAt(t_, chaser));
+  }
+  PlannerOutput runFor(double seconds, const Pose2D& chaser, bool see_target) {
+    PlannerOutput out;
+    const int cycles = static_cast<int>(std::round(seconds / kDt));
+    for (int i = 0; i < cycles; ++i) out = step(chaser, see_target);
+    return out;
+  }
+};
+
+const Pose2D kFar{3.0, 0.5, M_PI};            // 3 m out, facing the port
+const Pose2D kOnCircleOff{0.6 * std::cos(0.8), 0.6 * std::sin(0.8), 0.8 + M_PI};  // on the circle, 46 deg off
+const Pose2D kSafePoint{0.6, 0.0, M_PI};      // on the axis, aligned
+const Pose2D kNearContact{0.18 + 0.05, 0.0, M_PI};  // probe tip 5 cm from the port
+const Pose2D kDocked{0.18 + 0.002, 0.0, M_PI};      // probe tip 2 mm from the port
+
+}  // namespace
+
+TEST(DockingPlannerConfig, RejectsInvalidValuesWithTheirName) {
+  PlannerConfig c;
+  c.hold_timeout_s = -1.0;
+  try {
+    DockingPlanner p{c};
+    FAIL() << "accepted a negative hold timeout";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("hold_timeout_s"), std::string::npos);
+  }
+  c = PlannerConfig{};
+  c.law.safe_radius_m = NAN;
+  EXPECT_THROW(DockingPlanner{c}, std::invalid_argument);
+}
+
+TEST_F(StateMachineTest, SearchStopsThenTurnsSlowly) {
+  PlannerOutput out = step(kFar, false);
+  EXPECT_EQ(out.state, DockingPhase::kSearch);
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_NE(out.reason.find("no target"), std::string::npos) << out.reason;
+  out = runFor(planner_.config().search_wait_s + 0.2, kFar, false);
+  EXPECT_EQ(out.state, DockingPhase::kSearch);
+  EXPECT_EQ(out.command.vx, 0.0);
+  EXPECT_EQ(out.command.vy, 0.0);
+  EXPECT_DOUBLE_EQ(out.command.wz, planner_.config().search_yaw_rate_radps);
+}
+
+TEST_F(StateMachineTest, FullSequenceSearchApproachAlignFinalDocked) {
+  EXPECT_EQ(step(kFar, false).state, DockingPhase::kSearch);
+  PlannerOutput out = step(kFar, true);
+  EXPECT_EQ(out.state, DockingPhase::kApproach);
+  EXPECT_FALSE(isZero(out.command));
+  EXPECT_TRUE(out.target_visible);
+  // At the approach goal on the circle (for this pose the goal is the tangent-limited point: put the
+  // chaser where the law aims).
+  const Pose2D chaser_on_circle = kOnCircleOff;
+  out = step(chaser_on_circle, true);
+  EXPECT_EQ(out.state, DockingPhase::kAlign) << out.reason;
+  // Moves along the circle towards the axis (decreasing polar angle: clockwise here).
+  const Vec2 increasing = perpendicular(chaser_on_circle.position().normalized());
+  const Vec2 v_odom(std::cos(chaser_on_circle.yaw) * out.command.vx - std::sin(chaser_on_circle.yaw) * out.command.vy,
+                    std::sin(chaser_on_circle.yaw) * out.command.vx + std::cos(chaser_on_circle.yaw) * out.command.vy);
+  EXPECT_LT(v_odom.dot(increasing), 0.0);
+  out = step(kSafePoint, true);
+  EXPECT_EQ(out.state, DockingPhase::kFinal) << out.reason;
+  EXPECT_GT(out.command.vx, 0.0);
+  out = step(kDocked, true);
+  EXPECT_EQ(out.state, DockingPhase::kDocked) << out.reason;
+  EXPECT_TRUE(isZero(out.command));
+  // Latched, whatever happens next.
+  EXPECT_EQ(step(kFar, true).state, DockingPhase::kDocked);
+  EXPECT_EQ(runFor(10.0, kDocked, false).state, DockingPhase::kDocked);
+  EXPECT_TRUE(isZero(step(kDocked, false).command));
+}
+
+TEST_F(StateMachineTest, LostBrieflyHoldsWithZeroVelocityThenResumes) {
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  // Estimates stop: within the estimate timeout the planner keeps going on the last one...
+  EXPECT_EQ(step(kFar, false).state, DockingPhase::kApproach);
+  // ...then holds, with zero velocity.
+  PlannerOutput out = runFor(planner_.config().estimate_timeout_s + 0.1, kFar, false);
+  EXPECT_EQ(out.state, DockingPhase::kHold);
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_NE(out.reason.find("not seen"), std::string::npos) << out.reason;
+  out = runFor(1.0, kFar, false);
+  EXPECT_EQ(out.state, DockingPhase::kHold);
+  EXPECT_TRUE(isZero(out.command));
+  // The target comes back: resume the approach.
+  out = step(kFar, true);
+  EXPECT_EQ(out.state, DockingPhase::kApproach);
+  EXPECT_FALSE(isZero(out.command));
+}
+
+TEST_F(StateMachineTest, LostTooLongOutsideTheCircleSearches) {
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  const PlannerConfig& c = planner_.config();
+  // Every cycle until SEARCH is HOLD with zero velocity.
+  PlannerOutput out;
+  bool saw_hold = false;
+  for (int i = 0; i < static_cast<int>((c.estimate_timeout_s + c.hold_timeout_s + 0.5) / kDt); ++i) {
+    out = step(kFar, false);
+    if (out.state == DockingPhase::kHold) {
+      saw_hold = true;
+      EXPECT_TRUE(isZero(out.command));
+    }
+  }
+  EXPECT_TRUE(saw_hold);
+  EXPECT_EQ(out.state, DockingPhase::kSearch);
+  EXPECT_TRUE(isZero(out.command));  // SEARCH starts by standing still
+}
+
+TEST_F(StateMachineTest, LostTooLongInsideTheCircleAbortsBacksOffThenSearches) {
+  // Get into FINAL, just inside the circle: 0.54 m from the port (inside 0.6 - 0.05), probe tip
+  // 0.36 m from it (beyond the 0.35 m blind range, so a lost target is a HOLD, not odometry).
+  step(kOnCircleOff, true);
+  step(kSafePoint, true);
+  const Pose2D halfway{0.54, 0.0, M_PI};
+  ASSERT_EQ(step(halfway, true).state, DockingPhase::kFinal);
+  const PlannerConfig& c = planner_.config();
+  PlannerOutput out = runFor(c.estimate_timeout_s + 0.1, halfway, false);
+  EXPECT_EQ(out.state, DockingPhase::kHold);
+  EXPECT_TRUE(isZero(out.command));
+  out = runFor(c.hold_timeout_s + 0.1, halfway, false);
+  EXPECT_EQ(out.state, DockingPhase::kAbort) << out.reason;
+  // Backing off: radially out (+x here), on the held pose.
+  EXPECT_LT(out.command.vx, 0.0);  // facing the port, so backwards in the body frame
+  EXPECT_NEAR(out.command.vy, 0.0, 1e-9);
+  // Once on the circle: SEARCH, standing still.
+  out = step(Pose2D{0.6, 0.0, M_PI}, false);
+  EXPECT_EQ(out.state, DockingPhase::kSearch) << out.reason;
+  EXPECT_TRUE(isZero(out.command));
+}
+
+TEST_F(StateMachineTest, NanEstimateStopsAndSaysWhy) {
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  t_ += kDt;
+  TargetObservation bad = portAt(t_, port_);
+  bad.pose.y = NAN;
+  EXPECT_FALSE(planner_.addObservation(bad).accepted);
+  const PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
+  EXPECT_EQ(out.state, DockingPhase::kHold);
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_NE(out.reason.find("NaN"), std::string::npos) << out.reason;
+  // A good estimate clears it.
+  EXPECT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+}
+
+TEST_F(StateMachineTest, BadOdometryStopsAndSaysWhy) {
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  t_ += kDt;
+  planner_.addObservation(portAt(t_, port_));
+  ChaserOdometry nan_odom = odomAt(t_, kFar);
+  nan_odom.twist.wz = NAN;
+  PlannerOutput out = planner_.update(t_, nan_odom);
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_EQ(out.state, DockingPhase::kHold);
+  EXPECT_NE(out.reason.find("odometry"), std::string::npos) << out.reason;
+
+  t_ += kDt;
+  planner_.addObservation(portAt(t_, port_));
+  out = planner_.update(t_, odomAt(t_ - 1.0, kFar));  // a second old
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_NE(out.reason.find("stale"), std::string::npos) << out.reason;
+
+  out = planner_.update(t_, std::nullopt);
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_NE(out.reason.find("no odometry"), std::string::npos) << out.reason;
+
+  // Good odometry again: the approach resumes.
+  EXPECT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+
+  // NaN planner time is refused too.
+  EXPECT_TRUE(isZero(planner_.update(NAN, odomAt(t_, kFar)).command));
+}
+
+TEST_F(StateMachineTest, FinalNearContactFinishesOnOdometryWhenTheTargetIsLost) {
+  step(kOnCircleOff, true);
+  step(kSafePoint, true);
+  ASSERT_EQ(step(kNearContact, true).state, DockingPhase::kFinal);
+  // The cameras lose the target at 5 cm: FINAL goes on, on the held pose, and says so.
+  const PlannerOutput out = runFor(2.0, kNearContact, false);
+  EXPECT_EQ(out.state, DockingPhase::kFinal) << out.reason;
+  EXPECT_TRUE(out.on_odometry);
+  EXPECT_FALSE(out.target_visible);
+  EXPECT_GT(out.command.vx, 0.0);
+  EXPECT_NE(out.reason.find("odometry"), std::string::npos) << out.reason;
+  // Reaching the port on odometry docks.
+  const PlannerOutput docked = step(kDocked, false);
+  EXPECT_EQ(docked.state, DockingPhase::kDocked) << docked.reason;
+  EXPECT_NE(docked.reason.find("odometry"), std::string::npos) << docked.reason;
+}
+
+TEST_F(StateMachineTest, FinalBlindForTooLongAborts) {
+  step(kOnCircleOff, true);
+  step(kSafePoint, true);
+  ASSERT_EQ(step(kNearContact, true).state, DockingPhase::kFinal);
+  const PlannerOutput out = runFor(planner_.config().max_blind_s + 0.5, kNearContact, false);
+  EXPECT_EQ(out.state, DockingPhase::kAbort) << out.reason;
+}
+
+TEST_F(StateMachineTest, FinalErrorsGrowingAbort) {
+  step(kOnCircleOff, true);
+  ASSERT_EQ(step(kSafePoint, true).state, DockingPhase::kFinal);
+  // Pushed 10 cm off the axis.
+  const PlannerOutput out = step(Pose2D{0.45, 0.10, M_PI}, true);
+  EXPECT_EQ(out.state, DockingPhase::kAbort) << out.reason;
+  EXPECT_NE(out.reason.find("errors growing"), std::string::npos) << out.reason;
+  EXPECT_GT(out.command.vx * -1.0, 0.0);  // backing off: the chaser faces the port, so vx < 0
+}
+
+TEST_F(StateMachineTest, ApproachDivergingAborts) {
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  // Something drags the chaser 0.5 m further away.
+  const PlannerOutput out = step(Pose2D{kFar.x + 0.5, kFar.y, kFar.yaw}, true);
+  EXPECT_EQ(out.state, DockingPhase::kAbort) << out.reason;
+  EXPECT_NE(out.reason.find("diverging"), std::string::npos) << out.reason;
+  EXPECT_TRUE(isZero(out.command));  // outside the circle there is nothing to back off from
+  // Next cycle: through SEARCH, which still sees the target, to a fresh APPROACH.
+  const PlannerOutput next = step(Pose2D{kFar.x + 0.5, kFar.y, kFar.yaw}, true);
+  EXPECT_EQ(next.state, DockingPhase::kApproach) << next.reason;
+  EXPECT_DOUBLE_EQ(next.time_in_state_s, 0.0);
+}
+
+TEST_F(StateMachineTest, ErrorsReportedForDockingState) {
+  step(kFar, true);
+  const PlannerOutput out = step(kFar, true);
+  ASSERT_TRUE(out.has_target);
+  EXPECT_NEAR(out.geometry.range_m, std::hypot(3.0, 0.5), 1e-9);
+  EXPECT_NEAR(out.geometry.lateral_m, 0.5, 1e-9);
+  EXPECT_NEAR(out.geometry.axial_m, 3.0, 1e-9);
+  EXPECT_GT(out.goal_distance_m, 2.0);
+  EXPECT_GE(out.path.size(), 3u);
+  EXPECT_EQ(out.estimate_source, 1);
+}
