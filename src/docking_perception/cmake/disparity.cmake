@@ -17,24 +17,23 @@ target_link_libraries(docking_perception_disparity_synthetic ${OpenCV_LIBRARIES}
 set(DISPARITY_CONFIG_DIR ${PROJECT_SOURCE_DIR}/../../config)
 
 # Nodelet: thin ROS wrapper (parameters, dynamic_reconfigure, diagnostics, message conversion).
-if(EXISTS ${PROJECT_SOURCE_DIR}/src/disparity/disparity_detector_nodelet.cpp)
-  add_library(docking_perception_disparity_nodelet
-    src/disparity/disparity_detector_nodelet.cpp
-  )
-  add_dependencies(docking_perception_disparity_nodelet ${PROJECT_NAME}_gencfg ${catkin_EXPORTED_TARGETS})
-  target_link_libraries(docking_perception_disparity_nodelet
-    docking_perception_disparity_core ${catkin_LIBRARIES} ${OpenCV_LIBRARIES})
+# The library name is the one nodelet_plugins.xml declares.
+add_library(docking_perception_disparity_nodelet
+  src/disparity/disparity_detector_nodelet.cpp
+)
+add_dependencies(docking_perception_disparity_nodelet ${PROJECT_NAME}_gencfg ${catkin_EXPORTED_TARGETS})
+target_link_libraries(docking_perception_disparity_nodelet
+  docking_perception_disparity_core ${catkin_LIBRARIES} ${OpenCV_LIBRARIES})
 
-  # Standalone node: loads the nodelet in-process.
-  add_executable(disparity_detector src/disparity/disparity_detector_node.cpp)
-  target_link_libraries(disparity_detector ${catkin_LIBRARIES})
-  add_dependencies(disparity_detector docking_perception_disparity_nodelet)
+# Standalone node: loads the nodelet in-process (pluginlib finds it through nodelet_plugins.xml).
+add_executable(disparity_detector src/disparity/disparity_detector_node.cpp)
+target_link_libraries(disparity_detector ${catkin_LIBRARIES})
+add_dependencies(disparity_detector docking_perception_disparity_nodelet)
 
-  install(TARGETS docking_perception_disparity_nodelet disparity_detector
-    ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
-    LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
-    RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
-endif()
+install(TARGETS docking_perception_disparity_nodelet disparity_detector
+  ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+  LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+  RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 
 # Benchmark (a program that prints figures, never a test): rectify + disparity + detection.
 add_executable(bench_disparity src/disparity/bench_disparity.cpp)
@@ -67,5 +66,15 @@ if(CATKIN_ENABLE_TESTING)
       gtest_main)
     target_compile_definitions(test_disparity_pipeline PRIVATE
       DISPARITY_CONFIG_DIR="${DISPARITY_CONFIG_DIR}")
+  endif()
+
+  # The node end to end on synthetic DisparityImage messages (needs a roscore: rostest).
+  find_package(rostest REQUIRED)
+  add_rostest_gtest(test_disparity_detector_node test/disparity/disparity_detector_node.test
+    test/disparity/test_disparity_detector_node.cpp)
+  if(TARGET test_disparity_detector_node)
+    target_link_libraries(test_disparity_detector_node ${catkin_LIBRARIES})
+    add_dependencies(test_disparity_detector_node disparity_detector docking_perception_disparity_nodelet
+      ${catkin_EXPORTED_TARGETS})
   endif()
 endif()

@@ -1,0 +1,88 @@
+// disparity_detector nodelet: the thin ROS wrapper around DisparityDetector (see the package README).
+//
+// Subscribes (lazily, only while an output has subscribers):
+//   stereo/disparity           stereo_msgs/DisparityImage (stereo_image_proc)
+//   stereo/left/camera_info    sensor_msgs/CameraInfo: the rectified principal point
+// Publishes:
+//   perception/disparity/estimate     docking_msgs/TargetEstimate (SOURCE_DISPARITY, position only)
+//   perception/disparity/debug_image  sensor_msgs/Image bgr8 (image_transport)
+//   /diagnostics                      last rejection reason, detection rate
+// Parameters: config/disparity_detector.yaml, all required, all live through dynamic_reconfigure.
+#pragma once
+
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <docking_msgs/TargetEstimate.h>
+#include <dynamic_reconfigure/server.h>
+#include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <stereo_msgs/DisparityImage.h>
+
+#include "docking_perception/DisparityDetectorConfig.h"
+#include "docking_perception/disparity/disparity_detector.h"
+
+namespace docking_perception {
+
+class DisparityDetectorNodelet : public nodelet::Nodelet {
+ public:
+  DisparityDetectorNodelet() = default;
+  ~DisparityDetectorNodelet() override = default;
+
+ private:
+  using Config = docking_perception::DisparityDetectorConfig;
+
+  void onInit() override;
+
+  // Reads every key of config/disparity_detector.yaml from the private namespace. Returns false and
+  // logs each missing or invalid key by name.
+  bool loadConfig(Config* config);
+  static disparity::DetectorParams toDetectorParams(const Config& config);
+  void onReconfigure(Config& config, uint32_t level);
+
+  // Subscribes to the inputs while any output has a subscriber, unsubscribes otherwise.
+  void updateSubscriptions();
+  void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info);
+  void onDisparity(const stereo_msgs::DisparityImageConstPtr& message);
+  // Publishes valid = false with `status` (bad input), and counts it in the diagnostics.
+  void publishInvalidInput(const stereo_msgs::DisparityImage& message, const std::string& status,
+                           double cpu_start_ms);
+  void produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
+  void recordOutcome(bool found, const std::string& reason, double processing_ms);
+
+  ros::NodeHandle nh_;
+  ros::NodeHandle private_nh_;
+  std::unique_ptr<image_transport::ImageTransport> image_transport_;
+  ros::Publisher estimate_publisher_;
+  image_transport::Publisher debug_publisher_;
+  ros::Subscriber disparity_subscriber_;
+  ros::Subscriber camera_info_subscriber_;
+  std::mutex connection_mutex_;
+
+  boost::recursive_mutex reconfigure_mutex_;
+  std::unique_ptr<dynamic_reconfigure::Server<Config>> reconfigure_server_;
+
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::Timer diagnostics_timer_;
+
+  // State shared by the callbacks.
+  std::mutex state_mutex_;
+  Config config_;
+  disparity::DisparityDetector detector_;
+  sensor_msgs::CameraInfoConstPtr camera_info_;
+  bool warned_no_camera_info_ = false;
+  std::deque<bool> recent_found_;  // detection outcome of the last diagnostic_window_frames frames
+  std::string last_rejection_;
+  std::string last_input_error_;
+  unsigned long frames_ = 0;
+  unsigned long detections_ = 0;
+  double last_processing_ms_ = 0.0;
+  double last_range_m_ = 0.0;
+};
+
+}  // namespace docking_perception

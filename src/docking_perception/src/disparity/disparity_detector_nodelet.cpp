@@ -1,0 +1,422 @@
+#include "docking_perception/disparity/disparity_detector_nodelet.h"
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include <cv_bridge/cv_bridge.h>
+#include <docking_msgs/names.h>
+#include <image_geometry/pinhole_camera_model.h>
+#include <image_transport/camera_common.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <sensor_msgs/image_encodings.h>
+
+namespace docking_perception {
+namespace {
+
+// Variance of the components a disparity estimate does not measure (TargetEstimate.msg: >= 1e6).
+constexpr double kUnknownVariance = 1e6;
+
+// CPU time of the calling thread, ms: what this frame cost, whatever else the manager runs.
+double threadCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+// The estimate every frame starts from: not valid, orientation and twist unknown.
+docking_msgs::TargetEstimate blankEstimate(const std_msgs::Header& header) {
+  docking_msgs::TargetEstimate estimate;
+  estimate.header = header;
+  if (estimate.header.frame_id.empty()) {
+    estimate.header.frame_id = docking_msgs::frames::kStereoLeftOptical;
+  }
+  estimate.source = docking_msgs::TargetEstimate::SOURCE_DISPARITY;
+  estimate.selected_source = docking_msgs::TargetEstimate::SOURCE_DISPARITY;
+  estimate.valid = false;
+  estimate.position_valid = false;
+  estimate.orientation_valid = false;
+  estimate.twist_valid = false;
+  estimate.pose.pose.orientation.w = 1.0;
+  for (int i = 0; i < 6; ++i) {
+    estimate.pose.covariance[static_cast<std::size_t>(i * 6 + i)] = kUnknownVariance;
+    estimate.twist.covariance[static_cast<std::size_t>(i * 6 + i)] = kUnknownVariance;
+  }
+  estimate.solver = "disparity";
+  return estimate;
+}
+
+}  // namespace
+
+void DisparityDetectorNodelet::onInit() {
+  nh_ = getNodeHandle();
+  private_nh_ = getPrivateNodeHandle();
+
+  Config config;
+  if (!loadConfig(&config)) {
+    NODELET_FATAL("disparity_detector: invalid or missing parameters in %s (see errors above; all "
+                  "keys of config/disparity_detector.yaml are required). Shutting down.",
+                  private_nh_.getNamespace().c_str());
+    ros::requestShutdown();
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    config_ = config;
+    detector_.setParams(toDetectorParams(config));  // validated in loadConfig
+  }
+
+  // Live tuning: the server starts from the same parameter server values we just validated.
+  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<Config>>(reconfigure_mutex_,
+                                                                              private_nh_);
+  reconfigure_server_->updateConfig(config);
+  reconfigure_server_->setCallback(
+      [this](Config& new_config, uint32_t level) { onReconfigure(new_config, level); });
+
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, private_nh_, getName());
+  diagnostics_->setHardwareID("stereo_disparity");
+  diagnostics_->add("disparity_detector", this, &DisparityDetectorNodelet::produceDiagnostics);
+  diagnostics_timer_ = nh_.createTimer(ros::Duration(1.0),
+                                       [this](const ros::TimerEvent&) { diagnostics_->update(); });
+
+  // Outputs first, with connection callbacks that (un)subscribe the inputs on demand.
+  std::lock_guard<std::mutex> lock(connection_mutex_);
+  image_transport_ = std::make_unique<image_transport::ImageTransport>(nh_);
+  auto connection_changed = [this](const ros::SingleSubscriberPublisher&) { updateSubscriptions(); };
+  estimate_publisher_ = nh_.advertise<docking_msgs::TargetEstimate>(
+      docking_msgs::topics::kDisparityEstimate, 5, connection_changed, connection_changed);
+  auto image_connection_changed = [this](const image_transport::SingleSubscriberPublisher&) {
+    updateSubscriptions();
+  };
+  // The debug image sits beside the estimate: perception/disparity/debug_image.
+  const std::string debug_topic =
+      ros::names::parentNamespace(docking_msgs::topics::kDisparityEstimate) + "/debug_image";
+  debug_publisher_ = image_transport_->advertise(debug_topic, 1, image_connection_changed,
+                                                 image_connection_changed);
+  NODELET_INFO("disparity_detector: publishing %s and %s; subscribing %s only while they have "
+               "subscribers",
+               estimate_publisher_.getTopic().c_str(), debug_publisher_.getTopic().c_str(),
+               nh_.resolveName(docking_msgs::topics::kStereoDisparity).c_str());
+}
+
+bool DisparityDetectorNodelet::loadConfig(Config* config) {
+  std::vector<std::string> errors;
+  const std::string ns = private_nh_.getNamespace();
+  // Every key is required; numbers must lie in the ranges of cfg/DisparityDetector.cfg.
+  auto read = [&](const char* name, auto Config::*field) {
+    using T = std::decay_t<decltype(config->*field)>;
+    T value{};
+    if (!private_nh_.hasParam(name)) {
+      errors.push_back("missing parameter " + ns + "/" + name);
+      return;
+    }
+    if (!private_nh_.getParam(name, value)) {
+      errors.push_back("parameter " + ns + "/" + name + " has the wrong type (expected " +
+                       (std::is_same<T, bool>::value ? "true/false"
+                        : std::is_same<T, int>::value ? "an integer" : "a number") + ")");
+      return;
+    }
+    if constexpr (!std::is_same<T, bool>::value) {
+      const T min = Config::__getMin__().*field;
+      const T max = Config::__getMax__().*field;
+      if (!(value >= min && value <= max)) {
+        std::ostringstream message;
+        message << "parameter " << ns << "/" << name << " = " << value << " outside [" << min
+                << ", " << max << "]";
+        errors.push_back(message.str());
+        return;
+      }
+    }
+    config->*field = value;
+  };
+  read("median_kernel_px", &Config::median_kernel_px);
+  read("gaussian_sigma_px", &Config::gaussian_sigma_px);
+  read("closest_min_pixels", &Config::closest_min_pixels);
+  read("target_depth_m", &Config::target_depth_m);
+  read("threshold_margin_px", &Config::threshold_margin_px);
+  read("face_percentile", &Config::face_percentile);
+  read("face_depth_band_m", &Config::face_depth_band_m);
+  read("face_min_band_px", &Config::face_min_band_px);
+  read("min_blob_area_px", &Config::min_blob_area_px);
+  read("max_blob_area_fraction", &Config::max_blob_area_fraction);
+  read("border_margin_px", &Config::border_margin_px);
+  read("min_disparity_px", &Config::min_disparity_px);
+  read("max_disparity_px", &Config::max_disparity_px);
+  read("blind_band_extra_px", &Config::blind_band_extra_px);
+  read("roi_top_fraction", &Config::roi_top_fraction);
+  read("roi_bottom_fraction", &Config::roi_bottom_fraction);
+  read("floor_cut_enabled", &Config::floor_cut_enabled);
+  read("floor_cut_y_m", &Config::floor_cut_y_m);
+  read("disparity_sigma_px", &Config::disparity_sigma_px);
+  read("centre_sigma_px", &Config::centre_sigma_px);
+  read("debug_display_max_disparity_px", &Config::debug_display_max_disparity_px);
+  read("diagnostic_window_frames", &Config::diagnostic_window_frames);
+  read("min_detection_rate_ok", &Config::min_detection_rate_ok);
+  if (errors.empty()) {
+    // Rules between fields (e.g. max_disparity_px > min_disparity_px), named by the core.
+    for (const auto& error : disparity::validateParams(toDetectorParams(*config))) {
+      errors.push_back("parameter " + ns + "/" + error);
+    }
+  }
+  for (const auto& error : errors) NODELET_FATAL("disparity_detector: %s", error.c_str());
+  return errors.empty();
+}
+
+disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Config& c) {
+  disparity::DetectorParams p;
+  p.median_kernel_px = c.median_kernel_px;
+  p.gaussian_sigma_px = c.gaussian_sigma_px;
+  p.closest_min_pixels = c.closest_min_pixels;
+  p.target_depth_m = c.target_depth_m;
+  p.threshold_margin_px = c.threshold_margin_px;
+  p.face_percentile = c.face_percentile;
+  p.face_depth_band_m = c.face_depth_band_m;
+  p.face_min_band_px = c.face_min_band_px;
+  p.min_blob_area_px = c.min_blob_area_px;
+  p.max_blob_area_fraction = c.max_blob_area_fraction;
+  p.border_margin_px = c.border_margin_px;
+  p.min_disparity_px = c.min_disparity_px;
+  p.max_disparity_px = c.max_disparity_px;
+  p.roi_top_fraction = c.roi_top_fraction;
+  p.roi_bottom_fraction = c.roi_bottom_fraction;
+  p.floor_cut_enabled = c.floor_cut_enabled;
+  p.floor_cut_y_m = c.floor_cut_y_m;
+  p.disparity_sigma_px = c.disparity_sigma_px;
+  p.centre_sigma_px = c.centre_sigma_px;
+  return p;
+}
+
+void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  try {
+    detector_.setParams(toDetectorParams(config));
+    config_ = config;
+  } catch (const std::invalid_argument& error) {
+    // Keep running with the last good values, and show them back in rqt_reconfigure.
+    NODELET_ERROR("disparity_detector: reconfigure rejected, keeping the previous values: %s",
+                  error.what());
+    config = config_;
+  }
+  while (recent_found_.size() > static_cast<std::size_t>(config_.diagnostic_window_frames)) {
+    recent_found_.pop_front();
+  }
+}
+
+void DisparityDetectorNodelet::updateSubscriptions() {
+  std::lock_guard<std::mutex> lock(connection_mutex_);
+  const bool wanted =
+      estimate_publisher_.getNumSubscribers() > 0 || debug_publisher_.getNumSubscribers() > 0;
+  if (wanted && !disparity_subscriber_) {
+    disparity_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoDisparity, 1,
+                                          &DisparityDetectorNodelet::onDisparity, this);
+    camera_info_subscriber_ =
+        nh_.subscribe(image_transport::getCameraInfoTopic(docking_msgs::topics::kStereoLeftImageRect),
+                      1, &DisparityDetectorNodelet::onCameraInfo, this);
+    NODELET_DEBUG("disparity_detector: subscribed to %s", disparity_subscriber_.getTopic().c_str());
+  } else if (!wanted && disparity_subscriber_) {
+    disparity_subscriber_.shutdown();
+    camera_info_subscriber_.shutdown();
+    disparity_subscriber_ = ros::Subscriber();
+    camera_info_subscriber_ = ros::Subscriber();
+    NODELET_DEBUG("disparity_detector: no subscribers, unsubscribed from the disparity");
+  }
+}
+
+void DisparityDetectorNodelet::onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  camera_info_ = info;
+}
+
+void DisparityDetectorNodelet::publishInvalidInput(const stereo_msgs::DisparityImage& message,
+                                                   const std::string& status, double cpu_start_ms) {
+  NODELET_ERROR_THROTTLE(5.0, "disparity_detector: %s", status.c_str());
+  docking_msgs::TargetEstimate estimate = blankEstimate(message.header);
+  estimate.status = status;
+  estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    last_input_error_ = status;
+  }
+  recordOutcome(false, status, estimate.processing_time_ms);
+  estimate_publisher_.publish(estimate);
+}
+
+void DisparityDetectorNodelet::onDisparity(const stereo_msgs::DisparityImageConstPtr& message) {
+  const double cpu_start_ms = threadCpuMs();
+  const sensor_msgs::Image& image = message->image;
+
+  // --- Check the message before touching its data: a bad one is reported, never dereferenced.
+  namespace enc = sensor_msgs::image_encodings;
+  std::ostringstream problem;
+  if (image.encoding != enc::TYPE_32FC1) {
+    problem << "disparity image encoding must be '" << enc::TYPE_32FC1 << "', got '"
+            << image.encoding << "'";
+  } else if (image.width == 0 || image.height == 0) {
+    problem << "empty disparity image (" << image.width << "x" << image.height << ")";
+  } else if (image.step < image.width * sizeof(float) ||
+             image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+    problem << "disparity image data (" << image.data.size() << " bytes, step " << image.step
+            << ") too short for " << image.width << "x" << image.height << " floats";
+  } else if ((image.is_bigendian != 0) != (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__)) {
+    problem << "disparity image byte order (is_bigendian " << static_cast<int>(image.is_bigendian)
+            << ") differs from this machine's";
+  } else if (!(message->f > 0.0) || !(message->T > 0.0)) {
+    problem << "DisparityImage focal length f (" << message->f << ") and baseline T ("
+            << message->T << ") must be > 0";
+  }
+  if (!problem.str().empty()) {
+    publishInvalidInput(*message, problem.str(), cpu_start_ms);
+    return;
+  }
+
+  // Zero-copy view of the message data (kept alive by `message` for this callback).
+  const cv::Mat disparity(static_cast<int>(image.height), static_cast<int>(image.width), CV_32FC1,
+                          const_cast<std::uint8_t*>(image.data.data()), image.step);
+
+  Config config;
+  disparity::DisparityDetector detector;
+  sensor_msgs::CameraInfoConstPtr camera_info;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    config = config_;
+    detector = detector_;
+    camera_info = camera_info_;
+    last_input_error_.clear();
+  }
+
+  // --- Rectified model: f and B from the message; the principal point from the left rectified
+  // camera_info (its P matrix), else the image centre.
+  disparity::StereoGeometry geometry;
+  geometry.focal_px = message->f;
+  geometry.baseline_m = message->T;
+  geometry.cx_px = (image.width - 1) / 2.0;
+  geometry.cy_px = (image.height - 1) / 2.0;
+  if (camera_info && camera_info->width == image.width && camera_info->height == image.height) {
+    image_geometry::PinholeCameraModel model;
+    if (model.fromCameraInfo(camera_info) && model.fx() > 0.0) {
+      geometry.cx_px = model.cx();
+      geometry.cy_px = model.cy();
+      if (std::abs(model.fx() - message->f) > 0.01 * message->f) {
+        NODELET_WARN_THROTTLE(30.0,
+                              "disparity_detector: left camera_info fx %.1f differs from the "
+                              "DisparityImage f %.1f; using f from the disparity",
+                              model.fx(), message->f);
+      }
+    }
+  } else if (!warned_no_camera_info_) {
+    warned_no_camera_info_ = true;
+    NODELET_WARN("disparity_detector: no matching camera_info on %s yet; using the image centre "
+                 "(%.1f, %.1f) as the principal point",
+                 camera_info_subscriber_.getTopic().c_str(), geometry.cx_px, geometry.cy_px);
+  }
+
+  // --- The matcher's blind left band (no match possible), and its own valid window if it set one.
+  const int blind_columns =
+      std::max(0, static_cast<int>(std::ceil(message->max_disparity)) + config.blind_band_extra_px);
+  cv::Rect valid_region(blind_columns, 0, static_cast<int>(image.width) - blind_columns,
+                        static_cast<int>(image.height));
+  if (message->valid_window.width > 0 && message->valid_window.height > 0) {
+    valid_region &= cv::Rect(static_cast<int>(message->valid_window.x_offset),
+                             static_cast<int>(message->valid_window.y_offset),
+                             static_cast<int>(message->valid_window.width),
+                             static_cast<int>(message->valid_window.height));
+  }
+
+  const disparity::Detection detection =
+      detector.detect(disparity, geometry, message->min_disparity, message->max_disparity + 1.0,
+                      valid_region);
+
+  docking_msgs::TargetEstimate estimate = blankEstimate(message->header);
+  estimate.valid = detection.found;
+  estimate.position_valid = detection.found;
+  estimate.status = detection.found ? std::string() : detection.reason;
+  if (detection.found) {
+    estimate.pose.pose.position.x = detection.position_m.x();
+    estimate.pose.pose.position.y = detection.position_m.y();
+    estimate.pose.pose.position.z = detection.position_m.z();
+    for (int row = 0; row < 3; ++row) {
+      for (int col = 0; col < 3; ++col) {
+        estimate.pose.covariance[static_cast<std::size_t>(row * 6 + col)] =
+            detection.covariance_m2(row, col);
+      }
+    }
+    estimate.range_m = detection.range_m;
+    estimate.disparity_px = detection.disparity_px;
+    estimate.feature_inliers = static_cast<std::uint32_t>(detection.blob_pixels);
+  }
+
+  if (debug_publisher_.getNumSubscribers() > 0) {
+    cv_bridge::CvImage debug(message->header, enc::BGR8,
+                             disparity::renderDebugImage(disparity, detection,
+                                                         config.debug_display_max_disparity_px));
+    debug_publisher_.publish(debug.toImageMsg());
+  }
+
+  estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
+  recordOutcome(detection.found, detection.reason, estimate.processing_time_ms);
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    if (detection.found) last_range_m_ = detection.range_m;
+  }
+  estimate_publisher_.publish(estimate);
+}
+
+void DisparityDetectorNodelet::recordOutcome(bool found, const std::string& reason,
+                                             double processing_ms) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  ++frames_;
+  if (found) {
+    ++detections_;
+  } else {
+    last_rejection_ = reason;
+  }
+  last_processing_ms_ = processing_ms;
+  recent_found_.push_back(found);
+  while (recent_found_.size() > static_cast<std::size_t>(config_.diagnostic_window_frames)) {
+    recent_found_.pop_front();
+  }
+}
+
+void DisparityDetectorNodelet::produceDiagnostics(
+    diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  const double rate =
+      recent_found_.empty()
+          ? 0.0
+          : static_cast<double>(std::count(recent_found_.begin(), recent_found_.end(), true)) /
+                static_cast<double>(recent_found_.size());
+  status.add("frames", frames_);
+  status.add("detections", detections_);
+  status.add("detection rate (last frames)", rate);
+  status.add("window frames", recent_found_.size());
+  status.add("last rejection reason", last_rejection_.empty() ? "(none)" : last_rejection_);
+  status.add("last range m", last_range_m_);
+  status.add("last processing ms (CPU)", last_processing_ms_);
+  status.add("subscribed", static_cast<bool>(disparity_subscriber_));
+
+  if (!disparity_subscriber_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle: no subscribers");
+  } else if (!last_input_error_.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "bad input: " + last_input_error_);
+  } else if (recent_found_.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no disparity image received yet");
+  } else if (rate < config_.min_detection_rate_ok) {
+    std::ostringstream summary;
+    summary.precision(2);
+    summary << "detection rate " << rate << " < " << config_.min_detection_rate_ok
+            << "; last rejection: " << last_rejection_;
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, summary.str());
+  } else {
+    std::ostringstream summary;
+    summary.precision(2);
+    summary << "detecting, rate " << rate;
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, summary.str());
+  }
+}
+
+}  // namespace docking_perception
+
+PLUGINLIB_EXPORT_CLASS(docking_perception::DisparityDetectorNodelet, nodelet::Nodelet)
