@@ -1,5 +1,6 @@
 #include <docking_perception/camera/capture_rig.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <stdexcept>
 #include <system_error>
@@ -126,13 +127,42 @@ bool CaptureRig::openOne(size_t index, std::string* error) {
 }
 
 bool CaptureRig::openAll(std::string* error) {
+  frame_counts_.assign(sources_.size(), 0);
   for (size_t i = 0; i < sources_.size(); ++i) {
     if (!openOne(i, error)) {
       close();
       return false;
     }
+    // Files and sequences know their length: ending there avoids a failed read of a file that is not
+    // there (which OpenCV reports as a warning every time a sequence loops).
+    if (!sources_[i].isLiveDevice()) {
+      frame_counts_[i] = std::max(0L, static_cast<long>(captures_[i].get(cv::CAP_PROP_FRAME_COUNT)));
+    }
   }
   return true;
+}
+
+bool CaptureRig::reachedKnownEnd() const {
+  for (size_t i = 0; i < frame_counts_.size(); ++i) {
+    if (frame_counts_[i] > 0 && frames_since_open_ >= frame_counts_[i]) return true;
+  }
+  return false;
+}
+
+CaptureOutcome CaptureRig::endOfFiles(double now_s, const std::string& end) {
+  CaptureOutcome outcome;
+  close();
+  if (settings_.loop_files) {
+    retry_at_s_ = now_s;  // reopen on the next call, without backoff
+    outcome.status = CaptureStatus::kRestarted;
+    outcome.message = end + ", starting again";
+    return outcome;
+  }
+  ended_ = true;
+  last_error_ = end;
+  outcome.status = CaptureStatus::kEndOfStream;
+  outcome.message = end;
+  return outcome;
 }
 
 CaptureOutcome CaptureRig::scheduleRetry(double now_s, const std::string& what) {
@@ -170,23 +200,10 @@ CaptureOutcome CaptureRig::capture(double now_s, const std::function<void()>& af
 
   // Grab every source first (cheap: it only latches the frame), decode afterwards, so that the pair is
   // as close in time as the devices allow.
+  if (allFiles() && reachedKnownEnd()) return endOfFiles(now_s, "end of " + sources_.front().describe());
   for (size_t i = 0; i < captures_.size(); ++i) {
     if (captures_[i].grab()) continue;
-    if (allFiles() && frames_since_open_ > 0) {
-      const std::string end = "end of " + sources_[i].describe();
-      close();
-      if (settings_.loop_files) {
-        retry_at_s_ = now_s;  // reopen on the next call, without backoff
-        outcome.status = CaptureStatus::kRestarted;
-        outcome.message = end + ", starting again";
-        return outcome;
-      }
-      ended_ = true;
-      last_error_ = end;
-      outcome.status = CaptureStatus::kEndOfStream;
-      outcome.message = end;
-      return outcome;
-    }
+    if (allFiles() && frames_since_open_ > 0) return endOfFiles(now_s, "end of " + sources_[i].describe());
     return scheduleRetry(now_s, frames_since_open_ > 0 ? "lost " + sources_[i].describe() + " (grab failed)"
                                                        : sources_[i].describe() + " opened but gives no frames");
   }

@@ -64,6 +64,16 @@ TEST_F(CaptureRigTest, StereoSequenceGivesPairsInOrderThenEnds) {
   EXPECT_EQ(rig.capture(2.0).status, CaptureStatus::kEndOfStream);  // stays ended
 }
 
+TEST_F(CaptureRigTest, PairEndsWithItsShorterSequence) {
+  const std::string left = writeSequence("left", 3, 10);
+  const std::string right = writeSequence("right", 2, 15);
+  settings_.loop_files = false;
+  CaptureRig rig({parseSourceSpec(left), parseSourceSpec(right)}, settings_, backoff_);
+  EXPECT_EQ(rig.capture(0.0).status, CaptureStatus::kFrames);
+  EXPECT_EQ(rig.capture(0.1).status, CaptureStatus::kFrames);
+  EXPECT_EQ(rig.capture(0.2).status, CaptureStatus::kEndOfStream);
+}
+
 TEST_F(CaptureRigTest, LoopingSequenceStartsAgain) {
   const std::string ir = writeSequence("ir", 2, 100);
   CaptureRig rig({parseSourceSpec(ir)}, settings_, backoff_);

@@ -72,6 +72,8 @@ class CaptureRig {
   bool openOne(size_t index, std::string* error);
   CaptureOutcome scheduleRetry(double now_s, const std::string& what);
   bool allFiles() const;
+  bool reachedKnownEnd() const;
+  CaptureOutcome endOfFiles(double now_s, const std::string& end);
 
   std::vector<SourceSpec> sources_;
   CaptureSettings settings_;
@@ -82,6 +84,7 @@ class CaptureRig {
   double retry_at_s_ = 0.0;
   std::string last_error_;
   long frames_since_open_ = 0;
+  std::vector<long> frame_counts_;  // frames in each file or sequence (0: unknown or a live device)
   int consecutive_empty_ = 0;
 };
 
