@@ -1,0 +1,42 @@
+# mono_pose: near-range monocular pose of the known target (issue 5).
+#   docking_perception_mono_core  ROS-free core (OpenCV, Eigen, yaml-cpp): target model, BRISK face
+#                                 matching, LED pattern, paper 5-point solver, planar PnP, velocities
+#   test_mono_core                gtests of the core (no roscore)
+#   bench_mono                    timing of detection + pose (stages mono_full, mono_tracking)
+find_package(yaml-cpp REQUIRED)
+
+set(MONO_CORE_SOURCES
+  src/mono/pose_types.cpp
+  src/mono/target_model.cpp
+  src/mono/collinear_five_point_solver.cpp
+  src/mono/planar_pnp_solver.cpp
+  src/mono/led_pattern_detector.cpp
+  src/mono/feature_matcher.cpp
+  src/mono/dark_dot_locator.cpp
+  src/mono/velocity_estimators.cpp
+  src/mono/mono_pose_estimator.cpp)
+
+add_library(docking_perception_mono_core ${MONO_CORE_SOURCES})
+target_include_directories(docking_perception_mono_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR})
+target_link_libraries(docking_perception_mono_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES})
+
+# Synthetic targets and views, shared by the tests and the benchmark.
+add_library(docking_perception_mono_synthetic STATIC test/mono/synthetic_scene.cpp)
+target_link_libraries(docking_perception_mono_synthetic docking_perception_mono_core)
+
+add_executable(bench_mono test/mono/bench_mono.cpp)
+target_link_libraries(bench_mono docking_perception_mono_synthetic docking_perception_mono_core)
+
+if(CATKIN_ENABLE_TESTING)
+  catkin_add_gtest(test_mono_core
+    test/mono/test_main.cpp
+    test/mono/test_target_model.cpp
+    test/mono/test_five_point_solver.cpp
+    test/mono/test_planar_pnp_solver.cpp
+    test/mono/test_velocity_estimators.cpp
+    test/mono/test_led_pattern_detector.cpp
+    test/mono/test_mono_pose_estimator.cpp)
+  if(TARGET test_mono_core)
+    target_link_libraries(test_mono_core docking_perception_mono_synthetic docking_perception_mono_core)
+  endif()
+endif()

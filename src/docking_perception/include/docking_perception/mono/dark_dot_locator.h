@@ -1,0 +1,36 @@
+// Locates one printed dark dot near a predicted pixel (the dot's model position mapped through the
+// face homography) with sub-pixel precision: inside a disc around the prediction, the background level
+// is a high percentile and the dot level the minimum; pixels darker than their midpoint are weighted
+// by how much darker they are, and the weighted centroid is iterated twice (re-centring the disc).
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace docking_perception {
+namespace mono {
+
+struct DarkDotParams {
+  double search_radius_factor = 1.5;  // search disc radius / predicted dot radius (inside the white ring)
+  double min_search_radius_px = 3.0;
+  double min_contrast = 25.0;         // background - dot, 8-bit levels
+  double max_shift_factor = 1.0;      // refined centre may move at most this many dot radii
+};
+
+class DarkDotLocator {
+ public:
+  explicit DarkDotLocator(const DarkDotParams& params = DarkDotParams()) : params_(params) {}
+  void setParams(const DarkDotParams& params) { params_ = params; }
+
+  // gray: 8-bit; predicted: pixel; radius_px: the dot's apparent radius. False with the reason when the
+  // disc leaves the image, has too little contrast, or the centre runs away.
+  bool locate(const cv::Mat& gray, const Eigen::Vector2d& predicted, double radius_px, Eigen::Vector2d* centre,
+              std::string* reason) const;
+
+ private:
+  DarkDotParams params_;
+};
+
+}  // namespace mono
+}  // namespace docking_perception

@@ -1,0 +1,70 @@
+// IR LED blobs and the 5-point pattern among them.
+//
+// Blobs: a fixed threshold, 8-connected components, size and shape filters (area, fill ratio of the
+// bounding box, aspect ratio) against glare patches and streaks, and an intensity-weighted centroid
+// over the blob and its skirt (weights I - the local background level) for sub-pixel precision.
+//
+// Pattern: the markers form two collinear triples sharing an end (A = 0-1-2, B = 2-3-4, each middle at
+// the midpoint). Perspective keeps lines straight but moves the projected midpoint, so a candidate
+// triple (a, m, b) is accepted when m lies within collinearity_tolerance * |ab| of the line ab and its
+// position along ab is within midpoint_tolerance of 0.5. Two triples sharing one end and no other blob
+// make a candidate pattern. Which triple is A follows from the face's handedness: a face seen from the
+// front keeps the sign of the 2D cross product of the arms (2->0, 2->4) that the model has, whatever
+// the arm lengths look like under foreshortening. Candidates are ranked by their geometric residuals;
+// an extra blob only adds candidates, a missing one leaves none (a clean failure with a reason).
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "docking_perception/mono/collinear_five_point_solver.h"
+#include "docking_perception/mono/target_model.h"
+
+namespace docking_perception {
+namespace mono {
+
+struct LedDetectorParams {
+  int threshold = 200;                // 8-bit intensity an LED pixel reaches
+  double min_area_px = 2.0;
+  double max_area_px = 1500.0;
+  double min_fill_ratio = 0.35;       // blob area / bounding box area
+  double max_aspect_ratio = 3.0;      // bounding box long side / short side
+  int max_blobs = 16;                 // the brightest-by-area blobs kept for pattern search
+  double collinearity_tolerance = 0.04;  // distance of the middle blob from the line / triple length
+  double midpoint_tolerance = 0.2;       // |position along the triple - 0.5|
+  double min_arm_angle_deg = 15.0;       // the two arms must not look parallel
+};
+
+struct LedBlob {
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  double area_px = 0.0;
+  double peak = 0.0;
+};
+
+struct LedPatternCandidate {
+  MarkerPixels pixels{};   // pixels[i] is the image of marker i
+  std::array<int, kMarkerCount> blob_indices{};
+  double score = 0.0;      // sum of normalised collinearity and midpoint residuals (lower is better)
+};
+
+class LedPatternDetector {
+ public:
+  LedPatternDetector(const MarkerPoints& markers, const LedDetectorParams& params = LedDetectorParams());
+  void setParams(const LedDetectorParams& params) { params_ = params; }
+  const LedDetectorParams& params() const { return params_; }
+
+  // Blobs in an 8-bit single-channel image, within roi (an empty roi means the whole image).
+  std::vector<LedBlob> detectBlobs(const cv::Mat& gray, const cv::Rect& roi = cv::Rect()) const;
+
+  // All candidate patterns, best first. Empty (with the reason) when none is found.
+  std::vector<LedPatternCandidate> identifyPattern(const std::vector<LedBlob>& blobs, std::string* reason) const;
+
+ private:
+  LedDetectorParams params_;
+  double expected_handedness_;  // sign of cross(arm 2->0, arm 2->4) in the image of a front-facing face
+};
+
+}  // namespace mono
+}  // namespace docking_perception

@@ -1,0 +1,133 @@
+// MonoPoseEstimator: one image in, everything mono_pose publishes out (pose with covariance, validity
+// and the reason, quality figures, velocities with covariance, and what the debug image draws).
+//
+// Visible mode: FeatureMatcher finds the face (in the region predicted from the last pose when
+// tracking, else, or when that fails, the full frame); the `pnp` solver uses every homography inlier,
+// the `paper_5point` solver locates the 5 printed dots where the homography predicts them.
+// IR mode: LedPatternDetector finds the LED blobs and the pattern; both solvers then use the 5 LEDs
+// (`pnp` as IPPE + LM over 5 points). Every pose passes the same checks: reprojection error, range,
+// and the face turned towards the camera.
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "docking_perception/mono/collinear_five_point_solver.h"
+#include "docking_perception/mono/dark_dot_locator.h"
+#include "docking_perception/mono/feature_matcher.h"
+#include "docking_perception/mono/led_pattern_detector.h"
+#include "docking_perception/mono/planar_pnp_solver.h"
+#include "docking_perception/mono/pose_types.h"
+#include "docking_perception/mono/target_model.h"
+#include "docking_perception/mono/velocity_estimators.h"
+
+namespace docking_perception {
+namespace mono {
+
+enum class MonoMode { kVisible, kIr };
+enum class PoseSolverType { kPaperFivePoint, kPnp };
+enum class VelocityMethod { kFilter, kFrameDifference };
+
+// Names used in parameters and in TargetEstimate.solver: "visible" | "ir", "paper_5point" | "pnp",
+// "kalman" | "frame_difference". parse* return false for an unknown name.
+bool parseMonoMode(const std::string& name, MonoMode* mode);
+bool parsePoseSolver(const std::string& name, PoseSolverType* solver);
+bool parseVelocityMethod(const std::string& name, VelocityMethod* method);
+std::string toString(MonoMode mode);
+std::string toString(PoseSolverType solver);
+std::string toString(VelocityMethod method);
+
+struct MonoPoseParams {
+  MonoMode mode = MonoMode::kVisible;
+  PoseSolverType solver = PoseSolverType::kPnp;
+  VelocityMethod velocity = VelocityMethod::kFilter;
+  bool use_tracking_region = true;
+  double tracking_margin_px = 40.0;    // added around the predicted face outline
+  double max_reprojection_px = 3.0;    // a pose whose RMS reprojection error is larger is rejected
+  double min_pixel_sigma = 0.3;        // floor of the pixel noise that scales the covariances
+  double min_range_m = 0.1;
+  double max_range_m = 5.0;
+  int max_pattern_candidates = 6;      // IR: candidate LED patterns tried, best first
+  FeatureMatcherParams features;
+  LedDetectorParams leds;
+  DarkDotParams dots;
+  PlanarPnpParams pnp;
+  ConstantVelocityFilterParams filter;
+};
+
+// Empty when the parameters are usable, else a message naming the first bad parameter.
+std::string validateParams(const MonoPoseParams& params);
+
+struct MonoPoseResult {
+  double stamp_s = 0.0;
+  bool valid = false;
+  std::string status;                  // empty when valid, else why not
+  std::string solver;                  // "paper_5point" or "pnp"
+  PoseWithCovariance pose;             // camera <- target
+  double range_m = 0.0;
+  TwistWithCovariance twist;           // from the selected velocity method
+  TwistWithCovariance twist_filter;
+  TwistWithCovariance twist_frame_difference;
+  std::string velocity_status;         // why the selected velocity is not valid / a note from the filter
+  int feature_matches = 0;             // visible: ratio-test matches; IR: LED blobs found
+  int feature_inliers = 0;             // visible: homography inliers; IR: 5 when the pattern is found
+  double reprojection_error_px = 0.0;  // RMS over the points the solver used
+  double processing_time_ms = 0.0;     // CPU time of process()
+  bool used_tracking_region = false;   // the predicted region gave the result (no full-frame search)
+  cv::Rect search_region;              // where detection ran last (full frame after a fallback)
+  bool pnp_ambiguous = false;          // IPPE's two poses were close
+  // For the debug image.
+  std::vector<cv::Point2f> matched_points;
+  std::vector<cv::Point2f> inlier_points;
+  std::vector<cv::Point2f> face_outline;
+  std::vector<Eigen::Vector2d> marker_pixels;  // markers / LEDs in model order, when located
+  std::vector<Eigen::Vector2d> blob_pixels;    // IR: every LED blob
+};
+
+class MonoPoseEstimator {
+ public:
+  // Throws std::invalid_argument (with the reason) for invalid parameters or intrinsics, or a visible
+  // model whose texture yields too few features.
+  MonoPoseEstimator(const TargetModel& model, const CameraIntrinsics& camera, const MonoPoseParams& params);
+
+  // New parameters (dynamic_reconfigure); throws std::invalid_argument and keeps the old ones if invalid.
+  void setParams(const MonoPoseParams& params);
+  const MonoPoseParams& params() const { return params_; }
+  // New intrinsics (camera_info changed); throws std::invalid_argument if invalid.
+  void setCamera(const CameraIntrinsics& camera);
+  const CameraIntrinsics& camera() const { return camera_; }
+  const TargetModel& model() const { return model_; }
+
+  // One image (8-bit gray or BGR, rectified, the size of the intrinsics) at a stamp (s).
+  MonoPoseResult process(const cv::Mat& image, double stamp_s);
+  // Forget the tracking state and velocities.
+  void reset();
+
+ private:
+  bool estimateVisible(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
+  bool estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
+  bool solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason) const;
+  bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
+  cv::Rect predictedRegion(double stamp_s) const;
+  const Eigen::Matrix3d* previousRotation(double stamp_s, Eigen::Matrix3d* storage) const;
+  void updateVelocities(MonoPoseResult* result);
+
+  TargetModel model_;
+  CameraIntrinsics camera_;
+  MonoPoseParams params_;
+  FeatureMatcher matcher_;
+  LedPatternDetector led_detector_;
+  DarkDotLocator dot_locator_;
+  CollinearFivePointSolver five_point_solver_;
+  PlanarPnpSolver pnp_solver_;
+  ConstantVelocityFilter filter_;
+  FrameDifferenceVelocity frame_difference_;
+  bool tracking_ = false;  // the previous image gave a valid pose
+  PoseWithCovariance last_pose_;
+  double last_stamp_s_ = 0.0;
+};
+
+}  // namespace mono
+}  // namespace docking_perception

@@ -1,0 +1,174 @@
+#include "docking_perception/mono/led_pattern_detector.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace docking_perception {
+namespace mono {
+namespace {
+
+double cross2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+struct Triple {
+  int end_a;
+  int middle;
+  int end_b;
+  double residual;  // normalised collinearity + midpoint residuals
+};
+
+}  // namespace
+
+LedPatternDetector::LedPatternDetector(const MarkerPoints& markers, const LedDetectorParams& params)
+    : params_(params) {
+  // Image handedness of a face seen from the front, from the camera's view of the model: in the
+  // camera (x right, y down, z forward) a face whose normal n (+x of `target`) points at the camera
+  // has n_z < 0, and the image cross product of two arms has the sign of -(arm_a x arm_b) . n.
+  const Eigen::Vector3d arm_a = markers[0] - markers[2];
+  const Eigen::Vector3d arm_b = markers[4] - markers[2];
+  expected_handedness_ = -arm_a.cross(arm_b).dot(Eigen::Vector3d::UnitX()) > 0.0 ? 1.0 : -1.0;
+}
+
+std::vector<LedBlob> LedPatternDetector::detectBlobs(const cv::Mat& gray, const cv::Rect& roi_in) const {
+  std::vector<LedBlob> blobs;
+  if (gray.empty() || gray.type() != CV_8UC1) return blobs;
+  const cv::Rect full(0, 0, gray.cols, gray.rows);
+  const cv::Rect roi = roi_in.area() > 0 ? (roi_in & full) : full;
+  if (roi.area() <= 0) return blobs;
+  const cv::Mat view = gray(roi);
+  cv::Mat mask;
+  cv::threshold(view, mask, params_.threshold - 1, 255, cv::THRESH_BINARY);
+  cv::Mat labels;
+  cv::Mat stats;
+  cv::Mat centroids;
+  const int count = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
+  for (int label = 1; label < count; ++label) {
+    const int area = stats.at<int>(label, cv::CC_STAT_AREA);
+    const int w = stats.at<int>(label, cv::CC_STAT_WIDTH);
+    const int h = stats.at<int>(label, cv::CC_STAT_HEIGHT);
+    if (area < params_.min_area_px || area > params_.max_area_px) continue;
+    if (static_cast<double>(area) / (w * h) < params_.min_fill_ratio) continue;
+    if (static_cast<double>(std::max(w, h)) / std::min(w, h) > params_.max_aspect_ratio) continue;
+    // Sub-pixel centre: intensity-weighted over the blob's box grown by 2 px, above the level of the
+    // box's border. Including the blob's skirt below the threshold keeps the precision that a
+    // saturated (flat-topped) core alone would lose.
+    const cv::Rect box = cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT) - 2, stats.at<int>(label, cv::CC_STAT_TOP) - 2,
+                                  w + 4, h + 4) & cv::Rect(0, 0, view.cols, view.rows);
+    double border_sum = 0.0;
+    int border_count = 0;
+    for (int y = box.y; y < box.y + box.height; ++y) {
+      const uint8_t* row = view.ptr<uint8_t>(y);
+      for (int x = box.x; x < box.x + box.width; ++x) {
+        if (y != box.y && y != box.y + box.height - 1 && x != box.x && x != box.x + box.width - 1) continue;
+        border_sum += row[x];
+        ++border_count;
+      }
+    }
+    const double background = border_count > 0 ? border_sum / border_count : 0.0;
+    double sum_w = 0.0;
+    double sum_x = 0.0;
+    double sum_y = 0.0;
+    double peak = 0.0;
+    for (int y = box.y; y < box.y + box.height; ++y) {
+      const uint8_t* row = view.ptr<uint8_t>(y);
+      for (int x = box.x; x < box.x + box.width; ++x) {
+        const double weight = static_cast<double>(row[x]) - background;
+        if (weight <= 0.0) continue;
+        sum_w += weight;
+        sum_x += weight * x;
+        sum_y += weight * y;
+        peak = std::max(peak, static_cast<double>(row[x]));
+      }
+    }
+    if (sum_w <= 0.0) continue;
+    LedBlob blob;
+    blob.centroid = {sum_x / sum_w + roi.x, sum_y / sum_w + roi.y};
+    blob.area_px = area;
+    blob.peak = peak;
+    blobs.push_back(blob);
+  }
+  // Keep the largest blobs: LEDs are among the brightest, biggest spots, and the search is O(n^3).
+  std::sort(blobs.begin(), blobs.end(), [](const LedBlob& a, const LedBlob& b) { return a.area_px > b.area_px; });
+  if (static_cast<int>(blobs.size()) > params_.max_blobs) blobs.resize(static_cast<size_t>(params_.max_blobs));
+  return blobs;
+}
+
+std::vector<LedPatternCandidate> LedPatternDetector::identifyPattern(const std::vector<LedBlob>& blobs,
+                                                                     std::string* reason) const {
+  std::vector<LedPatternCandidate> candidates;
+  const int n = static_cast<int>(blobs.size());
+  if (n < kMarkerCount) {
+    if (reason) *reason = "found " + std::to_string(n) + " LED blobs, the pattern needs 5";
+    return candidates;
+  }
+  // All collinear triples with the middle blob near the midpoint (ends stored unordered: a < b).
+  std::vector<Triple> triples;
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b) {
+      const Eigen::Vector2d pa = blobs[static_cast<size_t>(a)].centroid;
+      const Eigen::Vector2d pb = blobs[static_cast<size_t>(b)].centroid;
+      const Eigen::Vector2d ab = pb - pa;
+      const double length = ab.norm();
+      if (length < 3.0) continue;
+      for (int m = 0; m < n; ++m) {
+        if (m == a || m == b) continue;
+        const Eigen::Vector2d am = blobs[static_cast<size_t>(m)].centroid - pa;
+        const double along = am.dot(ab) / (length * length);
+        const double off_line = std::abs(cross2d(ab, am)) / length / length;
+        const double midpoint_error = std::abs(along - 0.5);
+        if (off_line > params_.collinearity_tolerance || midpoint_error > params_.midpoint_tolerance) continue;
+        triples.push_back({a, m, b,
+                           off_line / params_.collinearity_tolerance + midpoint_error / params_.midpoint_tolerance});
+      }
+    }
+  }
+  const double min_sin = std::sin(params_.min_arm_angle_deg * M_PI / 180.0);
+  for (size_t i = 0; i < triples.size(); ++i) {
+    for (size_t j = i + 1; j < triples.size(); ++j) {
+      const Triple& t1 = triples[i];
+      const Triple& t2 = triples[j];
+      // The shared blob must be an end of both triples, and it must be the only shared blob.
+      const int ends1[2] = {t1.end_a, t1.end_b};
+      const int ends2[2] = {t2.end_a, t2.end_b};
+      for (int e1 = 0; e1 < 2; ++e1) {
+        for (int e2 = 0; e2 < 2; ++e2) {
+          if (ends1[e1] != ends2[e2]) continue;
+          const int shared = ends1[e1];
+          const int far1 = ends1[1 - e1];
+          const int far2 = ends2[1 - e2];
+          if (far1 == far2 || t1.middle == t2.middle || t1.middle == far2 || t2.middle == far1) continue;
+          const Eigen::Vector2d ps = blobs[static_cast<size_t>(shared)].centroid;
+          const Eigen::Vector2d arm1 = blobs[static_cast<size_t>(far1)].centroid - ps;
+          const Eigen::Vector2d arm2 = blobs[static_cast<size_t>(far2)].centroid - ps;
+          const double sin_angle = cross2d(arm1, arm2) / (arm1.norm() * arm2.norm());
+          if (std::abs(sin_angle) < min_sin) continue;
+          // Handedness decides which arm is A (2 -> 0) and which is B (2 -> 4).
+          const bool first_is_a = sin_angle * expected_handedness_ > 0.0;
+          const Triple& ta = first_is_a ? t1 : t2;
+          const Triple& tb = first_is_a ? t2 : t1;
+          const int far_a = first_is_a ? far1 : far2;
+          const int far_b = first_is_a ? far2 : far1;
+          LedPatternCandidate candidate;
+          candidate.blob_indices = {far_a, ta.middle, shared, tb.middle, far_b};
+          for (int k = 0; k < kMarkerCount; ++k) {
+            candidate.pixels[static_cast<size_t>(k)] =
+                blobs[static_cast<size_t>(candidate.blob_indices[static_cast<size_t>(k)])].centroid;
+          }
+          candidate.score = ta.residual + tb.residual;
+          candidates.push_back(candidate);
+        }
+      }
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const LedPatternCandidate& a, const LedPatternCandidate& b) { return a.score < b.score; });
+  if (candidates.empty() && reason) {
+    *reason = "no 5-point LED pattern among " + std::to_string(n) + " blobs (" + std::to_string(triples.size()) +
+              " collinear triples)";
+  }
+  return candidates;
+}
+
+}  // namespace mono
+}  // namespace docking_perception

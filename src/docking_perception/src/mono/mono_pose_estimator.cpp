@@ -1,0 +1,413 @@
+#include "docking_perception/mono/mono_pose_estimator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace docking_perception {
+namespace mono {
+namespace {
+
+Eigen::Vector2d applyHomography(const cv::Matx33d& h, const Eigen::Vector2d& p) {
+  const cv::Vec3d q = h * cv::Vec3d(p.x(), p.y(), 1.0);
+  return {q[0] / q[2], q[1] / q[2]};
+}
+
+std::string positive(const std::string& name, double value) {
+  return value > 0.0 ? std::string() : name + " must be positive (got " + std::to_string(value) + ")";
+}
+
+}  // namespace
+
+bool parseMonoMode(const std::string& name, MonoMode* mode) {
+  if (name == "visible") *mode = MonoMode::kVisible;
+  else if (name == "ir") *mode = MonoMode::kIr;
+  else return false;
+  return true;
+}
+
+bool parsePoseSolver(const std::string& name, PoseSolverType* solver) {
+  if (name == "paper_5point") *solver = PoseSolverType::kPaperFivePoint;
+  else if (name == "pnp") *solver = PoseSolverType::kPnp;
+  else return false;
+  return true;
+}
+
+bool parseVelocityMethod(const std::string& name, VelocityMethod* method) {
+  if (name == "kalman") *method = VelocityMethod::kFilter;
+  else if (name == "frame_difference") *method = VelocityMethod::kFrameDifference;
+  else return false;
+  return true;
+}
+
+std::string toString(MonoMode mode) { return mode == MonoMode::kVisible ? "visible" : "ir"; }
+std::string toString(PoseSolverType solver) {
+  return solver == PoseSolverType::kPnp ? "pnp" : "paper_5point";
+}
+std::string toString(VelocityMethod method) {
+  return method == VelocityMethod::kFilter ? "kalman" : "frame_difference";
+}
+
+std::string validateParams(const MonoPoseParams& p) {
+  const std::vector<std::string> checks = {
+      positive("max_reprojection_px", p.max_reprojection_px),
+      positive("min_pixel_sigma", p.min_pixel_sigma),
+      positive("min_range_m", p.min_range_m),
+      p.max_range_m > p.min_range_m ? "" : "max_range_m must exceed min_range_m",
+      p.tracking_margin_px >= 0.0 ? "" : "tracking_margin_px must not be negative",
+      p.max_pattern_candidates >= 1 ? "" : "max_pattern_candidates must be at least 1",
+      p.features.brisk_threshold > 0 ? "" : "features.brisk_threshold must be positive",
+      p.features.brisk_octaves >= 0 && p.features.brisk_octaves <= 8 ? "" : "features.brisk_octaves must be 0..8",
+      p.features.max_image_keypoints >= 10 ? "" : "features.max_image_keypoints must be at least 10",
+      p.features.model_widths_px.empty() ? "features.model_widths_px must not be empty" : "",
+      p.features.ratio > 0.0 && p.features.ratio <= 1.0 ? "" : "features.ratio must be in (0, 1]",
+      positive("features.ransac_threshold_px", p.features.ransac_threshold_px),
+      p.features.min_inliers >= 4 ? "" : "features.min_inliers must be at least 4",
+      p.leds.threshold >= 1 && p.leds.threshold <= 255 ? "" : "leds.threshold must be 1..255",
+      p.leds.max_area_px > p.leds.min_area_px ? "" : "leds.max_area_px must exceed leds.min_area_px",
+      p.leds.max_blobs >= kMarkerCount ? "" : "leds.max_blobs must be at least 5",
+      positive("leds.collinearity_tolerance", p.leds.collinearity_tolerance),
+      positive("leds.midpoint_tolerance", p.leds.midpoint_tolerance),
+      positive("dots.search_radius_factor", p.dots.search_radius_factor),
+      positive("dots.min_contrast", p.dots.min_contrast),
+      p.pnp.ambiguity_ratio >= 1.0 ? "" : "pnp.ambiguity_ratio must be at least 1",
+      positive("filter.accel_noise", p.filter.accel_noise),
+      positive("filter.angular_accel_noise", p.filter.angular_accel_noise),
+      positive("filter.max_gap_s", p.filter.max_gap_s),
+      p.filter.gate_chi2 >= 0.0 ? "" : "filter.gate_chi2 must not be negative",
+  };
+  for (const std::string& check : checks) {
+    if (!check.empty()) return check;
+  }
+  for (const int width : p.features.model_widths_px) {
+    if (width < 32) return "features.model_widths_px entries must be at least 32";
+  }
+  return "";
+}
+
+MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntrinsics& camera,
+                                     const MonoPoseParams& params)
+    : model_(model),
+      camera_(camera),
+      params_(params),
+      matcher_(params.features),
+      led_detector_(model.markers(), params.leds),
+      dot_locator_(params.dots),
+      five_point_solver_(model.markers()),
+      pnp_solver_(params.pnp),
+      filter_(params.filter),
+      frame_difference_(params.filter.max_gap_s) {
+  const std::string invalid = validateParams(params);
+  if (!invalid.empty()) throw std::invalid_argument(invalid);
+  std::string reason;
+  if (!camera.isValid(&reason)) throw std::invalid_argument("camera intrinsics: " + reason);
+  if (params.mode == MonoMode::kVisible) {
+    if (!model.hasTexture()) throw std::invalid_argument("visible mode needs the target texture");
+    if (!matcher_.buildModel(model.textureGray(), &reason)) throw std::invalid_argument(reason);
+  }
+}
+
+void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
+  const std::string invalid = validateParams(params);
+  if (!invalid.empty()) throw std::invalid_argument(invalid);
+  if (params.mode != params_.mode) {
+    if (params.mode == MonoMode::kVisible) {
+      if (!model_.hasTexture()) throw std::invalid_argument("visible mode needs the target texture");
+      matcher_ = FeatureMatcher(params.features);
+      std::string reason;
+      if (!matcher_.buildModel(model_.textureGray(), &reason)) throw std::invalid_argument(reason);
+    }
+    reset();
+  }
+  params_ = params;
+  matcher_.setParams(params.features);
+  led_detector_.setParams(params.leds);
+  dot_locator_.setParams(params.dots);
+  pnp_solver_.setParams(params.pnp);
+  filter_.setParams(params.filter);
+  frame_difference_.setMaxGap(params.filter.max_gap_s);
+}
+
+void MonoPoseEstimator::setCamera(const CameraIntrinsics& camera) {
+  std::string reason;
+  if (!camera.isValid(&reason)) throw std::invalid_argument("camera intrinsics: " + reason);
+  camera_ = camera;
+}
+
+void MonoPoseEstimator::reset() {
+  tracking_ = false;
+  filter_.reset();
+  frame_difference_.reset();
+}
+
+const Eigen::Matrix3d* MonoPoseEstimator::previousRotation(double stamp_s, Eigen::Matrix3d* storage) const {
+  if (!tracking_) return nullptr;
+  PoseWithCovariance predicted;
+  *storage = filter_.predict(stamp_s, &predicted) ? predicted.rotation : last_pose_.rotation;
+  return storage;
+}
+
+cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s) const {
+  if (!params_.use_tracking_region || !tracking_) return cv::Rect();
+  PoseWithCovariance predicted = last_pose_;
+  if (stamp_s > last_stamp_s_ && stamp_s - last_stamp_s_ <= params_.filter.max_gap_s) {
+    filter_.predict(stamp_s, &predicted);
+  }
+  std::vector<Eigen::Vector3d> outline;
+  if (params_.mode == MonoMode::kVisible) {
+    outline = model_.faceCorners();
+  } else {
+    outline.assign(model_.markers().begin(), model_.markers().end());
+  }
+  double min_x = 1e9, min_y = 1e9, max_x = -1e9, max_y = -1e9;
+  for (const Eigen::Vector3d& corner : outline) {
+    const Eigen::Vector3d p = predicted.rotation * corner + predicted.translation;
+    if (p.z() < 0.05) return cv::Rect();  // prediction too close or behind: search everything
+    const Eigen::Vector2d pixel = camera_.project(p);
+    min_x = std::min(min_x, pixel.x());
+    min_y = std::min(min_y, pixel.y());
+    max_x = std::max(max_x, pixel.x());
+    max_y = std::max(max_y, pixel.y());
+  }
+  const double margin = params_.tracking_margin_px;
+  const cv::Rect region(cv::Point(static_cast<int>(std::floor(min_x - margin)), static_cast<int>(std::floor(min_y - margin))),
+                        cv::Point(static_cast<int>(std::ceil(max_x + margin)), static_cast<int>(std::ceil(max_y + margin))));
+  const cv::Rect clipped = region & cv::Rect(0, 0, camera_.width, camera_.height);
+  // A region covering most of the frame saves nothing; an empty one means the target left the view.
+  if (clipped.area() <= 0 || clipped.area() > 0.8 * camera_.width * camera_.height) return cv::Rect();
+  return clipped;
+}
+
+bool MonoPoseEstimator::checkPose(const PoseWithCovariance& pose, std::string* reason) const {
+  const double range = pose.translation.norm();
+  if (!std::isfinite(range) || range < params_.min_range_m || range > params_.max_range_m) {
+    *reason = "range " + std::to_string(range) + " m outside [min_range_m, max_range_m]";
+    return false;
+  }
+  // The face normal (+x of `target`) must point back at the camera, else we would be looking at the
+  // back of the face: a wrong solution.
+  const Eigen::Vector3d normal = pose.rotation.col(0);
+  if (normal.dot(pose.translation) >= 0.0) {
+    *reason = "pose shows the back of the face";
+    return false;
+  }
+  if (!pose.covariance.allFinite()) {
+    *reason = "covariance is not finite";
+    return false;
+  }
+  return true;
+}
+
+bool MonoPoseEstimator::solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result,
+                                       std::string* reason) const {
+  FivePointSolution solution;
+  Matrix6d covariance;
+  // First the pose (for the residual), then the covariance scaled by the residual variance (5 points,
+  // 10 coordinates, 6 parameters: 4 degrees of freedom), floored at min_pixel_sigma.
+  if (!five_point_solver_.solve(camera_, pixels, &solution, reason)) return false;
+  const double residual_variance = solution.reprojection_rms_px * solution.reprojection_rms_px * kMarkerCount / 4.0;
+  const double variance = std::max(residual_variance, params_.min_pixel_sigma * params_.min_pixel_sigma);
+  std::string covariance_note;
+  five_point_solver_.solveWithCovariance(camera_, pixels, variance, &solution, &covariance, &covariance_note);
+  if (solution.reprojection_rms_px > params_.max_reprojection_px) {
+    *reason = "5-point reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large";
+    return false;
+  }
+  PoseWithCovariance pose;
+  pose.rotation = solution.rotation;
+  pose.translation = solution.translation;
+  pose.covariance = covariance;
+  if (!checkPose(pose, reason)) return false;
+  result->pose = pose;
+  result->reprojection_error_px = solution.reprojection_rms_px;
+  return true;
+}
+
+bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result) {
+  FaceMatch match;
+  if (region.area() > 0) {
+    match = matcher_.match(gray, region);
+    result->used_tracking_region = match.found;
+    result->search_region = region;
+  }
+  if (!match.found) {
+    match = matcher_.match(gray);
+    result->search_region = cv::Rect(0, 0, gray.cols, gray.rows);
+  }
+  result->feature_matches = match.matches;
+  result->feature_inliers = match.inliers;
+  result->matched_points = match.matched_image_points;
+  result->inlier_points = match.inlier_image_points;
+  result->face_outline = match.face_outline;
+  if (!match.found) {
+    result->status = match.status;
+    return false;
+  }
+
+  std::string reason;
+  if (params_.solver == PoseSolverType::kPnp) {
+    std::vector<Eigen::Vector3d> model_points;
+    std::vector<Eigen::Vector2d> image_points;
+    model_points.reserve(match.inlier_texture_points.size());
+    for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
+      model_points.push_back(model_.texturePixelToPoint(match.inlier_texture_points[i]));
+      image_points.emplace_back(match.inlier_image_points[i].x, match.inlier_image_points[i].y);
+    }
+    Eigen::Matrix3d previous_storage;
+    PlanarPnpSolution solution;
+    if (!pnp_solver_.solve(camera_, model_points, image_points, previousRotation(result->stamp_s, &previous_storage),
+                           &solution, &reason)) {
+      result->status = reason;
+      return false;
+    }
+    result->pnp_ambiguous = solution.ambiguous;
+    result->reprojection_error_px = solution.reprojection_rms_px;
+    if (solution.reprojection_rms_px > params_.max_reprojection_px) {
+      result->status = "PnP reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large";
+      return false;
+    }
+    if (!checkPose(solution.pose, &reason)) {
+      result->status = reason;
+      return false;
+    }
+    result->pose = solution.pose;
+    return true;
+  }
+
+  // paper_5point: the printed dots, where the homography says they are.
+  MarkerPixels pixels;
+  for (int i = 0; i < kMarkerCount; ++i) {
+    const Eigen::Vector3d& marker = model_.markers()[static_cast<size_t>(i)];
+    const cv::Point2d texture_pixel = model_.pointToTexturePixel(marker);
+    const Eigen::Vector2d centre = applyHomography(match.homography, {texture_pixel.x, texture_pixel.y});
+    const cv::Point2d texture_edge =
+        model_.pointToTexturePixel(marker + Eigen::Vector3d(0.0, model_.markerRadius(), 0.0));
+    const cv::Point2d texture_edge_z =
+        model_.pointToTexturePixel(marker + Eigen::Vector3d(0.0, 0.0, model_.markerRadius()));
+    const double radius_px =
+        std::max((applyHomography(match.homography, {texture_edge.x, texture_edge.y}) - centre).norm(),
+                 (applyHomography(match.homography, {texture_edge_z.x, texture_edge_z.y}) - centre).norm());
+    Eigen::Vector2d located;
+    if (!dot_locator_.locate(gray, centre, radius_px, &located, &reason)) {
+      result->status = "marker " + std::to_string(i) + ": " + reason;
+      return false;
+    }
+    pixels[static_cast<size_t>(i)] = located;
+  }
+  result->marker_pixels.assign(pixels.begin(), pixels.end());
+  if (!solveFivePoint(pixels, result, &reason)) {
+    result->status = reason;
+    return false;
+  }
+  return true;
+}
+
+bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result) {
+  std::string reason;
+  auto attempt = [&](const cv::Rect& search) -> bool {
+    const std::vector<LedBlob> blobs = led_detector_.detectBlobs(gray, search);
+    result->feature_matches = static_cast<int>(blobs.size());
+    result->blob_pixels.clear();
+    for (const LedBlob& blob : blobs) result->blob_pixels.push_back(blob.centroid);
+    const std::vector<LedPatternCandidate> candidates = led_detector_.identifyPattern(blobs, &reason);
+    const int tries = std::min(static_cast<int>(candidates.size()), params_.max_pattern_candidates);
+    for (int c = 0; c < tries; ++c) {
+      const MarkerPixels& pixels = candidates[static_cast<size_t>(c)].pixels;
+      // The 5-point solve also validates the identification (scale consistency, face orientation).
+      MonoPoseResult trial = *result;
+      if (!solveFivePoint(pixels, &trial, &reason)) continue;
+      if (params_.solver == PoseSolverType::kPnp) {
+        const std::vector<Eigen::Vector3d> model(model_.markers().begin(), model_.markers().end());
+        const std::vector<Eigen::Vector2d> image(pixels.begin(), pixels.end());
+        Eigen::Matrix3d previous_storage;
+        const Eigen::Matrix3d* previous = previousRotation(result->stamp_s, &previous_storage);
+        if (previous == nullptr) previous = &trial.pose.rotation;  // no history: the 5-point pose decides
+        PlanarPnpSolution solution;
+        if (!pnp_solver_.solve(camera_, model, image, previous, &solution, &reason)) continue;
+        if (solution.reprojection_rms_px > params_.max_reprojection_px || !checkPose(solution.pose, &reason)) continue;
+        trial.pose = solution.pose;
+        trial.reprojection_error_px = solution.reprojection_rms_px;
+        trial.pnp_ambiguous = solution.ambiguous;
+      }
+      *result = trial;
+      result->feature_inliers = kMarkerCount;
+      result->marker_pixels.assign(pixels.begin(), pixels.end());
+      return true;
+    }
+    return false;
+  };
+  if (region.area() > 0) {
+    result->search_region = region;
+    if (attempt(region)) {
+      result->used_tracking_region = true;
+      return true;
+    }
+  }
+  result->search_region = cv::Rect(0, 0, gray.cols, gray.rows);
+  if (attempt(cv::Rect())) return true;
+  result->status = reason.empty() ? "LED pattern not found" : reason;
+  return false;
+}
+
+void MonoPoseEstimator::updateVelocities(MonoPoseResult* result) {
+  std::string filter_note;
+  std::string difference_note;
+  const bool filter_ok = filter_.update(result->stamp_s, result->pose, &filter_note);
+  frame_difference_.update(result->stamp_s, result->pose, &difference_note);
+  result->twist_filter = filter_.twist();
+  result->twist_frame_difference = frame_difference_.twist();
+  if (!filter_ok) result->twist_filter.valid = false;  // this pose was not fused: no fresh velocity
+  if (params_.velocity == VelocityMethod::kFilter) {
+    result->twist = result->twist_filter;
+    result->velocity_status = filter_note;
+  } else {
+    result->twist = result->twist_frame_difference;
+    result->velocity_status = difference_note;
+  }
+  if (!result->twist.valid && result->velocity_status.empty()) {
+    result->velocity_status = "velocity needs two poses within filter.max_gap_s";
+  }
+}
+
+MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) {
+  const double start_ms = threadCpuTimeMs();
+  MonoPoseResult result;
+  result.stamp_s = stamp_s;
+  result.solver = toString(params_.solver);
+  cv::Mat gray;
+  if (image.empty()) {
+    result.status = "empty image";
+  } else if (image.cols != camera_.width || image.rows != camera_.height) {
+    result.status = "image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                    ", camera_info says " + std::to_string(camera_.width) + "x" + std::to_string(camera_.height);
+  } else if (image.type() == CV_8UC1) {
+    gray = image;
+  } else if (image.type() == CV_8UC3) {
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  } else {
+    result.status = "unsupported image type (need 8-bit gray or BGR)";
+  }
+
+  if (!gray.empty()) {
+    const cv::Rect region = predictedRegion(stamp_s);
+    result.valid = params_.mode == MonoMode::kVisible ? estimateVisible(gray, region, &result)
+                                                      : estimateIr(gray, region, &result);
+  }
+  if (result.valid) {
+    result.status.clear();
+    result.range_m = result.pose.translation.norm();
+    updateVelocities(&result);
+    tracking_ = true;
+    last_pose_ = result.pose;
+    last_stamp_s_ = stamp_s;
+  } else {
+    tracking_ = false;
+    result.velocity_status = "no pose";
+  }
+  result.processing_time_ms = threadCpuTimeMs() - start_ms;
+  return result;
+}
+
+}  // namespace mono
+}  // namespace docking_perception

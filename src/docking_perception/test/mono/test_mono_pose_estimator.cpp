@@ -1,0 +1,154 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <opencv2/core.hpp>
+
+#include "docking_perception/mono/mono_pose_estimator.h"
+#include "synthetic_scene.h"
+
+using namespace docking_perception::mono;  // NOLINT: test file
+
+namespace {
+
+double degrees(double rad) { return rad * 180.0 / M_PI; }
+
+struct ViewCase {
+  double yaw;
+  double pitch;
+  Eigen::Vector3d t;
+};
+
+MonoPoseParams paramsFor(MonoMode mode, PoseSolverType solver) {
+  MonoPoseParams params;
+  params.mode = mode;
+  params.solver = solver;
+  return params;
+}
+
+}  // namespace
+
+// End to end on synthetic views: the texture warped into a 640x480 image with the plane's homography.
+// Tolerances: PnP over ~100+ inliers is expected at the goal (0.5 % of range, 0.5 deg); we assert
+// 1 % and 1 deg for margin over rendering effects. The 5-point solver rests on 5 dots located to a few
+// tenths of a pixel, so its tilt error is several degrees (see test_five_point_solver); we assert 2 % of
+// range and 6 deg.
+TEST(MonoPoseEstimator, VisibleViewsGiveThePoseWithBothSolvers) {
+  const TargetModel model = synthetic::makeModel(1);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  const std::vector<ViewCase> views = {{0.0, 0.0, {0.0, 0.0, 1.0}},
+                                       {0.35, 0.1, {0.05, -0.03, 0.7}},
+                                       {-0.5, 0.0, {-0.05, 0.02, 1.4}},
+                                       {0.2, -0.15, {0.0, 0.0, 0.45}}};
+  for (const PoseSolverType solver : {PoseSolverType::kPnp, PoseSolverType::kPaperFivePoint}) {
+    for (size_t v = 0; v < views.size(); ++v) {
+      const ViewCase& view = views[v];
+      MonoPoseEstimator estimator(model, camera, paramsFor(MonoMode::kVisible, solver));
+      const Eigen::Matrix3d r = synthetic::facingRotation(view.yaw, view.pitch);
+      const cv::Mat image = synthetic::renderVisible(model, camera, r, view.t, 100 + v);
+      const MonoPoseResult result = estimator.process(image, 1.0);
+      ASSERT_TRUE(result.valid) << toString(solver) << " view " << v << ": " << result.status;
+      const double range = view.t.norm();
+      const double position_error = (result.pose.translation - view.t).norm();
+      const double angle_error = degrees(rotationAngleBetween(result.pose.rotation, r));
+      const bool pnp = solver == PoseSolverType::kPnp;
+      EXPECT_LT(position_error, (pnp ? 0.01 : 0.02) * range) << toString(solver) << " view " << v;
+      EXPECT_LT(angle_error, pnp ? 1.0 : 6.0) << toString(solver) << " view " << v;
+      EXPECT_EQ(result.solver, toString(solver));
+      EXPECT_GE(result.feature_inliers, 12);
+      EXPECT_GE(result.feature_matches, result.feature_inliers);
+      EXPECT_LT(result.reprojection_error_px, 1.5);
+      EXPECT_NEAR(result.range_m, result.pose.translation.norm(), 1e-12);
+      EXPECT_EQ(result.face_outline.size(), 4u);
+      EXPECT_GT(result.processing_time_ms, 0.0);
+      // A real covariance: positive definite, position sigma between 0.1 mm and 5 cm.
+      Eigen::SelfAdjointEigenSolver<Matrix6d> eigen(result.pose.covariance);
+      EXPECT_GT(eigen.eigenvalues().minCoeff(), 0.0);
+      EXPECT_GT(std::sqrt(result.pose.covariance(2, 2)), 1e-4);
+      EXPECT_LT(std::sqrt(result.pose.covariance(2, 2)), 0.05);
+      EXPECT_FALSE(result.twist.valid);  // one pose: no velocity yet
+      if (!pnp) {
+        EXPECT_EQ(result.marker_pixels.size(), 5u);
+      }
+    }
+  }
+}
+
+TEST(MonoPoseEstimator, TrackingUsesThePredictedRegionAndGivesAVelocity) {
+  const TargetModel model = synthetic::makeModel(2);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  MonoPoseEstimator estimator(model, camera, paramsFor(MonoMode::kVisible, PoseSolverType::kPnp));
+  const Eigen::Vector3d velocity(0.02, 0.0, -0.05);
+  MonoPoseResult result;
+  for (int frame = 0; frame < 20; ++frame) {
+    const double t = frame / 30.0;
+    const Eigen::Vector3d position = Eigen::Vector3d(0.0, 0.0, 1.0) + velocity * t;
+    const cv::Mat image = synthetic::renderVisible(model, camera, synthetic::facingRotation(0.2), position, 300 + frame);
+    result = estimator.process(image, 10.0 + t);
+    ASSERT_TRUE(result.valid) << "frame " << frame << ": " << result.status;
+    if (frame == 0) {
+      EXPECT_FALSE(result.used_tracking_region);
+    } else {
+      EXPECT_TRUE(result.used_tracking_region) << "frame " << frame;
+      EXPECT_LT(result.search_region.area(), camera.width * camera.height / 2);
+    }
+  }
+  ASSERT_TRUE(result.twist.valid);
+  ASSERT_TRUE(result.twist_frame_difference.valid);
+  EXPECT_LT((result.twist.linear - velocity).norm(), 0.05);
+}
+
+TEST(MonoPoseEstimator, ReportsWhyNothingWasFound) {
+  const TargetModel model = synthetic::makeModel(1);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  MonoPoseEstimator estimator(model, camera, paramsFor(MonoMode::kVisible, PoseSolverType::kPnp));
+  const cv::Mat blank(480, 640, CV_8UC1, cv::Scalar(90));
+  MonoPoseResult result = estimator.process(blank, 1.0);
+  EXPECT_FALSE(result.valid);
+  EXPECT_FALSE(result.status.empty());
+  result = estimator.process(cv::Mat(240, 320, CV_8UC1, cv::Scalar(0)), 2.0);
+  EXPECT_FALSE(result.valid);
+  EXPECT_NE(result.status.find("camera_info says 640x480"), std::string::npos) << result.status;
+  result = estimator.process(cv::Mat(), 3.0);
+  EXPECT_FALSE(result.valid);
+  EXPECT_EQ(result.status, "empty image");
+}
+
+TEST(MonoPoseEstimator, IrModeFindsTheLedsInTheDark) {
+  const TargetModel model = synthetic::makeModel(1);
+  CameraIntrinsics camera = synthetic::defaultCamera();
+  camera.fx = camera.fy = 520.0;
+  for (const PoseSolverType solver : {PoseSolverType::kPaperFivePoint, PoseSolverType::kPnp}) {
+    MonoPoseEstimator estimator(model, camera, paramsFor(MonoMode::kIr, solver));
+    const Eigen::Matrix3d r = synthetic::facingRotation(-0.3, 0.1, 0.05);
+    const Eigen::Vector3d t(0.03, 0.01, 0.9);
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& m : model.markers()) points.push_back(r * m + t);
+    points.emplace_back(0.25, -0.15, 1.3);  // a stray light
+    const MonoPoseResult result = estimator.process(synthetic::renderLedSpots(camera, points, 0.005, 5), 1.0);
+    ASSERT_TRUE(result.valid) << toString(solver) << ": " << result.status;
+    EXPECT_EQ(result.feature_matches, 6);
+    EXPECT_EQ(result.feature_inliers, 5);
+    EXPECT_LT((result.pose.translation - t).norm(), 0.02 * t.norm()) << toString(solver);
+    EXPECT_LT(degrees(rotationAngleBetween(result.pose.rotation, r)), 6.0) << toString(solver);
+    // One LED hidden: a clean failure with the reason.
+    points.erase(points.begin() + 3);
+    const MonoPoseResult hidden = estimator.process(synthetic::renderLedSpots(camera, points, 0.005, 6), 1.1);
+    EXPECT_FALSE(hidden.valid);
+    EXPECT_NE(hidden.status.find("LED"), std::string::npos) << hidden.status;
+  }
+}
+
+TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
+  MonoPoseParams params;
+  params.features.ratio = 1.5;
+  EXPECT_NE(validateParams(params).find("features.ratio"), std::string::npos);
+  params = MonoPoseParams();
+  params.max_range_m = 0.05;
+  EXPECT_NE(validateParams(params).find("max_range_m"), std::string::npos);
+  EXPECT_THROW(MonoPoseEstimator(synthetic::makeModel(1), synthetic::defaultCamera(), params), std::invalid_argument);
+  EXPECT_TRUE(validateParams(MonoPoseParams()).empty());
+  MonoMode mode;
+  EXPECT_TRUE(parseMonoMode("ir", &mode));
+  EXPECT_EQ(mode, MonoMode::kIr);
+  EXPECT_FALSE(parseMonoMode("thermal", &mode));
+}
