@@ -200,7 +200,7 @@ class ArbiterNode {
     tf2::toMsg(twist_out.angular, out.twist.twist.angular);
     fromMatrix(twist_out.covariance, out.twist.covariance);
     out.range_m = pose_out.position.norm();  // from the output camera, not the source camera
-    out.status = last_decision_.reason;
+    out.status.clear();  // TargetEstimate: empty when valid; the choice's reason is on the status topic
     estimate_pub_.publish(out);
     ++published_;
 

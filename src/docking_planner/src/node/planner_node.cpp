@@ -106,6 +106,7 @@ class PlannerNode {
     base_frame_ = pnh.param<std::string>("base_frame", docking_msgs::frames::kBaseLink);
     const double rate_hz = requireDouble(pnh, "rate_hz");
     if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) throw std::invalid_argument("parameter ~rate_hz must be in (0, 1000]");
+    update_on_estimate_ = requireBool(pnh, "update_on_estimate");
     tf_wait_s_ = requireDouble(pnh, "tf_wait_s");
     if (!(tf_wait_s_ >= 0.0)) throw std::invalid_argument("parameter ~tf_wait_s must be >= 0");
 
@@ -146,12 +147,15 @@ class PlannerNode {
                     docking_msgs::topics::kTargetEstimate);
     }
     pending_.push_back(msg);
-    processPending();
+    // A fresh estimate is acted on at once rather than at the next timer tick: that tick would add up
+    // to one period to the image-to-cmd_vel latency.
+    if (processPending() && update_on_estimate_) runCycle();
   }
 
   // Estimates wait here until tf can place the camera in odom at their stamp (odometry may lag the
-  // image by a cycle), for at most tf_wait_s.
-  void processPending() {
+  // image by a cycle), for at most tf_wait_s. Returns true when a valid estimate was taken.
+  bool processPending() {
+    bool took_valid = false;
     while (!pending_.empty()) {
       const auto& msg = pending_.front();
       if (!msg->valid) {
@@ -165,7 +169,7 @@ class PlannerNode {
       }
       std::string error;
       if (!tf_buffer_.canTransform(odom_frame_, msg->header.frame_id, msg->header.stamp, &error)) {
-        if ((ros::Time::now() - msg->header.stamp).toSec() <= tf_wait_s_) return;  // try again next cycle
+        if ((ros::Time::now() - msg->header.stamp).toSec() <= tf_wait_s_) return took_valid;  // retry later
         ++tf_failures_;
         last_tf_error_ = error;
         ROS_WARN_THROTTLE(2.0, "planner: dropped an estimate: no transform %s -> %s at its stamp: %s",
@@ -177,8 +181,10 @@ class PlannerNode {
           tf2::transformToEigen(tf_buffer_.lookupTransform(odom_frame_, msg->header.frame_id, msg->header.stamp));
       const TrackUpdate result = planner_.addObservation(toObservation(*msg, odom_from_camera));
       if (!result.accepted) ROS_DEBUG("planner: estimate not used: %s", result.reason.c_str());
+      took_valid = took_valid || result.accepted;
       pending_.pop_front();
     }
+    return took_valid;
   }
 
   TargetObservation toObservation(const docking_msgs::TargetEstimate& msg, const Eigen::Isometry3d& odom_from_camera) {
@@ -211,6 +217,10 @@ class PlannerNode {
 
   void onTimer(const ros::TimerEvent&) {
     processPending();
+    runCycle();
+  }
+
+  void runCycle() {
     const ros::Time now = ros::Time::now();
     last_ = planner_.update(now.toSec(), odometry_);
 
@@ -281,6 +291,7 @@ class PlannerNode {
   DockingPlanner planner_;
   std::string odom_frame_, base_frame_;
   double tf_wait_s_{0.2};
+  bool update_on_estimate_{true};
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   diagnostic_updater::Updater diagnostics_;
