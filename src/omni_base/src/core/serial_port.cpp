@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
+#include <poll.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -33,19 +34,34 @@ bool makeRaw(int fd, unsigned int speed, std::string& error) {
   return true;
 }
 
-// Reads until EAGAIN. Returns false on a hang-up or error.
+// Reads what is waiting. Returns false on a hang-up or error. A raw tty with VMIN = VTIME = 0 reads 0
+// bytes when nothing is waiting, so a hang-up is told by poll(), not by read() returning 0.
 bool drain(int fd, std::vector<uint8_t>& out, std::string& error) {
   uint8_t chunk[512];
   while (true) {
+    pollfd pfd{fd, POLLIN, 0};
+    if (::poll(&pfd, 1, 0) < 0) {
+      if (errno == EINTR) continue;
+      error = errnoText("poll");
+      return false;
+    }
+    if (pfd.revents & (POLLERR | POLLNVAL)) {
+      error = "device error";
+      return false;
+    }
+    if (!(pfd.revents & POLLIN)) {
+      if (pfd.revents & POLLHUP) {
+        error = "device hung up (unplugged?)";
+        return false;
+      }
+      return true;  // nothing waiting
+    }
     const ssize_t n = ::read(fd, chunk, sizeof(chunk));
     if (n > 0) {
       out.insert(out.end(), chunk, chunk + n);
       continue;
     }
-    if (n == 0) {
-      error = "end of file (device closed)";
-      return false;
-    }
+    if (n == 0) return true;
     if (errno == EAGAIN || errno == EWOULDBLOCK) return true;
     if (errno == EINTR) continue;
     error = errnoText("read");

@@ -1,0 +1,150 @@
+// fake_motor_board: a pseudo-terminal that behaves like the motor board, for bench tests without
+// hardware. omni_base opens the link path (~link) as if it were /dev/ttyUSB0.
+//
+// Misbehaviour on request, on ~fault (std_msgs/String):
+//   "none"            behave
+//   "stall"           wheels blocked, fault reported
+//   "drop P"          drop each reply with probability P (0..1)
+//   "garbage"         random bytes and false start sequences between replies
+//   "disconnect S"    close the pty (an unplugged cable) for S seconds, then come back
+//   "reboot"          counters and set-points back to zero, motors disabled
+// The true wheel speeds and angles are published on ~wheels (sensor_msgs/JointState) at 200 Hz.
+#include <poll.h>
+#include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
+#include <std_msgs/String.h>
+
+#include <chrono>
+#include <sstream>
+
+#include "omni_base/fake_motor_board.h"
+#include "omni_base/serial_port.h"
+#include "param_loader.h"
+
+namespace {
+
+double steadySeconds() {
+  static const auto start = std::chrono::steady_clock::now();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+class FakeMotorBoardNode {
+ public:
+  FakeMotorBoardNode(ros::NodeHandle& pnh) : pnh_(pnh), board_(loadConfig(pnh)) {
+    link_path_ = omni_base::ParamLoader(pnh).optional<std::string>("link", "/tmp/omni_base_fake_board");
+    wheel_names_ = omni_base::ParamLoader(pnh).require<std::vector<std::string>>("wheels/names");
+    fault_sub_ = pnh.subscribe("fault", 10, &FakeMotorBoardNode::onFault, this);
+    wheels_pub_ = pnh.advertise<sensor_msgs::JointState>("wheels", 10);
+    connect();
+  }
+
+  void run() {
+    double last_publish = 0.0;
+    std::vector<uint8_t> rx;
+    while (ros::ok()) {
+      const double now = steadySeconds();
+      if (!pty_.isOpen() && now >= reconnect_at_) connect();
+      if (pty_.isOpen()) {
+        pollfd pfd{pty_.masterFd(), POLLIN, 0};
+        ::poll(&pfd, 1, 1);
+        rx.clear();
+        pty_.readAvailable(rx);
+        board_.advanceTo(steadySeconds());
+        if (!rx.empty()) {
+          const auto reply = board_.receive(rx.data(), rx.size(), steadySeconds());
+          if (!reply.empty()) pty_.write(reply);
+        }
+      } else {
+        board_.advanceTo(now);
+        ros::Duration(0.001).sleep();
+      }
+      if (now - last_publish >= 0.005) {
+        publishWheels();
+        last_publish = now;
+      }
+      ros::spinOnce();
+    }
+  }
+
+ private:
+  static omni_base::FakeMotorBoardConfig loadConfig(const ros::NodeHandle& pnh) {
+    const omni_base::ParamLoader p(pnh);
+    omni_base::FakeMotorBoardConfig c;
+    c.wheel_count = p.require<std::vector<std::string>>("wheels/names").size();
+    c.drive.volts_per_rad_s = p.requirePositive("motor/volts_per_rad_s");
+    c.drive.supply_volts = p.requirePositive("motor/supply_volts");
+    c.motor_time_constant_s = p.requirePositive("motor/time_constant_s");
+    c.counts_per_rev = p.requirePositive("wheels/encoder_counts_per_rev");
+    c.random_seed = static_cast<uint32_t>(p.optional<int>("random_seed", 42));
+    return c;
+  }
+
+  void connect() {
+    if (pty_.open(link_path_)) {
+      ROS_INFO("fake_motor_board: listening on %s (-> %s)", link_path_.c_str(), pty_.slavePath().c_str());
+    } else {
+      ROS_ERROR("fake_motor_board: %s; retrying in 1 s", pty_.lastError().c_str());
+      reconnect_at_ = steadySeconds() + 1.0;
+    }
+  }
+
+  void onFault(const std_msgs::String::ConstPtr& msg) {
+    std::istringstream in(msg->data);
+    std::string kind;
+    double value = 0.0;
+    in >> kind >> value;
+    if (kind == "none") {
+      board_.setStalled(false);
+      board_.setReplyDropProbability(0.0);
+      board_.setGarbageBetweenFrames(false);
+    } else if (kind == "stall") {
+      board_.setStalled(true);
+    } else if (kind == "drop") {
+      board_.setReplyDropProbability(value);
+    } else if (kind == "garbage") {
+      board_.setGarbageBetweenFrames(true);
+    } else if (kind == "disconnect") {
+      pty_.close();
+      reconnect_at_ = steadySeconds() + (value > 0.0 ? value : 1.0);
+    } else if (kind == "reboot") {
+      board_.resetCounters();
+    } else {
+      ROS_ERROR("fake_motor_board: unknown fault '%s' (none|stall|drop P|garbage|disconnect S|reboot)", msg->data.c_str());
+      return;
+    }
+    ROS_WARN("fake_motor_board: fault mode '%s'", msg->data.c_str());
+  }
+
+  void publishWheels() {
+    sensor_msgs::JointState js;
+    js.header.stamp = ros::Time::now();
+    js.name = wheel_names_;
+    js.position = board_.wheelAngles();
+    js.velocity = board_.wheelSpeeds();
+    wheels_pub_.publish(js);
+  }
+
+  ros::NodeHandle pnh_;
+  omni_base::FakeMotorBoard board_;
+  omni_base::PseudoTerminal pty_;
+  std::string link_path_;
+  std::vector<std::string> wheel_names_;
+  double reconnect_at_{0.0};
+  ros::Subscriber fault_sub_;
+  ros::Publisher wheels_pub_;
+};
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "fake_motor_board");
+  ros::NodeHandle pnh("~");
+  try {
+    FakeMotorBoardNode node(pnh);
+    node.run();
+  } catch (const std::exception& e) {
+    ROS_FATAL("fake_motor_board: %s", e.what());
+    return 1;
+  }
+  return 0;
+}

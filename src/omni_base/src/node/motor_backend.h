@@ -1,0 +1,36 @@
+// Where the wheel set-points go and the encoder counts come from: the serial motor board, or the
+// simulator over topics. The node does not care which.
+#pragma once
+
+#include <diagnostic_updater/DiagnosticStatusWrapper.h>
+#include <ros/ros.h>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace omni_base {
+
+struct EncoderReading {
+  ros::Time stamp;              ///< when the host received (sim: when the simulator latched) the counts
+  std::vector<int32_t> counts;
+  double dt_s{0.0};             ///< time the counts span since the previous reading (0 for the first)
+  bool fault{false};            ///< the backend reports a motor fault
+  std::string fault_text;
+};
+
+class MotorBackend {
+ public:
+  virtual ~MotorBackend() = default;
+  /// Sends set-points (rad/s per wheel); also where a disconnected backend tries to reconnect.
+  virtual void send(const std::vector<double>& wheel_rad_s, bool enable, const ros::Time& now) = 0;
+  /// The newest encoder reading since the last call, if any.
+  virtual std::optional<EncoderReading> poll(const ros::Time& now) = 0;
+  /// The backend is answering.
+  virtual bool linkUp() const = 0;
+  virtual std::string describe() const = 0;
+  virtual void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) const = 0;
+};
+
+}  // namespace omni_base

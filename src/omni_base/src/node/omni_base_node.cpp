@@ -1,0 +1,314 @@
+// omni_base: cmd_vel in, wheel set-points out to the motor board (serial) or the simulator, odometry
+// back. The command path and the odometry are omni_base_core; this file wires them to ROS.
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <docking_msgs/WheelState.h>
+#include <docking_msgs/names.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <geometry_msgs/Twist.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <std_msgs/Bool.h>
+#include <std_srvs/Trigger.h>
+#include <tf2/LinearMath/Quaternion.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <cmath>
+#include <memory>
+
+#include "omni_base/base_controller.h"
+#include "omni_base/encoder_tracker.h"
+#include "omni_base/odometry.h"
+#include "param_loader.h"
+#include "serial_motor_backend.h"
+#include "sim_motor_backend.h"
+
+namespace omni_base {
+namespace {
+
+struct NodeConfig {
+  std::string backend;
+  double control_rate_hz{50.0};
+  std::vector<std::string> wheel_names;
+  WheelLayout layout;
+  EncoderTrackerConfig encoders;
+  MotorDriveModel drive;
+  BaseControllerConfig controller;
+  SerialBackendConfig serial;
+  std::string odom_frame;
+  std::string base_frame;
+  bool publish_tf{true};
+  std::vector<double> pose_covariance;
+  std::vector<double> twist_covariance;
+};
+
+NodeConfig loadConfig(const ros::NodeHandle& pnh) {
+  const ParamLoader p(pnh);
+  NodeConfig c;
+  c.backend = p.require<std::string>("backend");
+  if (c.backend != "serial" && c.backend != "sim") {
+    throw std::runtime_error("parameter " + p.name("backend") + " must be 'serial' or 'sim', got '" + c.backend + "'");
+  }
+  c.control_rate_hz = p.requirePositive("control_rate_hz");
+  c.wheel_names = p.require<std::vector<std::string>>("wheels/names");
+  const auto angles_deg = p.requireVector("wheels/drive_angles_deg", c.wheel_names.size(), false);
+  for (double a : angles_deg) c.layout.drive_angles_rad.push_back(a * M_PI / 180.0);
+  c.layout.center_distance_m = p.requirePositive("wheels/center_distance_m");
+  c.layout.wheel_radius_m = p.requirePositive("wheels/radius_m");
+
+  c.drive.volts_per_rad_s = p.requirePositive("motor/volts_per_rad_s");
+  c.drive.supply_volts = p.requirePositive("motor/supply_volts");
+
+  c.encoders.wheel_count = c.wheel_names.size();
+  c.encoders.counts_per_rev = p.requirePositive("wheels/encoder_counts_per_rev");
+  c.encoders.counter_bits = p.require<int>("wheels/encoder_bits");
+  if (c.encoders.counter_bits < 8 || c.encoders.counter_bits > 32) {
+    throw std::runtime_error("parameter " + p.name("wheels/encoder_bits") + " must be 8..32");
+  }
+  c.encoders.max_plausible_rad_s = p.requirePositive("encoders/max_plausible_speed_factor") * c.drive.maxSpeed();
+
+  auto toArray = [](const std::vector<double>& v) { return std::array<double, 3>{v[0], v[1], v[2]}; };
+  c.controller.limits.max_velocity = toArray(p.requireVector("limits/max_velocity", 3, true));
+  c.controller.limits.max_acceleration = toArray(p.requireVector("limits/max_acceleration", 3, true));
+  c.controller.stop_deceleration = toArray(p.requireVector("limits/stop_deceleration", 3, true));
+  c.controller.cmd_timeout_s = p.requirePositive("watchdog/cmd_vel_timeout_s");
+  c.controller.max_wheel_speed_rad_s = c.drive.maxSpeed();
+
+  c.serial.device = p.require<std::string>("serial/device");
+  c.serial.baud = p.require<int>("serial/baud");
+  c.serial.link_timeout_s = p.requirePositive("serial/link_timeout_s");
+  c.serial.backoff_min_s = p.requirePositive("serial/reconnect_backoff_min_s");
+  c.serial.backoff_max_s = p.requirePositive("serial/reconnect_backoff_max_s");
+  c.serial.wheel_count = c.wheel_names.size();
+  c.serial.drive = c.drive;
+
+  c.odom_frame = p.require<std::string>("odometry/frame_id");
+  c.base_frame = p.require<std::string>("odometry/child_frame_id");
+  c.publish_tf = p.require<bool>("odometry/publish_tf");
+  c.pose_covariance = p.requireVector("odometry/pose_covariance_diagonal", 6, true);
+  c.twist_covariance = p.requireVector("odometry/twist_covariance_diagonal", 6, true);
+  return c;
+}
+
+}  // namespace
+
+class OmniBaseNode {
+ public:
+  OmniBaseNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+      : config_(loadConfig(pnh)),
+        kinematics_(config_.layout),
+        controller_(kinematics_, config_.controller),
+        encoders_(config_.encoders),
+        last_setpoints_(config_.wheel_names.size(), 0.0) {
+    if (config_.backend == "serial") {
+      backend_ = std::make_unique<SerialMotorBackend>(config_.serial);
+    } else {
+      backend_ = std::make_unique<SimMotorBackend>(nh, config_.wheel_names.size(), config_.serial.link_timeout_s,
+                                                   config_.base_frame);
+    }
+    odom_pub_ = nh.advertise<nav_msgs::Odometry>(docking_msgs::topics::kOdom, 20);
+    wheel_state_pub_ = nh.advertise<docking_msgs::WheelState>(docking_msgs::topics::kWheelState, 20);
+    cmd_sub_ = nh.subscribe(docking_msgs::topics::kCmdVel, 10, &OmniBaseNode::onCmdVel, this,
+                            ros::TransportHints().tcpNoDelay());
+    estop_sub_ = nh.subscribe(docking_msgs::topics::kEStop, 10, &OmniBaseNode::onEStop, this);
+    release_srv_ = pnh.advertiseService("release_e_stop", &OmniBaseNode::onReleaseEStop, this);
+
+    diagnostics_.setHardwareID("omni_base (" + backend_->describe() + ")");
+    diagnostics_.add("Motor link", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { backend_->diagnose(s); });
+    diagnostics_.add("Command", this, &OmniBaseNode::diagnoseCommand);
+    diagnostics_.add("Encoders", this, &OmniBaseNode::diagnoseEncoders);
+
+    timer_ = nh.createTimer(ros::Duration(1.0 / config_.control_rate_hz), &OmniBaseNode::onControlCycle, this);
+    ROS_INFO("omni_base: %zu wheels, backend %s, %.0f Hz, cmd_vel timeout %.2f s, max wheel speed %.1f rad/s",
+             config_.wheel_names.size(), backend_->describe().c_str(), config_.control_rate_hz,
+             config_.controller.cmd_timeout_s, config_.controller.max_wheel_speed_rad_s);
+  }
+
+ private:
+  void onCmdVel(const geometry_msgs::Twist::ConstPtr& msg) {
+    const bool finite = std::isfinite(msg->linear.x) && std::isfinite(msg->linear.y) && std::isfinite(msg->linear.z) &&
+                        std::isfinite(msg->angular.x) && std::isfinite(msg->angular.y) && std::isfinite(msg->angular.z);
+    const Twist2D cmd = finite ? Twist2D{msg->linear.x, msg->linear.y, msg->angular.z} : Twist2D{NAN, NAN, NAN};
+    switch (controller_.command(cmd, ros::Time::now().toSec())) {
+      case CommandVerdict::kRejectedNonFinite:
+        ROS_WARN_THROTTLE(1.0, "omni_base: rejected cmd_vel with a NaN or infinite component (%llu so far)",
+                          static_cast<unsigned long long>(controller_.rejectedCommands()));
+        break;
+      case CommandVerdict::kIgnoredEStop:
+        ROS_WARN_THROTTLE(2.0, "omni_base: cmd_vel ignored: e-stop latched (call %s to release)",
+                          release_srv_.getService().c_str());
+        break;
+      case CommandVerdict::kAccepted:
+        break;
+    }
+  }
+
+  void onEStop(const std_msgs::Bool::ConstPtr& msg) {
+    if (msg->data) {
+      if (!controller_.eStopLatched()) {
+        ROS_ERROR("omni_base: E-STOP engaged: wheels stopping; latched until %s is called",
+                  release_srv_.getService().c_str());
+      }
+      controller_.engageEStop();
+    }
+  }
+
+  bool onReleaseEStop(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+    const bool was = controller_.eStopLatched();
+    controller_.releaseEStop(ros::Time::now().toSec());
+    res.success = true;
+    res.message = was ? "e-stop released; the base moves on the next cmd_vel" : "e-stop was not latched";
+    ROS_WARN("omni_base: %s", res.message.c_str());
+    return true;
+  }
+
+  void onControlCycle(const ros::TimerEvent&) {
+    const ros::Time now = ros::Time::now();
+    const bool was_up = backend_->linkUp();
+    const auto reading = backend_->poll(now);
+    if (backend_->linkUp() && !was_up) encoders_.reset();  // the board may have restarted its counters
+    if (reading) processEncoders(*reading);
+
+    const auto out = controller_.update(now.toSec(), backend_->linkUp());
+    if (out.stop_reason != last_stop_reason_) {
+      if (out.stop_reason == StopReason::kWatchdog) {
+        ROS_WARN("omni_base: no cmd_vel for %.2f s: stopping", config_.controller.cmd_timeout_s);
+      }
+      last_stop_reason_ = out.stop_reason;
+    }
+    last_setpoints_ = out.wheel_rad_s;
+    backend_->send(out.wheel_rad_s, !controller_.eStopLatched(), now);
+    diagnostics_.update();
+  }
+
+  void processEncoders(const EncoderReading& reading) {
+    if (reading.fault) {
+      ROS_ERROR_THROTTLE(2.0, "omni_base: motor fault reported: %s", reading.fault_text.c_str());
+    }
+    const auto sample = encoders_.update(reading.counts, reading.dt_s);
+    if (!sample.accepted) {
+      last_encoder_problem_ = sample.reason;
+      ROS_WARN_THROTTLE(1.0, "omni_base: encoder sample rejected: %s", sample.reason.c_str());
+      return;
+    }
+    std::vector<double> wheel_velocity(sample.delta_rad.size(), 0.0);
+    Twist2D body_velocity;
+    if (reading.dt_s > 0.0) {
+      for (std::size_t i = 0; i < wheel_velocity.size(); ++i) wheel_velocity[i] = sample.delta_rad[i] / reading.dt_s;
+      const Twist2D displacement = kinematics_.forward(sample.delta_rad);
+      odometry_.integrateDisplacement(displacement);
+      body_velocity = kinematics_.forward(wheel_velocity);
+    }
+    publishOdometry(reading, body_velocity);
+    publishWheelState(reading, wheel_velocity);
+  }
+
+  void publishOdometry(const EncoderReading& reading, const Twist2D& velocity) {
+    const Pose2D& pose = odometry_.pose();
+    tf2::Quaternion q;
+    q.setRPY(0.0, 0.0, pose.yaw);
+    nav_msgs::Odometry odom;
+    odom.header.stamp = reading.stamp;
+    odom.header.frame_id = config_.odom_frame;
+    odom.child_frame_id = config_.base_frame;
+    odom.pose.pose.position.x = pose.x;
+    odom.pose.pose.position.y = pose.y;
+    odom.pose.pose.orientation.x = q.x();
+    odom.pose.pose.orientation.y = q.y();
+    odom.pose.pose.orientation.z = q.z();
+    odom.pose.pose.orientation.w = q.w();
+    odom.twist.twist.linear.x = velocity.vx;
+    odom.twist.twist.linear.y = velocity.vy;
+    odom.twist.twist.angular.z = velocity.wz;
+    for (int i = 0; i < 6; ++i) {
+      odom.pose.covariance[static_cast<std::size_t>(i * 7)] = config_.pose_covariance[static_cast<std::size_t>(i)];
+      odom.twist.covariance[static_cast<std::size_t>(i * 7)] = config_.twist_covariance[static_cast<std::size_t>(i)];
+    }
+    odom_pub_.publish(odom);
+    if (config_.publish_tf && reading.stamp != last_tf_stamp_) {
+      geometry_msgs::TransformStamped tf;
+      tf.header = odom.header;
+      tf.child_frame_id = config_.base_frame;
+      tf.transform.translation.x = pose.x;
+      tf.transform.translation.y = pose.y;
+      tf.transform.rotation = odom.pose.pose.orientation;
+      tf_broadcaster_.sendTransform(tf);
+      last_tf_stamp_ = reading.stamp;  // tf2 rejects repeated stamps for the same frame pair
+    }
+  }
+
+  void publishWheelState(const EncoderReading& reading, const std::vector<double>& velocity) {
+    docking_msgs::WheelState state;
+    state.header.stamp = reading.stamp;
+    state.header.frame_id = config_.base_frame;
+    state.name = config_.wheel_names;
+    state.setpoint = last_setpoints_;
+    state.velocity = velocity;
+    state.position = encoders_.positions();
+    state.encoder_counts = reading.counts;
+    wheel_state_pub_.publish(state);
+  }
+
+  void diagnoseCommand(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    using diagnostic_msgs::DiagnosticStatus;
+    switch (last_stop_reason_) {
+      case StopReason::kNone: stat.summary(DiagnosticStatus::OK, "following cmd_vel"); break;
+      case StopReason::kNoCommand: stat.summary(DiagnosticStatus::OK, "idle: no cmd_vel received yet"); break;
+      case StopReason::kWatchdog: stat.summary(DiagnosticStatus::WARN, "cmd_vel timeout: stopped"); break;
+      case StopReason::kEStop: stat.summary(DiagnosticStatus::WARN, "e-stop latched: stopped"); break;
+      case StopReason::kLinkDown: stat.summary(DiagnosticStatus::ERROR, "motor link down: stopped"); break;
+    }
+    stat.add("seconds since cmd_vel", controller_.secondsSinceCommand(ros::Time::now().toSec()));
+    stat.add("watchdog trips", controller_.watchdogTrips());
+    stat.add("rejected non-finite commands", controller_.rejectedCommands());
+    stat.add("e-stop latched", controller_.eStopLatched());
+  }
+
+  void diagnoseEncoders(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    using diagnostic_msgs::DiagnosticStatus;
+    if (encoders_.rejectedSamples() > reported_rejections_) {
+      stat.summaryf(DiagnosticStatus::WARN, "implausible encoder samples rejected: %s", last_encoder_problem_.c_str());
+    } else {
+      stat.summary(DiagnosticStatus::OK, "encoders plausible");
+    }
+    reported_rejections_ = encoders_.rejectedSamples();
+    stat.add("rejected samples", encoders_.rejectedSamples());
+    stat.add("re-baselines", encoders_.rebaselines());
+  }
+
+  NodeConfig config_;
+  OmniKinematics kinematics_;
+  BaseController controller_;
+  EncoderTracker encoders_;
+  OdometryIntegrator odometry_;
+  std::unique_ptr<MotorBackend> backend_;
+  std::vector<double> last_setpoints_;
+  StopReason last_stop_reason_{StopReason::kNoCommand};
+  std::string last_encoder_problem_;
+  std::uint64_t reported_rejections_{0};
+  ros::Time last_tf_stamp_;
+
+  ros::Publisher odom_pub_;
+  ros::Publisher wheel_state_pub_;
+  ros::Subscriber cmd_sub_;
+  ros::Subscriber estop_sub_;
+  ros::ServiceServer release_srv_;
+  ros::Timer timer_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  diagnostic_updater::Updater diagnostics_;
+};
+
+}  // namespace omni_base
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "omni_base");
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  try {
+    omni_base::OmniBaseNode node(nh, pnh);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL("omni_base: %s", e.what());
+    return 1;
+  }
+  return 0;
+}

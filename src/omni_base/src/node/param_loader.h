@@ -1,0 +1,60 @@
+// Reading and validating the node's parameters: a missing or invalid one stops the node with a
+// message that names it.
+#pragma once
+
+#include <ros/ros.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace omni_base {
+
+class ParamLoader {
+ public:
+  explicit ParamLoader(const ros::NodeHandle& nh) : nh_(nh) {}
+
+  template <typename T>
+  T require(const std::string& name) const {
+    T value;
+    if (!nh_.getParam(name, value)) {
+      throw std::runtime_error("parameter " + nh_.resolveName(name) + " is missing or has the wrong type");
+    }
+    return value;
+  }
+
+  template <typename T>
+  T optional(const std::string& name, const T& fallback) const {
+    T value;
+    return nh_.getParam(name, value) ? value : fallback;
+  }
+
+  double requirePositive(const std::string& name) const {
+    const double v = require<double>(name);
+    if (!(v > 0.0) || !std::isfinite(v)) {
+      throw std::runtime_error("parameter " + nh_.resolveName(name) + " must be a positive number, got " + std::to_string(v));
+    }
+    return v;
+  }
+
+  std::vector<double> requireVector(const std::string& name, std::size_t size, bool positive) const {
+    const auto v = require<std::vector<double>>(name);
+    if (size != 0 && v.size() != size) {
+      throw std::runtime_error("parameter " + nh_.resolveName(name) + " must have " + std::to_string(size) +
+                               " entries, has " + std::to_string(v.size()));
+    }
+    for (double x : v) {
+      if (!std::isfinite(x) || (positive && !(x > 0.0))) {
+        throw std::runtime_error("parameter " + nh_.resolveName(name) + " has an invalid entry " + std::to_string(x));
+      }
+    }
+    return v;
+  }
+
+  std::string name(const std::string& param) const { return nh_.resolveName(param); }
+
+ private:
+  ros::NodeHandle nh_;
+};
+
+}  // namespace omni_base

@@ -1,0 +1,61 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "motor_backend.h"
+#include "omni_base/motor.h"
+#include "omni_base/motor_protocol.h"
+#include "omni_base/reconnect_backoff.h"
+#include "omni_base/serial_port.h"
+
+namespace omni_base {
+
+struct SerialBackendConfig {
+  std::string device;
+  int baud{115200};
+  double link_timeout_s{0.25};
+  double backoff_min_s{0.1};
+  double backoff_max_s{2.0};
+  std::size_t wheel_count{3};
+  MotorDriveModel drive;
+};
+
+/// Talks to the motor board over a serial port (protocol in README.md). Any failure (the port
+/// cannot be opened, a read/write error, no valid frame for link_timeout_s) closes the port, marks
+/// the link down and retries with exponential back-off.
+class SerialMotorBackend : public MotorBackend {
+ public:
+  explicit SerialMotorBackend(const SerialBackendConfig& config);
+  void send(const std::vector<double>& wheel_rad_s, bool enable, const ros::Time& now) override;
+  std::optional<EncoderReading> poll(const ros::Time& now) override;
+  bool linkUp() const override { return link_up_; }
+  std::string describe() const override { return "serial " + config_.device; }
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) const override;
+
+ private:
+  void tryConnect(const ros::Time& now);
+  void dropConnection(const ros::Time& now, const std::string& why);
+  bool writeFrame(const protocol::Frame& frame, const ros::Time& now);
+
+  SerialBackendConfig config_;
+  SerialPort port_;
+  protocol::StreamDecoder decoder_;
+  ReconnectBackoff backoff_;
+  std::vector<uint8_t> rx_;
+  bool link_up_{false};
+  bool enabled_sent_{false};
+  bool last_enable_{false};
+  uint8_t sequence_{0};
+  ros::Time connected_at_;
+  ros::Time last_frame_at_;
+  ros::Time next_attempt_;
+  std::optional<uint32_t> last_board_time_ms_;
+  uint8_t last_status_{0};
+  uint8_t last_faults_{0};
+  std::uint64_t link_losses_{0};
+  std::uint64_t connects_{0};
+  std::string last_error_;
+};
+
+}  // namespace omni_base
