@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -19,7 +20,62 @@ double signedArea(const std::vector<cv::Point2f>& polygon) {
   return 0.5 * area;
 }
 
+// The matching loop; instantiated twice so that the popcount builtin compiles to the POPCNT
+// instruction where the CPU has it, and to portable code elsewhere.
+inline void knnLoop(const cv::Mat& query, const cv::Mat& train, int first_row, int row_count,
+                    std::vector<HammingPair>* pairs) {
+  const int words = query.cols / 8;
+  const int tail = query.cols % 8;
+  for (int q = 0; q < query.rows; ++q) {
+    const uint8_t* a = query.ptr<uint8_t>(q);
+    HammingPair& pair = (*pairs)[static_cast<size_t>(q)];
+    for (int t = first_row; t < first_row + row_count; ++t) {
+      const uint8_t* b = train.ptr<uint8_t>(t);
+      int distance = 0;
+      for (int w = 0; w < words; ++w) {
+        uint64_t x;
+        uint64_t y;
+        std::memcpy(&x, a + 8 * w, 8);
+        std::memcpy(&y, b + 8 * w, 8);
+        distance += __builtin_popcountll(x ^ y);
+      }
+      for (int k = 0; k < tail; ++k) distance += __builtin_popcount(static_cast<unsigned>(a[8 * words + k] ^ b[8 * words + k]));
+      if (distance < pair.best_distance) {
+        pair.second_distance = pair.best_distance;
+        pair.best_distance = distance;
+        pair.best_index = t;
+      } else if (distance < pair.second_distance) {
+        pair.second_distance = distance;
+      }
+    }
+  }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((target("popcnt"))) void knnLoopPopcnt(const cv::Mat& query, const cv::Mat& train, int first_row,
+                                                     int row_count, std::vector<HammingPair>* pairs) {
+  knnLoop(query, train, first_row, row_count, pairs);
+}
+#endif
+
 }  // namespace
+
+std::vector<HammingPair> hammingKnn2(const cv::Mat& query, const cv::Mat& train, int first_row, int row_count) {
+  std::vector<HammingPair> pairs(static_cast<size_t>(query.rows));
+  if (query.empty() || train.empty() || query.cols != train.cols || query.type() != CV_8U || train.type() != CV_8U) {
+    return pairs;
+  }
+  first_row = std::max(0, first_row);
+  row_count = std::min(row_count, train.rows - first_row);
+#if defined(__x86_64__) && defined(__GNUC__)
+  if (__builtin_cpu_supports("popcnt")) {
+    knnLoopPopcnt(query, train, first_row, row_count, &pairs);
+    return pairs;
+  }
+#endif
+  knnLoop(query, train, first_row, row_count, &pairs);
+  return pairs;
+}
 
 FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(params) {
   brisk_ = cv::BRISK::create(params_.brisk_threshold, params_.brisk_octaves);
@@ -28,6 +84,8 @@ FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(par
 void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
   const bool rebuild = params.brisk_threshold != params_.brisk_threshold ||
                        params.brisk_octaves != params_.brisk_octaves ||
+                       params.use_brisk_detector != params_.use_brisk_detector ||
+                       params.fast_threshold != params_.fast_threshold ||
                        params.model_widths_px != params_.model_widths_px;
   params_ = params;
   if (rebuild) {
@@ -36,45 +94,146 @@ void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
   }
 }
 
+void FeatureMatcher::detect(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, int max_keypoints) const {
+  keypoints->clear();
+  if (params_.use_brisk_detector) {
+    brisk_->detect(image, *keypoints);
+  } else {
+    cv::FAST(image, *keypoints, params_.fast_threshold, true);
+  }
+  if (max_keypoints > 0 && static_cast<int>(keypoints->size()) > max_keypoints) {
+    cv::KeyPointsFilter::retainBest(*keypoints, max_keypoints);
+  }
+}
+
 bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason) {
   texture_ = texture_gray;
   texture_size_ = texture_gray.size();
+  levels_.clear();
   model_points_.clear();
   model_descriptors_ = cv::Mat();
   if (texture_gray.empty() || texture_gray.type() != CV_8UC1) {
     if (reason) *reason = "the model texture must be a non-empty 8-bit gray image";
     return false;
   }
-  for (const int width : params_.model_widths_px) {
+  std::vector<int> widths = params_.model_widths_px;
+  std::sort(widths.rbegin(), widths.rend());
+  for (const int width : widths) {
     if (width <= 16) continue;
-    const double scale = static_cast<double>(width) / texture_gray.cols;
-    cv::Mat scaled;
-    if (std::abs(scale - 1.0) < 1e-3) {
-      scaled = texture_gray;
+    ModelLevel level;
+    level.width_px = width;
+    level.scale = static_cast<double>(width) / texture_gray.cols;
+    if (std::abs(level.scale - 1.0) < 1e-3) {
+      level.image = texture_gray;
     } else {
-      cv::resize(texture_gray, scaled, cv::Size(), scale, scale, scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+      cv::resize(texture_gray, level.image, cv::Size(), level.scale, level.scale,
+                 level.scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
     }
     std::vector<cv::KeyPoint> keypoints;
     cv::Mat descriptors;
-    brisk_->detectAndCompute(scaled, cv::noArray(), keypoints, descriptors);
+    detect(level.image, &keypoints, 0);
+    brisk_->compute(level.image, keypoints, descriptors);
+    level.first_row = model_descriptors_.rows;
+    level.row_count = descriptors.rows;
     for (const cv::KeyPoint& kp : keypoints) {
       // Back to full-texture pixels (pixel centres at integers in both).
-      model_points_.emplace_back(static_cast<float>((kp.pt.x + 0.5) / scale - 0.5),
-                                 static_cast<float>((kp.pt.y + 0.5) / scale - 0.5));
+      model_points_.emplace_back(static_cast<float>((kp.pt.x + 0.5) / level.scale - 0.5),
+                                 static_cast<float>((kp.pt.y + 0.5) / level.scale - 0.5));
     }
     if (!descriptors.empty()) model_descriptors_.push_back(descriptors);
+    levels_.push_back(level);
   }
   if (static_cast<int>(model_points_.size()) < params_.min_inliers) {
     if (reason) {
       *reason = "the model texture gives only " + std::to_string(model_points_.size()) +
-                " BRISK keypoints (need at least min_inliers = " + std::to_string(params_.min_inliers) + ")";
+                " keypoints (need at least min_inliers = " + std::to_string(params_.min_inliers) + ")";
     }
     return false;
   }
   return true;
 }
 
-FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in) const {
+void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
+  if (levels_.empty()) return;
+  // The level whose width is closest (in ratio) to the face's apparent width.
+  const double apparent_width = 0.5 * (cv::norm(match->face_outline[1] - match->face_outline[0]) +
+                                       cv::norm(match->face_outline[2] - match->face_outline[3]));
+  const ModelLevel* level = &levels_.front();
+  for (const ModelLevel& candidate : levels_) {
+    if (std::abs(std::log(candidate.width_px / apparent_width)) < std::abs(std::log(level->width_px / apparent_width))) {
+      level = &candidate;
+    }
+  }
+  constexpr int kPatchRadius = 5;
+  constexpr int kSearch = 3;
+  const cv::Rect image_rect(0, 0, gray.cols, gray.rows);
+  const cv::Rect face_box = cv::boundingRect(match->face_outline) & image_rect;
+  if (face_box.area() <= 0) return;
+  // Level pixel -> texture pixel, then the homography, then shift into the face box.
+  const double s = level->scale;
+  const cv::Matx33d level_to_texture(1.0 / s, 0.0, 0.5 / s - 0.5, 0.0, 1.0 / s, 0.5 / s - 0.5, 0.0, 0.0, 1.0);
+  const cv::Matx33d to_box(1.0, 0.0, -face_box.x, 0.0, 1.0, -face_box.y, 0.0, 0.0, 1.0);
+  cv::Mat rendered;
+  cv::Mat valid;
+  cv::warpPerspective(level->image, rendered, to_box * match->homography * level_to_texture, face_box.size(),
+                      cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::warpPerspective(cv::Mat(level->image.size(), CV_8UC1, cv::Scalar(255)), valid,
+                      to_box * match->homography * level_to_texture, face_box.size(), cv::INTER_NEAREST,
+                      cv::BORDER_CONSTANT, cv::Scalar(0));
+
+  std::vector<cv::Point2f> texture_points;
+  std::vector<cv::Point2f> image_points;
+  cv::Mat response;
+  for (const cv::Point2f& texture_point : match->inlier_texture_points) {
+    const cv::Vec3d projected = match->homography * cv::Vec3d(texture_point.x, texture_point.y, 1.0);
+    const cv::Point2d predicted(projected[0] / projected[2], projected[1] / projected[2]);
+    const cv::Point centre(static_cast<int>(std::lround(predicted.x)), static_cast<int>(std::lround(predicted.y)));
+    const cv::Rect patch(centre.x - kPatchRadius - face_box.x, centre.y - kPatchRadius - face_box.y,
+                         2 * kPatchRadius + 1, 2 * kPatchRadius + 1);
+    const cv::Rect window(centre.x - kPatchRadius - kSearch, centre.y - kPatchRadius - kSearch,
+                          2 * (kPatchRadius + kSearch) + 1, 2 * (kPatchRadius + kSearch) + 1);
+    if ((patch & cv::Rect(0, 0, face_box.width, face_box.height)) != patch || (window & image_rect) != window) continue;
+    if (cv::countNonZero(valid(patch)) != patch.area()) continue;  // template must lie on the face
+    cv::matchTemplate(gray(window), rendered(patch), response, cv::TM_CCOEFF_NORMED);
+    double best = 0.0;
+    cv::Point peak;
+    cv::minMaxLoc(response, nullptr, &best, nullptr, &peak);
+    if (!(best >= params_.min_correlation)) continue;
+    if (peak.x == 0 || peak.y == 0 || peak.x == response.cols - 1 || peak.y == response.rows - 1) continue;
+    auto parabola = [](float left, float middle, float right) {
+      const float denominator = left - 2.0f * middle + right;
+      return std::abs(denominator) < 1e-6f ? 0.0f : 0.5f * (left - right) / denominator;
+    };
+    const float dx = parabola(response.at<float>(peak.y, peak.x - 1), response.at<float>(peak.y, peak.x),
+                              response.at<float>(peak.y, peak.x + 1));
+    const float dy = parabola(response.at<float>(peak.y - 1, peak.x), response.at<float>(peak.y, peak.x),
+                              response.at<float>(peak.y + 1, peak.x));
+    // The rendering put the model point at `predicted`; the image has it shifted by the peak offset.
+    const double offset_x = peak.x - kSearch + dx;
+    const double offset_y = peak.y - kSearch + dy;
+    texture_points.push_back(texture_point);
+    image_points.emplace_back(static_cast<float>(predicted.x + offset_x), static_cast<float>(predicted.y + offset_y));
+  }
+  if (static_cast<int>(image_points.size()) < params_.min_inliers) return;  // keep the unrefined ones
+  // A last RANSAC on the refined points (tight threshold) drops the few that locked onto a wrong peak.
+  std::vector<unsigned char> mask;
+  const cv::Mat homography = cv::findHomography(texture_points, image_points, cv::RANSAC, 1.0, mask, 2000, 0.995);
+  if (homography.empty()) return;
+  std::vector<cv::Point2f> kept_texture;
+  std::vector<cv::Point2f> kept_image;
+  for (size_t i = 0; i < mask.size(); ++i) {
+    if (!mask[i]) continue;
+    kept_texture.push_back(texture_points[i]);
+    kept_image.push_back(image_points[i]);
+  }
+  if (static_cast<int>(kept_image.size()) < params_.min_inliers) return;
+  match->homography = cv::Matx33d(homography);
+  match->inlier_texture_points = kept_texture;
+  match->inlier_image_points = kept_image;
+  match->refined = true;
+}
+
+FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, double expected_face_width_px) const {
   FaceMatch result;
   if (model_descriptors_.empty()) {
     result.status = "no model features";
@@ -91,11 +250,10 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in) con
     return result;
   }
   std::vector<cv::KeyPoint> keypoints;
-  const cv::Mat view = gray(roi);
-  brisk_->detect(view, keypoints);
-  if (static_cast<int>(keypoints.size()) > params_.max_image_keypoints) {
-    cv::KeyPointsFilter::retainBest(keypoints, params_.max_image_keypoints);
-  }
+  // A continuous copy: BRISK's descriptor code mis-reads sub-matrix views (measured: almost no
+  // matches on a region view, normal matches on its copy).
+  const cv::Mat view = roi == full ? gray : gray(roi).clone();
+  detect(view, &keypoints, params_.max_image_keypoints);
   cv::Mat descriptors;
   brisk_->compute(view, keypoints, descriptors);
   result.keypoints = static_cast<int>(keypoints.size());
@@ -104,16 +262,31 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in) con
     return result;
   }
 
-  cv::BFMatcher matcher(cv::NORM_HAMMING);
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher.knnMatch(descriptors, model_descriptors_, knn, 2);
+  // Model rows to search: all levels, or those near the expected apparent width.
+  int first_row = 0;
+  int row_count = model_descriptors_.rows;
+  if (expected_face_width_px > 0.0) {
+    int begin = -1;
+    int end = -1;
+    for (const ModelLevel& level : levels_) {
+      if (std::abs(std::log(level.width_px / expected_face_width_px)) > std::log(1.6)) continue;
+      if (begin < 0) begin = level.first_row;
+      end = level.first_row + level.row_count;
+    }
+    if (begin >= 0) {
+      first_row = begin;
+      row_count = end - begin;
+    }
+  }
+  const std::vector<HammingPair> pairs = hammingKnn2(descriptors, model_descriptors_, first_row, row_count);
   std::vector<cv::Point2f> texture_points;
   std::vector<cv::Point2f> image_points;
-  for (const auto& pair : knn) {
-    if (pair.size() < 2) continue;
-    if (pair[0].distance >= params_.ratio * pair[1].distance) continue;
-    const cv::Point2f& p = keypoints[static_cast<size_t>(pair[0].queryIdx)].pt;
-    texture_points.push_back(model_points_[static_cast<size_t>(pair[0].trainIdx)]);
+  for (size_t q = 0; q < pairs.size(); ++q) {
+    const HammingPair& pair = pairs[q];
+    if (pair.best_index < 0 || pair.second_distance >= (1 << 30)) continue;
+    if (pair.best_distance >= params_.ratio * pair.second_distance) continue;
+    const cv::Point2f& p = keypoints[q].pt;
+    texture_points.push_back(model_points_[static_cast<size_t>(pair.best_index)]);
     image_points.emplace_back(p.x + roi.x, p.y + roi.y);
   }
   result.matches = static_cast<int>(image_points.size());
@@ -124,8 +297,8 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in) con
     return result;
   }
   std::vector<unsigned char> inlier_mask;
-  const cv::Mat homography =
-      cv::findHomography(texture_points, image_points, cv::RANSAC, params_.ransac_threshold_px, inlier_mask, 2000, 0.995);
+  const cv::Mat homography = cv::findHomography(texture_points, image_points, cv::RANSAC,
+                                                params_.ransac_threshold_px, inlier_mask, 2000, 0.995);
   if (homography.empty()) {
     result.status = "no homography";
     return result;
@@ -159,6 +332,11 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in) con
   if (std::abs(area) < params_.min_face_area_px) {
     result.status = "matched face too small";
     return result;
+  }
+  if (params_.refine) {
+    refine(gray, &result);
+    result.inliers = static_cast<int>(result.inlier_image_points.size());
+    cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
   }
   result.found = true;
   return result;

@@ -148,7 +148,8 @@ const Eigen::Matrix3d* MonoPoseEstimator::previousRotation(double stamp_s, Eigen
   return storage;
 }
 
-cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s) const {
+cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_px) const {
+  *face_width_px = 0.0;
   if (!params_.use_tracking_region || !tracking_) return cv::Rect();
   PoseWithCovariance predicted = last_pose_;
   if (stamp_s > last_stamp_s_ && stamp_s - last_stamp_s_ <= params_.filter.max_gap_s) {
@@ -161,14 +162,20 @@ cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s) const {
     outline.assign(model_.markers().begin(), model_.markers().end());
   }
   double min_x = 1e9, min_y = 1e9, max_x = -1e9, max_y = -1e9;
+  std::vector<Eigen::Vector2d> pixels;
   for (const Eigen::Vector3d& corner : outline) {
     const Eigen::Vector3d p = predicted.rotation * corner + predicted.translation;
     if (p.z() < 0.05) return cv::Rect();  // prediction too close or behind: search everything
     const Eigen::Vector2d pixel = camera_.project(p);
+    pixels.push_back(pixel);
     min_x = std::min(min_x, pixel.x());
     min_y = std::min(min_y, pixel.y());
     max_x = std::max(max_x, pixel.x());
     max_y = std::max(max_y, pixel.y());
+  }
+  if (params_.mode == MonoMode::kVisible) {
+    // Apparent width of the face (top and bottom edges), to pick the model levels to match against.
+    *face_width_px = 0.5 * ((pixels[1] - pixels[0]).norm() + (pixels[2] - pixels[3]).norm());
   }
   const double margin = params_.tracking_margin_px;
   const cv::Rect region(cv::Point(static_cast<int>(std::floor(min_x - margin)), static_cast<int>(std::floor(min_y - margin))),
@@ -224,10 +231,11 @@ bool MonoPoseEstimator::solveFivePoint(const MarkerPixels& pixels, MonoPoseResul
   return true;
 }
 
-bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result) {
+bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px,
+                                        MonoPoseResult* result) {
   FaceMatch match;
   if (region.area() > 0) {
-    match = matcher_.match(gray, region);
+    match = matcher_.match(gray, region, face_width_px);
     result->used_tracking_region = match.found;
     result->search_region = region;
   }
@@ -390,8 +398,9 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   }
 
   if (!gray.empty()) {
-    const cv::Rect region = predictedRegion(stamp_s);
-    result.valid = params_.mode == MonoMode::kVisible ? estimateVisible(gray, region, &result)
+    double face_width_px = 0.0;
+    const cv::Rect region = predictedRegion(stamp_s, &face_width_px);
+    result.valid = params_.mode == MonoMode::kVisible ? estimateVisible(gray, region, face_width_px, &result)
                                                       : estimateIr(gray, region, &result);
   }
   if (result.valid) {

@@ -106,11 +106,13 @@ class MonoPoseEstimator {
   void reset();
 
  private:
-  bool estimateVisible(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
+  bool estimateVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px, MonoPoseResult* result);
   bool estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
   bool solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason) const;
   bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
-  cv::Rect predictedRegion(double stamp_s) const;
+  // The region where the target should appear (empty: search the whole image) and, in visible mode,
+  // the face's predicted apparent width.
+  cv::Rect predictedRegion(double stamp_s, double* face_width_px) const;
   const Eigen::Matrix3d* previousRotation(double stamp_s, Eigen::Matrix3d* storage) const;
   void updateVelocities(MonoPoseResult* result);
 
