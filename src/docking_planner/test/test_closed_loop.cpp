@@ -3,12 +3,14 @@
 // "perfect" estimator that still behaves like the cameras: it sees the port only inside the
 // camera's field of view, gives the port's orientation only within 2 m and when the face is turned
 // less than 75 deg from the camera (position only otherwise, like the disparity detector), loses the
-// target when the camera is closer than 0.25 m to it, and delivers each estimate 0.1 s late.
+// target when the camera is closer than 0.25 m to it, and delivers each estimate 0.1 s late. One
+// variant adds Gaussian noise (fixed seed) to the estimates.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <deque>
 #include <iostream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -36,6 +38,8 @@ struct Scenario {
   double chaser_heading_off_rad;  // chaser heading relative to facing the port
   double target_rate_radps;
   bool yaw_rate_from_twist;
+  double position_noise_m{0.0};   // per axis, times (1 + range in m): grows with range like stereo
+  double yaw_noise_rad{0.0};
 };
 
 struct World {
@@ -65,7 +69,7 @@ struct Result {
 };
 
 // What the camera would report at time t, or invalid.
-TargetObservation observe(const World& w, double t, const Scenario& s, double config_fov) {
+TargetObservation observe(const World& w, double t, const Scenario& s, double config_fov, std::mt19937& rng) {
   TargetObservation o;
   o.stamp_s = t;
   const Pose2D port = w.port(t);
@@ -83,6 +87,11 @@ TargetObservation observe(const World& w, double t, const Scenario& s, double co
   const double face_angle = wrapAngle(std::atan2(-to_port.y(), -to_port.x()) - port.yaw);
   o.orientation_valid = to_port.norm() < kMonoRange && std::abs(face_angle) < kFaceVisibleAngle;
   o.yaw_rate_valid = s.yaw_rate_from_twist && o.orientation_valid;
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const double sigma_p = s.position_noise_m * (1.0 + to_port.norm());
+  o.pose.x += sigma_p * unit(rng);
+  o.pose.y += sigma_p * unit(rng);
+  o.pose.yaw = wrapAngle(o.pose.yaw + s.yaw_noise_rad * unit(rng));
   o.yaw_rate = w.target_rate;
   return o;
 }
@@ -100,10 +109,11 @@ Result run(const Scenario& s) {
 
   Result r;
   std::deque<TargetObservation> in_flight;
+  std::mt19937 rng(42);  // fixed seed: the same noise every run
   const double fov = config.law.camera_half_fov_rad;
   for (int cycle = 0; cycle < static_cast<int>(240.0 / kDt); ++cycle) {
     const double t = cycle * kDt;
-    if (cycle % kEstimateEvery == 0) in_flight.push_back(observe(w, t, s, fov));
+    if (cycle % kEstimateEvery == 0) in_flight.push_back(observe(w, t, s, fov, rng));
     while (!in_flight.empty() && in_flight.front().stamp_s <= t - kLatencyCycles * kDt + 1e-9) {
       planner.addObservation(in_flight.front());
       in_flight.pop_front();
@@ -209,4 +219,15 @@ TEST(ClosedLoop, RotatingTargetThreeDegPerSecond) {
   expectDocked({"rotating +3 deg/s, twist rate, port turned -60 deg", -1.0, -60.0 * kDeg, 20.0 * kDeg,
                 kThreeDegPerS, true},
                false);
+}
+
+TEST(ClosedLoop, NoisyEstimates) {
+  Scenario still{"still, noisy (2 mm, 0.3 deg)", 0.7, 50.0 * kDeg, 0.0, 0.0, false};
+  still.position_noise_m = 0.002;
+  still.yaw_noise_rad = 0.3 * kDeg;
+  expectDocked(still, false);
+  Scenario rotating{"rotating 3 deg/s, noisy (2 mm, 0.3 deg)", -0.5, -40.0 * kDeg, 0.0, kThreeDegPerS, false};
+  rotating.position_noise_m = 0.002;
+  rotating.yaw_noise_rad = 0.3 * kDeg;
+  expectDocked(rotating, false);
 }

@@ -1,9 +1,18 @@
-// The docking port held in the odom frame from the estimates (ROS-free): the last good pose, its
-// velocity and angular velocity (from the estimate's twist, or from successive poses, low-pass
-// filtered), and a prediction to any later time. This is what lets the final approach finish on
-// odometry when the cameras are too close to see the target.
+// The docking port held in the odom frame (ROS-free): a Kalman filter over the estimates, and a
+// prediction to any later time. This is what lets the final approach finish on odometry when the
+// cameras are too close to see the target, and what the rotating target's feed-forward comes from.
+//
+// Model (the paper's test bed: a target robot that stands or turns in place): the target is a rigid
+// body turning at a nearly constant rate w about a nearly fixed point c of the odom plane; the port
+// sits at a fixed offset d from c in the target's frame:
+//     port yaw  psi(t) = psi0 + w t             (filter 1: [psi, w], w a slow random walk)
+//     port position p(t) = c + R(psi(t)) d       (filter 2: [c, d], linear given psi; c, d slow random walks)
+// so the port moves on a circle, its velocity is w x R(psi) d, and a still target is w = 0. Pose noise
+// is averaged over seconds instead of being differenced (differencing amplifies it by sqrt(2)/dt,
+// paper-notes.md "Velocities"). A target that drifts is followed through the random walk of c.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -19,6 +28,8 @@ struct TargetObservation {
   bool valid{false};                 ///< false: the estimator sees nothing (`status` says why)
   bool orientation_valid{false};     ///< `pose.yaw` is meaningful (false for a position-only source)
   Pose2D pose;                       ///< the port in odom: centre and port-axis direction
+  double position_sigma_m{0.0};      ///< std. dev. of x and y; 0: use the configured default
+  double yaw_sigma_rad{0.0};         ///< std. dev. of yaw; 0: use the configured default
   bool yaw_rate_valid{false};        ///< `yaw_rate` is meaningful
   double yaw_rate{0.0};              ///< the port's angular velocity about odom z, rad/s
   std::uint8_t source{0};            ///< TargetEstimate.SOURCE_* of the estimate used
@@ -26,13 +37,22 @@ struct TargetObservation {
 };
 
 struct TrackConfig {
-  double velocity_filter_time_s{0.8};  ///< low-pass time constant of the port's velocity estimates
-  double min_difference_dt_s{0.02};    ///< poses closer in time than this are not differenced
-  double max_port_speed_mps{0.1};      ///< the estimated port velocity is clamped to this (noise guard)
-  double max_port_yaw_rate_radps{0.3}; ///< the estimated port yaw rate is clamped to this
-  bool use_estimate_yaw_rate{true};    ///< prefer the estimate's twist to differenced yaw, when valid
+  double default_position_sigma_m{0.01};      ///< when the estimate gives none
+  double default_yaw_sigma_rad{0.03};         ///< when the estimate gives none
+  double yaw_rate_sigma_radps{0.02};          ///< std. dev. of a yaw rate taken from the estimate's twist
+  bool use_estimate_yaw_rate{true};           ///< fuse the twist's yaw rate when valid
+  double yaw_rate_random_walk{0.005};         ///< rad/s per sqrt(s): how fast the target's rate may change
+  double centre_random_walk{0.01};            ///< m per sqrt(s): how fast the turning centre may drift
+  double offset_random_walk{0.001};           ///< m per sqrt(s): the port offset (constant in truth)
+  double initial_offset_sigma_m{0.3};         ///< prior on the port's offset from the turning centre
+  double initial_yaw_rate_sigma_radps{0.1};   ///< prior on the target's yaw rate
+  double max_port_yaw_rate_radps{0.3};        ///< the estimated yaw rate is clamped to this
+  double max_port_speed_mps{0.1};             ///< the predicted port speed is clamped to this
+  double outlier_gate_sigma{6.0};             ///< innovations beyond this many sigmas are rejected (0: off)
+  int outlier_reset_count{5};                 ///< this many rejections in a row: the target moved, restart
 };
 
+/// Throws std::invalid_argument naming the bad field.
 void validate(const TrackConfig& config);
 
 struct TrackUpdate {
@@ -42,9 +62,11 @@ struct TrackUpdate {
 
 class TargetTrack {
  public:
+  /// Throws std::invalid_argument for an invalid configuration.
   explicit TargetTrack(const TrackConfig& config);
 
-  /// Takes a valid observation. Rejects non-finite values and stamps not after the last one taken.
+  /// Takes a valid observation. Rejects non-finite values, stamps not after the last one taken, and
+  /// outliers (until they persist: then the filter restarts from them).
   TrackUpdate update(const TargetObservation& observation);
 
   bool hasPosition() const { return last_position_stamp_s_.has_value(); }
@@ -54,20 +76,28 @@ class TargetTrack {
   double lastOrientationStamp() const;
   std::uint8_t lastSource() const { return last_source_; }
 
-  /// The port at time `now_s`, predicted from the last observation with the filtered velocities.
-  /// Requires hasPosition(). Without an orientation yet, yaw is 0 and meaningless.
+  /// The port at time `now_s`. Requires hasPosition(). Without an orientation yet, yaw is meaningless.
   PortState predict(double now_s) const;
 
   void reset();
 
  private:
+  void propagate(double dt);
+  void restartPosition(const Vec2& measured, double variance);
+  Eigen::Matrix<double, 2, 4> positionJacobian() const;
+
   TrackConfig config_;
-  Pose2D pose_;
-  Vec2 velocity_{Vec2::Zero()};
-  double yaw_rate_{0.0};
+  // Filter 1: port yaw and yaw rate.
+  Eigen::Vector2d yaw_state_{Eigen::Vector2d::Zero()};
+  Eigen::Matrix2d yaw_cov_{Eigen::Matrix2d::Identity()};
+  // Filter 2: turning centre c (0, 1) and port offset d in the target frame (2, 3).
+  Eigen::Vector4d pos_state_{Eigen::Vector4d::Zero()};
+  Eigen::Matrix4d pos_cov_{Eigen::Matrix4d::Identity()};
   std::optional<double> last_position_stamp_s_;
   std::optional<double> last_orientation_stamp_s_;
   std::uint8_t last_source_{0};
+  int position_outliers_{0};
+  int yaw_outliers_{0};
 };
 
 }  // namespace docking_planner

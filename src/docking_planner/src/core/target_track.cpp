@@ -1,34 +1,53 @@
 #include "docking_planner/target_track.h"
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace docking_planner {
+namespace {
+
+void requirePositive(double value, const char* name) {
+  if (!std::isfinite(value) || value <= 0.0) throw std::invalid_argument(std::string(name) + " must be positive");
+}
+
+void requireNonNegative(double value, const char* name) {
+  if (!std::isfinite(value) || value < 0.0) throw std::invalid_argument(std::string(name) + " must be >= 0");
+}
+
+Eigen::Matrix2d rotation(double a) {
+  Eigen::Matrix2d r;
+  r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+  return r;
+}
+
+}  // namespace
 
 void validate(const TrackConfig& c) {
-  if (!std::isfinite(c.velocity_filter_time_s) || c.velocity_filter_time_s < 0.0) {
-    throw std::invalid_argument("velocity_filter_time_s must be a number >= 0");
-  }
-  if (!std::isfinite(c.min_difference_dt_s) || c.min_difference_dt_s <= 0.0) {
-    throw std::invalid_argument("min_difference_dt_s must be positive");
-  }
-  if (!std::isfinite(c.max_port_speed_mps) || c.max_port_speed_mps < 0.0) {
-    throw std::invalid_argument("max_port_speed_mps must be a number >= 0");
-  }
-  if (!std::isfinite(c.max_port_yaw_rate_radps) || c.max_port_yaw_rate_radps < 0.0) {
-    throw std::invalid_argument("max_port_yaw_rate_radps must be a number >= 0");
-  }
+  requirePositive(c.default_position_sigma_m, "default_position_sigma_m");
+  requirePositive(c.default_yaw_sigma_rad, "default_yaw_sigma_rad");
+  requirePositive(c.yaw_rate_sigma_radps, "yaw_rate_sigma_radps");
+  requireNonNegative(c.yaw_rate_random_walk, "yaw_rate_random_walk");
+  requireNonNegative(c.centre_random_walk, "centre_random_walk");
+  requireNonNegative(c.offset_random_walk, "offset_random_walk");
+  requirePositive(c.initial_offset_sigma_m, "initial_offset_sigma_m");
+  requirePositive(c.initial_yaw_rate_sigma_radps, "initial_yaw_rate_sigma_radps");
+  requireNonNegative(c.max_port_yaw_rate_radps, "max_port_yaw_rate_radps");
+  requireNonNegative(c.max_port_speed_mps, "max_port_speed_mps");
+  requireNonNegative(c.outlier_gate_sigma, "outlier_gate_sigma");
+  if (c.outlier_reset_count < 1) throw std::invalid_argument("outlier_reset_count must be >= 1");
 }
 
 TargetTrack::TargetTrack(const TrackConfig& config) : config_(config) { validate(config_); }
 
 void TargetTrack::reset() {
-  pose_ = Pose2D{};
-  velocity_ = Vec2::Zero();
-  yaw_rate_ = 0.0;
+  yaw_state_.setZero();
+  pos_state_.setZero();
   last_position_stamp_s_.reset();
   last_orientation_stamp_s_.reset();
+  position_outliers_ = yaw_outliers_ = 0;
 }
 
 double TargetTrack::lastStamp() const {
@@ -39,6 +58,38 @@ double TargetTrack::lastOrientationStamp() const {
   return last_orientation_stamp_s_ ? *last_orientation_stamp_s_ : -std::numeric_limits<double>::infinity();
 }
 
+Eigen::Matrix<double, 2, 4> TargetTrack::positionJacobian() const {
+  // p = c + R(psi) d: linear in (c, d) for the current yaw estimate.
+  Eigen::Matrix<double, 2, 4> h;
+  h.leftCols<2>() = Eigen::Matrix2d::Identity();
+  h.rightCols<2>() = rotation(yaw_state_(0));
+  return h;
+}
+
+void TargetTrack::propagate(double dt) {
+  if (dt <= 0.0) return;
+  Eigen::Matrix2d f;
+  f << 1.0, dt, 0.0, 1.0;
+  const double q = config_.yaw_rate_random_walk * config_.yaw_rate_random_walk;
+  Eigen::Matrix2d qm;
+  qm << q * dt * dt * dt / 3.0, q * dt * dt / 2.0, q * dt * dt / 2.0, q * dt;
+  yaw_state_ = f * yaw_state_;
+  yaw_state_(0) = wrapAngle(yaw_state_(0));
+  yaw_cov_ = f * yaw_cov_ * f.transpose() + qm;
+  const double qc = config_.centre_random_walk * config_.centre_random_walk * dt;
+  const double qd = config_.offset_random_walk * config_.offset_random_walk * dt;
+  pos_cov_.diagonal() += Eigen::Vector4d(qc, qc, qd, qd);
+}
+
+void TargetTrack::restartPosition(const Vec2& measured, double variance) {
+  // Keep the offset (the port is where it is on the target), move the centre under the measurement.
+  const Vec2 offset = pos_state_.tail<2>();
+  pos_state_.head<2>() = measured - rotation(yaw_state_(0)) * offset;
+  pos_cov_.topLeftCorner<2, 2>() = Eigen::Matrix2d::Identity() * variance;
+  pos_cov_.topRightCorner<2, 2>().setZero();
+  pos_cov_.bottomLeftCorner<2, 2>().setZero();
+}
+
 TrackUpdate TargetTrack::update(const TargetObservation& o) {
   TrackUpdate result;
   if (!o.valid) {
@@ -46,7 +97,8 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
     return result;
   }
   if (!std::isfinite(o.stamp_s) || !std::isfinite(o.pose.x) || !std::isfinite(o.pose.y) ||
-      (o.orientation_valid && !std::isfinite(o.pose.yaw)) || (o.yaw_rate_valid && !std::isfinite(o.yaw_rate))) {
+      (o.orientation_valid && !std::isfinite(o.pose.yaw)) || (o.yaw_rate_valid && !std::isfinite(o.yaw_rate)) ||
+      !std::isfinite(o.position_sigma_m) || !std::isfinite(o.yaw_sigma_rad)) {
     result.reason = "estimate contains NaN or infinity";
     return result;
   }
@@ -54,38 +106,100 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
     result.reason = "estimate out of order (stamp not after the last one used)";
     return result;
   }
+  const double pos_var = std::pow(o.position_sigma_m > 0.0 ? o.position_sigma_m : config_.default_position_sigma_m, 2);
+  const double yaw_var = std::pow(o.yaw_sigma_rad > 0.0 ? o.yaw_sigma_rad : config_.default_yaw_sigma_rad, 2);
+  const Vec2 measured = o.pose.position();
+  const double gate2 = config_.outlier_gate_sigma * config_.outlier_gate_sigma;
 
-  // Velocities by differencing against the last pose taken, low-pass filtered: raw differences
-  // amplify the pose noise by sqrt(2)/dt (paper-notes.md, "Velocities").
-  // Two sources disagree by their biases: differencing across a switch would be a velocity spike.
-  if (last_position_stamp_s_ && o.source == last_source_) {
-    const double dt = o.stamp_s - *last_position_stamp_s_;
-    if (dt >= config_.min_difference_dt_s) {
-      const double alpha =
-          config_.velocity_filter_time_s > 0.0 ? 1.0 - std::exp(-dt / config_.velocity_filter_time_s) : 1.0;
-      const Vec2 raw_velocity = (o.pose.position() - pose_.position()) / dt;
-      velocity_ = clampNorm(velocity_ + alpha * (raw_velocity - velocity_), config_.max_port_speed_mps);
-      std::optional<double> raw_rate;
-      if (config_.use_estimate_yaw_rate && o.yaw_rate_valid) {
-        raw_rate = o.yaw_rate;
-      } else if (o.orientation_valid && last_orientation_stamp_s_) {
-        const double dt_yaw = o.stamp_s - *last_orientation_stamp_s_;
-        if (dt_yaw >= config_.min_difference_dt_s) raw_rate = wrapAngle(o.pose.yaw - pose_.yaw) / dt_yaw;
-      }
-      if (raw_rate) {
-        yaw_rate_ = clampAbs(yaw_rate_ + alpha * (*raw_rate - yaw_rate_), config_.max_port_yaw_rate_radps);
-      }
+  if (!last_position_stamp_s_) {
+    // First estimate: centre under the port, offset unknown (prior), yaw rate unknown (prior).
+    yaw_state_ = Eigen::Vector2d(o.orientation_valid ? wrapAngle(o.pose.yaw) : 0.0, 0.0);
+    yaw_cov_ = Eigen::Vector2d(o.orientation_valid ? yaw_var : M_PI * M_PI,
+                               std::pow(config_.initial_yaw_rate_sigma_radps, 2))
+                   .asDiagonal();
+    pos_state_ = Eigen::Vector4d(measured.x(), measured.y(), 0.0, 0.0);
+    const double s0 = std::pow(config_.initial_offset_sigma_m, 2);
+    pos_cov_ = Eigen::Vector4d(pos_var + s0, pos_var + s0, s0, s0).asDiagonal();
+    pos_cov_(0, 2) = pos_cov_(2, 0) = -s0;  // c + d is known to pos_var: c and d anti-correlated
+    pos_cov_(1, 3) = pos_cov_(3, 1) = -s0;
+    if (o.orientation_valid) {
+      // The prior's correlation is for d in odom axes; express it in the target frame (R(psi)^T d).
+      const Eigen::Matrix2d r = rotation(yaw_state_(0));
+      pos_cov_.topRightCorner<2, 2>() = -s0 * r;
+      pos_cov_.bottomLeftCorner<2, 2>() = -s0 * r.transpose();
+      last_orientation_stamp_s_ = o.stamp_s;
     }
-  } else if (!last_position_stamp_s_ && config_.use_estimate_yaw_rate && o.yaw_rate_valid) {
-    yaw_rate_ = clampAbs(o.yaw_rate, config_.max_port_yaw_rate_radps);
+    last_position_stamp_s_ = o.stamp_s;
+    last_source_ = o.source;
+    result.accepted = true;
+    return result;
   }
 
-  pose_.x = o.pose.x;
-  pose_.y = o.pose.y;
+  propagate(o.stamp_s - *last_position_stamp_s_);
+
+  // Yaw: first orientation after position-only ones starts filter 1 afresh.
   if (o.orientation_valid) {
-    pose_.yaw = wrapAngle(o.pose.yaw);
-    last_orientation_stamp_s_ = o.stamp_s;
-  }  // a position-only estimate keeps the held port axis (predicted from its own stamp)
+    if (!last_orientation_stamp_s_) {
+      // Until now the yaw was a placeholder: re-express the offset so the port stays where it was.
+      const double new_yaw = wrapAngle(o.pose.yaw);
+      const Eigen::Matrix2d change = rotation(new_yaw).transpose() * rotation(yaw_state_(0));
+      pos_state_.tail<2>() = change * pos_state_.tail<2>();
+      Eigen::Matrix4d j = Eigen::Matrix4d::Identity();
+      j.bottomRightCorner<2, 2>() = change;
+      pos_cov_ = j * pos_cov_ * j.transpose();
+      yaw_state_(0) = new_yaw;
+      yaw_cov_(0, 0) = yaw_var;
+      yaw_cov_(0, 1) = yaw_cov_(1, 0) = 0.0;
+    } else {
+      const double innovation = wrapAngle(o.pose.yaw - yaw_state_(0));
+      const double s = yaw_cov_(0, 0) + yaw_var;
+      if (gate2 > 0.0 && innovation * innovation / s > gate2 && ++yaw_outliers_ < config_.outlier_reset_count) {
+        result.reason = "orientation outlier (" + std::to_string(innovation) + " rad off the held one)";
+      } else {
+        if (yaw_outliers_ >= config_.outlier_reset_count) {
+          yaw_state_(0) = wrapAngle(o.pose.yaw);  // it persisted: the target did turn; keep the rate
+          yaw_cov_(0, 0) = yaw_var;
+          yaw_cov_(0, 1) = yaw_cov_(1, 0) = 0.0;
+        } else {
+          const Eigen::Vector2d k = yaw_cov_.col(0) / s;
+          yaw_state_ += k * innovation;
+          yaw_state_(0) = wrapAngle(yaw_state_(0));
+          yaw_cov_ -= k * yaw_cov_.row(0);
+        }
+        yaw_outliers_ = 0;
+      }
+    }
+    if (result.reason.empty()) last_orientation_stamp_s_ = o.stamp_s;
+  }
+  if (o.yaw_rate_valid && config_.use_estimate_yaw_rate && result.reason.empty()) {
+    const double innovation = o.yaw_rate - yaw_state_(1);
+    const double s = yaw_cov_(1, 1) + config_.yaw_rate_sigma_radps * config_.yaw_rate_sigma_radps;
+    const Eigen::Vector2d k = yaw_cov_.col(1) / s;
+    yaw_state_ += k * innovation;
+    yaw_state_(0) = wrapAngle(yaw_state_(0));
+    yaw_cov_ -= k * yaw_cov_.row(1);
+  }
+  yaw_state_(1) = clampAbs(yaw_state_(1), config_.max_port_yaw_rate_radps);
+  if (!result.reason.empty()) return result;  // an outlier orientation: do not trust its position either
+
+  // Position.
+  const Eigen::Matrix<double, 2, 4> h = positionJacobian();
+  const Vec2 innovation = measured - h * pos_state_;
+  const Eigen::Matrix2d s = h * pos_cov_ * h.transpose() + Eigen::Matrix2d::Identity() * pos_var;
+  const double mahalanobis2 = innovation.dot(s.ldlt().solve(innovation));
+  if (gate2 > 0.0 && mahalanobis2 > gate2) {
+    if (++position_outliers_ < config_.outlier_reset_count) {
+      result.reason = "position outlier (" + std::to_string(innovation.norm()) + " m off the held one)";
+      return result;
+    }
+    restartPosition(measured, pos_var);  // it persisted: the target did move
+  } else {
+    const Eigen::Matrix<double, 4, 2> k = pos_cov_ * h.transpose() * s.inverse();
+    pos_state_ += k * innovation;
+    pos_cov_ = (Eigen::Matrix4d::Identity() - k * h) * pos_cov_;
+    pos_cov_ = 0.5 * (pos_cov_ + pos_cov_.transpose());
+  }
+  position_outliers_ = 0;
   last_position_stamp_s_ = o.stamp_s;
   last_source_ = o.source;
   result.accepted = true;
@@ -95,22 +209,13 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
 PortState TargetTrack::predict(double now_s) const {
   PortState s;
   const double dt = last_position_stamp_s_ ? now_s - *last_position_stamp_s_ : 0.0;
-  s.velocity = velocity_;
-  s.yaw_rate = yaw_rate_;
-  // Constant-twist (SE(2) exponential) prediction: a target turning about a point other than the
-  // port moves the port on a circle, which a straight-line extrapolation would cut short.
-  const double turn = yaw_rate_ * dt;
-  Vec2 displacement = velocity_ * dt;
-  if (std::abs(yaw_rate_) > 1e-9) {
-    displacement =
-        (std::sin(turn) / yaw_rate_) * velocity_ + ((1.0 - std::cos(turn)) / yaw_rate_) * perpendicular(velocity_);
-    s.velocity = Vec2(std::cos(turn) * velocity_.x() - std::sin(turn) * velocity_.y(),
-                      std::sin(turn) * velocity_.x() + std::cos(turn) * velocity_.y());
-  }
-  s.pose.x = pose_.x + displacement.x();
-  s.pose.y = pose_.y + displacement.y();
-  const double dt_yaw = last_orientation_stamp_s_ ? now_s - *last_orientation_stamp_s_ : 0.0;
-  s.pose.yaw = wrapAngle(pose_.yaw + yaw_rate_ * dt_yaw);
+  const double yaw_rate = yaw_state_(1);
+  const double yaw = wrapAngle(yaw_state_(0) + yaw_rate * dt);
+  const Vec2 offset = rotation(yaw) * pos_state_.tail<2>();
+  const Vec2 position = pos_state_.head<2>() + offset;
+  s.pose = Pose2D{position.x(), position.y(), yaw};
+  s.yaw_rate = yaw_rate;
+  s.velocity = clampNorm(yaw_rate * perpendicular(offset), config_.max_port_speed_mps);
   return s;
 }
 

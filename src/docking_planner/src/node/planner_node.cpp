@@ -63,11 +63,23 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   l.final_lateral_gate_m = requireDouble(p, "final_lateral_gate_m");
   l.final_yaw_gate_rad = requireDouble(p, "final_yaw_gate_rad");
   TrackConfig& t = c.track;
-  t.velocity_filter_time_s = requireDouble(p, "velocity_filter_time_s");
-  t.min_difference_dt_s = requireDouble(p, "min_difference_dt_s");
-  t.max_port_speed_mps = requireDouble(p, "max_port_speed_mps");
-  t.max_port_yaw_rate_radps = requireDouble(p, "max_port_yaw_rate_radps");
+  t.default_position_sigma_m = requireDouble(p, "default_position_sigma_m");
+  t.default_yaw_sigma_rad = requireDouble(p, "default_yaw_sigma_rad");
+  t.yaw_rate_sigma_radps = requireDouble(p, "yaw_rate_sigma_radps");
   t.use_estimate_yaw_rate = requireBool(p, "use_estimate_yaw_rate");
+  t.yaw_rate_random_walk = requireDouble(p, "yaw_rate_random_walk");
+  t.centre_random_walk = requireDouble(p, "centre_random_walk");
+  t.offset_random_walk = requireDouble(p, "offset_random_walk");
+  t.initial_offset_sigma_m = requireDouble(p, "initial_offset_sigma_m");
+  t.initial_yaw_rate_sigma_radps = requireDouble(p, "initial_yaw_rate_sigma_radps");
+  t.max_port_yaw_rate_radps = requireDouble(p, "max_port_yaw_rate_radps");
+  t.max_port_speed_mps = requireDouble(p, "max_port_speed_mps");
+  t.outlier_gate_sigma = requireDouble(p, "outlier_gate_sigma");
+  const double reset_count = requireDouble(p, "outlier_reset_count");
+  if (!(reset_count >= 1.0 && reset_count <= 1000.0)) {
+    throw std::invalid_argument("parameter ~outlier_reset_count must be in [1, 1000]");
+  }
+  t.outlier_reset_count = static_cast<int>(reset_count);
   c.estimate_timeout_s = requireDouble(p, "estimate_timeout_s");
   c.odom_timeout_s = requireDouble(p, "odom_timeout_s");
   c.orientation_timeout_s = requireDouble(p, "orientation_timeout_s");
@@ -107,6 +119,7 @@ class PlannerNode {
     const double rate_hz = requireDouble(pnh, "rate_hz");
     if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) throw std::invalid_argument("parameter ~rate_hz must be in (0, 1000]");
     update_on_estimate_ = requireBool(pnh, "update_on_estimate");
+    use_estimate_covariance_ = requireBool(pnh, "use_estimate_covariance");
     tf_wait_s_ = requireDouble(pnh, "tf_wait_s");
     if (!(tf_wait_s_ >= 0.0)) throw std::invalid_argument("parameter ~tf_wait_s must be >= 0");
 
@@ -205,6 +218,25 @@ class PlannerNode {
           odom_from_camera.rotation() * (Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized() * Eigen::Vector3d::UnitX());
       o.pose.yaw = std::atan2(axis.y(), axis.x());
     }
+    if (use_estimate_covariance_) {
+      // Rotate the camera-frame covariance into odom; the planner's filter takes one sigma for x and y
+      // (the larger of the two, to stay on the safe side) and one for yaw. Variances of 1e6 and more
+      // mean "not estimated" (TargetEstimate): the configured default is used then (sigma 0).
+      Eigen::Matrix3d position_cov, rotation_cov;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          position_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>(r * 6 + c)];
+          rotation_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>((r + 3) * 6 + c + 3)];
+        }
+      }
+      const Eigen::Matrix3d rot = odom_from_camera.rotation();
+      const Eigen::Matrix3d position_odom = rot * position_cov * rot.transpose();
+      const Eigen::Matrix3d rotation_odom = rot * rotation_cov * rot.transpose();
+      const double xy_var = std::max(position_odom(0, 0), position_odom(1, 1));
+      const double yaw_var = rotation_odom(2, 2);
+      if (std::isfinite(xy_var) && xy_var > 0.0 && xy_var < 1e5) o.position_sigma_m = std::sqrt(xy_var);
+      if (std::isfinite(yaw_var) && yaw_var > 0.0 && yaw_var < 1e5) o.yaw_sigma_rad = std::sqrt(yaw_var);
+    }
     if (msg.twist_valid && odometry_) {
       // The twist is relative to the camera, which turns with base_link: add the chaser's own yaw rate.
       const auto& w = msg.twist.twist.angular;
@@ -292,6 +324,7 @@ class PlannerNode {
   std::string odom_frame_, base_frame_;
   double tf_wait_s_{0.2};
   bool update_on_estimate_{true};
+  bool use_estimate_covariance_{true};
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   diagnostic_updater::Updater diagnostics_;
