@@ -158,7 +158,9 @@ void CaptureNodelet::onInit() {
       const std::string problem = camera::calibrationSizeProblem(
           calibration_file, static_cast<int>(info.width), static_cast<int>(info.height), settings_.width,
           settings_.height, "the configured resolution (~width, ~height)");
-      if (!problem.empty() && channel.source.isLiveDevice()) NODELET_ERROR("%s", problem.c_str());
+      if (!problem.empty() && channel.source.isLiveDevice()) {
+        NODELET_ERROR("%s: %s", getName().c_str(), problem.c_str());
+      }
     }
     channel.publisher = image_transport_->advertiseCamera(channel.defaults.image_topic, 1);
     sources.push_back(channel.source);
@@ -199,16 +201,16 @@ void CaptureNodelet::captureLoop() {
         case camera::CaptureStatus::kEmptyFrame:
           ++empty_frames_total_;
           ++empty_frames_since_report_;
-          NODELET_WARN_THROTTLE(5.0, "%s: frame skipped (%lu empty frames so far)", outcome.message.c_str(),
-                                empty_frames_total_);
+          NODELET_WARN_THROTTLE(5.0, "%s: %s: frame skipped (%lu empty frames so far)", getName().c_str(),
+                                outcome.message.c_str(), empty_frames_total_);
           break;
         case camera::CaptureStatus::kWaiting:
           state_ = State::kWaiting;
           state_message_ = outcome.message;
           retry_in_s_ = std::max(0.0, outcome.retry_at_s - now_s);
           if (outcome.new_failure) {
-            NODELET_ERROR("%s; retrying in %.1f s (failure %d in a row)", outcome.message.c_str(), retry_in_s_,
-                          rig_->consecutiveFailures());
+            NODELET_ERROR("%s: %s; retrying in %.1f s (failure %d in a row)", getName().c_str(),
+                          outcome.message.c_str(), retry_in_s_, rig_->consecutiveFailures());
           }
           break;
         case camera::CaptureStatus::kRestarted:
@@ -216,14 +218,16 @@ void CaptureNodelet::captureLoop() {
           sleep_until_s = now_s;
           break;
         case camera::CaptureStatus::kEndOfStream:
-          if (state_ != State::kEnded) NODELET_WARN("%s: no more frames", outcome.message.c_str());
+          if (state_ != State::kEnded) {
+            NODELET_WARN("%s: %s: no more frames", getName().c_str(), outcome.message.c_str());
+          }
           state_ = State::kEnded;
           state_message_ = outcome.message;
           break;
       }
     } catch (const std::exception& e) {
       // OpenCV or cv_bridge on a frame we did not expect: report it, keep the node alive.
-      NODELET_ERROR_THROTTLE(5.0, "capture failed: %s", e.what());
+      NODELET_ERROR_THROTTLE(5.0, "%s: capture failed: %s", getName().c_str(), e.what());
       state_message_ = std::string("capture failed: ") + e.what();
     }
     diagnostics_->update();
@@ -243,7 +247,7 @@ void CaptureNodelet::handleFrames(const std::vector<cv::Mat>& frames, const ros:
       state_ = State::kRefused;
       state_message_ = channel.source.describe() + ": " + image.error;
       ++frames_refused_;
-      NODELET_ERROR_THROTTLE(5.0, "%s", state_message_.c_str());
+      NODELET_ERROR_THROTTLE(5.0, "%s: %s", getName().c_str(), state_message_.c_str());
       return;
     }
     sensor_msgs::CameraInfo info = channel.info_manager->getCameraInfo();
@@ -254,7 +258,7 @@ void CaptureNodelet::handleFrames(const std::vector<cv::Mat>& frames, const ros:
       state_ = State::kRefused;
       state_message_ = problem;
       ++frames_refused_;
-      NODELET_ERROR_THROTTLE(10.0, "%s", problem.c_str());
+      NODELET_ERROR_THROTTLE(10.0, "%s: %s", getName().c_str(), problem.c_str());
       return;
     }
     if (info.width == 0) {  // uncalibrated: still say how big the images are
@@ -276,7 +280,7 @@ void CaptureNodelet::handleFrames(const std::vector<cv::Mat>& frames, const ros:
     channels_[i].publisher.publish(image_msg, info_msg);
   }
   if (state_ != State::kStreaming) {
-    NODELET_INFO("streaming from %s", rig_->sources().front().describe().c_str());
+    NODELET_INFO("%s: streaming from %s", getName().c_str(), rig_->sources().front().describe().c_str());
   }
   state_ = State::kStreaming;
   state_message_.clear();
