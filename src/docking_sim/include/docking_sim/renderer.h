@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <utility>
 #include <random>
 #include <vector>
 
@@ -14,6 +15,11 @@
 #include "docking_sim/scene.h"
 
 namespace docking_sim {
+
+/// CPU time of the stages of the last render, ms (thread CPU time; for the benchmark).
+struct RenderTiming {
+  double rasterize_ms{0}, distort_ms{0}, effects_ms{0};
+};
 
 struct RenderOptions {
   bool distortion{true};
@@ -34,6 +40,7 @@ class CameraRenderer {
   /// Pixel (u, v) of the output's pinhole model sits at (u + dx, v + dy) in idealImage().
   cv::Point2i idealPrincipalOffset() const { return pad_; }
   Band band() const { return band_; }
+  const RenderTiming& lastTiming() const { return timing_; }
 
  private:
   template <int kChannels>
@@ -60,9 +67,11 @@ class CameraRenderer {
   std::vector<int8_t> noise_table_;
   std::mt19937_64 rng_;
   cv::Mat output_;
+  RenderTiming timing_;
   // Scratch polygons (kept to avoid per-frame allocation).
   std::vector<Eigen::Vector3d> clip_a_, clip_b_;
   std::vector<Eigen::Vector2d> projected_;
+  std::vector<std::pair<double, std::size_t>> order_;  ///< draw order: (squared distance, surface)
 };
 
 }  // namespace docking_sim

@@ -12,10 +12,24 @@
 
 namespace docking_sim {
 
+/// One pyramid level stored in 8x8 texel blocks, so that a scanline walking down a texture column
+/// stays in cache as well as one walking along a row.
+struct BlockedLevel {
+  int width{0}, height{0}, blocks_x{0};
+  std::vector<uchar> bgr;    ///< blocked, 3 bytes per texel
+  std::vector<uchar> gray;   ///< blocked, 1 byte per texel
+  /// Texel index of (u, v) in the blocked layout (multiply by the channel count).
+  std::size_t index(int u, int v) const {
+    return ((static_cast<std::size_t>(v >> 3) * blocks_x + static_cast<std::size_t>(u >> 3)) << 6) |
+           static_cast<std::size_t>(((v & 7) << 3) | (u & 7));
+  }
+};
+
 /// A texture with its mip pyramid, in colour (visible band) and grey (IR band).
 struct Texture {
   std::vector<cv::Mat> bgr;    ///< level 0 = full size, CV_8UC3
   std::vector<cv::Mat> gray;   ///< CV_8UC1, same sizes
+  std::vector<BlockedLevel> blocked;  ///< the same levels, blocked, for the renderer
   bool repeat{false};          ///< wraps (sizes are powers of two) instead of clamping
 };
 

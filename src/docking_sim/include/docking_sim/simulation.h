@@ -56,6 +56,7 @@ class Simulation {
 
   /// Renders camera RobotModel::kStereoLeft / kStereoRight / kIr at the current time.
   const cv::Mat& render(int camera);
+  const CameraRenderer& renderer(int camera) const { return *renderers_.at(static_cast<std::size_t>(camera)); }
 
   const SimSettings& settings() const { return settings_; }
   const Scenario& scenario() const { return scenario_; }

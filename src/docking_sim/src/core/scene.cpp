@@ -223,6 +223,24 @@ std::shared_ptr<Texture> makeTexture(const cv::Mat& bgr, bool repeat) {
     cv::Mat g;
     cv::cvtColor(level, g, cv::COLOR_BGR2GRAY);
     tex->gray.push_back(g);
+    BlockedLevel b;
+    b.width = level.cols;
+    b.height = level.rows;
+    b.blocks_x = (level.cols + 7) / 8;
+    const std::size_t texels = static_cast<std::size_t>(b.blocks_x) * ((level.rows + 7) / 8) * 64;
+    b.bgr.assign(texels * 3, 0);
+    b.gray.assign(texels, 0);
+    for (int v = 0; v < level.rows; ++v) {
+      for (int u = 0; u < level.cols; ++u) {
+        const std::size_t i = b.index(u, v);
+        const cv::Vec3b& p = level.at<cv::Vec3b>(v, u);
+        b.bgr[3 * i] = p[0];
+        b.bgr[3 * i + 1] = p[1];
+        b.bgr[3 * i + 2] = p[2];
+        b.gray[i] = g.at<uchar>(v, u);
+      }
+    }
+    tex->blocked.push_back(std::move(b));
   }
   return tex;
 }

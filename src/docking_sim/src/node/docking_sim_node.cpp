@@ -1,0 +1,305 @@
+// docking_sim_node: the thin ROS wrapper around docking_sim::Simulation. It owns time: steps the
+// physics, publishes /clock, the three cameras, wheel encoders and ground truth, all in sim time.
+#include <camera_calibration_parsers/parse.h>
+#include <docking_msgs/WheelCommand.h>
+#include <docking_msgs/WheelEncoders.h>
+#include <docking_msgs/names.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <image_transport/image_transport.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <opencv2/core/utility.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "docking_sim/config_error.h"
+#include "docking_sim/simulation.h"
+
+namespace {
+
+namespace names = docking_msgs;
+using docking_sim::RobotModel;
+
+std::string requireString(const ros::NodeHandle& nh, const std::string& name) {
+  std::string value;
+  if (!nh.getParam(name, value) || value.empty()) {
+    throw std::runtime_error("missing parameter ~" + name + " (a path or name string)");
+  }
+  return value;
+}
+
+geometry_msgs::Transform toTransform(const Eigen::Isometry3d& t) {
+  geometry_msgs::Transform out;
+  out.translation.x = t.translation().x();
+  out.translation.y = t.translation().y();
+  out.translation.z = t.translation().z();
+  const Eigen::Quaterniond q(t.linear());
+  out.rotation.x = q.x();
+  out.rotation.y = q.y();
+  out.rotation.z = q.z();
+  out.rotation.w = q.w();
+  return out;
+}
+
+geometry_msgs::Pose toPose(const Eigen::Isometry3d& t) {
+  const auto tf = toTransform(t);
+  geometry_msgs::Pose p;
+  p.position.x = tf.translation.x;
+  p.position.y = tf.translation.y;
+  p.position.z = tf.translation.z;
+  p.orientation = tf.rotation;
+  return p;
+}
+
+class SimNode {
+ public:
+  SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), image_transport_(nh) {
+    docking_sim::SimulationFiles files;
+    files.sim_config = requireString(pnh, "sim_config");
+    files.target_config = requireString(pnh, "target_config");
+    files.robot_config = requireString(pnh, "robot_config");
+    files.omni_base_config = requireString(pnh, "omni_base_config");
+    std::string scenario_file;
+    if (pnh.getParam("scenario_file", scenario_file) && !scenario_file.empty()) {
+      files.scenario = scenario_file;
+    } else {
+      files.scenario = requireString(pnh, "scenario_dir") + "/" + requireString(pnh, "scenario") + ".yaml";
+    }
+    sim_ = std::make_unique<docking_sim::Simulation>(files);
+
+    const auto& settings = sim_->settings();
+    real_time_factor_ = pnh.param("real_time_factor", settings.real_time_factor);
+    camera_rate_hz_ = pnh.param("camera_rate_hz", settings.camera_rate_hz);
+    if (!std::isfinite(real_time_factor_) || real_time_factor_ < 0.0) {
+      throw std::runtime_error("parameter ~real_time_factor must be >= 0 (0 = as fast as possible)");
+    }
+    if (!std::isfinite(camera_rate_hz_) || camera_rate_hz_ <= 0.0 || camera_rate_hz_ > 200.0) {
+      throw std::runtime_error("parameter ~camera_rate_hz must be within (0, 200]");
+    }
+    exit_at_end_ = pnh.param("exit_at_end", true);
+    publish_world_to_odom_ = pnh.param("publish_world_to_odom", true);
+
+    // Camera info straight from the calibration files the robot uses (camera_calibration_parsers).
+    const char* image_topics[3] = {names::topics::kStereoLeftImageRaw, names::topics::kStereoRightImageRaw,
+                                   names::topics::kIrImageRaw};
+    for (int i = 0; i < 3; ++i) {
+      const auto& mount = sim_->robot().cameras[static_cast<std::size_t>(i)];
+      std::string camera_name;
+      if (!camera_calibration_parsers::readCalibration(mount.calibration_file, camera_name, infos_[i])) {
+        throw docking_sim::ConfigError(mount.calibration_file, "", "camera_calibration_parsers cannot read it");
+      }
+      infos_[i].header.frame_id = mount.frame_id;
+      camera_pubs_[i] = image_transport_.advertiseCamera(image_topics[i], 2);
+    }
+    clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
+    encoder_pub_ = nh_.advertise<docking_msgs::WheelEncoders>(names::topics::kWheelEncoders, 10);
+    truth_left_pub_ = nh_.advertise<nav_msgs::Odometry>(names::topics::kTruthStereoLeft, 10);
+    truth_ir_pub_ = nh_.advertise<nav_msgs::Odometry>(names::topics::kTruthIr, 10);
+    truth_chaser_pub_ = nh_.advertise<nav_msgs::Odometry>(names::topics::kTruthChaserOdom, 10);
+    command_sub_ = nh_.subscribe(names::topics::kWheelCommand, 10, &SimNode::onWheelCommand, this);
+
+    if (publish_world_to_odom_) {
+      // odom starts where the chaser starts, so rviz can show odometry and truth in one tree.
+      geometry_msgs::TransformStamped t;
+      t.header.stamp = ros::Time(kTimeOffsetS);
+      t.header.frame_id = names::frames::kWorld;
+      t.child_frame_id = names::frames::kOdom;
+      t.transform = toTransform(sim_->worldTChaser());
+      static_broadcaster_.sendTransform(t);
+    }
+    const auto& sc = sim_->scenario();
+    ROS_INFO("docking_sim: scenario '%s' (%s), lighting %s, seed %llu, duration %.0f s, real-time factor %.2f, "
+             "cameras %.1f Hz",
+             sc.name.c_str(), sc.description.c_str(), sc.lighting.c_str(), static_cast<unsigned long long>(sc.seed),
+             sc.duration_s, real_time_factor_, camera_rate_hz_);
+  }
+
+  void run() {
+    const auto& settings = sim_->settings();
+    const double physics_dt = 1.0 / settings.physics_rate_hz;
+    const double camera_dt = 1.0 / camera_rate_hz_;
+    const double encoder_dt = 1.0 / settings.encoder_rate_hz;
+    const double tf_dt = 1.0 / settings.truth_tf_rate_hz;
+    // Events are scheduled by integer counters so that stamps are exact multiples of their periods.
+    long physics_n = 1, camera_n = 1, encoder_n = 1, tf_n = 1;
+    const ros::WallTime wall_start = ros::WallTime::now();
+    ros::WallTime last_behind_warning = wall_start;
+
+    while (ros::ok()) {
+      const double next = std::min({physics_n * physics_dt, camera_n * camera_dt, encoder_n * encoder_dt,
+                                    tf_n * tf_dt});
+      if (real_time_factor_ > 0.0) {
+        const ros::WallTime due = wall_start + ros::WallDuration(next / real_time_factor_);
+        const ros::WallTime now = ros::WallTime::now();
+        if (due > now) {
+          (due - now).sleep();
+        } else if ((now - due).toSec() > 0.5 && (now - last_behind_warning).toSec() > 10.0) {
+          ROS_WARN("docking_sim: %.1f s behind the requested real-time factor %.2f (rendering is the bottleneck)",
+                   (now - due).toSec() * real_time_factor_, real_time_factor_);
+          last_behind_warning = now;
+        }
+      }
+      ros::spinOnce();  // wheel commands arrive at the sim time they are applied
+      sim_->advance(next - sim_->time());
+      const ros::Time stamp(sim_->time() + kTimeOffsetS);
+      rosgraph_msgs::Clock clock;
+      clock.clock = stamp;
+      clock_pub_.publish(clock);
+
+      const double eps = 1e-9;
+      if (physics_n * physics_dt <= next + eps) ++physics_n;
+      if (encoder_n * encoder_dt <= next + eps) {
+        ++encoder_n;
+        publishEncoders(stamp);
+      }
+      if (tf_n * tf_dt <= next + eps) {
+        ++tf_n;
+        publishTruthTf(stamp);
+      }
+      if (camera_n * camera_dt <= next + eps) {
+        ++camera_n;
+        publishCameras(stamp);
+      }
+      const double duration = sim_->scenario().duration_s;
+      if (duration > 0.0 && sim_->time() >= duration && !finished_) {
+        finished_ = true;
+        ROS_INFO("docking_sim: scenario '%s' finished after %.1f s of sim time", sim_->scenario().name.c_str(),
+                 sim_->time());
+        if (exit_at_end_) break;
+        // Otherwise time keeps running, so that other nodes do not hang.
+      }
+    }
+  }
+
+ private:
+  // Sim time 0 would read as "no time yet" to ROS nodes: the published clock starts at this offset.
+  static constexpr double kTimeOffsetS = 1.0;
+
+  void onWheelCommand(const docking_msgs::WheelCommand::ConstPtr& msg) {
+    using docking_sim::CommandResult;
+    const CommandResult result = sim_->wheelCommand(msg->enable, msg->velocity);
+    if (result == CommandResult::kRejectedNonFinite) {
+      ROS_WARN_THROTTLE(1.0, "docking_sim: rejected a wheel command with NaN/inf speeds; wheels stop");
+    } else if (result == CommandResult::kRejectedWrongSize) {
+      ROS_WARN_THROTTLE(1.0, "docking_sim: rejected a wheel command with %zu speeds (the base has %zu wheels)",
+                        msg->velocity.size(), sim_->chaser().wheelCount());
+    }
+  }
+
+  void publishEncoders(const ros::Time& stamp) {
+    docking_msgs::WheelEncoders msg;
+    msg.header.stamp = stamp;
+    msg.header.frame_id = names::frames::kBaseLink;
+    msg.counts = sim_->chaser().encoderCounts();
+    msg.motors_enabled = sim_->chaser().motorsEnabled();
+    msg.fault = false;
+    encoder_pub_.publish(msg);
+  }
+
+  void publishTruthTf(const ros::Time& stamp) {
+    geometry_msgs::TransformStamped chaser, target;
+    chaser.header.stamp = target.header.stamp = stamp;
+    chaser.header.frame_id = target.header.frame_id = names::frames::kWorld;
+    chaser.child_frame_id = names::frames::kChaserTruth;
+    target.child_frame_id = names::frames::kTargetTruth;
+    chaser.transform = toTransform(sim_->worldTChaser());
+    target.transform = toTransform(sim_->worldTPort());
+    tf_broadcaster_.sendTransform({chaser, target});
+
+    nav_msgs::Odometry odom;
+    odom.header.stamp = stamp;
+    odom.header.frame_id = names::frames::kWorld;
+    odom.child_frame_id = names::frames::kChaserTruth;
+    odom.pose.pose = toPose(sim_->worldTChaser());
+    const auto twist = sim_->chaser().twist();  // body frame (child), as nav_msgs/Odometry wants
+    odom.twist.twist.linear.x = twist.vx;
+    odom.twist.twist.linear.y = twist.vy;
+    odom.twist.twist.angular.z = twist.wz;
+    truth_chaser_pub_.publish(odom);
+  }
+
+  void publishCameras(const ros::Time& stamp) {
+    for (int i = 0; i < 3; ++i) {
+      const auto& mount = sim_->robot().cameras[static_cast<std::size_t>(i)];
+      if (camera_pubs_[i].getNumSubscribers() == 0) continue;  // render only what someone watches
+      const cv::Mat& frame = sim_->render(i);
+      sensor_msgs::ImagePtr image = boost::make_shared<sensor_msgs::Image>();
+      image->header.stamp = stamp;
+      image->header.frame_id = mount.frame_id;
+      image->height = static_cast<uint32_t>(frame.rows);
+      image->width = static_cast<uint32_t>(frame.cols);
+      image->encoding = frame.channels() == 3 ? sensor_msgs::image_encodings::BGR8 : sensor_msgs::image_encodings::MONO8;
+      image->is_bigendian = 0;
+      image->step = static_cast<uint32_t>(frame.cols * frame.channels());
+      image->data.resize(image->step * image->height);
+      for (int r = 0; r < frame.rows; ++r) {
+        std::copy(frame.ptr<uchar>(r), frame.ptr<uchar>(r) + image->step, image->data.begin() + r * image->step);
+      }
+      sensor_msgs::CameraInfoPtr info = boost::make_shared<sensor_msgs::CameraInfo>(infos_[i]);
+      info->header = image->header;
+      camera_pubs_[i].publish(image, info);
+    }
+    publishCameraTruth(RobotModel::kStereoLeft, truth_left_pub_, stamp);
+    publishCameraTruth(RobotModel::kIr, truth_ir_pub_, stamp);
+  }
+
+  void publishCameraTruth(int camera, ros::Publisher& pub, const ros::Time& stamp) {
+    const auto truth = sim_->truthInCamera(camera);
+    nav_msgs::Odometry odom;
+    odom.header.stamp = stamp;
+    odom.header.frame_id = sim_->robot().cameras[static_cast<std::size_t>(camera)].frame_id;
+    odom.child_frame_id = names::frames::kTarget;
+    odom.pose.pose = toPose(truth.camera_T_port);
+    // Velocity of the port relative to the camera, in the camera frame (as TargetEstimate's twist).
+    odom.twist.twist.linear.x = truth.linear_m_s.x();
+    odom.twist.twist.linear.y = truth.linear_m_s.y();
+    odom.twist.twist.linear.z = truth.linear_m_s.z();
+    odom.twist.twist.angular.x = truth.angular_rad_s.x();
+    odom.twist.twist.angular.y = truth.angular_rad_s.y();
+    odom.twist.twist.angular.z = truth.angular_rad_s.z();
+    pub.publish(odom);
+  }
+
+  ros::NodeHandle nh_;
+  image_transport::ImageTransport image_transport_;
+  std::unique_ptr<docking_sim::Simulation> sim_;
+  double real_time_factor_{1.0};
+  double camera_rate_hz_{30.0};
+  bool exit_at_end_{true};
+  bool finished_{false};
+  bool publish_world_to_odom_{true};
+  std::array<sensor_msgs::CameraInfo, 3> infos_;
+  std::array<image_transport::CameraPublisher, 3> camera_pubs_;
+  ros::Publisher clock_pub_, encoder_pub_, truth_left_pub_, truth_ir_pub_, truth_chaser_pub_;
+  ros::Subscriber command_sub_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "docking_sim");
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  cv::setNumThreads(1);  // one core for rendering; perception gets the rest
+  try {
+    SimNode node(nh, pnh);
+    node.run();
+  } catch (const std::exception& e) {
+    ROS_FATAL("docking_sim: %s", e.what());
+    return 1;
+  }
+  return 0;
+}

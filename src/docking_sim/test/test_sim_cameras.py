@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""rostest: docking_sim publishes the three cameras at the configured rate in sim time, with valid
+camera_info matching the calibration files, and ground truth stamped like the images."""
+import math
+import os
+import sys
+import unittest
+
+import rospy
+import rostest
+import yaml
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image
+
+CAMERAS = {
+    # topic base: (frame id, encoding, calibration file)
+    "stereo/left": ("stereo_left_optical_frame", "bgr8", "cameras/stereo_left.yaml"),
+    "stereo/right": ("stereo_right_optical_frame", "bgr8", "cameras/stereo_right.yaml"),
+    "ir": ("ir_optical_frame", "mono8", "cameras/ir.yaml"),
+}
+
+
+class SimCamerasTest(unittest.TestCase):
+    def setUp(self):
+        self.config_dir = rospy.get_param("~config_dir")
+        self.rate = rospy.get_param("~camera_rate_hz")
+        self.sim_seconds = rospy.get_param("~sim_seconds")
+        self.images = {k: [] for k in CAMERAS}
+        self.infos = {k: [] for k in CAMERAS}
+        self.truth = {"sim/truth/stereo_left": [], "sim/truth/ir": []}
+        self.clock = []
+        subs = [rospy.Subscriber("/clock", Clock, lambda m: self.clock.append(m.clock.to_sec()))]
+        for base in CAMERAS:
+            subs.append(rospy.Subscriber(base + "/image_raw", Image, self.images[base].append, queue_size=50))
+            subs.append(rospy.Subscriber(base + "/camera_info", CameraInfo, self.infos[base].append, queue_size=50))
+        for topic in self.truth:
+            subs.append(rospy.Subscriber(topic, Odometry, self.truth[topic].append, queue_size=50))
+        self.subs = subs
+
+    def wait_for_sim_seconds(self):
+        wall_deadline = rospy.get_rostime()  # sim time (use_sim_time); wait on wall time below
+        import time
+        start_wall = time.time()
+        while not rospy.is_shutdown() and time.time() - start_wall < 90.0:
+            if self.clock and all(len(v) > 2 for v in self.images.values()):
+                first = min(v[0].header.stamp.to_sec() for v in self.images.values())
+                if self.clock[-1] - first > self.sim_seconds:
+                    return
+            time.sleep(0.1)
+        del wall_deadline
+        self.fail("the simulator did not publish %s s of images within 90 s wall time (clock: %d msgs)"
+                  % (self.sim_seconds, len(self.clock)))
+
+    def test_cameras_rate_info_truth(self):
+        self.wait_for_sim_seconds()
+        for base, (frame, encoding, calib_file) in CAMERAS.items():
+            images = self.images[base]
+            stamps = [m.header.stamp.to_sec() for m in images]
+            # Rate in sim time: frames counted over the stamps they cover.
+            span = stamps[-1] - stamps[0]
+            rate = (len(stamps) - 1) / span
+            self.assertAlmostEqual(rate, self.rate, delta=0.05 * self.rate, msg="%s rate %.2f Hz" % (base, rate))
+            for a, b in zip(stamps, stamps[1:]):
+                self.assertAlmostEqual(b - a, 1.0 / self.rate, delta=1e-3, msg="%s: uneven frame spacing" % base)
+            img = images[-1]
+            self.assertEqual(img.encoding, encoding)
+            self.assertEqual((img.width, img.height), (640, 480))
+            self.assertEqual(img.header.frame_id, frame)
+            self.assertEqual(len(img.data), img.step * img.height)
+            with open(os.path.join(self.config_dir, calib_file)) as f:
+                calib = yaml.safe_load(f)
+            info_by_stamp = {m.header.stamp: m for m in self.infos[base]}
+            self.assertIn(img.header.stamp, info_by_stamp, "%s: no camera_info with the image's stamp" % base)
+            info = info_by_stamp[img.header.stamp]
+            self.assertEqual(info.header.frame_id, frame)
+            self.assertEqual((info.width, info.height), (640, 480))
+            self.assertEqual(info.distortion_model, "plumb_bob")
+            for got, want in zip(info.K, calib["camera_matrix"]["data"]):
+                self.assertAlmostEqual(got, want, places=6)
+            for got, want in zip(info.D, calib["distortion_coefficients"]["data"]):
+                self.assertAlmostEqual(got, want, places=6)
+            for got, want in zip(info.P, calib["projection_matrix"]["data"]):
+                self.assertAlmostEqual(got, want, places=6)
+            # Not a blank frame: a lit room has texture.
+            self.assertGreater(len(set(img.data[::97])), 20, "%s image looks blank" % base)
+
+        # Truth: one message per image stamp, in the camera's optical frame, 3 m of range (still_3m).
+        left_stamps = set(m.header.stamp for m in self.images["stereo/left"])
+        for topic, frame in (("sim/truth/stereo_left", "stereo_left_optical_frame"), ("sim/truth/ir", "ir_optical_frame")):
+            msgs = self.truth[topic]
+            self.assertTrue(msgs, topic + " silent")
+            self.assertEqual(msgs[-1].header.frame_id, frame)
+            self.assertEqual(msgs[-1].child_frame_id, "target")
+            p = msgs[-1].pose.pose.position
+            self.assertAlmostEqual(math.sqrt(p.x ** 2 + p.y ** 2 + p.z ** 2), 3.05, delta=0.05)
+            self.assertGreater(p.z, 2.9)  # in front of the camera, along its optical axis
+        truth_stamps = set(m.header.stamp for m in self.truth["sim/truth/stereo_left"])
+        self.assertTrue(left_stamps <= truth_stamps | {max(left_stamps)}, "images without truth")
+
+
+if __name__ == "__main__":
+    rospy.init_node("test_sim_cameras")
+    rostest.rosrun("docking_sim", "sim_cameras", SimCamerasTest, sys.argv)
