@@ -130,7 +130,7 @@ cv::Mat wallTexture(cv::RNG& rng) {
   const cv::Vec3d base(200, 212, 218);
   for (int y = 0; y < size; ++y) {
     for (int x = 0; x < size; ++x) {
-      const double f = 0.86 + 0.14 * blotch.at<float>(y, x) + 0.035 * speckle.at<float>(y, x);
+      const double f = 0.91 + 0.08 * blotch.at<float>(y, x) + 0.035 * speckle.at<float>(y, x);
       cv::Vec3b& p = img.at<cv::Vec3b>(y, x);
       for (int c = 0; c < 3; ++c) p[c] = cv::saturate_cast<uchar>(base[c] * f);
     }
