@@ -31,6 +31,7 @@ if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_mono_core
     test/mono/test_main.cpp
     test/mono/test_target_model.cpp
+    test/mono/test_feature_matcher.cpp
     test/mono/test_five_point_solver.cpp
     test/mono/test_planar_pnp_solver.cpp
     test/mono/test_velocity_estimators.cpp

@@ -1,0 +1,66 @@
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+
+#include "docking_perception/mono/feature_matcher.h"
+#include "synthetic_scene.h"
+
+using namespace docking_perception::mono;  // NOLINT: test file
+
+TEST(HammingKnn2, AgreesWithBruteForceNorm) {
+  cv::RNG rng(3);
+  cv::Mat query(40, 64, CV_8U);
+  cv::Mat train(300, 64, CV_8U);
+  rng.fill(query, cv::RNG::UNIFORM, 0, 256);
+  rng.fill(train, cv::RNG::UNIFORM, 0, 256);
+  const auto pairs = hammingKnn2(query, train, 50, 200);
+  ASSERT_EQ(pairs.size(), 40u);
+  for (int q = 0; q < query.rows; ++q) {
+    int best = 1 << 30, second = 1 << 30, best_index = -1;
+    for (int t = 50; t < 250; ++t) {
+      const int d = static_cast<int>(cv::norm(query.row(q), train.row(t), cv::NORM_HAMMING));
+      if (d < best) {
+        second = best;
+        best = d;
+        best_index = t;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    EXPECT_EQ(pairs[q].best_distance, best);
+    EXPECT_EQ(pairs[q].second_distance, second);
+    EXPECT_EQ(pairs[q].best_index, best_index);
+  }
+}
+
+// The refined homography must put the texture corners where the true plane homography puts them.
+TEST(FeatureMatcher, FindsTheFaceAndRefinesToSubPixel) {
+  const TargetModel model = synthetic::makeModel(4);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  const Eigen::Matrix3d r = synthetic::facingRotation(0.3, -0.1, 0.2);
+  const Eigen::Vector3d t(0.04, 0.02, 0.8);
+  const cv::Mat image = synthetic::renderVisible(model, camera, r, t, 9);
+  FeatureMatcher matcher;
+  std::string reason;
+  ASSERT_TRUE(matcher.buildModel(model.textureGray(), &reason)) << reason;
+  const FaceMatch match = matcher.match(image);
+  ASSERT_TRUE(match.found) << match.status;
+  EXPECT_TRUE(match.refined);
+  EXPECT_GE(match.inliers, 20);
+  double worst = 0.0;
+  for (const cv::Point2f& corner : {cv::Point2f(-0.5f, -0.5f), cv::Point2f(599.5f, 479.5f), cv::Point2f(300.f, 100.f)}) {
+    const cv::Vec3d h = match.homography * cv::Vec3d(corner.x, corner.y, 1.0);
+    const Eigen::Vector2d truth = camera.project(r * model.texturePixelToPoint(corner) + t);
+    worst = std::max(worst, (Eigen::Vector2d(h[0] / h[2], h[1] / h[2]) - truth).norm());
+  }
+  EXPECT_LT(worst, 0.5);
+  // Every refined inlier agrees with the true projection of its model point.
+  for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
+    const Eigen::Vector2d truth = camera.project(r * model.texturePixelToPoint(match.inlier_texture_points[i]) + t);
+    EXPECT_LT((Eigen::Vector2d(match.inlier_image_points[i].x, match.inlier_image_points[i].y) - truth).norm(), 1.0);
+  }
+  // A region without the face finds nothing, and says so.
+  const FaceMatch elsewhere = matcher.match(image, cv::Rect(0, 0, 100, 100));
+  EXPECT_FALSE(elsewhere.found);
+  EXPECT_FALSE(elsewhere.status.empty());
+}
