@@ -14,6 +14,8 @@ namespace {
 
 // Sub-pixel resolution of the closest-disparity histogram: OpenCV's matchers give 1/16 px.
 constexpr double kHistogramBinsPerPx = 16.0;
+// How many too-small near objects the search may look behind before it gives up.
+constexpr int kMaxNearObjectsSkipped = 5;
 
 std::string joinErrors(const std::vector<std::string>& errors) {
   std::string joined;
@@ -213,7 +215,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     }
   }
   result.valid_pixels = valid_count;
-  const int needed = std::max(p.closest_min_pixels, p.min_blob_area_px);
+  const int needed = p.closest_min_pixels;
   if (valid_count < needed) {
     result.outcome = Outcome::kNoValidDisparity;
     result.reason = "only " + std::to_string(valid_count) +
@@ -235,7 +237,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
   // --- Closest object: walk a 1/16 px histogram down from the largest disparity until
   // closest_min_pixels pixels are collected. This is a percentile defined by a pixel count, so it
   // does not depend on how much of the scene happens to be valid.
-  const cv::Mat filtered_region = filtered(region);
+  cv::Mat filtered_region = filtered(region);
   double max_value = 0.0;
   cv::minMaxLoc(filtered_region, nullptr, &max_value);
   if (!(max_value > 0.0)) {
@@ -261,48 +263,88 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
                     " valid disparity pixels after filtering (need " + std::to_string(needed) + ")";
     return result;
   }
-  int collected = 0;
-  int closest_bin = bins - 1;
-  for (; closest_bin > 0; --closest_bin) {
-    collected += histogram[static_cast<std::size_t>(closest_bin)];
-    if (collected >= p.closest_min_pixels) break;
-  }
-  const double closest = closest_bin / kHistogramBinsPerPx;
-  result.closest_disparity_px = closest;
+  cv::Mat mask(disparity.size(), CV_8UC1);
+  int blob_area = 0;
+  int largest_skipped_area = 0;
+  for (;;) {
+    int collected = 0;
+    int closest_bin = bins - 1;
+    for (; closest_bin > 0; --closest_bin) {
+      collected += histogram[static_cast<std::size_t>(closest_bin)];
+      if (collected >= p.closest_min_pixels) break;
+    }
+    if (collected < p.closest_min_pixels) {
+      // Only reachable after skipping: every object in view was too small (its contour and mask are
+      // still in `result` for the debug image).
+      result.outcome = Outcome::kBlobTooSmall;
+      result.reason = "blob too small: every object in view is smaller than min_blob_area_px " +
+                      std::to_string(p.min_blob_area_px) + " (largest " +
+                      std::to_string(largest_skipped_area) + " px)";
+      return result;
+    }
+    const double closest = closest_bin / kHistogramBinsPerPx;
+    result.closest_disparity_px = closest;
 
-  // --- Threshold just below it: keep the target's own depth (target_depth_m behind the nearest
-  // point), but never closer than threshold_margin_px to the closest disparity.
-  const double threshold = std::max(
-      std::min(closest - p.threshold_margin_px, disparityBehind(geometry, closest, p.target_depth_m)),
-      1.0 / kHistogramBinsPerPx);
-  result.threshold_disparity_px = threshold;
-  cv::Mat mask(disparity.size(), CV_8UC1, cv::Scalar(0));
-  cv::Mat mask_region = mask(region);
-  cv::compare(filtered_region, threshold, mask_region, cv::CMP_GE);
+    // --- Threshold just below it: keep the target's own depth (target_depth_m behind the nearest
+    // point), but never closer than threshold_margin_px to the closest disparity.
+    const double threshold =
+        std::max(std::min(closest - p.threshold_margin_px,
+                          disparityBehind(geometry, closest, p.target_depth_m)),
+                 1.0 / kHistogramBinsPerPx);
+    result.threshold_disparity_px = threshold;
+    mask.setTo(cv::Scalar(0));
+    cv::Mat mask_region = mask(region);
+    cv::compare(filtered_region, threshold, mask_region, cv::CMP_GE);  // writes into `mask`
 
-  // --- Largest blob: the outer contour of the biggest area (the paper's "biggest contour").
-  // findContours on the sparse mask costs a tenth of a connected-component labelling.
-  std::vector<std::vector<cv::Point>> contours;
-  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
-  const auto largest = std::max_element(
-      contours.begin(), contours.end(), [](const auto& a, const auto& b) {
-        const double area_a = cv::contourArea(a), area_b = cv::contourArea(b);
-        return area_a < area_b || (area_a == area_b && a.size() < b.size());
-      });
-  if (largest == contours.end()) {
-    result.outcome = Outcome::kNoBlob;
-    result.reason = "no blob above the threshold disparity " + formatNumber(threshold) + " px";
-    return result;
+    // --- Largest blob: the outer contour of the biggest area (the paper's "biggest contour").
+    // findContours on the sparse mask costs a tenth of a connected-component labelling.
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+    const auto largest = std::max_element(
+        contours.begin(), contours.end(), [](const auto& a, const auto& b) {
+          const double area_a = cv::contourArea(a), area_b = cv::contourArea(b);
+          return area_a < area_b || (area_a == area_b && a.size() < b.size());
+        });
+    if (largest == contours.end()) {
+      result.outcome = result.near_objects_skipped > 0 ? Outcome::kBlobTooSmall : Outcome::kNoBlob;
+      result.reason = result.near_objects_skipped > 0
+                          ? "blob too small: every object in view is smaller than min_blob_area_px " +
+                                std::to_string(p.min_blob_area_px)
+                          : "no blob above the threshold disparity " + formatNumber(threshold) + " px";
+      return result;
+    }
+    result.contour = *largest;
+    result.bounding_box = cv::boundingRect(result.contour);
+    // The blob: thresholded pixels inside the contour (holes of invalid disparity stay out).
+    result.mask = cv::Mat(disparity.size(), CV_8UC1, cv::Scalar(0));
+    cv::drawContours(result.mask, std::vector<std::vector<cv::Point>>{result.contour}, 0,
+                     cv::Scalar(255), cv::FILLED);
+    cv::Mat blob_region = result.mask(result.bounding_box);
+    cv::bitwise_and(blob_region, mask(result.bounding_box), blob_region);
+    blob_area = cv::countNonZero(blob_region);
+    if (blob_area >= p.min_blob_area_px || result.near_objects_skipped >= kMaxNearObjectsSkipped) {
+      break;
+    }
+
+    // --- Everything at this depth is smaller than a target can be: mismatches at occlusion edges,
+    // speckles, dust. Remove it and look behind it, so it cannot hide the target.
+    if (filtered.data == clean.data) {  // no filter ran: keep the raw values for the depth
+      filtered = clean.clone();
+      filtered_region = filtered(region);
+    }
+    for (int v = 0; v < filtered_region.rows; ++v) {
+      float* row = filtered.ptr<float>(region.y + v) + region.x;
+      const std::uint8_t* mask_row = mask_region.ptr<std::uint8_t>(v);
+      for (int u = 0; u < filtered_region.cols; ++u) {
+        if (mask_row[u] != 0) {
+          --histogram[static_cast<std::size_t>(row[u] * kHistogramBinsPerPx)];
+          row[u] = 0.0f;
+        }
+      }
+    }
+    ++result.near_objects_skipped;
+    largest_skipped_area = std::max(largest_skipped_area, blob_area);
   }
-  result.contour = *largest;
-  result.bounding_box = cv::boundingRect(result.contour);
-  // The blob: thresholded pixels inside the contour (holes of invalid disparity stay out).
-  result.mask = cv::Mat(disparity.size(), CV_8UC1, cv::Scalar(0));
-  cv::drawContours(result.mask, std::vector<std::vector<cv::Point>>{result.contour}, 0,
-                   cv::Scalar(255), cv::FILLED);
-  cv::Mat blob_region = result.mask(result.bounding_box);
-  cv::bitwise_and(blob_region, mask(result.bounding_box), blob_region);
-  const int blob_area = cv::countNonZero(blob_region);
 
   // --- The blob's measured (unfiltered) disparities: the median filter chose the pixels, the raw
   // values give the depth, so the filter cannot bias it.

@@ -172,13 +172,24 @@ TEST(DisparityDetector, TooSmallBlobIsRejected) {
   DetectorParams params;
   params.closest_min_pixels = 20;  // the 100-pixel square is "the closest object"...
   params.min_blob_area_px = 150;   // ...but too small to be the target
-  // A far wall gives the search enough valid pixels to run at all.
-  cv::Mat with_wall = disparity.clone();
-  with_wall.setTo(cv::Scalar(disparityAt(20.0)), with_wall < 0.0f);
-  const Detection result = DisparityDetector{params}.detect(with_wall, ourGeometry());
+  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
   EXPECT_EQ(result.outcome, Outcome::kBlobTooSmall);
   EXPECT_NE(result.reason.find("too small"), std::string::npos) << result.reason;
+  EXPECT_FALSE(result.contour.empty()) << "the rejected blob is kept for the debug image";
+}
+
+TEST(DisparityDetector, SmallNearObjectIsLookedBehind) {
+  // A 20x20 px patch at 1.2 m (say, a mismatch at an occlusion edge) is nearer than the target and
+  // bigger than closest_min_pixels, but smaller than any target: the target behind it is found.
+  cv::Mat disparity = invalidImage();
+  paintRect(&disparity, 0.1, 0.0, 3.0, 0.30, 0.24);
+  disparity(cv::Rect(150, 120, 20, 20)).setTo(cv::Scalar(disparityAt(1.2)));
+  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  ASSERT_TRUE(result.found) << result.reason;
+  EXPECT_EQ(result.near_objects_skipped, 1);
+  EXPECT_NEAR(result.position_m.z(), 3.0, 0.01);
+  EXPECT_NEAR(result.position_m.x(), 0.1, 0.01);
 }
 
 TEST(DisparityDetector, TinyNearSpeckDoesNotHideTheTarget) {

@@ -8,7 +8,8 @@
 //  3. closest object: a high order statistic of the valid disparities (the value that at least
 //     `closest_min_pixels` pixels reach), so a few noisy pixels cannot win;
 //  4. threshold just below it (a depth band that holds the target's own depth), keep the largest
-//     connected blob;
+//     blob (outer contour); if everything at that depth is smaller than min_blob_area_px (mismatches
+//     at occlusion edges, speckles), remove it and search again behind it (at most 5 times);
 //  5. reject implausible blobs with a reason (too small, too large, on the border, out of range);
 //  6. the target's visible face: the blob's nearest depth layer; its centroid is the centre, the median
 //     of its disparities the robust disparity;
@@ -47,10 +48,10 @@ struct DetectorParams {
   // The visible face: the blob's nearest layer.
   double face_percentile = 0.9;       // reference disparity of the face: this percentile of the blob
   double face_depth_band_m = 0.10;    // face layer: within this depth of the reference
-  double face_min_band_px = 0.5;      // ...but never thinner than this (disparity noise at far range)
+  double face_min_band_px = 0.25;     // ...but never thinner than this (sub-pixel noise at far range)
 
   // Plausibility of the blob.
-  int min_blob_area_px = 150;             // fewer pixels: "blob too small"
+  int min_blob_area_px = 400;             // fewer pixels: "blob too small" (looked behind)
   double max_blob_area_fraction = 0.5;    // more than this fraction of the region: "blob too large"
   int border_margin_px = 2;               // within this of the valid region's edge: "touches border"
   double min_disparity_px = 4.0;          // robust disparity below this: "too far"
@@ -98,6 +99,7 @@ struct Detection {
   int valid_pixels = 0;              // valid disparities in the region of interest
   double closest_disparity_px = 0;   // robust closest disparity of the whole image
   double threshold_disparity_px = 0; // mask = filtered disparity >= this
+  int near_objects_skipped = 0;      // nearer objects smaller than min_blob_area_px looked behind
 
   // The chosen blob (filled whenever a blob was chosen, also when it was then rejected).
   std::vector<cv::Point> contour;  // outer contour of the blob, image pixels
