@@ -1,22 +1,24 @@
 # Cameras: stereo_camera and ir_camera (nodelets + standalone executables), camera_frames_publisher,
 # their ROS-free core library and tests. Included by CMakeLists.txt after catkin_package().
+# Targets: ${PROJECT_NAME}_camera_core, ${PROJECT_NAME}_camera_nodelets (nodelet_plugins.xml),
+# stereo_camera, ir_camera, camera_frames_publisher.
 find_package(yaml-cpp REQUIRED)
 
 # ROS-free logic: source parsing, reconnect backoff, the capture rig, frame formats, calibration checks,
 # camera mounts from robot.yaml.
-add_library(docking_perception_camera_core
-  src/camera/source_spec.cpp
-  src/camera/reconnect_backoff.cpp
-  src/camera/frame_format.cpp
+add_library(${PROJECT_NAME}_camera_core
   src/camera/calibration_check.cpp
-  src/camera/capture_rig.cpp
   src/camera/camera_mounts.cpp
+  src/camera/capture_rig.cpp
+  src/camera/frame_format.cpp
+  src/camera/reconnect_backoff.cpp
+  src/camera/source_spec.cpp
 )
-target_link_libraries(docking_perception_camera_core ${OpenCV_LIBRARIES} yaml-cpp)
+target_link_libraries(${PROJECT_NAME}_camera_core ${OpenCV_LIBRARIES} yaml-cpp)
 
-add_library(docking_perception_camera_nodelets src/camera/capture_nodelet.cpp)
-target_link_libraries(docking_perception_camera_nodelets docking_perception_camera_core ${catkin_LIBRARIES})
-add_dependencies(docking_perception_camera_nodelets ${catkin_EXPORTED_TARGETS})
+add_library(${PROJECT_NAME}_camera_nodelets src/camera/capture_nodelet.cpp)
+target_link_libraries(${PROJECT_NAME}_camera_nodelets ${PROJECT_NAME}_camera_core ${catkin_LIBRARIES})
+add_dependencies(${PROJECT_NAME}_camera_nodelets ${catkin_EXPORTED_TARGETS})
 
 add_executable(stereo_camera src/camera/stereo_camera_main.cpp)
 target_link_libraries(stereo_camera ${catkin_LIBRARIES})
@@ -24,43 +26,42 @@ add_executable(ir_camera src/camera/ir_camera_main.cpp)
 target_link_libraries(ir_camera ${catkin_LIBRARIES})
 
 add_executable(camera_frames_publisher src/camera/camera_frames_publisher.cpp)
-target_link_libraries(camera_frames_publisher docking_perception_camera_core ${catkin_LIBRARIES})
+target_link_libraries(camera_frames_publisher ${PROJECT_NAME}_camera_core ${catkin_LIBRARIES})
 
-install(TARGETS docking_perception_camera_core docking_perception_camera_nodelets
+install(TARGETS ${PROJECT_NAME}_camera_core ${PROJECT_NAME}_camera_nodelets
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION})
-install(TARGETS stereo_camera ir_camera camera_frames_publisher
+install(TARGETS camera_frames_publisher ir_camera stereo_camera
   RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 install(DIRECTORY include/${PROJECT_NAME}/camera/ DESTINATION ${CATKIN_PACKAGE_INCLUDE_DESTINATION}/camera)
 
 if(CATKIN_ENABLE_TESTING)
-  catkin_add_gtest(docking_perception_camera_core_test
-    test/camera/test_source_spec.cpp
-    test/camera/test_reconnect_backoff.cpp
-    test/camera/test_frame_format.cpp
-    test/camera/test_calibration_check.cpp
-    test/camera/test_capture_rig.cpp
-    test/camera/test_camera_mounts.cpp
+  # Core unit tests: no roscore.
+  catkin_add_gtest(${PROJECT_NAME}_camera_core_test
     test/camera/gtest_main.cpp
+    test/camera/test_calibration_check.cpp
+    test/camera/test_camera_mounts.cpp
+    test/camera/test_capture_rig.cpp
+    test/camera/test_frame_format.cpp
+    test/camera/test_reconnect_backoff.cpp
+    test/camera/test_source_spec.cpp
   )
-  if(TARGET docking_perception_camera_core_test)
-    target_link_libraries(docking_perception_camera_core_test docking_perception_camera_core)
-    target_compile_definitions(docking_perception_camera_core_test PRIVATE
+  if(TARGET ${PROJECT_NAME}_camera_core_test)
+    target_link_libraries(${PROJECT_NAME}_camera_core_test ${PROJECT_NAME}_camera_core)
+    target_compile_definitions(${PROJECT_NAME}_camera_core_test PRIVATE
       DOCKING_CONFIG_DIR="${PROJECT_SOURCE_DIR}/../../config")
   endif()
-endif()
 
-# Node tests (rostest): one executable, one .test file per scenario.
-if(CATKIN_ENABLE_TESTING)
+  # Node tests (rostest): one executable, one .test file per scenario.
   find_package(rostest REQUIRED)
   catkin_add_executable_with_gtest(camera_nodes_rostest test/camera/camera_nodes_rostest.cpp EXCLUDE_FROM_ALL)
   if(TARGET camera_nodes_rostest)
     target_link_libraries(camera_nodes_rostest ${catkin_LIBRARIES} yaml-cpp)
     add_dependencies(camera_nodes_rostest ${catkin_EXPORTED_TARGETS})
-    foreach(camera_test camera_sequence camera_failures camera_frames)
+    foreach(camera_test camera_frames camera_failures camera_sequence)
       add_rostest(test/camera/${camera_test}.test
-        DEPENDENCIES camera_nodes_rostest stereo_camera ir_camera camera_frames_publisher
-                     docking_perception_camera_nodelets)
+        DEPENDENCIES camera_frames_publisher camera_nodes_rostest ir_camera stereo_camera
+                     ${PROJECT_NAME}_camera_nodelets)
     endforeach()
   endif()
 endif()
