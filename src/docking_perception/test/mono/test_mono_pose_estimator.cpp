@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <opencv2/core.hpp>
 
+#include "docking_perception/mono/debug_drawing.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
 #include "synthetic_scene.h"
 
@@ -152,4 +153,32 @@ TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
   EXPECT_TRUE(parseMonoMode("ir", &mode));
   EXPECT_EQ(mode, MonoMode::kIr);
   EXPECT_FALSE(parseMonoMode("thermal", &mode));
+}
+
+TEST(DebugDrawing, DrawsTheProjectedModelOnlyForAValidPose) {
+  const TargetModel model = synthetic::makeModel(1);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  MonoPoseEstimator estimator(model, camera, MonoPoseParams());
+  const cv::Mat image =
+      synthetic::renderVisible(model, camera, synthetic::facingRotation(0.2), Eigen::Vector3d(0.0, 0.0, 1.0), 1);
+  const MonoPoseResult found = estimator.process(image, 1.0);
+  ASSERT_TRUE(found.valid) << found.status;
+  const cv::Mat drawn = drawDebugImage(image, found, camera, model);
+  ASSERT_EQ(drawn.type(), CV_8UC3);
+  ASSERT_EQ(drawn.size(), image.size());
+  // The target's y axis is drawn in green: halfway along it the pixel is green.
+  const Eigen::Vector2d origin = camera.project(found.pose.translation);
+  const Eigen::Vector2d on_y_axis = camera.project(found.pose.rotation * Eigen::Vector3d(0.0, 0.06, 0.0) +
+                                                   found.pose.translation);
+  const cv::Vec3b green = drawn.at<cv::Vec3b>(cvRound(on_y_axis.y()), cvRound(on_y_axis.x()));
+  EXPECT_GT(green[1], 150);
+  EXPECT_LT(green[2], 100);
+  // Nothing found: no pose drawn, the gray image comes back as colour with only the status text.
+  MonoPoseResult lost;
+  lost.solver = "pnp";
+  lost.status = "too few matches";
+  const cv::Mat lost_drawn = drawDebugImage(image, lost, camera, model);
+  const cv::Vec3b pixel = lost_drawn.at<cv::Vec3b>(cvRound(origin.y()), cvRound(origin.x()));
+  EXPECT_EQ(pixel[0], pixel[1]);
+  EXPECT_EQ(pixel[1], pixel[2]);
 }
