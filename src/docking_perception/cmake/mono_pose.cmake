@@ -14,7 +14,8 @@ set(MONO_CORE_SOURCES
   src/mono/feature_matcher.cpp
   src/mono/dark_dot_locator.cpp
   src/mono/velocity_estimators.cpp
-  src/mono/mono_pose_estimator.cpp)
+  src/mono/mono_pose_estimator.cpp
+  src/mono/debug_drawing.cpp)
 
 add_library(docking_perception_mono_core ${MONO_CORE_SOURCES})
 target_include_directories(docking_perception_mono_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR})
@@ -41,3 +42,4 @@ if(CATKIN_ENABLE_TESTING)
     target_link_libraries(test_mono_core docking_perception_mono_synthetic docking_perception_mono_core)
   endif()
 endif()
+
