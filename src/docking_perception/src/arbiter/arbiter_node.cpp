@@ -3,6 +3,8 @@
 // estimate, as pose and twist, as tf output_frame -> target, and its choice on a status topic and in
 // diagnostics. Parameters: config/arbiter.yaml (see README.md).
 #include <array>
+#include <cmath>
+#include <initializer_list>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -76,6 +78,18 @@ EstimateSummary summarize(const docking_msgs::TargetEstimate& msg, Source source
   s.feature_inliers = msg.feature_inliers;
   s.reprojection_error_px = msg.reprojection_error_px;
   s.status = msg.status;
+  const auto& p = msg.pose.pose.position;
+  const auto& q = msg.pose.pose.orientation;
+  const auto& v = msg.twist.twist.linear;
+  const auto& w = msg.twist.twist.angular;
+  const auto finite = [](std::initializer_list<double> values) {
+    for (double x : values)
+      if (!std::isfinite(x)) return false;
+    return true;
+  };
+  s.values_finite = (!msg.position_valid || finite({p.x, p.y, p.z})) &&
+                    (!msg.orientation_valid || finite({q.x, q.y, q.z, q.w})) &&
+                    (!msg.twist_valid || finite({v.x, v.y, v.z, w.x, w.y, w.z}));
   return s;
 }
 

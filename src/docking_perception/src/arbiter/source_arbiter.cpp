@@ -90,10 +90,14 @@ OfferResult SourceArbiter::offer(const EstimateSummary& estimate) {
     return result;
   }
   slot = estimate;
-  // A valid flag with a non-finite range is not a usable estimate: keep it, but as invalid.
+  // A valid flag with non-finite numbers is not a usable estimate: keep it (it is the source's
+  // latest word), but as invalid, with the reason.
   if (slot->valid && !std::isfinite(slot->range_m)) {
     slot->valid = false;
     slot->status = "range is not finite";
+  } else if (slot->valid && !slot->values_finite) {
+    slot->valid = false;
+    slot->status = "pose or twist contains NaN";
   }
   result.accepted = true;
   return result;

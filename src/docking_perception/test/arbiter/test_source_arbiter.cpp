@@ -226,3 +226,15 @@ TEST(SourceArbiter, MonoWithoutOrientationOrNonFiniteRangeIsUnusable) {
   EXPECT_NE(d.reason.find("no orientation"), std::string::npos) << d.reason;
   EXPECT_NE(d.reason.find("range is not finite"), std::string::npos) << d.reason;
 }
+
+TEST(SourceArbiter, NanPoseMakesTheSourceUnusable) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  EstimateSummary nan_pose = good(Source::kMonoVisible, 1.0, 1.0);
+  nan_pose.values_finite = false;
+  ASSERT_TRUE(arbiter.offer(nan_pose).accepted);
+  ASSERT_TRUE(arbiter.offer(good(Source::kMonoIr, 1.0, 1.0)).accepted);
+  const Decision d = arbiter.decide(1.01);
+  ASSERT_TRUE(d.valid);
+  EXPECT_EQ(d.source, Source::kMonoIr);
+  EXPECT_NE(d.reason.find("NaN"), std::string::npos) << d.reason;
+}

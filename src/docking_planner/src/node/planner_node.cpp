@@ -190,8 +190,16 @@ class PlannerNode {
         pending_.pop_front();
         continue;
       }
-      const Eigen::Isometry3d odom_from_camera =
-          tf2::transformToEigen(tf_buffer_.lookupTransform(odom_frame_, msg->header.frame_id, msg->header.stamp));
+      Eigen::Isometry3d odom_from_camera;
+      try {
+        odom_from_camera =
+            tf2::transformToEigen(tf_buffer_.lookupTransform(odom_frame_, msg->header.frame_id, msg->header.stamp));
+      } catch (const tf2::TransformException& e) {
+        ++tf_failures_;
+        last_tf_error_ = e.what();
+        pending_.pop_front();
+        continue;
+      }
       const TrackUpdate result = planner_.addObservation(toObservation(*msg, odom_from_camera));
       if (!result.accepted) ROS_DEBUG("planner: estimate not used: %s", result.reason.c_str());
       took_valid = took_valid || result.accepted;

@@ -27,6 +27,7 @@ struct EstimateSummary {
   double range_m{0.0};             ///< camera to target, m
   std::uint32_t feature_inliers{0};
   double reprojection_error_px{0.0};
+  bool values_finite{true};        ///< the pose (and twist, if valid) contain no NaN or infinity
   std::string status;              ///< the estimator's own reason when not valid
 };
 
