@@ -278,3 +278,14 @@ TEST_F(StateMachineTest, ErrorsReportedForDockingState) {
   EXPECT_GE(out.path.size(), 3u);
   EXPECT_EQ(out.estimate_source, 1);
 }
+
+TEST_F(StateMachineTest, ResetLeavesDockedForSearchAndForgetsTheTarget) {
+  step(kOnCircleOff, true);
+  step(kSafePoint, true);
+  ASSERT_EQ(step(kDocked, true).state, DockingPhase::kDocked);
+  planner_.reset(t_);
+  const PlannerOutput out = step(kDocked, false);
+  EXPECT_EQ(out.state, DockingPhase::kSearch);
+  EXPECT_FALSE(out.has_target);
+  EXPECT_TRUE(isZero(out.command));
+}

@@ -17,6 +17,7 @@
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
+#include <std_srvs/Empty.h>
 #include <tf2/utils.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_geometry_msgs/tf2_geometry_msgs.h>
@@ -129,6 +130,8 @@ class PlannerNode {
     estimate_sub_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 10, &PlannerNode::onEstimate, this);
     odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometry, this);
 
+    reset_service_ = pnh.advertiseService("reset", &PlannerNode::onReset, this);
+
     diagnostics_.setHardwareID("none");
     diagnostics_.add("docking planner", this, &PlannerNode::diagnose);
     timer_ = nh.createTimer(ros::Duration(1.0 / rate_hz), &PlannerNode::onTimer, this);
@@ -138,6 +141,14 @@ class PlannerNode {
   void publishStop() { cmd_pub_.publish(geometry_msgs::Twist()); }
 
  private:
+  // Back to SEARCH with no target (e.g. after DOCKED, to start another run without a restart).
+  bool onReset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+    pending_.clear();
+    planner_.reset(ros::Time::now().toSec());
+    ROS_INFO("planner: reset to SEARCH");
+    return true;
+  }
+
   void onOdometry(const nav_msgs::OdometryConstPtr& msg) {
     if (!msg->header.frame_id.empty() && msg->header.frame_id != odom_frame_) {
       ROS_WARN_THROTTLE(5.0, "planner: odometry in frame '%s', expected '%s'", msg->header.frame_id.c_str(),
@@ -338,6 +349,7 @@ class PlannerNode {
   diagnostic_updater::Updater diagnostics_;
   ros::Publisher cmd_pub_, state_pub_, path_pub_;
   ros::Subscriber estimate_sub_, odom_sub_;
+  ros::ServiceServer reset_service_;
   ros::Timer timer_;
   std::optional<ChaserOdometry> odometry_;
   std::deque<docking_msgs::TargetEstimateConstPtr> pending_;
