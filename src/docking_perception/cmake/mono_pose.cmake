@@ -43,3 +43,21 @@ if(CATKIN_ENABLE_TESTING)
   endif()
 endif()
 
+# The ROS shell: nodelet (docking_perception/MonoPoseNodelet) and the same in its own process.
+# (MONO_CORE_ONLY: a scratch build of the core and its tests without catkin.)
+if(NOT MONO_CORE_ONLY)
+add_library(docking_perception_mono_pose_nodelet src/mono/mono_pose_nodelet.cpp)
+target_link_libraries(docking_perception_mono_pose_nodelet docking_perception_mono_core ${catkin_LIBRARIES})
+add_dependencies(docking_perception_mono_pose_nodelet ${catkin_EXPORTED_TARGETS})
+if(TARGET ${PROJECT_NAME}_gencfg)
+  add_dependencies(docking_perception_mono_pose_nodelet ${PROJECT_NAME}_gencfg)
+endif()
+
+add_executable(mono_pose src/mono/mono_pose_node.cpp)
+target_link_libraries(mono_pose ${catkin_LIBRARIES})
+
+install(TARGETS docking_perception_mono_core docking_perception_mono_pose_nodelet mono_pose
+  ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+  LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+  RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+endif()

@@ -28,7 +28,7 @@ struct FeatureMatcherParams {
   int brisk_octaves = 3;
   int max_image_keypoints = 300;    // strongest kept before descriptors are computed (bounds the time)
   int max_model_keypoints_per_level = 400;  // bounds the matching time (image x model descriptors)
-  std::vector<int> model_widths_px = {400, 280, 200, 140, 100};  // texture widths of the model pyramid
+  std::vector<int> model_widths_px = {400, 280, 200, 140, 100, 70};  // texture widths of the model pyramid
   double ratio = 0.8;               // Lowe's ratio test
   double ransac_threshold_px = 3.0;
   int min_inliers = 12;

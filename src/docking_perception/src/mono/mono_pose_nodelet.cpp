@@ -1,0 +1,386 @@
+// MonoPoseNodelet: the ROS shell around mono::MonoPoseEstimator. Reads and validates its parameters
+// (config/mono_pose_<mode>.yaml), subscribes lazily to a rectified image + camera_info, publishes a
+// TargetEstimate per image (valid = false with the reason when the target is not found), a debug image,
+// diagnostics, and takes dynamic_reconfigure updates. No algorithm lives here.
+#include <cv_bridge/cv_bridge.h>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
+#include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <Eigen/Geometry>
+#include <atomic>
+#include <boost/thread/recursive_mutex.hpp>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "docking_msgs/TargetEstimate.h"
+#include "docking_msgs/names.h"
+#include "docking_perception/MonoPoseConfig.h"
+#include "docking_perception/mono/debug_drawing.h"
+#include "docking_perception/mono/mono_pose_estimator.h"
+
+namespace docking_perception {
+
+class MonoPoseNodelet : public nodelet::Nodelet {
+ public:
+  ~MonoPoseNodelet() override = default;
+
+ private:
+  void onInit() override;
+  bool readParameters(std::vector<std::string>* errors);
+  template <typename T>
+  void require(const std::string& name, T* value, std::vector<std::string>* errors);
+  void connectionChanged();
+  void imageCallback(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
+  void reconfigure(MonoPoseConfig& config, uint32_t level);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  void publishEstimate(const std_msgs::Header& header, const mono::MonoPoseResult& result);
+
+  ros::NodeHandle nh_;
+  ros::NodeHandle private_nh_;
+  std::unique_ptr<image_transport::ImageTransport> image_transport_;
+  image_transport::CameraSubscriber camera_subscriber_;
+  image_transport::Publisher debug_publisher_;
+  ros::Publisher estimate_publisher_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::Timer diagnostics_timer_;
+  boost::recursive_mutex reconfigure_mutex_;
+  std::unique_ptr<dynamic_reconfigure::Server<MonoPoseConfig>> reconfigure_server_;
+
+  // Subscription changes have their own lock: shutting a subscriber down waits for its running
+  // callback, which may itself be waiting for mutex_.
+  std::mutex connect_mutex_;
+  std::atomic<bool> subscribed_{false};
+  std::mutex mutex_;  // guards everything below (image, reconfigure and diagnostics callbacks)
+  std::string mode_name_;
+  std::string image_topic_;
+  uint8_t source_ = docking_msgs::TargetEstimate::SOURCE_MONO_VISIBLE;
+  mono::MonoPoseParams params_;
+  std::unique_ptr<mono::TargetModel> model_;
+  std::unique_ptr<mono::MonoPoseEstimator> estimator_;
+  bool publish_debug_image_ = true;
+  // For diagnostics.
+  std::string last_status_ = "no image yet";
+  bool last_valid_ = false;
+  std::string camera_error_;
+  int images_ = 0;
+  int found_ = 0;
+  double last_processing_ms_ = 0.0;
+  int last_inliers_ = 0;
+};
+
+template <typename T>
+void MonoPoseNodelet::require(const std::string& name, T* value, std::vector<std::string>* errors) {
+  if (!private_nh_.getParam(name, *value)) {
+    errors->push_back("missing or mistyped parameter '" + private_nh_.resolveName(name) + "'");
+  }
+}
+
+bool MonoPoseNodelet::readParameters(std::vector<std::string>* errors) {
+  std::string target_yaml;
+  std::string solver;
+  std::string velocity;
+  require("mode", &mode_name_, errors);
+  require("target_yaml", &target_yaml, errors);
+  require("solver", &solver, errors);
+  require("velocity_method", &velocity, errors);
+  mono::MonoPoseParams& p = params_;
+  require("use_tracking_region", &p.use_tracking_region, errors);
+  require("tracking_margin_px", &p.tracking_margin_px, errors);
+  require("max_reprojection_px", &p.max_reprojection_px, errors);
+  require("min_pixel_sigma", &p.min_pixel_sigma, errors);
+  require("min_range_m", &p.min_range_m, errors);
+  require("max_range_m", &p.max_range_m, errors);
+  require("max_pattern_candidates", &p.max_pattern_candidates, errors);
+  require("use_brisk_detector", &p.features.use_brisk_detector, errors);
+  require("fast_threshold", &p.features.fast_threshold, errors);
+  require("brisk_threshold", &p.features.brisk_threshold, errors);
+  require("brisk_octaves", &p.features.brisk_octaves, errors);
+  require("max_image_keypoints", &p.features.max_image_keypoints, errors);
+  require("max_model_keypoints_per_level", &p.features.max_model_keypoints_per_level, errors);
+  require("model_widths_px", &p.features.model_widths_px, errors);
+  require("feature_ratio", &p.features.ratio, errors);
+  require("ransac_threshold_px", &p.features.ransac_threshold_px, errors);
+  require("min_inliers", &p.features.min_inliers, errors);
+  require("min_face_area_px", &p.features.min_face_area_px, errors);
+  require("refine_matches", &p.features.refine, errors);
+  require("min_correlation", &p.features.min_correlation, errors);
+  require("led_threshold", &p.leds.threshold, errors);
+  require("led_min_area_px", &p.leds.min_area_px, errors);
+  require("led_max_area_px", &p.leds.max_area_px, errors);
+  require("led_min_fill_ratio", &p.leds.min_fill_ratio, errors);
+  require("led_max_aspect_ratio", &p.leds.max_aspect_ratio, errors);
+  require("led_max_blobs", &p.leds.max_blobs, errors);
+  require("led_collinearity_tolerance", &p.leds.collinearity_tolerance, errors);
+  require("led_midpoint_tolerance", &p.leds.midpoint_tolerance, errors);
+  require("dot_search_radius_factor", &p.dots.search_radius_factor, errors);
+  require("dot_min_contrast", &p.dots.min_contrast, errors);
+  require("pnp_ambiguity_ratio", &p.pnp.ambiguity_ratio, errors);
+  require("pnp_ambiguity_floor_px", &p.pnp.ambiguity_floor_px, errors);
+  require("accel_noise", &p.filter.accel_noise, errors);
+  require("angular_accel_noise", &p.filter.angular_accel_noise, errors);
+  require("max_gap_s", &p.filter.max_gap_s, errors);
+  require("gate_chi2", &p.filter.gate_chi2, errors);
+  require("max_rejections", &p.filter.max_rejections, errors);
+  require("publish_debug_image", &publish_debug_image_, errors);
+  if (!errors->empty()) return false;
+
+  mono::MonoMode mode;
+  if (!mono::parseMonoMode(mode_name_, &mode)) {
+    errors->push_back("parameter 'mode' must be 'visible' or 'ir', got '" + mode_name_ + "'");
+  }
+  if (!mono::parsePoseSolver(solver, &p.solver)) {
+    errors->push_back("parameter 'solver' must be 'paper_5point' or 'pnp', got '" + solver + "'");
+  }
+  if (!mono::parseVelocityMethod(velocity, &p.velocity)) {
+    errors->push_back("parameter 'velocity_method' must be 'kalman' or 'frame_difference', got '" + velocity + "'");
+  }
+  if (!errors->empty()) return false;
+  p.mode = mode;
+  p.pnp.min_pixel_sigma = p.min_pixel_sigma;
+  const std::string invalid = mono::validateParams(p);
+  if (!invalid.empty()) errors->push_back("parameter " + invalid);
+  try {
+    model_ = std::make_unique<mono::TargetModel>(
+        mono::TargetModel::loadFromYaml(target_yaml, mode == mono::MonoMode::kVisible));
+  } catch (const mono::TargetModelError& e) {
+    errors->push_back(std::string("parameter 'target_yaml': ") + e.what());
+  }
+  return errors->empty();
+}
+
+void MonoPoseNodelet::onInit() {
+  nh_ = getNodeHandle();
+  private_nh_ = getPrivateNodeHandle();
+  std::vector<std::string> errors;
+  if (!readParameters(&errors)) {
+    for (const std::string& error : errors) NODELET_FATAL("mono_pose: %s", error.c_str());
+    NODELET_FATAL("mono_pose: invalid or missing parameters (see above; all are listed in config/mono_pose_<mode>.yaml)");
+    ros::requestShutdown();
+    return;
+  }
+  const bool visible = params_.mode == mono::MonoMode::kVisible;
+  source_ = visible ? docking_msgs::TargetEstimate::SOURCE_MONO_VISIBLE : docking_msgs::TargetEstimate::SOURCE_MONO_IR;
+  image_topic_ = visible ? docking_msgs::topics::kStereoLeftImageRect : docking_msgs::topics::kIrImageRect;
+  const std::string estimate_topic =
+      visible ? docking_msgs::topics::kMonoVisibleEstimate : docking_msgs::topics::kMonoIrEstimate;
+  // The debug image sits beside the estimate: perception/mono_<mode>/debug_image.
+  const std::string debug_topic = ros::names::parentNamespace(estimate_topic) + "/debug_image";
+
+  image_transport_ = std::make_unique<image_transport::ImageTransport>(nh_);
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, private_nh_, getName());
+  diagnostics_->setHardwareID("mono_pose_" + mode_name_);
+  diagnostics_->add("mono_pose " + mode_name_, this, &MonoPoseNodelet::diagnose);
+  diagnostics_timer_ = nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+
+  // Lazy: the camera is subscribed only while someone listens to the estimate or the debug image.
+  {
+    std::lock_guard<std::mutex> lock(connect_mutex_);
+    estimate_publisher_ = nh_.advertise<docking_msgs::TargetEstimate>(
+        estimate_topic, 5, [this](const ros::SingleSubscriberPublisher&) { connectionChanged(); },
+        [this](const ros::SingleSubscriberPublisher&) { connectionChanged(); });
+    debug_publisher_ = image_transport_->advertise(
+        debug_topic, 1, [this](const image_transport::SingleSubscriberPublisher&) { connectionChanged(); },
+        [this](const image_transport::SingleSubscriberPublisher&) { connectionChanged(); });
+  }
+  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<MonoPoseConfig>>(reconfigure_mutex_, private_nh_);
+  reconfigure_server_->setCallback([this](MonoPoseConfig& config, uint32_t level) { reconfigure(config, level); });
+  NODELET_INFO("mono_pose (%s, %s): %s -> %s, debug image on %s", mode_name_.c_str(),
+               mono::toString(params_.solver).c_str(), nh_.resolveName(image_topic_).c_str(),
+               nh_.resolveName(estimate_topic).c_str(), nh_.resolveName(debug_topic).c_str());
+  connectionChanged();
+}
+
+void MonoPoseNodelet::connectionChanged() {
+  std::lock_guard<std::mutex> lock(connect_mutex_);
+  if (!image_transport_) return;
+  const bool wanted = estimate_publisher_.getNumSubscribers() > 0 || debug_publisher_.getNumSubscribers() > 0;
+  if (wanted && !camera_subscriber_) {
+    camera_subscriber_ = image_transport_->subscribeCamera(image_topic_, 2, &MonoPoseNodelet::imageCallback, this);
+  } else if (!wanted && camera_subscriber_) {
+    camera_subscriber_.shutdown();
+  }
+  subscribed_ = static_cast<bool>(camera_subscriber_);
+}
+
+void MonoPoseNodelet::reconfigure(MonoPoseConfig& config, uint32_t /*level*/) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  mono::MonoPoseParams next = params_;
+  if (!mono::parsePoseSolver(config.solver, &next.solver) ||
+      !mono::parseVelocityMethod(config.velocity_method, &next.velocity)) {
+    NODELET_ERROR("mono_pose: reconfigure: unknown solver '%s' or velocity_method '%s'; keeping the old ones",
+                  config.solver.c_str(), config.velocity_method.c_str());
+    config.solver = mono::toString(params_.solver);
+    config.velocity_method = mono::toString(params_.velocity);
+    return;
+  }
+  next.use_tracking_region = config.use_tracking_region;
+  next.tracking_margin_px = config.tracking_margin_px;
+  next.max_reprojection_px = config.max_reprojection_px;
+  next.min_pixel_sigma = config.min_pixel_sigma;
+  next.pnp.min_pixel_sigma = config.min_pixel_sigma;
+  next.features.ratio = config.feature_ratio;
+  next.features.fast_threshold = config.fast_threshold;
+  next.features.min_inliers = config.min_inliers;
+  next.features.ransac_threshold_px = config.ransac_threshold_px;
+  next.features.refine = config.refine_matches;
+  next.leds.threshold = config.led_threshold;
+  next.filter.accel_noise = config.accel_noise;
+  next.filter.angular_accel_noise = config.angular_accel_noise;
+  const std::string invalid = mono::validateParams(next);
+  if (!invalid.empty()) {
+    NODELET_ERROR("mono_pose: reconfigure rejected: %s", invalid.c_str());
+    return;
+  }
+  try {
+    if (estimator_) estimator_->setParams(next);
+    params_ = next;
+    publish_debug_image_ = config.publish_debug_image;
+  } catch (const std::exception& e) {
+    NODELET_ERROR("mono_pose: reconfigure rejected: %s", e.what());
+  }
+}
+
+void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
+                                    const sensor_msgs::CameraInfoConstPtr& info) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  // Intrinsics of the rectified image: the projection matrix P.
+  mono::CameraIntrinsics camera;
+  camera.fx = info->P[0];
+  camera.cx = info->P[2];
+  camera.fy = info->P[5];
+  camera.cy = info->P[6];
+  camera.width = static_cast<int>(info->width);
+  camera.height = static_cast<int>(info->height);
+  mono::MonoPoseResult result;
+  result.solver = mono::toString(params_.solver);
+  std::string reason;
+  if (!camera.isValid(&reason)) {
+    camera_error_ = "camera_info on " + image_topic_ + ": " + reason;
+    result.status = camera_error_;
+    NODELET_WARN_THROTTLE(5.0, "mono_pose: %s", camera_error_.c_str());
+    publishEstimate(image->header, result);
+    return;
+  }
+  camera_error_.clear();
+  try {
+    if (!estimator_) {
+      estimator_ = std::make_unique<mono::MonoPoseEstimator>(*model_, camera, params_);
+    } else if (camera.fx != estimator_->camera().fx || camera.fy != estimator_->camera().fy ||
+               camera.cx != estimator_->camera().cx || camera.cy != estimator_->camera().cy ||
+               camera.width != estimator_->camera().width || camera.height != estimator_->camera().height) {
+      estimator_->setCamera(camera);
+      estimator_->reset();
+    }
+  } catch (const std::exception& e) {
+    camera_error_ = e.what();
+    result.status = camera_error_;
+    NODELET_ERROR_THROTTLE(5.0, "mono_pose: %s", e.what());
+    publishEstimate(image->header, result);
+    return;
+  }
+
+  cv_bridge::CvImageConstPtr cv_image;
+  try {
+    const std::string& encoding = image->encoding;
+    const bool mono8 = encoding == sensor_msgs::image_encodings::MONO8;
+    cv_image = cv_bridge::toCvShare(image, mono8 ? sensor_msgs::image_encodings::MONO8
+                                                 : sensor_msgs::image_encodings::BGR8);
+  } catch (const cv_bridge::Exception& e) {
+    result.status = std::string("cannot convert the image: ") + e.what();
+    publishEstimate(image->header, result);
+    return;
+  }
+  // Time comes from the image: live, simulated and replayed alike.
+  result = estimator_->process(cv_image->image, image->header.stamp.toSec());
+  ++images_;
+  found_ += result.valid ? 1 : 0;
+  last_valid_ = result.valid;
+  last_status_ = result.valid ? "found" : result.status;
+  last_processing_ms_ = result.processing_time_ms;
+  last_inliers_ = result.feature_inliers;
+  publishEstimate(image->header, result);
+
+  if (publish_debug_image_ && debug_publisher_.getNumSubscribers() > 0) {
+    cv_bridge::CvImage debug(image->header, sensor_msgs::image_encodings::BGR8,
+                             mono::drawDebugImage(cv_image->image, result, estimator_->camera(), *model_));
+    debug_publisher_.publish(debug.toImageMsg());
+  }
+}
+
+void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono::MonoPoseResult& result) {
+  docking_msgs::TargetEstimate msg;
+  msg.header = header;
+  msg.source = source_;
+  msg.selected_source = source_;
+  msg.valid = result.valid;
+  msg.position_valid = result.valid;
+  msg.orientation_valid = result.valid;
+  msg.twist_valid = result.valid && result.twist.valid;
+  const Eigen::Quaterniond q(result.pose.rotation);
+  msg.pose.pose.position.x = result.pose.translation.x();
+  msg.pose.pose.position.y = result.pose.translation.y();
+  msg.pose.pose.position.z = result.pose.translation.z();
+  msg.pose.pose.orientation.x = q.x();
+  msg.pose.pose.orientation.y = q.y();
+  msg.pose.pose.orientation.z = q.z();
+  msg.pose.pose.orientation.w = q.w();
+  msg.twist.twist.linear.x = result.twist.linear.x();
+  msg.twist.twist.linear.y = result.twist.linear.y();
+  msg.twist.twist.linear.z = result.twist.linear.z();
+  msg.twist.twist.angular.x = result.twist.angular.x();
+  msg.twist.twist.angular.y = result.twist.angular.y();
+  msg.twist.twist.angular.z = result.twist.angular.z();
+  // Row-major 6x6; components that are not valid carry 1e6 (the message's convention).
+  const mono::Matrix6d unknown = mono::Matrix6d::Identity() * 1e6;
+  const mono::Matrix6d& pose_covariance = result.valid ? result.pose.covariance : unknown;
+  const mono::Matrix6d& twist_covariance = msg.twist_valid ? result.twist.covariance : unknown;
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      msg.pose.covariance[static_cast<size_t>(6 * r + c)] = pose_covariance(r, c);
+      msg.twist.covariance[static_cast<size_t>(6 * r + c)] = twist_covariance(r, c);
+    }
+  }
+  msg.range_m = result.range_m;
+  msg.feature_matches = static_cast<uint32_t>(std::max(0, result.feature_matches));
+  msg.feature_inliers = static_cast<uint32_t>(std::max(0, result.feature_inliers));
+  msg.reprojection_error_px = result.reprojection_error_px;
+  msg.disparity_px = 0.0;
+  msg.processing_time_ms = result.processing_time_ms;
+  msg.solver = result.solver;
+  msg.status = result.valid ? std::string() : result.status;
+  estimate_publisher_.publish(msg);
+}
+
+void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!camera_error_.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, camera_error_);
+  } else if (!subscribed_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle: nobody subscribes to the estimate");
+  } else if (images_ == 0) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no image received on " + image_topic_);
+  } else if (!last_valid_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "target not found: " + last_status_);
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "target found");
+  }
+  status.add("mode", mode_name_);
+  status.add("solver", mono::toString(params_.solver));
+  status.add("images", images_);
+  status.add("found", found_);
+  status.add("last status", last_status_);
+  status.add("last processing time ms", last_processing_ms_);
+  status.add("last inliers", last_inliers_);
+}
+
+}  // namespace docking_perception
+
+PLUGINLIB_EXPORT_CLASS(docking_perception::MonoPoseNodelet, nodelet::Nodelet)
