@@ -11,7 +11,8 @@ add_library(docking_perception_arbiter_core
 add_executable(arbiter src/arbiter/arbiter_node.cpp)
 target_link_libraries(arbiter docking_perception_arbiter_core ${catkin_LIBRARIES})
 add_dependencies(arbiter ${catkin_EXPORTED_TARGETS})
-if(PERCEPTION_CFGS)
+# cfg/Arbiter.cfg (live tuning): the generated ArbiterConfig.h must exist before the node compiles.
+if(TARGET ${PROJECT_NAME}_gencfg)
   add_dependencies(arbiter ${PROJECT_NAME}_gencfg)
 endif()
 

@@ -2,6 +2,7 @@
 // the core choose one, re-expresses it in `output_frame` with tf2, and publishes it as the FUSED
 // estimate, as pose and twist, as tf output_frame -> target, and its choice on a status topic and in
 // diagnostics. Parameters: config/arbiter.yaml (see README.md).
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <initializer_list>
@@ -10,6 +11,8 @@
 #include <string>
 
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <docking_perception/ArbiterConfig.h>
+#include <dynamic_reconfigure/server.h>
 #include <docking_msgs/TargetEstimate.h>
 #include <docking_msgs/names.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
@@ -114,12 +117,40 @@ class ArbiterNode {
     subscribe(nh, docking_msgs::topics::kMonoVisibleEstimate, Source::kMonoVisible);
     subscribe(nh, docking_msgs::topics::kMonoIrEstimate, Source::kMonoIr);
 
+    // Live tuning; the server starts from the values loaded above (same parameter names).
+    reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<docking_perception::ArbiterConfig>>(pnh);
+    reconfigure_server_->setCallback(
+        [this](docking_perception::ArbiterConfig& cfg, std::uint32_t) { onReconfigure(cfg); });
+
     diagnostics_.setHardwareID("none");
     diagnostics_.add("target source", this, &ArbiterNode::diagnose);
     timer_ = nh.createTimer(ros::Duration(1.0 / status_rate_hz), &ArbiterNode::onTimer, this);
   }
 
  private:
+  void onReconfigure(docking_perception::ArbiterConfig& cfg) {
+    arbiter::ArbiterConfig c = arbiter_.config();
+    c.switch_range_m = cfg.switch_range_m;
+    c.hysteresis_m = cfg.hysteresis_m;
+    c.timeout_s = cfg.timeout_s;
+    c.future_tolerance_s = cfg.future_tolerance_s;
+    c.min_mono_inliers = static_cast<std::uint32_t>(std::max(0, cfg.min_mono_inliers));
+    c.max_mono_reprojection_error_px = cfg.max_mono_reprojection_error_px;
+    try {
+      arbiter_.reconfigure(c);
+    } catch (const std::invalid_argument& e) {
+      ROS_ERROR("arbiter: reconfigure refused (%s); keeping the previous values", e.what());
+      // Show the values in force, not the refused ones (the server publishes what the callback leaves).
+      const arbiter::ArbiterConfig& kept = arbiter_.config();
+      cfg.switch_range_m = kept.switch_range_m;
+      cfg.hysteresis_m = kept.hysteresis_m;
+      cfg.timeout_s = kept.timeout_s;
+      cfg.future_tolerance_s = kept.future_tolerance_s;
+      cfg.min_mono_inliers = static_cast<int>(kept.min_mono_inliers);
+      cfg.max_mono_reprojection_error_px = kept.max_mono_reprojection_error_px;
+    }
+  }
+
   void subscribe(ros::NodeHandle& nh, const char* topic, Source source) {
     subscribers_.push_back(nh.subscribe<docking_msgs::TargetEstimate>(
         topic, 10, [this, source](const docking_msgs::TargetEstimateConstPtr& msg) { onEstimate(msg, source); }));
@@ -266,6 +297,7 @@ class ArbiterNode {
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
   diagnostic_updater::Updater diagnostics_;
+  std::unique_ptr<dynamic_reconfigure::Server<docking_perception::ArbiterConfig>> reconfigure_server_;
   ros::Publisher estimate_pub_, pose_pub_, twist_pub_, status_pub_;
   std::vector<ros::Subscriber> subscribers_;
   ros::Timer timer_;

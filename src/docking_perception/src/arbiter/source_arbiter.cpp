@@ -65,6 +65,11 @@ void validate(const ArbiterConfig& c) {
 
 SourceArbiter::SourceArbiter(const ArbiterConfig& config) : config_(config) { validate(config_); }
 
+void SourceArbiter::reconfigure(const ArbiterConfig& config) {
+  validate(config);
+  config_ = config;
+}
+
 const std::optional<EstimateSummary>& SourceArbiter::latest(Source source) const {
   return latest_.at(indexOf(source));
 }

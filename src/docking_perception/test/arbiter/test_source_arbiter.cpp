@@ -238,3 +238,16 @@ TEST(SourceArbiter, NanPoseMakesTheSourceUnusable) {
   EXPECT_EQ(d.source, Source::kMonoIr);
   EXPECT_NE(d.reason.find("NaN"), std::string::npos) << d.reason;
 }
+
+TEST(SourceArbiter, ReconfigureMovesTheSwitchRangeAndRefusesInvalidValues) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  EXPECT_EQ(offerAll(arbiter, 1.0, 2.5).source, Source::kDisparity);
+  ArbiterConfig wider;
+  wider.switch_range_m = 3.0;
+  arbiter.reconfigure(wider);
+  EXPECT_EQ(offerAll(arbiter, 1.1, 2.5).source, Source::kMonoVisible);  // 2.5 < 3.0 - 0.2
+  ArbiterConfig bad = wider;
+  bad.hysteresis_m = 5.0;
+  EXPECT_THROW(arbiter.reconfigure(bad), std::invalid_argument);
+  EXPECT_DOUBLE_EQ(arbiter.config().hysteresis_m, 0.2);  // the old one is kept
+}

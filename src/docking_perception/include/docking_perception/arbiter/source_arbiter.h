@@ -75,6 +75,9 @@ class SourceArbiter {
   Decision decide(double now_s);
 
   const ArbiterConfig& config() const { return config_; }
+  /// Replaces the configuration (live tuning), keeping the sources' history and the regime.
+  /// Throws std::invalid_argument, keeping the old one, when the new one is invalid.
+  void reconfigure(const ArbiterConfig& config);
   RangeRegime regime() const { return regime_; }
   std::uint64_t rejectedCount() const { return rejected_; }
   /// The latest accepted estimate of a source, if any.
