@@ -143,7 +143,7 @@ TEST(MonoPoseEstimator, IrModeFindsTheLedsInTheDark) {
 TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
   MonoPoseParams params;
   params.features.ratio = 1.5;
-  EXPECT_NE(validateParams(params).find("features.ratio"), std::string::npos);
+  EXPECT_NE(validateParams(params).find("feature_ratio"), std::string::npos);
   params = MonoPoseParams();
   params.max_range_m = 0.05;
   EXPECT_NE(validateParams(params).find("max_range_m"), std::string::npos);

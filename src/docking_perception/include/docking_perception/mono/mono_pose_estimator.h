@@ -57,7 +57,8 @@ struct MonoPoseParams {
   ConstantVelocityFilterParams filter;
 };
 
-// Empty when the parameters are usable, else a message naming the first bad parameter.
+// Empty when the parameters are usable, else a message naming the first bad parameter by its name in
+// config/mono_pose_<mode>.yaml (e.g. "feature_ratio must be in (0, 1]").
 std::string validateParams(const MonoPoseParams& params);
 
 struct MonoPoseResult {
