@@ -2,30 +2,31 @@
 # Included by ../CMakeLists.txt after catkin_package().
 
 # ROS-free core: the choice (range regime with hysteresis, quality, staleness, order).
-add_library(docking_perception_arbiter_core
-  src/arbiter/source_arbiter.cpp
+add_library(${PROJECT_NAME}_arbiter_core
   src/arbiter/frame_change.cpp
+  src/arbiter/source_arbiter.cpp
 )
 
 # Node: tf2 into one output frame, publishes the FUSED estimate, pose, twist, tf, status, diagnostics.
 add_executable(arbiter src/arbiter/arbiter_node.cpp)
-target_link_libraries(arbiter docking_perception_arbiter_core ${catkin_LIBRARIES})
+target_link_libraries(arbiter ${PROJECT_NAME}_arbiter_core ${catkin_LIBRARIES})
 add_dependencies(arbiter ${catkin_EXPORTED_TARGETS})
 # cfg/Arbiter.cfg (live tuning): the generated ArbiterConfig.h must exist before the node compiles.
 if(TARGET ${PROJECT_NAME}_gencfg)
   add_dependencies(arbiter ${PROJECT_NAME}_gencfg)
 endif()
 
-install(TARGETS docking_perception_arbiter_core arbiter
+install(TARGETS arbiter ${PROJECT_NAME}_arbiter_core
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 
 if(CATKIN_ENABLE_TESTING)
-  catkin_add_gtest(test_arbiter_core test/arbiter/test_source_arbiter.cpp
-    test/arbiter/test_frame_change.cpp)
+  catkin_add_gtest(test_arbiter_core
+    test/arbiter/test_frame_change.cpp
+    test/arbiter/test_source_arbiter.cpp)
   if(TARGET test_arbiter_core)
     # Debian's catkin links GTest::gtest only; the tests use gtest's own main().
-    target_link_libraries(test_arbiter_core docking_perception_arbiter_core GTest::gtest_main)
+    target_link_libraries(test_arbiter_core ${PROJECT_NAME}_arbiter_core GTest::gtest_main)
   endif()
 endif()
