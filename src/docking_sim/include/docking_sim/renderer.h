@@ -59,7 +59,11 @@ class CameraRenderer {
   cv::Matx33d ideal_K_;
   cv::Mat ideal_;          ///< pinhole render with margin
   cv::Mat depth_;          ///< CV_32F, 1/z (0 = nothing)
-  cv::Mat map1_, map2_;    ///< distortion remap (fixed point)
+  /// Distortion as a fixed bilinear lookup: per output pixel the byte offset of the top-left source
+  /// pixel in ideal_ and 7-bit weights (x, y).
+  std::vector<int32_t> remap_offset_;
+  std::vector<uint8_t> remap_weight_x_, remap_weight_y_;
+  void applyDistortion();
   cv::Mat distorted_;
   cv::Mat blurred_;
   cv::Mat glare_;          ///< additive, same type as the output (empty: no glare)

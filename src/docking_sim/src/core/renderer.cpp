@@ -48,15 +48,18 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
     }
     pad_.x = static_cast<int>(std::ceil(std::max(-min_x, max_x - (w - 1)))) + 2;
     pad_.y = static_cast<int>(std::ceil(std::max(-min_y, max_y - (h - 1)))) + 2;
-    cv::Mat mapx(h, w, CV_32F), mapy(h, w, CV_32F);
-    for (int y = 0; y < h; ++y) {
-      for (int x = 0; x < w; ++x) {
-        const auto& p = ideal[static_cast<std::size_t>(y) * w + x];
-        mapx.at<float>(y, x) = p.x + pad_.x;
-        mapy.at<float>(y, x) = p.y + pad_.y;
-      }
+    const int channels = type == CV_8UC3 ? 3 : 1;
+    const int ideal_width = w + 2 * pad_.x;
+    remap_offset_.resize(ideal.size());
+    remap_weight_x_.resize(ideal.size());
+    remap_weight_y_.resize(ideal.size());
+    for (std::size_t i = 0; i < ideal.size(); ++i) {
+      const double sx = ideal[i].x + pad_.x, sy = ideal[i].y + pad_.y;  // inside the margin by construction
+      const int x0 = static_cast<int>(std::floor(sx)), y0 = static_cast<int>(std::floor(sy));
+      remap_offset_[i] = (y0 * ideal_width + x0) * channels;
+      remap_weight_x_[i] = static_cast<uint8_t>(std::lround((sx - x0) * 128.0));
+      remap_weight_y_[i] = static_cast<uint8_t>(std::lround((sy - y0) * 128.0));
     }
-    cv::convertMaps(mapx, mapy, map1_, map2_, CV_16SC2);  // fixed point: the fast remap path
   }
   ideal_K_ = calibration.K;
   ideal_K_(0, 2) += pad_.x;
@@ -118,7 +121,7 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
   }
   const double t1 = threadCpuMs();
   if (options_.distortion) {
-    cv::remap(ideal_, distorted_, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    applyDistortion();
   } else {
     ideal_(cv::Rect(pad_.x, pad_.y, output_.cols, output_.rows)).copyTo(distorted_);
   }
@@ -131,6 +134,43 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
   const double t3 = threadCpuMs();
   timing_ = RenderTiming{t1 - t0, t2 - t1, t3 - t2};
   return output_;
+}
+
+namespace {
+
+template <int kChannels>
+void bilinearLookup(const cv::Mat& src_image, const std::vector<int32_t>& offsets, const std::vector<uint8_t>& weights_x,
+                    const std::vector<uint8_t>& weights_y, cv::Mat& dst) {
+  const std::size_t stride = src_image.step;
+  const uchar* src = src_image.data;
+  const int32_t* off = offsets.data();
+  const uint8_t* wxs = weights_x.data();
+  const uint8_t* wys = weights_y.data();
+  for (int y = 0; y < dst.rows; ++y) {
+    uchar* out = dst.ptr<uchar>(y);
+    for (int x = 0; x < dst.cols; ++x) {
+      const uchar* p = src + *off++;
+      const int wx = *wxs++, wy = *wys++;
+      const int w00 = (128 - wx) * (128 - wy), w01 = wx * (128 - wy), w10 = (128 - wx) * wy, w11 = wx * wy;
+      for (int c = 0; c < kChannels; ++c) {
+        out[c] = static_cast<uchar>((p[c] * w00 + p[c + kChannels] * w01 + p[c + stride] * w10 +
+                                     p[c + stride + kChannels] * w11 + (1 << 13)) >> 14);
+      }
+      out += kChannels;
+    }
+  }
+}
+
+}  // namespace
+
+void CameraRenderer::applyDistortion() {
+  // Bilinear lookup through the precomputed map (cv::remap INTER_LINEAR with 7-bit weights).
+  distorted_.create(output_.size(), output_.type());
+  if (output_.channels() == 3) {
+    bilinearLookup<3>(ideal_, remap_offset_, remap_weight_x_, remap_weight_y_, distorted_);
+  } else {
+    bilinearLookup<1>(ideal_, remap_offset_, remap_weight_x_, remap_weight_y_, distorted_);
+  }
 }
 
 void CameraRenderer::applyEffects() {
