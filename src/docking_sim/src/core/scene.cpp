@@ -94,7 +94,7 @@ cv::Mat materialDetail(const std::string& material, cv::RNG& rng, int size) {
 
 cv::Mat floorTexture(cv::RNG& rng) {
   // 2 m x 2 m of vinyl tiles, 0.5 m each, with grout, per-tile shade, speckle and scuffs.
-  const int size = 1024, tiles = 4, tile_px = size / tiles;
+  const int size = 512, tiles = 4, tile_px = size / tiles;
   cv::Mat blotch = smoothNoise(rng, size, 16);
   cv::Mat speckle(size, size, CV_32F);
   rng.fill(speckle, cv::RNG::NORMAL, 0.0, 1.0);
@@ -105,7 +105,7 @@ cv::Mat floorTexture(cv::RNG& rng) {
   for (int y = 0; y < size; ++y) {
     for (int x = 0; x < size; ++x) {
       const int tx = x / tile_px, ty = y / tile_px;
-      const bool grout = (x % tile_px) < 3 || (y % tile_px) < 3;
+      const bool grout = (x % tile_px) < 2 || (y % tile_px) < 2;
       double f = grout ? 0.55 : tile_shade[static_cast<std::size_t>(ty * tiles + tx)] *
                                     (0.9 + 0.2 * blotch.at<float>(y, x)) + 0.05 * speckle.at<float>(y, x);
       cv::Vec3b& p = img.at<cv::Vec3b>(y, x);
@@ -114,8 +114,8 @@ cv::Mat floorTexture(cv::RNG& rng) {
   }
   for (int i = 0; i < 40; ++i) {  // scuff marks
     cv::Point a(rng.uniform(0, size), rng.uniform(0, size));
-    cv::Point b = a + cv::Point(rng.uniform(-60, 60), rng.uniform(-20, 20));
-    cv::line(img, a, b, cv::Scalar(90, 95, 100), rng.uniform(1, 4), cv::LINE_AA);
+    cv::Point b = a + cv::Point(rng.uniform(-30, 30), rng.uniform(-10, 10));
+    cv::line(img, a, b, cv::Scalar(90, 95, 100), rng.uniform(1, 3), cv::LINE_AA);
   }
   return img;
 }
