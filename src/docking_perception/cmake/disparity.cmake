@@ -77,4 +77,13 @@ if(CATKIN_ENABLE_TESTING)
     add_dependencies(test_disparity_detector_node disparity_detector docking_perception_disparity_nodelet
       ${catkin_EXPORTED_TARGETS})
   endif()
+
+  # Against the simulator's truth at 3 m (needs docking_sim, omni_base and the camera frames node).
+  add_rostest_gtest(test_disparity_sim test/disparity/disparity_sim_still_3m.test
+    test/disparity/test_disparity_sim.cpp)
+  if(TARGET test_disparity_sim)
+    target_link_libraries(test_disparity_sim ${catkin_LIBRARIES})
+    add_dependencies(test_disparity_sim disparity_detector docking_perception_disparity_nodelet
+      ${catkin_EXPORTED_TARGETS})
+  endif()
 endif()

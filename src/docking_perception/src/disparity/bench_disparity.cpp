@@ -2,8 +2,16 @@
 // A program that prints figures, never a test (timings depend on the machine and its load).
 //
 //   bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]
+//                   [--left RAW.png --right RAW.png] [--debug-image OUT.png]
 //
-// Stages: rectify (cv::remap of both raw images with the maps of config/cameras/stereo_*.yaml),
+// Without --left/--right the pair is rendered here (test/disparity/synthetic_stereo.h: the target
+// face-on at 3 m, its panels, a floor and a wall) and distorted with the calibration, so the
+// rectification has real work; with them, raw frames from the simulator (docking_sim's sim_render)
+// are used as the simulator publishes them (bgr8): converted to grey (image_proc/debayer) and
+// rectified (image_proc/rectify) inside the rectify stage, as perception.launch does.
+//
+// Stages: rectify (grey conversion of colour frames and cv::remap of both images with the maps of
+// config/cameras/stereo_*.yaml),
 // disparity (the matcher of config/stereo_image_proc.yaml, converted to float as stereo_image_proc
 // does), detection (DisparityDetector with config/disparity_detector.yaml), and disparity_total
 // (all three, timed as one). Times are the thread's CPU time (clock_gettime
@@ -22,6 +30,7 @@
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "docking_perception/disparity/disparity_detector.h"
@@ -33,6 +42,10 @@ using docking_perception::disparity::DisparityDetector;
 using docking_perception::disparity::Detection;
 using docking_perception::disparity::StereoGeometry;
 namespace testing = docking_perception::disparity::testing;
+
+const char* const kUsage =
+    "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR] [--left RAW.png --right "
+    "RAW.png] [--debug-image OUT.png]\n";
 
 double medianOf(std::vector<double> values) {
   std::sort(values.begin(), values.end());
@@ -73,7 +86,7 @@ void rectifyMaps(const testing::CameraCalibration& calibration, cv::Mat* map1, c
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string output_path;
+  std::string output_path, left_path, right_path, debug_path;
   std::string config_dir = DISPARITY_CONFIG_DIR;
   int frames = 100;
   for (int i = 1; i < argc; ++i) {
@@ -82,15 +95,21 @@ int main(int argc, char** argv) {
       frames = std::max(1, std::atoi(argv[++i]));
     } else if (arg == "--config-dir" && i + 1 < argc) {
       config_dir = argv[++i];
+    } else if (arg == "--left" && i + 1 < argc) {
+      left_path = argv[++i];
+    } else if (arg == "--right" && i + 1 < argc) {
+      right_path = argv[++i];
+    } else if (arg == "--debug-image" && i + 1 < argc) {
+      debug_path = argv[++i];
     } else if (!arg.empty() && arg[0] != '-' && output_path.empty()) {
       output_path = arg;
     } else {
-      std::cerr << "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]\n";
+      std::cerr << kUsage;
       return 2;
     }
   }
-  if (output_path.empty()) {
-    std::cerr << "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]\n";
+  if (output_path.empty() || left_path.empty() != right_path.empty()) {
+    std::cerr << kUsage;
     return 2;
   }
 
@@ -112,8 +131,23 @@ int main(int argc, char** argv) {
                        right_calibration.projection.at<double>(0, 0);
     cv::Mat left_rectified_truth, right_rectified_truth;
     testing::renderStereoPair(scene, &left_rectified_truth, &right_rectified_truth);
-    const cv::Mat left_raw = distort(left_rectified_truth, left_calibration);
-    const cv::Mat right_raw = distort(right_rectified_truth, right_calibration);
+    cv::Mat left_raw = distort(left_rectified_truth, left_calibration);
+    cv::Mat right_raw = distort(right_rectified_truth, right_calibration);
+    if (!left_path.empty()) {
+      // As published (the simulator's cameras are bgr8): image_proc rectifies all channels.
+      left_raw = cv::imread(left_path, cv::IMREAD_UNCHANGED);
+      right_raw = cv::imread(right_path, cv::IMREAD_UNCHANGED);
+      if (left_raw.empty() || right_raw.empty()) {
+        std::cerr << "bench_disparity: cannot read " << (left_raw.empty() ? left_path : right_path)
+                  << "\n";
+        return 1;
+      }
+      if (left_raw.size() != left_calibration.size || right_raw.size() != right_calibration.size) {
+        std::cerr << "bench_disparity: frame size differs from the calibration's "
+                  << left_calibration.size << "\n";
+        return 1;
+      }
+    }
 
     cv::Mat left_map1, left_map2, right_map1, right_map2;
     rectifyMaps(left_calibration, &left_map1, &left_map2);
@@ -144,9 +178,13 @@ int main(int argc, char** argv) {
     const int warmup = 3;
     for (int frame = 0; frame < frames + warmup; ++frame) {
       const auto start = Clock::now();
-      cv::Mat left_rect, right_rect;
-      cv::remap(left_raw, left_rect, left_map1, left_map2, cv::INTER_LINEAR);
-      cv::remap(right_raw, right_rect, right_map1, right_map2, cv::INTER_LINEAR);
+      cv::Mat left_mono = left_raw, right_mono = right_raw, left_rect, right_rect;
+      if (left_raw.channels() == 3) {  // image_proc/debayer: bgr8 -> image_mono
+        cv::cvtColor(left_raw, left_mono, cv::COLOR_BGR2GRAY);
+        cv::cvtColor(right_raw, right_mono, cv::COLOR_BGR2GRAY);
+      }
+      cv::remap(left_mono, left_rect, left_map1, left_map2, cv::INTER_LINEAR);
+      cv::remap(right_mono, right_rect, right_map1, right_map2, cv::INTER_LINEAR);
       const double rectify_ms = ms_since(start);
       const auto disparity_start = Clock::now();
       const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
@@ -168,7 +206,8 @@ int main(int argc, char** argv) {
                            (frames + warmup);
     double cpu_total_ms = 0.0;
     for (double ms : samples["disparity_total"]) cpu_total_ms += ms;
-    std::cout << "bench_disparity: 640x480, 1 thread, " << frames << " frames, matcher "
+    std::cout << "bench_disparity: " << (left_path.empty() ? "synthetic grey pair" : left_path)
+              << ", 640x480, 1 thread, " << frames << " frames, matcher "
               << (settings.stereo_algorithm == 0 ? "StereoBM" : "StereoSGBM") << " range " << range
               << " window " << (settings.correlation_window_size | 1) << "\n";
     std::ofstream json(output_path);
@@ -194,6 +233,25 @@ int main(int argc, char** argv) {
     std::cout << std::setprecision(2) << "  (thread CPU time; wall time per frame " << wall_ms
               << " ms against " << cpu_total_ms / frames
               << " ms CPU: the difference is other load on the machine)\n";
+    if (!debug_path.empty()) {
+      cv::Mat left_mono = left_raw, right_mono = right_raw, left_rect, right_rect;
+      if (left_raw.channels() == 3) {
+        cv::cvtColor(left_raw, left_mono, cv::COLOR_BGR2GRAY);
+        cv::cvtColor(right_raw, right_mono, cv::COLOR_BGR2GRAY);
+      }
+      cv::remap(left_mono, left_rect, left_map1, left_map2, cv::INTER_LINEAR);
+      cv::remap(right_mono, right_rect, right_map1, right_map2, cv::INTER_LINEAR);
+      const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
+      cv::imwrite(debug_path, docking_perception::disparity::renderDebugImage(disparity, detection, 64.0));
+    }
+    if (!left_path.empty()) {
+      std::cout << std::setprecision(3) << "  detection on " << left_path << ": "
+                << (detection.found ? "found" : "NOT found: " + detection.reason) << ", position ("
+                << detection.position_m.x() << ", " << detection.position_m.y() << ", "
+                << detection.position_m.z() << ") m, " << detection.blob_pixels << " px\n";
+      std::cout << "  wrote " << output_path << "\n";
+      return 0;
+    }
     std::cout << std::setprecision(3) << "  detection: "
               << (detection.found ? "found" : "NOT found: " + detection.reason) << ", position ("
               << detection.position_m.x() << ", " << detection.position_m.y() << ", "

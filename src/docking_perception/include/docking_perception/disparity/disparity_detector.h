@@ -55,7 +55,7 @@ struct DetectorParams {
   double max_blob_area_fraction = 0.5;    // more than this fraction of the region: "blob too large"
   int border_margin_px = 2;               // within this of the valid region's edge: "touches border"
   double min_disparity_px = 4.0;          // robust disparity below this: "too far"
-  double max_disparity_px = 100.0;        // above this: "too close"
+  double max_disparity_px = 92.0;         // above this: "too close" (0.6 m for our pair)
 
   // Where to look. Rows outside [roi_top_fraction, roi_bottom_fraction) of the image are ignored.
   double roi_top_fraction = 0.0;
