@@ -1,6 +1,7 @@
 // docking_sim_node: the thin ROS wrapper around docking_sim::Simulation. It owns time: steps the
 // physics, publishes /clock, the three cameras, wheel encoders and ground truth, all in sim time.
 #include <camera_calibration_parsers/parse.h>
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <docking_msgs/WheelCommand.h>
 #include <docking_msgs/WheelEncoders.h>
 #include <docking_msgs/names.h>
@@ -64,7 +65,7 @@ geometry_msgs::Pose toPose(const Eigen::Isometry3d& t) {
 
 class SimNode {
  public:
-  SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), image_transport_(nh) {
+  SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), image_transport_(nh), diagnostics_(nh, pnh) {
     docking_sim::SimulationFiles files;
     files.sim_config = requireString(pnh, "sim_config");
     files.target_config = requireString(pnh, "target_config");
@@ -118,6 +119,8 @@ class SimNode {
       t.transform = toTransform(sim_->worldTChaser());
       static_broadcaster_.sendTransform(t);
     }
+    diagnostics_.setHardwareID("docking_sim");
+    diagnostics_.add("Simulator", this, &SimNode::diagnose);
     const auto& sc = sim_->scenario();
     ROS_INFO("docking_sim: scenario '%s' (%s), lighting %s, seed %llu, duration %.0f s, real-time factor %.2f, "
              "cameras %.1f Hz",
@@ -151,6 +154,7 @@ class SimNode {
         }
       }
       ros::spinOnce();  // wheel commands arrive at the sim time they are applied
+      diagnostics_.update();
       sim_->advance(next - sim_->time());
       const ros::Time stamp(sim_->time() + kTimeOffsetS);
       rosgraph_msgs::Clock clock;
@@ -185,6 +189,27 @@ class SimNode {
  private:
   // Sim time 0 would read as "no time yet" to ROS nodes: the published clock starts at this offset.
   static constexpr double kTimeOffsetS = 1.0;
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+    // Achieved real-time factor since the last report.
+    const ros::WallTime now = ros::WallTime::now();
+    const double wall = (now - last_diag_wall_).toSec();
+    const double achieved = wall > 0 ? (sim_->time() - last_diag_sim_) / wall : 0.0;
+    last_diag_wall_ = now;
+    last_diag_sim_ = sim_->time();
+    if (real_time_factor_ > 0 && achieved < 0.8 * real_time_factor_) {
+      status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "slower than the requested real-time factor");
+    } else {
+      status.summary(diagnostic_msgs::DiagnosticStatus::OK, "running");
+    }
+    status.add("scenario", sim_->scenario().name);
+    status.add("lighting", sim_->scenario().lighting);
+    status.add("sim time (s)", sim_->time());
+    status.add("requested real-time factor", real_time_factor_);
+    status.add("achieved real-time factor", achieved);
+    const char* keys[3] = {"render stereo_left (ms CPU)", "render stereo_right (ms CPU)", "render ir (ms CPU)"};
+    for (int i = 0; i < 3; ++i) status.add(keys[i], render_ms_[i]);
+  }
 
   void onWheelCommand(const docking_msgs::WheelCommand::ConstPtr& msg) {
     using docking_sim::CommandResult;
@@ -234,6 +259,8 @@ class SimNode {
       const auto& mount = sim_->robot().cameras[static_cast<std::size_t>(i)];
       if (camera_pubs_[i].getNumSubscribers() == 0) continue;  // render only what someone watches
       const cv::Mat& frame = sim_->render(i);
+      const auto& t = sim_->renderer(i).lastTiming();
+      render_ms_[i] = 0.9 * render_ms_[i] + 0.1 * (t.rasterize_ms + t.distort_ms + t.effects_ms);
       sensor_msgs::ImagePtr image = boost::make_shared<sensor_msgs::Image>();
       image->header.stamp = stamp;
       image->header.frame_id = mount.frame_id;
@@ -283,6 +310,10 @@ class SimNode {
   std::array<image_transport::CameraPublisher, 3> camera_pubs_;
   ros::Publisher clock_pub_, encoder_pub_, truth_left_pub_, truth_ir_pub_, truth_chaser_pub_;
   ros::Subscriber command_sub_;
+  diagnostic_updater::Updater diagnostics_;
+  std::array<double, 3> render_ms_{{0.0, 0.0, 0.0}};
+  ros::WallTime last_diag_wall_{ros::WallTime::now()};
+  double last_diag_sim_{0.0};
   tf2_ros::TransformBroadcaster tf_broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
 };
