@@ -66,32 +66,34 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
   const int positions = window.rows - size + 1;
   response->create(positions, positions, CV_32F);
   const double n = static_cast<double>(size * size);
-  double t_sum = 0.0;
-  double t_sum2 = 0.0;
+  // 8-bit data: every sum fits in 32 bits (121 * 255^2 < 2^23), and integer loops vectorise.
+  int t_sum = 0;
+  int t_sum2 = 0;
   for (int y = 0; y < size; ++y) {
     const uint8_t* t = templ.ptr<uint8_t>(y);
     for (int x = 0; x < size; ++x) {
       t_sum += t[x];
-      t_sum2 += static_cast<double>(t[x]) * t[x];
+      t_sum2 += t[x] * t[x];
     }
   }
-  const double t_var = t_sum2 - t_sum * t_sum / n;
+  const double t_var = t_sum2 - static_cast<double>(t_sum) * t_sum / n;
   for (int oy = 0; oy < positions; ++oy) {
     for (int ox = 0; ox < positions; ++ox) {
-      double w_sum = 0.0;
-      double w_sum2 = 0.0;
-      double cross = 0.0;
+      int w_sum = 0;
+      int w_sum2 = 0;
+      int cross = 0;
       for (int y = 0; y < size; ++y) {
         const uint8_t* w = window.ptr<uint8_t>(oy + y) + ox;
         const uint8_t* t = templ.ptr<uint8_t>(y);
         for (int x = 0; x < size; ++x) {
-          w_sum += w[x];
-          w_sum2 += static_cast<double>(w[x]) * w[x];
-          cross += static_cast<double>(w[x]) * t[x];
+          const int wv = w[x];
+          w_sum += wv;
+          w_sum2 += wv * wv;
+          cross += wv * t[x];
         }
       }
-      const double w_var = w_sum2 - w_sum * w_sum / n;
-      const double covariance = cross - w_sum * t_sum / n;
+      const double w_var = w_sum2 - static_cast<double>(w_sum) * w_sum / n;
+      const double covariance = cross - static_cast<double>(w_sum) * t_sum / n;
       const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
       response->at<float>(oy, ox) = denominator > 1e-9 ? static_cast<float>(covariance / denominator) : 0.0f;
     }
@@ -225,7 +227,17 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   std::vector<cv::Point2f> texture_points;
   std::vector<cv::Point2f> image_points;
   cv::Mat response;
-  for (const cv::Point2f& texture_point : match->inlier_texture_points) {
+  // Candidates: the inliers, plus the model corners of the chosen level (distinct, well-textured points
+  // the matcher did not pair): far more constraints for the pose at the same refinement cost each.
+  std::vector<cv::Point2f> candidates = match->inlier_texture_points;
+  const int extra_budget = std::max(0, params_.max_refined_points - static_cast<int>(candidates.size()));
+  if (extra_budget > 0 && level->row_count > 0) {
+    const int stride = std::max(1, level->row_count / extra_budget);
+    for (int row = level->first_row; row < level->first_row + level->row_count; row += stride) {
+      candidates.push_back(model_points_[static_cast<size_t>(row)]);
+    }
+  }
+  for (const cv::Point2f& texture_point : candidates) {
     const cv::Vec3d projected = match->homography * cv::Vec3d(texture_point.x, texture_point.y, 1.0);
     const cv::Point2d predicted(projected[0] / projected[2], projected[1] / projected[2]);
     const cv::Point centre(static_cast<int>(std::lround(predicted.x)), static_cast<int>(std::lround(predicted.y)));
@@ -376,7 +388,6 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
   }
   if (params_.refine) {
     refine(gray, &result);
-    result.inliers = static_cast<int>(result.inlier_image_points.size());
     cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
   }
   result.found = true;

@@ -77,6 +77,7 @@ std::string validateParams(const MonoPoseParams& p) {
       positive("max_gap_s", p.filter.max_gap_s),
       p.filter.gate_chi2 >= 0.0 ? "" : "gate_chi2 must not be negative",
       p.filter.max_rejections >= 1 ? "" : "max_rejections must be at least 1",
+      p.features.max_refined_points >= 0 ? "" : "max_refined_points must not be negative",
       p.features.fast_threshold > 0 ? "" : "fast_threshold must be positive",
       p.features.max_model_keypoints_per_level >= 10 ? "" : "max_model_keypoints_per_level must be at least 10",
       p.features.min_face_area_px >= 0.0 ? "" : "min_face_area_px must not be negative",
@@ -278,6 +279,7 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
       return false;
     }
     result->pnp_ambiguous = solution.ambiguous;
+    result->pose_points = static_cast<int>(model_points.size());
     result->reprojection_error_px = solution.reprojection_rms_px;
     if (solution.reprojection_rms_px > params_.max_reprojection_px) {
       result->status = "PnP reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large";
@@ -312,6 +314,7 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
     pixels[static_cast<size_t>(i)] = located;
   }
   result->marker_pixels.assign(pixels.begin(), pixels.end());
+  result->pose_points = kMarkerCount;
   if (!solveFivePoint(pixels, result, &reason)) {
     result->status = reason;
     return false;
@@ -348,6 +351,7 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
       }
       *result = trial;
       result->feature_inliers = kMarkerCount;
+      result->pose_points = kMarkerCount;
       result->marker_pixels.assign(pixels.begin(), pixels.end());
       return true;
     }

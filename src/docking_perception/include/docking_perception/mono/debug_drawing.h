@@ -1,5 +1,5 @@
-// The mono_pose debug image, drawn without ROS: all ratio-test matches (grey), homography inliers
-// (green), the matched face outline (yellow), located markers / LED blobs (red / orange), and, for a
+// The mono_pose debug image, drawn without ROS: all ratio-test matches (grey), the points the pose
+// used (green), the matched face outline (yellow), located markers / LED blobs (red / orange), and, for a
 // valid pose, the model's face outline projected with that pose (cyan) and the target axes (x red,
 // y green, z blue), with the status or the range written on top.
 #pragma once

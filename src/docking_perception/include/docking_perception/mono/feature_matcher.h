@@ -9,7 +9,9 @@
 // Refinement: corner positions are good to ~1 px, too coarse for sub-degree orientation. The texture
 // level nearest the face's apparent size is warped into the image with the homography, and around each
 // inlier the image is correlated (normalised cross-correlation, 11x11 patch, +-3 px, parabolic peak)
-// with that rendering: this gives the image position of the exact model point to ~0.1 px.
+// with that rendering: this gives the image position of the exact model point to ~0.1 px. The model
+// corners of that level that were not matched are refined the same way (up to max_refined_points),
+// which multiplies the constraints on the pose at a distance, where few features match.
 #pragma once
 
 #include <Eigen/Core>
@@ -35,6 +37,7 @@ struct FeatureMatcherParams {
   double min_face_area_px = 600.0;  // the matched face outline must be at least this big
   bool refine = true;               // sub-pixel refinement of the inliers
   double min_correlation = 0.75;    // refined points below this correlation are dropped
+  int max_refined_points = 150;     // inliers plus model corners of the nearest level, refined by NCC
 };
 
 struct FaceMatch {
@@ -42,10 +45,12 @@ struct FaceMatch {
   std::string status;               // why not found
   int keypoints = 0;                // image keypoints with descriptors
   int matches = 0;                  // after the ratio test
-  int inliers = 0;                  // of the homography (after refinement, when on)
-  bool refined = false;
+  int inliers = 0;                  // ratio-test matches that are inliers of the RANSAC homography
+  bool refined = false;             // the correspondences below are the refined ones
   cv::Matx33d homography = cv::Matx33d::eye();  // texture pixel -> image pixel
   std::vector<cv::Point2f> matched_image_points;  // all ratio-test matches (for the debug image)
+  // The correspondences for the pose: the homography inliers, or after refinement the refined points
+  // (inliers and unmatched model corners), so there may be more of them than `inliers`.
   std::vector<cv::Point2f> inlier_texture_points;
   std::vector<cv::Point2f> inlier_image_points;
   std::vector<cv::Point2f> face_outline;           // texture corners mapped by the homography

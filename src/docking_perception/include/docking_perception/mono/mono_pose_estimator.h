@@ -74,6 +74,7 @@ struct MonoPoseResult {
   std::string velocity_status;         // why the selected velocity is not valid / a note from the filter
   int feature_matches = 0;             // visible: ratio-test matches; IR: LED blobs found
   int feature_inliers = 0;             // visible: homography inliers; IR: 5 when the pattern is found
+  int pose_points = 0;                 // points the solver used (visible pnp: refined points)
   double reprojection_error_px = 0.0;  // RMS over the points the solver used
   double processing_time_ms = 0.0;     // CPU time of process()
   bool used_tracking_region = false;   // the predicted region gave the result (no full-frame search)
