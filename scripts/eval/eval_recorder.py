@@ -1,0 +1,169 @@
+#!/usr/bin/env python3
+"""Evaluation recorder: a ROS node that pairs every target estimate with the simulator's ground truth
+at the same image stamp, for one scenario, and writes that scenario's entry of results/eval/summary.json
+(plus the raw samples for plots). It shuts the launch down (it is `required`) when done.
+
+Parameters (private): output (json path), scenario, lighting, warmup_s and duration_s (sim time),
+range_m (optional: the nominal range; by default the true range at the first truth message).
+"""
+import json
+import math
+import statistics
+import time
+
+import rospy
+from docking_msgs.msg import TargetEstimate
+from nav_msgs.msg import Odometry
+
+SOURCES = {  # summary key -> topic
+    "disparity": "/perception/disparity/estimate",
+    "mono_visible": "/perception/mono_visible/estimate",
+    "mono_ir": "/perception/mono_ir/estimate",
+    "fused": "/target/estimate",
+}
+TRUTH_TOPICS = {"stereo_left_optical_frame": "/sim/truth/stereo_left", "ir_optical_frame": "/sim/truth/ir"}
+
+
+def quat_to_matrix(q):
+    x, y, z, w = q.x, q.y, q.z, q.w
+    return [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ]
+
+
+def rotation_angle_deg(qa, qb):
+    """Angle of the rotation between two orientations."""
+    dot = abs(qa.x * qb.x + qa.y * qb.y + qa.z * qb.z + qa.w * qb.w)
+    return math.degrees(2.0 * math.acos(min(1.0, dot)))
+
+
+def percentile(values, p):
+    if not values:
+        return None
+    s = sorted(values)
+    k = (len(s) - 1) * p / 100.0
+    lo, hi = math.floor(k), math.ceil(k)
+    return s[lo] + (s[hi] - s[lo]) * (k - lo)
+
+
+def median(values):
+    return statistics.median(values) if values else None
+
+
+class EvalRecorder:
+    def __init__(self):
+        self.output = rospy.get_param("~output")
+        self.scenario = rospy.get_param("~scenario")
+        self.lighting = rospy.get_param("~lighting", "nominal")
+        self.warmup = rospy.get_param("~warmup_s", 3.0)
+        self.duration = rospy.get_param("~duration_s", 10.0)
+        self.nominal_range = rospy.get_param("~range_m", None)
+        self.truth = {frame: {} for frame in TRUTH_TOPICS}  # frame -> {stamp_ns: Odometry}
+        self.estimates = {name: [] for name in SOURCES}     # name -> [TargetEstimate]
+        self.first_truth_range = None
+        self.start = None
+        for frame, topic in TRUTH_TOPICS.items():
+            rospy.Subscriber(topic, Odometry, self.on_truth, callback_args=frame, queue_size=100)
+        for name, topic in SOURCES.items():
+            rospy.Subscriber(topic, TargetEstimate, self.on_estimate, callback_args=name, queue_size=100)
+
+    def on_truth(self, msg, frame):
+        self.truth[frame][msg.header.stamp.to_nsec()] = msg
+        if self.first_truth_range is None and frame == "stereo_left_optical_frame":
+            p = msg.pose.pose.position
+            self.first_truth_range = math.sqrt(p.x ** 2 + p.y ** 2 + p.z ** 2)
+
+    def on_estimate(self, msg, name):
+        if self.start is None or msg.header.stamp.to_sec() < self.start + self.warmup:
+            return
+        self.estimates[name].append(msg)
+
+    def run(self):
+        while not rospy.is_shutdown() and rospy.get_time() == 0.0:
+            time.sleep(0.05)  # wait for /clock
+        self.start = rospy.get_time()
+        end = self.start + self.warmup + self.duration
+        wall_deadline = time.time() + 30.0 * (self.warmup + self.duration) + 60.0
+        while not rospy.is_shutdown() and rospy.get_time() < end and time.time() < wall_deadline:
+            time.sleep(0.05)
+        time.sleep(1.0)  # let the last estimates of the window arrive
+        self.write()
+
+    def evaluate(self, name, estimates):
+        samples = []
+        for est in estimates:
+            truth = self.truth.get(est.header.frame_id, {}).get(est.header.stamp.to_nsec())
+            samples.append((est, truth))
+        frames = len(samples)
+        valid = [(e, t) for e, t in samples if e.valid and e.position_valid]
+        pos_err, range_err, ori_err, lin_err, ang_err, proc = [], [], [], [], [], []
+        unmatched = 0
+        for est, truth in valid:
+            if truth is None:
+                unmatched += 1
+                continue
+            pe, pt = est.pose.pose.position, truth.pose.pose.position
+            pos_err.append(math.dist((pe.x, pe.y, pe.z), (pt.x, pt.y, pt.z)))
+            true_range = math.sqrt(pt.x ** 2 + pt.y ** 2 + pt.z ** 2)
+            est_range = math.sqrt(pe.x ** 2 + pe.y ** 2 + pe.z ** 2)
+            range_err.append(100.0 * abs(est_range - true_range) / true_range)
+            if est.orientation_valid:
+                ori_err.append(rotation_angle_deg(est.pose.pose.orientation, truth.pose.pose.orientation))
+            if est.twist_valid:
+                le, lt = est.twist.twist.linear, truth.twist.twist.linear
+                ae, at = est.twist.twist.angular, truth.twist.twist.angular
+                lin_err.append(math.dist((le.x, le.y, le.z), (lt.x, lt.y, lt.z)))
+                ang_err.append(math.degrees(math.dist((ae.x, ae.y, ae.z), (at.x, at.y, at.z))))
+        for est, _ in samples:
+            proc.append(est.processing_time_ms)
+        stamps = [e.header.stamp.to_sec() for e, _ in samples]
+        span = (max(stamps) - min(stamps)) if len(stamps) > 1 else 0.0
+        entry = {
+            "frames": frames,
+            "detection_rate": (len(valid) / frames) if frames else 0.0,
+            "position_error_median_m": median(pos_err),
+            "position_error_p95_m": percentile(pos_err, 95),
+            "range_error_median_pct": median(range_err),
+            "orientation_error_median_deg": median(ori_err),
+            "orientation_error_p95_deg": percentile(ori_err, 95),
+            "linear_velocity_error_median_mps": median(lin_err),
+            "angular_velocity_error_median_dps": median(ang_err),
+            "rate_hz": ((frames - 1) / span) if span > 0 else 0.0,
+            "processing_ms_median": median(proc),
+        }
+        raw = [
+            {"t": e.header.stamp.to_sec(), "valid": bool(e.valid), "selected_source": e.selected_source,
+             "true_range": (math.sqrt(sum(v * v for v in (t.pose.pose.position.x, t.pose.pose.position.y,
+                                                          t.pose.pose.position.z))) if t else None),
+             "position_error": (math.dist((e.pose.pose.position.x, e.pose.pose.position.y, e.pose.pose.position.z),
+                                          (t.pose.pose.position.x, t.pose.pose.position.y, t.pose.pose.position.z))
+                                if (t and e.valid and e.position_valid) else None)}
+            for e, t in samples
+        ]
+        if unmatched:
+            rospy.logwarn("eval_recorder: %d %s estimates had no truth at their stamp", unmatched, name)
+        return entry, raw
+
+    def write(self):
+        sources, raw = {}, {}
+        for name, estimates in self.estimates.items():
+            if estimates:
+                sources[name], raw[name] = self.evaluate(name, estimates)
+        result = {
+            "name": self.scenario,
+            "range_m": float(self.nominal_range if self.nominal_range is not None else (self.first_truth_range or 0.0)),
+            "lighting": self.lighting,
+            "sources": sources,
+            "raw": raw,
+        }
+        with open(self.output, "w") as f:
+            json.dump(result, f)
+        rospy.loginfo("eval_recorder: %s: %s", self.scenario,
+                      ", ".join(f"{k} {v['frames']} frames, detection {v['detection_rate']:.2f}" for k, v in sources.items()))
+
+
+if __name__ == "__main__":
+    rospy.init_node("eval_recorder")
+    EvalRecorder().run()
