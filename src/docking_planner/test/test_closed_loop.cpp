@@ -40,6 +40,8 @@ struct Scenario {
   bool yaw_rate_from_twist;
   double position_noise_m{0.0};   // per axis, times (1 + range in m): grows with range like stereo
   double yaw_noise_rad{0.0};
+  Vec2 target_velocity{0.0, 0.0};  // drift of the target robot's centre, m/s
+  bool model_target_drift{false};  // the planner's TrackConfig switch
 };
 
 struct World {
@@ -47,11 +49,12 @@ struct World {
   Vec2 target_centre{0.0, 0.0};
   double target_yaw0{0.0};
   double target_rate{0.0};
+  Vec2 target_velocity{0.0, 0.0};
 
   Pose2D port(double t) const {
     const double yaw = target_yaw0 + target_rate * t;
-    return Pose2D{target_centre.x() + kPortOffset * std::cos(yaw), target_centre.y() + kPortOffset * std::sin(yaw),
-                  wrapAngle(yaw)};
+    const Vec2 centre = target_centre + target_velocity * t;
+    return Pose2D{centre.x() + kPortOffset * std::cos(yaw), centre.y() + kPortOffset * std::sin(yaw), wrapAngle(yaw)};
   }
 };
 
@@ -98,9 +101,11 @@ TargetObservation observe(const World& w, double t, const Scenario& s, double co
 
 Result run(const Scenario& s) {
   PlannerConfig config;  // the defaults, which config/planner.yaml repeats
+  config.track.model_target_drift = s.model_target_drift;
   DockingPlanner planner{config};
   World w;
   w.target_rate = s.target_rate_radps;
+  w.target_velocity = s.target_velocity;
   // Port at t = 0 near the origin; the chaser 4 m from it.
   w.target_yaw0 = s.start_direction_rad + s.port_turn_rad;
   const Pose2D port0 = w.port(0.0);
@@ -167,12 +172,12 @@ bool visited(const Result& r, DockingPhase p) {
   return false;
 }
 
-void expectDocked(const Scenario& s, bool expect_no_abort) {
+void expectDocked(const Scenario& s, bool expect_no_abort, double tip_tolerance_m = 0.01) {
   SCOPED_TRACE(s.name);
   const Result r = run(s);
   std::cout << "[ closed loop ] " << s.name << ": " << describe(r) << "\n";
   ASSERT_TRUE(r.docked) << describe(r);
-  EXPECT_LE(r.tip_error_m, 0.01) << describe(r);                    // goal: 1 cm
+  EXPECT_LE(r.tip_error_m, tip_tolerance_m) << describe(r);         // goal: 1 cm
   EXPECT_LE(std::abs(r.yaw_error_rad), M_PI / 180.0) << describe(r);  // goal: 1 deg
   EXPECT_TRUE(visited(r, DockingPhase::kApproach)) << describe(r);
   EXPECT_TRUE(visited(r, DockingPhase::kFinal)) << describe(r);
@@ -230,4 +235,30 @@ TEST(ClosedLoop, NoisyEstimates) {
   rotating.position_noise_m = 0.002;
   rotating.yaw_noise_rad = 0.3 * kDeg;
   expectDocked(rotating, false);
+}
+
+TEST(ClosedLoop, DriftingAndRotatingTargetWithTheDriftModel) {
+  // Like the simulator's translating scenario: 3 cm/s sideways while turning at 2 deg/s. The 1 cm goal
+  // is set for still and turning targets; with a drift the dead-reckoned finish reaches ~1 cm, so
+  // this checks 1.5 cm (and the yaw goal).
+  Scenario drifting{"drifting 3 cm/s, rotating 2 deg/s", 0.3, 30.0 * kDeg, 0.0, 2.0 * kDeg, false};
+  drifting.target_velocity = Vec2(0.0, 0.03);
+  drifting.model_target_drift = true;
+  expectDocked(drifting, false, 0.015);
+  Scenario noisy = drifting;
+  noisy.name = "drifting, noisy (2 mm, 0.3 deg)";
+  noisy.position_noise_m = 0.002;
+  noisy.yaw_noise_rad = 0.3 * kDeg;
+  expectDocked(noisy, false, 0.015);
+}
+
+TEST(ClosedLoop, DriftingTargetWithoutTheDriftModelMissesTheGoal) {
+  // The documented trade-off, kept honest: without the drift model the blind finish does not follow a
+  // drifting target (if this starts passing the goal, the default may be worth revisiting).
+  Scenario drifting{"drifting 3 cm/s, no drift model", 0.3, 30.0 * kDeg, 0.0, 2.0 * kDeg, false};
+  drifting.target_velocity = Vec2(0.0, 0.03);
+  const Result r = run(drifting);
+  std::cout << "[ closed loop ] " << drifting.name << ": " << describe(r) << "\n";
+  ASSERT_TRUE(r.docked) << describe(r);  // it still ends in DOCKED against its own (held) estimate
+  EXPECT_GT(r.tip_error_m, 0.01) << describe(r);
 }

@@ -31,6 +31,8 @@ void validate(const TrackConfig& c) {
   requirePositive(c.yaw_rate_sigma_radps, "yaw_rate_sigma_radps");
   requireNonNegative(c.yaw_rate_random_walk, "yaw_rate_random_walk");
   requireNonNegative(c.centre_random_walk, "centre_random_walk");
+  requireNonNegative(c.centre_velocity_random_walk, "centre_velocity_random_walk");
+  requirePositive(c.initial_centre_speed_sigma_mps, "initial_centre_speed_sigma_mps");
   requireNonNegative(c.offset_random_walk, "offset_random_walk");
   requirePositive(c.initial_offset_sigma_m, "initial_offset_sigma_m");
   requirePositive(c.initial_yaw_rate_sigma_radps, "initial_yaw_rate_sigma_radps");
@@ -58,11 +60,11 @@ double TargetTrack::lastOrientationStamp() const {
   return last_orientation_stamp_s_ ? *last_orientation_stamp_s_ : -std::numeric_limits<double>::infinity();
 }
 
-Eigen::Matrix<double, 2, 4> TargetTrack::positionJacobian() const {
-  // p = c + R(psi) d: linear in (c, d) for the current yaw estimate.
-  Eigen::Matrix<double, 2, 4> h;
+Eigen::Matrix<double, 2, 6> TargetTrack::positionJacobian() const {
+  // p = c + R(psi) d: linear in (c, d) for the current yaw estimate; u is seen through c.
+  Eigen::Matrix<double, 2, 6> h = Eigen::Matrix<double, 2, 6>::Zero();
   h.leftCols<2>() = Eigen::Matrix2d::Identity();
-  h.rightCols<2>() = rotation(yaw_state_(0));
+  h.block<2, 2>(0, 2) = rotation(yaw_state_(0));
   return h;
 }
 
@@ -76,18 +78,31 @@ void TargetTrack::propagate(double dt) {
   yaw_state_ = f * yaw_state_;
   yaw_state_(0) = wrapAngle(yaw_state_(0));
   yaw_cov_ = f * yaw_cov_ * f.transpose() + qm;
+  // c' = u (constant drift), u a random walk.
+  Matrix6d fp = Matrix6d::Identity();
+  fp.block<2, 2>(0, 4) = Eigen::Matrix2d::Identity() * dt;
+  pos_state_ = fp * pos_state_;
+  pos_cov_ = fp * pos_cov_ * fp.transpose();
   const double qc = config_.centre_random_walk * config_.centre_random_walk * dt;
   const double qd = config_.offset_random_walk * config_.offset_random_walk * dt;
-  pos_cov_.diagonal() += Eigen::Vector4d(qc, qc, qd, qd);
+  const double qu =
+      config_.model_target_drift ? config_.centre_velocity_random_walk * config_.centre_velocity_random_walk : 0.0;
+  Vector6d noise;
+  noise << (qc + qu * dt * dt * dt / 3.0), (qc + qu * dt * dt * dt / 3.0), qd, qd, (qu * dt), (qu * dt);
+  pos_cov_.diagonal() += noise;
+  pos_cov_(0, 4) += qu * dt * dt / 2.0;
+  pos_cov_(4, 0) += qu * dt * dt / 2.0;
+  pos_cov_(1, 5) += qu * dt * dt / 2.0;
+  pos_cov_(5, 1) += qu * dt * dt / 2.0;
 }
 
 void TargetTrack::restartPosition(const Vec2& measured, double variance) {
   // Keep the offset (the port is where it is on the target), move the centre under the measurement.
-  const Vec2 offset = pos_state_.tail<2>();
+  const Vec2 offset = pos_state_.segment<2>(2);
   pos_state_.head<2>() = measured - rotation(yaw_state_(0)) * offset;
+  pos_cov_.block<2, 6>(0, 0).setZero();
+  pos_cov_.block<6, 2>(0, 0).setZero();
   pos_cov_.topLeftCorner<2, 2>() = Eigen::Matrix2d::Identity() * variance;
-  pos_cov_.topRightCorner<2, 2>().setZero();
-  pos_cov_.bottomLeftCorner<2, 2>().setZero();
 }
 
 TrackUpdate TargetTrack::update(const TargetObservation& o) {
@@ -117,18 +132,17 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
     yaw_cov_ = Eigen::Vector2d(o.orientation_valid ? yaw_var : M_PI * M_PI,
                                std::pow(config_.initial_yaw_rate_sigma_radps, 2))
                    .asDiagonal();
-    pos_state_ = Eigen::Vector4d(measured.x(), measured.y(), 0.0, 0.0);
+    pos_state_ << measured.x(), measured.y(), 0.0, 0.0, 0.0, 0.0;
     const double s0 = std::pow(config_.initial_offset_sigma_m, 2);
-    pos_cov_ = Eigen::Vector4d(pos_var + s0, pos_var + s0, s0, s0).asDiagonal();
-    pos_cov_(0, 2) = pos_cov_(2, 0) = -s0;  // c + d is known to pos_var: c and d anti-correlated
-    pos_cov_(1, 3) = pos_cov_(3, 1) = -s0;
-    if (o.orientation_valid) {
-      // The prior's correlation is for d in odom axes; express it in the target frame (R(psi)^T d).
-      const Eigen::Matrix2d r = rotation(yaw_state_(0));
-      pos_cov_.topRightCorner<2, 2>() = -s0 * r;
-      pos_cov_.bottomLeftCorner<2, 2>() = -s0 * r.transpose();
-      last_orientation_stamp_s_ = o.stamp_s;
-    }
+    // Without the drift model, u starts at 0 with no uncertainty and no process noise: it stays 0.
+    const double su = config_.model_target_drift ? std::pow(config_.initial_centre_speed_sigma_mps, 2) : 0.0;
+    pos_cov_.setZero();
+    pos_cov_.diagonal() << pos_var + s0, pos_var + s0, s0, s0, su, su;
+    // c + R d is known to pos_var: c and d are anti-correlated (d in the target frame, hence R).
+    const Eigen::Matrix2d r = rotation(yaw_state_(0));
+    pos_cov_.block<2, 2>(0, 2) = -s0 * r;
+    pos_cov_.block<2, 2>(2, 0) = -s0 * r.transpose();
+    if (o.orientation_valid) last_orientation_stamp_s_ = o.stamp_s;
     last_position_stamp_s_ = o.stamp_s;
     last_source_ = o.source;
     result.accepted = true;
@@ -143,9 +157,9 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
       // Until now the yaw was a placeholder: re-express the offset so the port stays where it was.
       const double new_yaw = wrapAngle(o.pose.yaw);
       const Eigen::Matrix2d change = rotation(new_yaw).transpose() * rotation(yaw_state_(0));
-      pos_state_.tail<2>() = change * pos_state_.tail<2>();
-      Eigen::Matrix4d j = Eigen::Matrix4d::Identity();
-      j.bottomRightCorner<2, 2>() = change;
+      pos_state_.segment<2>(2) = change * pos_state_.segment<2>(2);
+      Matrix6d j = Matrix6d::Identity();
+      j.block<2, 2>(2, 2) = change;
       pos_cov_ = j * pos_cov_ * j.transpose();
       yaw_state_(0) = new_yaw;
       yaw_cov_(0, 0) = yaw_var;
@@ -183,7 +197,7 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
   if (!result.reason.empty()) return result;  // an outlier orientation: do not trust its position either
 
   // Position.
-  const Eigen::Matrix<double, 2, 4> h = positionJacobian();
+  const Eigen::Matrix<double, 2, 6> h = positionJacobian();
   const Vec2 innovation = measured - h * pos_state_;
   const Eigen::Matrix2d s = h * pos_cov_ * h.transpose() + Eigen::Matrix2d::Identity() * pos_var;
   const double mahalanobis2 = innovation.dot(s.ldlt().solve(innovation));
@@ -194,9 +208,9 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
     }
     restartPosition(measured, pos_var);  // it persisted: the target did move
   } else {
-    const Eigen::Matrix<double, 4, 2> k = pos_cov_ * h.transpose() * s.inverse();
+    const Eigen::Matrix<double, 6, 2> k = pos_cov_ * h.transpose() * s.inverse();
     pos_state_ += k * innovation;
-    pos_cov_ = (Eigen::Matrix4d::Identity() - k * h) * pos_cov_;
+    pos_cov_ = (Matrix6d::Identity() - k * h) * pos_cov_;
     pos_cov_ = 0.5 * (pos_cov_ + pos_cov_.transpose());
   }
   position_outliers_ = 0;
@@ -211,11 +225,12 @@ PortState TargetTrack::predict(double now_s) const {
   const double dt = last_position_stamp_s_ ? now_s - *last_position_stamp_s_ : 0.0;
   const double yaw_rate = yaw_state_(1);
   const double yaw = wrapAngle(yaw_state_(0) + yaw_rate * dt);
-  const Vec2 offset = rotation(yaw) * pos_state_.tail<2>();
-  const Vec2 position = pos_state_.head<2>() + offset;
+  const Vec2 drift = pos_state_.tail<2>();
+  const Vec2 offset = rotation(yaw) * pos_state_.segment<2>(2);
+  const Vec2 position = pos_state_.head<2>() + drift * dt + offset;
   s.pose = Pose2D{position.x(), position.y(), yaw};
   s.yaw_rate = yaw_rate;
-  s.velocity = clampNorm(yaw_rate * perpendicular(offset), config_.max_port_speed_mps);
+  s.velocity = clampNorm(drift + yaw_rate * perpendicular(offset), config_.max_port_speed_mps);
   return s;
 }
 

@@ -70,6 +70,9 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   t.use_estimate_yaw_rate = requireBool(p, "use_estimate_yaw_rate");
   t.yaw_rate_random_walk = requireDouble(p, "yaw_rate_random_walk");
   t.centre_random_walk = requireDouble(p, "centre_random_walk");
+  t.model_target_drift = requireBool(p, "model_target_drift");
+  t.centre_velocity_random_walk = requireDouble(p, "centre_velocity_random_walk");
+  t.initial_centre_speed_sigma_mps = requireDouble(p, "initial_centre_speed_sigma_mps");
   t.offset_random_walk = requireDouble(p, "offset_random_walk");
   t.initial_offset_sigma_m = requireDouble(p, "initial_offset_sigma_m");
   t.initial_yaw_rate_sigma_radps = requireDouble(p, "initial_yaw_rate_sigma_radps");
