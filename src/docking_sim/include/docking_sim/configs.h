@@ -114,7 +114,9 @@ enum class Band { kVisible, kInfrared };
 
 struct CameraMount {
   std::string key;                 ///< stereo_left | stereo_right | ir
-  std::string frame_id;
+  std::string frame_id;            ///< the camera's tf frame (robot.yaml mount)
+  std::string image_frame_id;      ///< frame_id its images carry (the right camera of a stereo pair
+                                   ///< uses the left's: stereo_image_proc requires one frame per pair)
   std::string calibration_file;    ///< resolved path
   Eigen::Isometry3d base_T_camera{Eigen::Isometry3d::Identity()};
   CameraCalibration calibration;

@@ -205,6 +205,7 @@ RobotModel loadRobotModel(const std::string& path) {
     m.key = keys[i];
     m.band = (i == RobotModel::kIr) ? Band::kInfrared : Band::kVisible;
     m.frame_id = cam["frame_id"].asString();
+    m.image_frame_id = cam.has("image_frame_id") ? cam["image_frame_id"].asString() : m.frame_id;
     m.calibration_file = resolvePath(folderOf(path), cam["calibration"].asString());
     m.base_T_camera = poseFromXyzRpy(cam["xyz_m"].asVector(3), cam["rpy_rad"].asVector(3));
     try {

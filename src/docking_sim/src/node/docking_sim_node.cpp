@@ -100,7 +100,7 @@ class SimNode {
       if (!camera_calibration_parsers::readCalibration(mount.calibration_file, camera_name, infos_[i])) {
         throw docking_sim::ConfigError(mount.calibration_file, "", "camera_calibration_parsers cannot read it");
       }
-      infos_[i].header.frame_id = mount.frame_id;
+      infos_[i].header.frame_id = mount.image_frame_id;
       camera_pubs_[i] = image_transport_.advertiseCamera(image_topics[i], 2);
     }
     clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
@@ -263,7 +263,7 @@ class SimNode {
       render_ms_[i] = 0.9 * render_ms_[i] + 0.1 * (t.rasterize_ms + t.distort_ms + t.effects_ms);
       sensor_msgs::ImagePtr image = boost::make_shared<sensor_msgs::Image>();
       image->header.stamp = stamp;
-      image->header.frame_id = mount.frame_id;
+      image->header.frame_id = mount.image_frame_id;
       image->height = static_cast<uint32_t>(frame.rows);
       image->width = static_cast<uint32_t>(frame.cols);
       image->encoding = frame.channels() == 3 ? sensor_msgs::image_encodings::BGR8 : sensor_msgs::image_encodings::MONO8;
