@@ -324,8 +324,10 @@ void CaptureNodelet::diagnoseCapture(diagnostic_updater::DiagnosticStatusWrapper
 StereoCameraNodelet::StereoCameraNodelet()
     : CaptureNodelet({{"left/", docking_msgs::topics::kStereoLeftImageRaw, "stereo_left",
                        docking_msgs::frames::kStereoLeftOptical},
+                      // Both images of the pair carry the left frame: stereo_image_proc requires it (the
+                      // baseline is in the right calibration's projection matrix).
                       {"right/", docking_msgs::topics::kStereoRightImageRaw, "stereo_right",
-                       docking_msgs::frames::kStereoRightOptical}},
+                       docking_msgs::frames::kStereoLeftOptical}},
                      camera::ColourMode::kKeep) {}
 
 IrCameraNodelet::IrCameraNodelet()

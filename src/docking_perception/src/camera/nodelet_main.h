@@ -12,7 +12,10 @@ inline int runNodeletStandalone(int argc, char** argv, const std::string& node_n
   ros::init(argc, argv, node_name);
   nodelet::Loader loader(false);  // no load/unload services: this process runs just this nodelet
   const nodelet::M_string remappings(ros::names::getRemappings());
-  const nodelet::V_string nodelet_argv(argv + 1, argv + argc);
+  // The nodelet sees the command line without the ROS remappings (those are passed separately).
+  nodelet::V_string nodelet_argv;
+  ros::removeROSArgs(argc, argv, nodelet_argv);
+  if (!nodelet_argv.empty()) nodelet_argv.erase(nodelet_argv.begin());  // the program name
   // The nodelet logs why it did not start (e.g. the parameter that is missing).
   if (!loader.load(ros::this_node::getName(), type, remappings, nodelet_argv)) {
     ROS_FATAL("%s: could not start %s", ros::this_node::getName().c_str(), type.c_str());

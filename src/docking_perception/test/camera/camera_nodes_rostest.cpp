@@ -107,8 +107,10 @@ TEST(CameraSequence, StereoPairHasCalibratedInfoAndSharedIncreasingStamps) {
   std::lock_guard<std::mutex> lock_left(left.mutex);
   std::lock_guard<std::mutex> lock_right(right.mutex);
   expectInfoMatchesCalibration(left.infos.back(), requiredTestParam("left_calibration"), frames::kStereoLeftOptical);
+  // Both of a pair in the left optical frame: stereo_image_proc (image_geometry::StereoCameraModel)
+  // refuses a pair whose frames differ.
   expectInfoMatchesCalibration(right.infos.back(), requiredTestParam("right_calibration"),
-                               frames::kStereoRightOptical);
+                               frames::kStereoLeftOptical);
 
   // Every left image has a right image with the very same stamp (one stamp per grabbed pair) ...
   std::set<ros::Time> right_stamps;
