@@ -109,6 +109,15 @@ TEST_F(CaptureRigTest, MissingDeviceRetriesWithGrowingDelays) {
   EXPECT_FALSE(rig.isOpen());
 }
 
+TEST_F(CaptureRigTest, DeviceThatExistsButIsNoCameraIsNamedAndRetried) {
+  CaptureRig rig({parseSourceSpec("/dev/null")}, settings_, backoff_);
+  const auto outcome = rig.capture(0.0);
+  EXPECT_EQ(outcome.status, CaptureStatus::kWaiting);
+  EXPECT_TRUE(outcome.new_failure);
+  EXPECT_NE(outcome.message.find("cannot open V4L2 device /dev/null"), std::string::npos) << outcome.message;
+  EXPECT_DOUBLE_EQ(outcome.retry_at_s, 0.5);
+}
+
 TEST_F(CaptureRigTest, OneMissingSourceKeepsThePairClosedAndIsNamed) {
   const std::string left = writeSequence("left", 2, 10);
   const std::string right = (dir_ / "absent_%04d.png").string();
