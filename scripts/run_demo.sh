@@ -1,4 +1,9 @@
 #!/usr/bin/env bash
-# Placeholder until the simulator and the closed loop exist (issues 3 and 6).
-echo "make demo: not available yet: it needs the simulator (issue 3) and the closed loop (issue 6)." >&2
-exit 2
+# make demo: one closed-loop docking in the simulator (default scenario), headless, until DOCKED or a
+# 240 s (sim) timeout; summary printed and written to results/demo/ (summary.json, run.bag, PNG plots).
+#   scripts/run_demo.sh [--scenario NAME] [--timeout S] [--real-time-factor F] ...   (--help)
+# Environment: DEMO_ARGS (extra arguments), DEMO_RTF, DEMO_CAMERA_RATE_HZ.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH=/usr/bin:$PATH
+exec /usr/bin/python3 scripts/demo/run_demo.py "$@" ${DEMO_ARGS:-}

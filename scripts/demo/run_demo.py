@@ -1,0 +1,173 @@
+#!/usr/bin/env python3
+"""make demo: one closed-loop docking in the simulator, headless.
+
+Starts launch/sim.launch (simulator, omni_base, perception, arbiter, planner, rosbag record) on its own
+ROS master, watches docking/state until DOCKED or a sim-time timeout, stops everything, then analyses
+the bag against the simulator's truth (scripts/demo/analyze_run.py): prints a summary and writes
+OUT/summary.json, OUT/run.bag, OUT/trajectory.png, OUT/timeline.png.
+
+Exit status: 0 when the run was carried out (docked or not: the summary says why), 1 when it could not
+be (a required node died, no /clock, no docking/state), 2 on bad arguments.
+"""
+import argparse
+import json
+import os
+import pathlib
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def stop(proc, sig_timeout=30):
+    if proc.poll() is not None:
+        return
+    try:
+        os.killpg(proc.pid, signal.SIGINT)
+        proc.wait(timeout=sig_timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    except ProcessLookupError:
+        pass
+
+
+def run(args):
+    out = pathlib.Path(args.out).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    bag = out / "run.bag"
+    for stale in (bag, out / "run.bag.active", out / "summary.json"):
+        stale.unlink(missing_ok=True)
+    port = args.port or free_port()
+    master = f"http://127.0.0.1:{port}"
+    env = dict(os.environ, ROS_MASTER_URI=master, ROS_HOME=str(out / "ros_home"))
+    launch_args = [f"real_time_factor:={args.real_time_factor}", f"camera_rate_hz:={args.camera_rate_hz}",
+                   f"bag:={bag}", "output:=log"]
+    if args.scenario_file:
+        launch_args.append(f"scenario_file:={pathlib.Path(args.scenario_file).resolve()}")
+    else:
+        launch_args.append(f"scenario:={args.scenario}")
+    launch_args += args.launch_arg or []
+    log_path = out / "launch.log"
+    log = open(log_path, "w")
+    print(f"demo: roslaunch -p {port} launch/sim.launch {' '.join(launch_args)}", flush=True)
+    launch = subprocess.Popen(["roslaunch", "-p", str(port),
+                               str(ROOT / "launch" / "sim.launch")] + launch_args,
+                              env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    failure = None
+    outcome = {}
+    try:
+        os.environ["ROS_MASTER_URI"] = master
+        os.environ["ROS_HOME"] = env["ROS_HOME"]
+        failure = monitor(launch, args, outcome)
+    finally:
+        stop(launch)
+        log.close()
+    if failure:
+        print(f"demo: the run could not be carried out: {failure} (log: {log_path})", file=sys.stderr)
+        if not bag.exists():
+            return 1
+    if not bag.exists():
+        print(f"demo: no bag was written ({bag}); see {log_path}", file=sys.stderr)
+        return 1
+    import analyze_run
+    summary, data, raw = analyze_run.analyze(bag, timeout_s=args.timeout)
+    summary.update({"scenario": args.scenario_file or args.scenario, "real_time_factor": args.real_time_factor,
+                    "timeout_s": args.timeout, "run_failure": failure,
+                    "bag_size_mb": bag.stat().st_size / 1e6, "wall_time_s": outcome.get("wall_s")})
+    analyze_run.plot(summary, data, raw, out)
+    with open(out / "summary.json", "w") as f:
+        json.dump(summary, f, indent=2)
+    analyze_run.print_summary(summary)
+    print(f"  bag {bag} ({summary['bag_size_mb']:.1f} MB), plots {out}/trajectory.png, {out}/timeline.png")
+    return 1 if failure else 0
+
+
+def monitor(launch, args, outcome):
+    """Waits for DOCKED or the sim-time timeout. Returns None, or why the run could not be carried out."""
+    import rospy
+    from docking_msgs.msg import DockingState
+
+    wall0 = time.time()
+    # The master must answer before init_node.
+    while time.time() - wall0 < 60:
+        if launch.poll() is not None:
+            return "roslaunch exited at start-up"
+        try:
+            import rosgraph
+            if rosgraph.Master("/demo").is_online():
+                break
+        except Exception:
+            pass
+        time.sleep(0.5)
+    rospy.init_node("demo_monitor", anonymous=True, disable_signals=True)
+    last = {"state": None, "count": 0}
+
+    def on_state(msg):
+        last["state"] = msg
+        last["count"] += 1
+
+    rospy.Subscriber("/docking/state", DockingState, on_state, queue_size=10)
+    while rospy.get_time() == 0.0:
+        if launch.poll() is not None:
+            return "roslaunch exited before /clock"
+        if time.time() - wall0 > args.startup_timeout:
+            return f"no /clock after {args.startup_timeout:.0f} s (wall)"
+        time.sleep(0.1)
+    t0 = rospy.get_time()
+    reported = None
+    docked_at = None
+    while True:
+        if launch.poll() is not None:
+            return "roslaunch exited during the run (a required node died or the scenario ended): see launch.log"
+        now = rospy.get_time()
+        s = last["state"]
+        if s is not None and s.state_name != reported:
+            reported = s.state_name
+            print(f"  t={now - t0:6.1f} s  {s.state_name:8s} {s.reason}", flush=True)
+        if s is not None and s.state == DockingState.DOCKED and docked_at is None:
+            docked_at = now
+        if docked_at is not None and now - docked_at > 1.0:
+            break
+        if now - t0 > args.timeout:
+            print(f"  timeout: {args.timeout:.0f} s of sim time", flush=True)
+            break
+        if last["count"] == 0 and now - t0 > 30.0:
+            return "no docking/state from the planner after 30 s of sim time"
+        if time.time() - wall0 > args.wall_timeout:
+            print(f"  wall-clock limit {args.wall_timeout:.0f} s reached at sim t={now - t0:.1f} s", flush=True)
+            break
+        time.sleep(0.2)
+    outcome["wall_s"] = time.time() - wall0
+    rospy.signal_shutdown("done")
+    return None
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scenario", default="default", help="config/scenarios/<name>.yaml")
+    ap.add_argument("--scenario-file", help="explicit scenario file (overrides --scenario)")
+    ap.add_argument("--out", default=str(ROOT / "results" / "demo"))
+    ap.add_argument("--timeout", type=float, default=240.0, help="sim seconds")
+    ap.add_argument("--wall-timeout", type=float, default=3600.0, help="wall seconds (safety net)")
+    ap.add_argument("--startup-timeout", type=float, default=120.0, help="wall seconds to the first /clock")
+    ap.add_argument("--real-time-factor", type=float, default=float(os.environ.get("DEMO_RTF", 0.4)),
+                    help="sim s per wall s; perception must keep up (0.4 on a busy 2-core machine)")
+    ap.add_argument("--camera-rate-hz", type=float, default=float(os.environ.get("DEMO_CAMERA_RATE_HZ", 15.0)))
+    ap.add_argument("--port", type=int, default=0, help="ROS master port (default: a free one)")
+    ap.add_argument("--launch-arg", action="append", help="extra NAME:=VALUE for sim.launch")
+    return run(ap.parse_args())
+
+
+if __name__ == "__main__":
+    sys.exit(main())
