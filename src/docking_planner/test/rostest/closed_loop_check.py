@@ -1,0 +1,195 @@
+#!/usr/bin/env python3
+"""Closed-loop rostest checks against the simulator's truth (sim time throughout).
+
+mode "dock": the planner must reach DOCKED within ~timeout_s (sim); at that moment the TRUE probe tip
+  (base_link x = probe_x_m on tf world -> chaser_truth) must be within max_position_error_m of the TRUE
+  port origin (tf world -> target_truth) in the floor plane, and the chaser's x axis within
+  max_yaw_error_deg of the reversed port axis.
+mode "lost": this node relays the arbiter's target/estimate to the planner (remapped onto
+  ~relay_topic) and stops relaying lose_after_s (sim) after the planner entered APPROACH, as if the
+  target had vanished. The planner must go to HOLD, then SEARCH, within hold_to_search_max_s, and every
+  cmd_vel from HOLD until SEARCH (and SEARCH's standing wait) must be zero; the chaser must not move
+  (truth) while it holds.
+"""
+import math
+import sys
+import threading
+import unittest
+
+import rospy
+import rostest
+import tf2_ros
+from docking_msgs.msg import DockingState, TargetEstimate
+from geometry_msgs.msg import Twist
+
+PKG = "docking_planner"
+
+
+def yaw_of(q):
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def wrap(a):
+    return math.atan2(math.sin(a), math.cos(a))
+
+
+class ClosedLoopCheck(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("closed_loop_check")
+
+    def setUp(self):
+        self.lock = threading.Lock()
+        self.states = []      # (receipt sim time, DockingState)
+        self.cmds = []        # (receipt sim time, Twist)
+        self.relaying = True
+        self.buffer = tf2_ros.Buffer(cache_time=rospy.Duration(600.0))
+        self.listener = tf2_ros.TransformListener(self.buffer)
+        rospy.Subscriber("docking/state", DockingState, self.on_state, queue_size=50)
+        rospy.Subscriber("cmd_vel", Twist, self.on_cmd, queue_size=50)
+        relay_topic = rospy.get_param("~relay_topic", "")
+        if relay_topic:
+            self.relay_pub = rospy.Publisher(relay_topic, TargetEstimate, queue_size=10)
+            rospy.Subscriber("target/estimate", TargetEstimate, self.on_estimate, queue_size=10)
+
+    def on_state(self, msg):
+        with self.lock:
+            self.states.append((rospy.get_time(), msg))
+
+    def on_cmd(self, msg):
+        with self.lock:
+            self.cmds.append((rospy.get_time(), msg))
+
+    def on_estimate(self, msg):
+        if self.relaying:
+            self.relay_pub.publish(msg)
+
+    def wait_clock(self):
+        wall_limit = rospy.get_param("~startup_wall_timeout_s", 120.0)
+        import time
+        start = time.time()
+        while rospy.get_time() == 0.0:
+            self.assertLess(time.time() - start, wall_limit, "no /clock from the simulator")
+            time.sleep(0.1)
+        return rospy.get_time()
+
+    def truth(self, stamp):
+        """(chaser x, y, yaw), (port x, y, yaw) in world at the stamp."""
+        out = []
+        for frame in ("chaser_truth", "target_truth"):
+            tr = self.buffer.lookup_transform("world", frame, stamp, rospy.Duration(2.0))
+            t, q = tr.transform.translation, tr.transform.rotation
+            out.append((t.x, t.y, yaw_of(q)))
+        return out
+
+    def latest_state(self):
+        with self.lock:
+            return self.states[-1][1] if self.states else None
+
+    def test_closed_loop(self):
+        mode = rospy.get_param("~mode")
+        if mode == "dock":
+            self.check_dock()
+        elif mode == "lost":
+            self.check_lost()
+        else:
+            self.fail("unknown ~mode %s" % mode)
+
+    def check_dock(self):
+        timeout = rospy.get_param("~timeout_s", 240.0)
+        probe_x = rospy.get_param("~probe_x_m", 0.18)
+        max_pos = rospy.get_param("~max_position_error_m", 0.01)
+        max_yaw = rospy.get_param("~max_yaw_error_deg", 1.0)
+        t0 = self.wait_clock()
+        docked = None
+        visited = []
+        while not rospy.is_shutdown() and rospy.get_time() - t0 < timeout:
+            with self.lock:
+                for _, s in self.states[len(visited):]:
+                    visited.append(s)
+                    if s.state == DockingState.DOCKED and docked is None:
+                        docked = s
+            if docked is not None:
+                break
+            rospy.sleep(0.2)
+        names = []
+        for s in visited:
+            if not names or names[-1] != s.state_name:
+                names.append(s.state_name)
+        last = visited[-1] if visited else None
+        self.assertIsNotNone(docked, "not DOCKED within %.0f s (sim); states %s; last: %s" % (
+            timeout, " -> ".join(names), last.reason if last else "no docking/state"))
+        (cx, cy, cyaw), (px, py, pyaw) = self.truth(docked.header.stamp)
+        tip_err = math.hypot(cx + probe_x * math.cos(cyaw) - px, cy + probe_x * math.sin(cyaw) - py)
+        yaw_err = math.degrees(abs(wrap(cyaw - (pyaw + math.pi))))
+        rospy.loginfo("closed_loop_check: DOCKED at %.1f s (sim), true tip error %.1f mm, yaw %.2f deg; %s",
+                      docked.header.stamp.to_sec() - t0, 1000 * tip_err, yaw_err, " -> ".join(names))
+        self.assertLessEqual(tip_err, max_pos, "true probe-tip error %.1f mm > %.1f mm" % (1000 * tip_err, 1000 * max_pos))
+        self.assertLessEqual(yaw_err, max_yaw, "true yaw error %.2f deg > %.2f deg" % (yaw_err, max_yaw))
+
+    def check_lost(self):
+        lose_after = rospy.get_param("~lose_after_s", 4.0)
+        timeout = rospy.get_param("~timeout_s", 90.0)
+        hold_to_search_max = rospy.get_param("~hold_to_search_max_s", 10.0)
+        t0 = self.wait_clock()
+        # 1. Wait for APPROACH on the relayed estimates, then cut them after lose_after_s.
+        approach_t = None
+        while rospy.get_time() - t0 < timeout:
+            s = self.latest_state()
+            if s is not None and s.state == DockingState.APPROACH and approach_t is None:
+                approach_t = rospy.get_time()
+            if approach_t is not None and rospy.get_time() - approach_t >= lose_after:
+                break
+            rospy.sleep(0.05)
+        self.assertIsNotNone(approach_t, "the planner never reached APPROACH")
+        self.assertEqual(self.latest_state().state, DockingState.APPROACH,
+                         "not in APPROACH when the target is made to vanish: %s" % self.latest_state().reason)
+        self.relaying = False
+        lost_t = rospy.get_time()
+        with self.lock:
+            n0 = len(self.states)
+        # Chaser moving before the loss (a real mid-approach).
+        moving = [c for t, c in self.cmds if t > lost_t - 1.0 and t <= lost_t]
+        self.assertTrue(any(abs(c.linear.x) + abs(c.linear.y) > 1e-3 for c in moving),
+                        "the chaser was not moving before the target vanished")
+        # 2. HOLD, then SEARCH.
+        hold_t = search_t = None
+        while rospy.get_time() - lost_t < timeout and search_t is None:
+            with self.lock:
+                for t, s in self.states[n0:]:
+                    if hold_t is None and s.state == DockingState.HOLD:
+                        hold_t = t
+                    if hold_t is not None and search_t is None and s.state == DockingState.SEARCH:
+                        search_t = t
+                    if hold_t is None:
+                        self.assertIn(s.state, (DockingState.APPROACH,),
+                                      "left APPROACH for %s, not HOLD: %s" % (s.state_name, s.reason))
+                    elif search_t is None:
+                        self.assertEqual(s.state, DockingState.HOLD, "HOLD went to %s, not SEARCH: %s"
+                                         % (s.state_name, s.reason))
+            rospy.sleep(0.05)
+        self.assertIsNotNone(hold_t, "no HOLD after the target vanished")
+        self.assertIsNotNone(search_t, "no SEARCH within %.0f s after HOLD" % timeout)
+        self.assertLess(search_t - hold_t, hold_to_search_max, "HOLD lasted %.1f s" % (search_t - hold_t))
+        self.assertLess(hold_t - lost_t, 2.0, "HOLD only %.1f s after the loss" % (hold_t - lost_t))
+        # 3. Zero cmd_vel from HOLD (plus one control cycle of slack for topic ordering) until SEARCH
+        #    starts turning (its standing wait included): search_wait_s after SEARCH began.
+        search_wait = rospy.get_param("~search_wait_s", 2.0)
+        rospy.sleep(search_wait + 0.5)
+        with self.lock:
+            between = [(t, c) for t, c in self.cmds if hold_t + 0.1 < t < search_t + search_wait - 0.2]
+        self.assertGreater(len(between), 10, "too few cmd_vel between HOLD and SEARCH")
+        for t, c in between:
+            self.assertTrue(c.linear.x == 0.0 and c.linear.y == 0.0 and c.angular.z == 0.0,
+                            "non-zero cmd_vel %.3f %.3f %.3f at %.2f s after HOLD" % (
+                                c.linear.x, c.linear.y, c.angular.z, t - hold_t))
+        # The chaser (truth) stands still once the motors have spun down (0.5 s), until SEARCH turns.
+        a = self.truth(rospy.Time.from_sec(hold_t + 0.6))[0]
+        b = self.truth(rospy.Time.from_sec(search_t))[0]
+        self.assertLess(math.hypot(a[0] - b[0], a[1] - b[1]), 0.005, "the chaser moved while holding")
+        rospy.loginfo("closed_loop_check: lost at %.1f s, HOLD after %.2f s, SEARCH after %.2f s more, "
+                      "%d zero cmd_vel in between", lost_t - t0, hold_t - lost_t, search_t - hold_t, len(between))
+
+
+if __name__ == "__main__":
+    rostest.rosrun(PKG, "closed_loop_check", ClosedLoopCheck, sys.argv)
