@@ -1,4 +1,8 @@
 #!/usr/bin/env bash
-# Placeholder until the simulator and the closed loop exist (issues 3 and 6).
-echo "make campaign: not available yet: it needs the simulator (issue 3) and the closed loop (issue 6)." >&2
-exit 2
+# make campaign: CAMPAIGN_RUNS (default 50) seeded closed-loop docking runs from randomized starts
+# (range, bearing, port angle, rotation rate, lighting) -> results/campaign/summary.json, errors.png.
+#   scripts/run_campaign.sh [--runs N] [--seed S] [--timeout SIM_S] ...   (--help)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH=/usr/bin:$PATH
+exec /usr/bin/python3 scripts/demo/run_campaign.py "$@" ${CAMPAIGN_ARGS:-}

@@ -1,0 +1,167 @@
+#!/usr/bin/env python3
+"""make campaign: N seeded closed-loop docking runs from randomized starts.
+
+Each run's scenario (range 1.5-4.5 m, bearing of the target in the chaser's view within +-20 deg,
+port angle off the line of sight within +-60 deg, rotation rate within +-4 deg/s, lighting nominal /
+dark / glare) is drawn from random.Random(seed + i) and written to results/campaign/scenarios/, then run
+through scripts/demo/run_demo.py (sim.launch scenario_file:=...). Writes results/campaign/summary.json
+{"runs", "success_rate", error distribution, failures with their causes, per-run rows} and
+results/campaign/errors.png.
+
+  run_campaign.py [--runs N (CAMPAIGN_RUNS, default 50)] [--seed S] [--timeout SIM_S] [--real-time-factor F]
+"""
+import argparse
+import json
+import math
+import os
+import pathlib
+import random
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+LIGHTING = ["nominal"] * 6 + ["dark"] * 2 + ["glare"] * 2
+
+
+def make_scenario(rng, index, seed):
+    rng_m = rng.uniform(1.5, 4.5)
+    bearing = math.radians(rng.uniform(-20.0, 20.0))
+    port_off = rng.uniform(-60.0, 60.0)
+    rate = rng.uniform(-4.0, 4.0)
+    light = rng.choice(LIGHTING)
+    px, py = rng_m * math.cos(bearing), rng_m * math.sin(bearing)
+    # The port faces the chaser (yaw = bearing + 180) turned by port_off; the robot centre sits 0.15 m
+    # behind the port along its axis.
+    yaw = math.degrees(bearing) + 180.0 + port_off
+    cx, cy = px - 0.15 * math.cos(math.radians(yaw)), py - 0.15 * math.sin(math.radians(yaw))
+    text = f"""# make campaign run {index} (seed {seed}): range {rng_m:.2f} m, bearing {math.degrees(bearing):.1f} deg,
+# port {port_off:.1f} deg off the line of sight, {rate:.2f} deg/s, {light}.
+scenario:
+  description: "campaign {index}"
+  duration_s: 900.0
+  seed: {seed}
+  lighting: {light}
+  chaser: {{x_m: 0.0, y_m: 0.0, yaw_deg: 0.0}}
+  target:
+    x_m: {cx:.4f}
+    y_m: {cy:.4f}
+    yaw_deg: {yaw:.2f}
+    motion: {{yaw_rate_deg_s: {rate:.3f}, velocity_m_s: [0.0, 0.0]}}
+"""
+    params = {"range_m": rng_m, "bearing_deg": math.degrees(bearing), "port_angle_deg": port_off,
+              "yaw_rate_deg_s": rate, "lighting": light, "seed": seed}
+    return text, params
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--runs", type=int, default=int(os.environ.get("CAMPAIGN_RUNS", 50)))
+    ap.add_argument("--seed", type=int, default=1000)
+    ap.add_argument("--timeout", type=float, default=240.0, help="sim seconds per run")
+    ap.add_argument("--real-time-factor", type=float, default=float(os.environ.get("DEMO_RTF", 0.3)))
+    ap.add_argument("--out", default=str(ROOT / "results" / "campaign"))
+    ap.add_argument("--keep-bags", action="store_true")
+    ap.add_argument("--launch-arg", action="append", help="extra NAME:=VALUE for sim.launch")
+    a = ap.parse_args()
+    out = pathlib.Path(a.out)
+    (out / "scenarios").mkdir(parents=True, exist_ok=True)
+    rows = []
+    for i in range(a.runs):
+        seed = a.seed + i
+        text, params = make_scenario(random.Random(seed), i, seed)
+        scen = out / "scenarios" / f"run_{i:03d}.yaml"
+        scen.write_text(text)
+        run_dir = out / "runs" / f"run_{i:03d}"
+        cmd = ["/usr/bin/python3", str(ROOT / "scripts" / "demo" / "run_demo.py"), "--scenario-file", str(scen),
+               "--out", str(run_dir), "--timeout", str(a.timeout), "--real-time-factor", str(a.real_time_factor)]
+        for la in a.launch_arg or []:
+            cmd += ["--launch-arg", la]
+        print(f"campaign {i + 1}/{a.runs}: {params}", flush=True)
+        rc = subprocess.run(cmd, stdout=subprocess.DEVNULL if not os.environ.get("CAMPAIGN_VERBOSE") else None).returncode
+        row = dict(params, run=i, exit_code=rc)
+        sj = run_dir / "summary.json"
+        if sj.exists():
+            s = json.loads(sj.read_text())
+            pos_ok = s["final_position_error_m"] <= 0.01
+            yaw_ok = s["final_yaw_error_deg"] <= 1.0
+            row.update({k: s.get(k) for k in ("docked", "time_to_dock_s", "final_position_error_m",
+                                                 "final_yaw_error_deg", "last_state", "last_reason",
+                                                 "states_visited", "run_failure")})
+            row["success"] = bool(s["docked"] and pos_ok and yaw_ok)
+            if not row["success"]:
+                row["cause"] = (s.get("run_failure") or
+                                ("not docked: %s: %s" % (s["last_state"], s["last_reason"]) if not s["docked"] else
+                                 "docked outside tolerance: %.1f mm, %.2f deg" % (1000 * s["final_position_error_m"],
+                                                                                  s["final_yaw_error_deg"])))
+            if not a.keep_bags:
+                (run_dir / "run.bag").unlink(missing_ok=True)
+        else:
+            row.update({"success": False, "docked": False, "cause": f"run could not be carried out (exit {rc})"})
+        rows.append(row)
+        print(f"  -> {'OK' if row['success'] else 'FAIL: ' + row.get('cause', '')}", flush=True)
+        write_summary(out, rows)
+    s = write_summary(out, rows)
+    print(json.dumps({k: s[k] for k in ("runs", "success_rate", "position_error_mm", "yaw_error_deg")}, indent=2))
+
+
+def pct(values, p):
+    if not values:
+        return None
+    v = sorted(values)
+    k = (len(v) - 1) * p / 100.0
+    lo, hi = math.floor(k), math.ceil(k)
+    return v[lo] + (v[hi] - v[lo]) * (k - lo)
+
+
+def write_summary(out, rows):
+    docked = [r for r in rows if r.get("docked")]
+    pos = [1000 * r["final_position_error_m"] for r in docked]
+    yaw = [r["final_yaw_error_deg"] for r in docked]
+    ttd = [r["time_to_dock_s"] for r in docked]
+    causes = {}
+    for r in rows:
+        if not r["success"]:
+            key = r["cause"].split(":")[0] if r.get("cause") else "unknown"
+            causes[key] = causes.get(key, 0) + 1
+    s = {
+        "runs": len(rows),
+        "success_rate": (sum(r["success"] for r in rows) / len(rows)) if rows else 0.0,
+        "docked_rate": (len(docked) / len(rows)) if rows else 0.0,
+        "position_error_mm": {"median": pct(pos, 50), "p95": pct(pos, 95), "max": max(pos) if pos else None},
+        "yaw_error_deg": {"median": pct(yaw, 50), "p95": pct(yaw, 95), "max": max(yaw) if yaw else None},
+        "time_to_dock_s": {"median": pct(ttd, 50), "p95": pct(ttd, 95)},
+        "failure_causes": causes,
+        "failures": [{"run": r["run"], "cause": r.get("cause"), "lighting": r["lighting"], "range_m": r["range_m"]}
+                     for r in rows if not r["success"]],
+        "per_run": rows,
+    }
+    (out / "summary.json").write_text(json.dumps(s, indent=2))
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+        for light, m in (("nominal", "o"), ("dark", "s"), ("glare", "^")):
+            d = [r for r in docked if r["lighting"] == light]
+            ax[0].plot([r["range_m"] for r in d], [1000 * r["final_position_error_m"] for r in d], m, label=light)
+            ax[1].plot([r["range_m"] for r in d], [r["final_yaw_error_deg"] for r in d], m, label=light)
+        f = [r for r in rows if not r.get("docked")]
+        ax[0].plot([r["range_m"] for r in f], [0 for _ in f], "rx", label="not docked")
+        ax[0].axhline(10, ls="--", color="k")
+        ax[1].axhline(1, ls="--", color="k")
+        ax[0].set_xlabel("start range [m]")
+        ax[0].set_ylabel("final tip error (truth) [mm]")
+        ax[1].set_xlabel("start range [m]")
+        ax[1].set_ylabel("final yaw error (truth) [deg]")
+        ax[0].legend()
+        fig.suptitle("campaign: %d runs, success %.0f %%" % (s["runs"], 100 * s["success_rate"]))
+        fig.tight_layout()
+        fig.savefig(out / "errors.png", dpi=90)
+        plt.close(fig)
+    except Exception as e:  # plots are a convenience; the summary is the result
+        print(f"campaign: plot failed: {e}", file=sys.stderr)
+    return s
+
+
+if __name__ == "__main__":
+    main()
