@@ -59,10 +59,9 @@ class CameraRenderer {
   cv::Matx33d ideal_K_;
   cv::Mat ideal_;          ///< pinhole render with margin
   cv::Mat depth_;          ///< CV_32F, 1/z (0 = nothing)
-  /// Distortion as a fixed bilinear lookup: per output pixel the byte offset of the top-left source
-  /// pixel in ideal_ and 7-bit weights (x, y).
-  std::vector<int32_t> remap_offset_;
-  std::vector<uint8_t> remap_weight_x_, remap_weight_y_;
+  /// Distortion as a precomputed fixed-point cv::remap map (CV_16SC2 source pixel, CV_16UC1
+  /// sub-pixel index) from each output pixel into ideal_.
+  cv::Mat remap_xy_, remap_frac_;
   void applyDistortion();
   cv::Mat distorted_;
   cv::Mat blurred_;

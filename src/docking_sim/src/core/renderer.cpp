@@ -29,7 +29,6 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
 
   // Where each raw (distorted) pixel looks in the ideal pinhole image: undistort every pixel centre
   // once. Barrel distortion looks beyond the pinhole frame, so the ideal image gets a margin.
-  cv::Mat map_points;
   if (options.distortion) {
     std::vector<cv::Point2f> raw;
     raw.reserve(static_cast<std::size_t>(w) * h);
@@ -48,18 +47,18 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
     }
     pad_.x = static_cast<int>(std::ceil(std::max(-min_x, max_x - (w - 1)))) + 2;
     pad_.y = static_cast<int>(std::ceil(std::max(-min_y, max_y - (h - 1)))) + 2;
-    const int channels = type == CV_8UC3 ? 3 : 1;
-    const int ideal_width = w + 2 * pad_.x;
-    remap_offset_.resize(ideal.size());
-    remap_weight_x_.resize(ideal.size());
-    remap_weight_y_.resize(ideal.size());
-    for (std::size_t i = 0; i < ideal.size(); ++i) {
-      const double sx = ideal[i].x + pad_.x, sy = ideal[i].y + pad_.y;  // inside the margin by construction
-      const int x0 = static_cast<int>(std::floor(sx)), y0 = static_cast<int>(std::floor(sy));
-      remap_offset_[i] = (y0 * ideal_width + x0) * channels;
-      remap_weight_x_[i] = static_cast<uint8_t>(std::lround((sx - x0) * 128.0));
-      remap_weight_y_[i] = static_cast<uint8_t>(std::lround((sy - y0) * 128.0));
+    // Fixed-point maps for cv::remap (integer source pixel + 1/32-px bilinear weights): its SIMD
+    // bilinear path is several times faster than a per-pixel lookup, and 1/32 px of map quantisation
+    // is far below the blur the effects add afterwards.
+    cv::Mat map_x(h, w, CV_32F), map_y(h, w, CV_32F);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const cv::Point2f& p = ideal[static_cast<std::size_t>(y) * w + x];
+        map_x.at<float>(y, x) = p.x + static_cast<float>(pad_.x);  // inside the margin by construction
+        map_y.at<float>(y, x) = p.y + static_cast<float>(pad_.y);
+      }
     }
+    cv::convertMaps(map_x, map_y, remap_xy_, remap_frac_, CV_16SC2);
   }
   ideal_K_ = calibration.K;
   ideal_K_(0, 2) += pad_.x;
@@ -136,41 +135,9 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
   return output_;
 }
 
-namespace {
-
-template <int kChannels>
-void bilinearLookup(const cv::Mat& src_image, const std::vector<int32_t>& offsets, const std::vector<uint8_t>& weights_x,
-                    const std::vector<uint8_t>& weights_y, cv::Mat& dst) {
-  const std::size_t stride = src_image.step;
-  const uchar* src = src_image.data;
-  const int32_t* off = offsets.data();
-  const uint8_t* wxs = weights_x.data();
-  const uint8_t* wys = weights_y.data();
-  for (int y = 0; y < dst.rows; ++y) {
-    uchar* out = dst.ptr<uchar>(y);
-    for (int x = 0; x < dst.cols; ++x) {
-      const uchar* p = src + *off++;
-      const int wx = *wxs++, wy = *wys++;
-      const int w00 = (128 - wx) * (128 - wy), w01 = wx * (128 - wy), w10 = (128 - wx) * wy, w11 = wx * wy;
-      for (int c = 0; c < kChannels; ++c) {
-        out[c] = static_cast<uchar>((p[c] * w00 + p[c + kChannels] * w01 + p[c + stride] * w10 +
-                                     p[c + stride + kChannels] * w11 + (1 << 13)) >> 14);
-      }
-      out += kChannels;
-    }
-  }
-}
-
-}  // namespace
-
 void CameraRenderer::applyDistortion() {
-  // Bilinear lookup through the precomputed map (cv::remap INTER_LINEAR with 7-bit weights).
-  distorted_.create(output_.size(), output_.type());
-  if (output_.channels() == 3) {
-    bilinearLookup<3>(ideal_, remap_offset_, remap_weight_x_, remap_weight_y_, distorted_);
-  } else {
-    bilinearLookup<1>(ideal_, remap_offset_, remap_weight_x_, remap_weight_y_, distorted_);
-  }
+  // The margin keeps every lookup inside ideal_, so the border mode never matters.
+  cv::remap(ideal_, distorted_, remap_xy_, remap_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
 }
 
 void CameraRenderer::applyEffects() {
