@@ -248,7 +248,9 @@ int main(int argc, char** argv) {
       std::cout << std::setprecision(3) << "  detection on " << left_path << ": "
                 << (detection.found ? "found" : "NOT found: " + detection.reason) << ", position ("
                 << detection.position_m.x() << ", " << detection.position_m.y() << ", "
-                << detection.position_m.z() << ") m, " << detection.blob_pixels << " px\n";
+                << detection.position_m.z() << ") m, " << detection.blob_pixels << " px, thickness "
+                << detection.blob_thickness_px << " px, " << detection.near_objects_skipped
+                << " near objects skipped\n";
       std::cout << "  wrote " << output_path << "\n";
       return 0;
     }

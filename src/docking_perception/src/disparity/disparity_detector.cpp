@@ -49,6 +49,18 @@ double percentile(std::vector<float>* values, double fraction) {
   return *nth;
 }
 
+// Thickness of a blob: the diameter of the largest disc inside it, px. A mismatched strip along an
+// occlusion edge can have a target's area but not its thickness.
+double blobThickness(const cv::Mat& blob_region) {
+  cv::Mat padded;  // a zero border, so the blob's edge at the box edge counts as an edge
+  cv::copyMakeBorder(blob_region, padded, 1, 1, 1, 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::Mat distance;
+  cv::distanceTransform(padded, distance, cv::DIST_L2, cv::DIST_MASK_5);
+  double max_distance = 0.0;
+  cv::minMaxLoc(distance, nullptr, &max_distance);
+  return 2.0 * max_distance;
+}
+
 // Disparity of a point `depth_band_m` behind the one at disparity `disparity_px`.
 double disparityBehind(const StereoGeometry& geometry, double disparity_px, double depth_band_m) {
   const double focal_baseline = geometry.focal_px * geometry.baseline_m;
@@ -80,6 +92,8 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
   require(std::isfinite(p.face_min_band_px) && p.face_min_band_px >= 0.0, "face_min_band_px",
           "must be >= 0", p.face_min_band_px);
   require(p.min_blob_area_px >= 1, "min_blob_area_px", "must be >= 1", p.min_blob_area_px);
+  require(std::isfinite(p.min_blob_thickness_px) && p.min_blob_thickness_px >= 0.0,
+          "min_blob_thickness_px", "must be >= 0", p.min_blob_thickness_px);
   require(std::isfinite(p.max_blob_area_fraction) && p.max_blob_area_fraction > 0.0 &&
               p.max_blob_area_fraction <= 1.0,
           "max_blob_area_fraction", "must be in (0, 1]", p.max_blob_area_fraction);
@@ -278,7 +292,8 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
       // still in `result` for the debug image).
       result.outcome = Outcome::kBlobTooSmall;
       result.reason = "blob too small: every object in view is smaller than min_blob_area_px " +
-                      std::to_string(p.min_blob_area_px) + " (largest " +
+                      std::to_string(p.min_blob_area_px) + " or thinner than min_blob_thickness_px " +
+                      formatNumber(p.min_blob_thickness_px) + " (largest " +
                       std::to_string(largest_skipped_area) + " px)";
       return result;
     }
@@ -322,7 +337,10 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     cv::Mat blob_region = result.mask(result.bounding_box);
     cv::bitwise_and(blob_region, mask(result.bounding_box), blob_region);
     blob_area = cv::countNonZero(blob_region);
-    if (blob_area >= p.min_blob_area_px || result.near_objects_skipped >= kMaxNearObjectsSkipped) {
+    result.blob_thickness_px = blobThickness(blob_region);
+    const bool plausible_size = blob_area >= p.min_blob_area_px &&
+                                result.blob_thickness_px >= p.min_blob_thickness_px;
+    if (plausible_size || result.near_objects_skipped >= kMaxNearObjectsSkipped) {
       break;
     }
 
@@ -400,6 +418,10 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     result.outcome = Outcome::kBlobTooSmall;
     result.reason = "blob too small: " + std::to_string(result.blob_pixels) + " px < min_blob_area_px " +
                     std::to_string(p.min_blob_area_px);
+  } else if (result.blob_thickness_px < p.min_blob_thickness_px) {
+    result.outcome = Outcome::kBlobTooSmall;
+    result.reason = "blob too thin: " + formatNumber(result.blob_thickness_px) +
+                    " px < min_blob_thickness_px " + formatNumber(p.min_blob_thickness_px);
   } else if (touches_left || touches_right || touches_top || touches_bottom) {
     result.outcome = Outcome::kBlobTouchesBorder;
     std::string sides;

@@ -141,6 +141,7 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("face_depth_band_m", &Config::face_depth_band_m);
   read("face_min_band_px", &Config::face_min_band_px);
   read("min_blob_area_px", &Config::min_blob_area_px);
+  read("min_blob_thickness_px", &Config::min_blob_thickness_px);
   read("max_blob_area_fraction", &Config::max_blob_area_fraction);
   read("border_margin_px", &Config::border_margin_px);
   read("min_disparity_px", &Config::min_disparity_px);
@@ -176,6 +177,7 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.face_depth_band_m = c.face_depth_band_m;
   p.face_min_band_px = c.face_min_band_px;
   p.min_blob_area_px = c.min_blob_area_px;
+  p.min_blob_thickness_px = c.min_blob_thickness_px;
   p.max_blob_area_fraction = c.max_blob_area_fraction;
   p.border_margin_px = c.border_margin_px;
   p.min_disparity_px = c.min_disparity_px;

@@ -164,6 +164,7 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.face_depth_band_m = number("face_depth_band_m");
   p.face_min_band_px = number("face_min_band_px");
   p.min_blob_area_px = integer("min_blob_area_px");
+  p.min_blob_thickness_px = number("min_blob_thickness_px");
   p.max_blob_area_fraction = number("max_blob_area_fraction");
   p.border_margin_px = integer("border_margin_px");
   p.min_disparity_px = number("min_disparity_px");

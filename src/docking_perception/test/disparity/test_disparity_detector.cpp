@@ -192,6 +192,23 @@ TEST(DisparityDetector, SmallNearObjectIsLookedBehind) {
   EXPECT_NEAR(result.position_m.x(), 0.1, 0.01);
 }
 
+TEST(DisparityDetector, ThinNearStripIsLookedBehind) {
+  // An 8 px wide, 80 px tall strip at 0.86 m (600 px, more than min_blob_area_px): what block
+  // matching produces in the occlusion band at the target's left edge. Too thin to be a target.
+  cv::Mat disparity = invalidImage();
+  paintRect(&disparity, 0.0, 0.0, 2.0, 0.30, 0.24);
+  disparity(cv::Rect(230, 200, 8, 80)).setTo(cv::Scalar(64.0));
+  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  ASSERT_TRUE(result.found) << result.reason;
+  EXPECT_EQ(result.near_objects_skipped, 1);
+  EXPECT_NEAR(result.position_m.z(), 2.0, 0.01);
+
+  DetectorParams no_thickness_check;
+  no_thickness_check.min_blob_thickness_px = 0.0;
+  const Detection fooled = DisparityDetector{no_thickness_check}.detect(disparity, ourGeometry());
+  EXPECT_LT(fooled.position_m.z(), 1.0) << "without the check the strip is taken for the target";
+}
+
 TEST(DisparityDetector, TinyNearSpeckDoesNotHideTheTarget) {
   // Fewer near pixels than closest_min_pixels: the speck is not "the closest object".
   cv::Mat disparity = invalidImage();

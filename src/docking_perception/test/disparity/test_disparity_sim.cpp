@@ -1,6 +1,8 @@
 // rostest: disparity estimates from the simulated cameras against the simulator's truth at the same
 // image stamp (see disparity_sim_still_3m.test).
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <map>
 #include <mutex>
 #include <vector>
@@ -64,6 +66,7 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
       << " truth messages)";
 
   int valid = 0;
+  std::vector<double> range_errors;
   for (const Pair& pair : matched) {
     EXPECT_EQ(pair.estimate.header.frame_id, docking_msgs::frames::kStereoLeftOptical);
     EXPECT_EQ(pair.truth.header.frame_id, docking_msgs::frames::kStereoLeftOptical);
@@ -81,6 +84,13 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
         << "estimate (" << p.x << ", " << p.y << ", " << p.z << ") truth (" << t.x << ", " << t.y
         << ", " << t.z << ") at " << pair.estimate.header.stamp;
     EXPECT_NEAR(pair.estimate.range_m, range, max_error_fraction * range);
+    range_errors.push_back(std::abs(pair.estimate.range_m - range) / range);
+  }
+  if (!range_errors.empty()) {
+    std::sort(range_errors.begin(), range_errors.end());
+    std::cout << "disparity vs truth: " << valid << " of " << matched.size()
+              << " frames found, range error median " << 100.0 * range_errors[range_errors.size() / 2]
+              << " %, max " << 100.0 * range_errors.back() << " %\n";
   }
   const double rate = static_cast<double>(valid) / static_cast<double>(matched.size());
   EXPECT_GE(rate, min_detection_rate) << valid << " of " << matched.size() << " frames";

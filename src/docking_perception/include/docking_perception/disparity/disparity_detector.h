@@ -8,8 +8,9 @@
 //  3. closest object: a high order statistic of the valid disparities (the value that at least
 //     `closest_min_pixels` pixels reach), so a few noisy pixels cannot win;
 //  4. threshold just below it (a depth band that holds the target's own depth), keep the largest
-//     blob (outer contour); if everything at that depth is smaller than min_blob_area_px (mismatches
-//     at occlusion edges, speckles), remove it and search again behind it (at most 5 times);
+//     blob (outer contour); if it is smaller than min_blob_area_px or thinner than
+//     min_blob_thickness_px (mismatches at occlusion edges, speckles), remove everything at that
+//     depth and search again behind it (at most 5 times);
 //  5. reject implausible blobs with a reason (too small, too large, on the border, out of range);
 //  6. the target's visible face: the blob's nearest depth layer; its centroid is the centre, the median
 //     of its disparities the robust disparity;
@@ -52,6 +53,8 @@ struct DetectorParams {
 
   // Plausibility of the blob.
   int min_blob_area_px = 400;             // fewer pixels: "blob too small" (looked behind)
+  double min_blob_thickness_px = 16.0;    // thinner (largest inscribed disc): "blob too thin",
+                                          // looked behind (mismatch strips at occlusion edges)
   double max_blob_area_fraction = 0.5;    // more than this fraction of the region: "blob too large"
   int border_margin_px = 2;               // within this of the valid region's edge: "touches border"
   double min_disparity_px = 4.0;          // robust disparity below this: "too far"
@@ -99,7 +102,8 @@ struct Detection {
   int valid_pixels = 0;              // valid disparities in the region of interest
   double closest_disparity_px = 0;   // robust closest disparity of the whole image
   double threshold_disparity_px = 0; // mask = filtered disparity >= this
-  int near_objects_skipped = 0;      // nearer objects smaller than min_blob_area_px looked behind
+  int near_objects_skipped = 0;      // nearer objects too small or thin that were looked behind
+  double blob_thickness_px = 0;      // diameter of the largest disc inside the blob
 
   // The chosen blob (filled whenever a blob was chosen, also when it was then rejected).
   std::vector<cv::Point> contour;  // outer contour of the blob, image pixels
