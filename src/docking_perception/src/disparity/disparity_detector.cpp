@@ -109,6 +109,8 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
           "roi_bottom_fraction", "must be in (roi_top_fraction, 1]", p.roi_bottom_fraction);
   require(std::isfinite(p.floor_cut_y_m) && p.floor_cut_y_m > 0.0, "floor_cut_y_m", "must be > 0",
           p.floor_cut_y_m);
+  require(std::isfinite(p.ceiling_cut_y_m) && p.ceiling_cut_y_m >= 0.0, "ceiling_cut_y_m",
+          "must be >= 0 (0: off)", p.ceiling_cut_y_m);
   require(std::isfinite(p.disparity_sigma_px) && p.disparity_sigma_px > 0.0, "disparity_sigma_px",
           "must be > 0", p.disparity_sigma_px);
   require(std::isfinite(p.centre_sigma_px) && p.centre_sigma_px > 0.0, "centre_sigma_px",
@@ -206,16 +208,20 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
   }
 
   // --- Valid disparities of the region; everything else 0. Floor cut: a point is lower than
-  // floor_cut_y_m below the axis when (v - cy) B / d > floor_cut_y_m, i.e. d < (v - cy) B / cut.
+  // floor_cut_y_m below the axis when (v - cy) B / d > floor_cut_y_m, i.e. d < (v - cy) B / cut;
+  // the ceiling cut is the same above the axis.
   const float search_min = static_cast<float>(std::max(search_min_px, 0.0));
   const float search_max = static_cast<float>(search_max_px);
   cv::Mat clean(disparity.size(), CV_32FC1, cv::Scalar(0.0f));
   int valid_count = 0;
   for (int v = region.y; v < region.y + region.height; ++v) {
-    float floor_min_disparity = 0.0f;  // disparities below this are floor points in this row
+    float floor_min_disparity = 0.0f;  // disparities below this are floor (ceiling) points here
     if (p.floor_cut_enabled && v > geometry.cy_px) {
       floor_min_disparity =
           static_cast<float>((v - geometry.cy_px) * geometry.baseline_m / p.floor_cut_y_m);
+    } else if (p.floor_cut_enabled && p.ceiling_cut_y_m > 0.0 && v < geometry.cy_px) {
+      floor_min_disparity =
+          static_cast<float>((geometry.cy_px - v) * geometry.baseline_m / p.ceiling_cut_y_m);
     }
     const float* in = disparity.ptr<float>(v);
     float* out = clean.ptr<float>(v);

@@ -151,6 +151,7 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("roi_bottom_fraction", &Config::roi_bottom_fraction);
   read("floor_cut_enabled", &Config::floor_cut_enabled);
   read("floor_cut_y_m", &Config::floor_cut_y_m);
+  read("ceiling_cut_y_m", &Config::ceiling_cut_y_m);
   read("disparity_sigma_px", &Config::disparity_sigma_px);
   read("centre_sigma_px", &Config::centre_sigma_px);
   read("debug_display_max_disparity_px", &Config::debug_display_max_disparity_px);
@@ -186,6 +187,7 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.roi_bottom_fraction = c.roi_bottom_fraction;
   p.floor_cut_enabled = c.floor_cut_enabled;
   p.floor_cut_y_m = c.floor_cut_y_m;
+  p.ceiling_cut_y_m = c.ceiling_cut_y_m;
   p.disparity_sigma_px = c.disparity_sigma_px;
   p.centre_sigma_px = c.centre_sigma_px;
   return p;

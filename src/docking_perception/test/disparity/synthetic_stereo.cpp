@@ -173,6 +173,7 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.roi_bottom_fraction = number("roi_bottom_fraction");
   p.floor_cut_enabled = number("floor_cut_enabled") != 0.0;
   p.floor_cut_y_m = number("floor_cut_y_m");
+  p.ceiling_cut_y_m = number("ceiling_cut_y_m");
   p.disparity_sigma_px = number("disparity_sigma_px");
   p.centre_sigma_px = number("centre_sigma_px");
   return p;
