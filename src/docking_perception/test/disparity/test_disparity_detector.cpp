@@ -272,6 +272,7 @@ TEST(DisparityDetector, CeilingIsIgnoredByTheHeightCut) {
   paintRect(&disparity, 0.0, 0.0, 6.0, 0.30, 0.24);
   paintRect(&disparity, 1.0, -2.0, 4.5, 0.6, 0.5);
   DetectorParams params;
+  params.ceiling_cut_y_m = 1.0;
   const Detection with_cut = DisparityDetector{params}.detect(disparity, ourGeometry());
   ASSERT_TRUE(with_cut.found) << with_cut.reason;
   EXPECT_NEAR(with_cut.position_m.z(), 6.0, 0.02);

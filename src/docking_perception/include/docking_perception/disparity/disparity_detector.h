@@ -70,7 +70,7 @@ struct DetectorParams {
   double floor_cut_y_m = 0.15;
   // With the floor cut: points higher than this above the axis (the lab's ceiling and lights) are
   // ignored too; 0: off.
-  double ceiling_cut_y_m = 1.0;
+  double ceiling_cut_y_m = 0.0;
 
   // Noise model of the covariance.
   double disparity_sigma_px = 0.25;  // 1-sigma error of the robust disparity
