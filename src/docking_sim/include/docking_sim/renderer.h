@@ -36,6 +36,7 @@ class CameraRenderer {
   const cv::Mat& render(const Scene& scene, const Eigen::Isometry3d& world_T_camera);
 
   /// The undistorted pinhole render of the last frame (with a margin; see idealPrincipalOffset()).
+  /// Visible band: CV_8UC4 (b, g, r, 0); IR: CV_8UC1.
   const cv::Mat& idealImage() const { return ideal_; }
   /// Pixel (u, v) of the output's pinhole model sits at (u + dx, v + dy) in idealImage().
   cv::Point2i idealPrincipalOffset() const { return pad_; }
@@ -57,12 +58,13 @@ class CameraRenderer {
   double noise_sigma_{0.0};
   cv::Point2i pad_{0, 0};
   cv::Matx33d ideal_K_;
-  cv::Mat ideal_;          ///< pinhole render with margin
+  cv::Mat ideal_;          ///< pinhole render with margin (visible: CV_8UC4 b, g, r, 0)
   cv::Mat depth_;          ///< CV_32F, 1/z (0 = nothing)
   /// Distortion as a precomputed fixed-point cv::remap map (CV_16SC2 source pixel, CV_16UC1
   /// sub-pixel index) from each output pixel into ideal_.
   cv::Mat remap_xy_, remap_frac_;
   void applyDistortion();
+  cv::Mat distorted4_;     ///< visible band: the remapped CV_8UC4 image before dropping the 4th byte
   cv::Mat distorted_;
   cv::Mat blurred_;
   cv::Mat glare_;          ///< additive, same type as the output (empty: no glare)

@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,7 +17,9 @@ namespace docking_sim {
 /// stays in cache as well as one walking along a row.
 struct BlockedLevel {
   int width{0}, height{0}, blocks_x{0};
-  std::vector<uchar> bgr;    ///< blocked, 3 bytes per texel
+  /// blocked, 4 bytes per texel (b, g, r, 0): one aligned 32-bit load per texel, and the renderer
+  /// shades all channels at once in one register.
+  std::vector<uint32_t> bgrx;
   std::vector<uchar> gray;   ///< blocked, 1 byte per texel
   /// Texel index of (u, v) in the blocked layout (multiply by the channel count).
   std::size_t index(int u, int v) const {

@@ -12,6 +12,34 @@ namespace {
 
 constexpr double kNearPlaneM = 0.02;
 
+// The visible band is rasterised as 32-bit b, g, r, 0 pixels (a CV_8UC4 image) read and written as
+// uint32_t: that byte order holds on little-endian machines only.
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the 32-bit texel layout assumes little-endian");
+
+/// (channel * gain) >> 8 for the four bytes of a packed texel at once, exact for gain <= 256: each
+/// 8-bit x 9-bit product fits its 16-bit lane, so two channels share one multiply without carries.
+inline uint32_t shadePacked(uint32_t texel, uint32_t gain) {
+  const uint32_t even = ((texel & 0x00ff00ffu) * gain >> 8) & 0x00ff00ffu;
+  const uint32_t odd = (((texel >> 8) & 0x00ff00ffu) * gain) & 0xff00ff00u;
+  return even | odd;
+}
+
+/// The same with saturation at 255, one channel at a time (gains above 1: rare, e.g. lamps, LEDs).
+inline uint32_t shadePackedSaturating(uint32_t texel, uint32_t gain) {
+  uint32_t out = 0;
+  for (int shift = 0; shift < 24; shift += 8) {
+    const uint32_t value = (((texel >> shift) & 0xffu) * gain) >> 8;
+    out |= (value > 255u ? 255u : value) << shift;
+  }
+  return out;
+}
+
+/// A texel coordinate in 16.16 fixed point (bounded first: an almost edge-on span can send the
+/// homography's quotient anywhere, and the conversion must stay defined).
+inline int64_t toFixed(double texel) {
+  return static_cast<int64_t>(std::floor(std::clamp(texel, -1e9, 1e9) * 65536.0));
+}
+
 double threadCpuMs() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
@@ -63,7 +91,9 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
   ideal_K_ = calibration.K;
   ideal_K_(0, 2) += pad_.x;
   ideal_K_(1, 2) += pad_.y;
-  ideal_.create(h + 2 * pad_.y, w + 2 * pad_.x, type);
+  // Visible: 4 bytes per ideal pixel (b, g, r, 0) so that the rasteriser moves whole texels and
+  // cv::remap takes its vectorised 4-channel path (it has none for 3 channels).
+  ideal_.create(h + 2 * pad_.y, w + 2 * pad_.x, band == Band::kVisible ? CV_8UC4 : CV_8UC1);
   depth_.create(ideal_.size(), CV_32F);
   output_.create(h, w, type);
 
@@ -114,7 +144,7 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
   ideal_.setTo(cv::Scalar::all(0));
   depth_.setTo(cv::Scalar(0.0f));
   if (band_ == Band::kVisible) {
-    rasterize<3>(scene, camera_T_world);
+    rasterize<4>(scene, camera_T_world);
   } else {
     rasterize<1>(scene, camera_T_world);
   }
@@ -122,7 +152,12 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
   if (options_.distortion) {
     applyDistortion();
   } else {
-    ideal_(cv::Rect(pad_.x, pad_.y, output_.cols, output_.rows)).copyTo(distorted_);
+    const cv::Mat crop = ideal_(cv::Rect(pad_.x, pad_.y, output_.cols, output_.rows));
+    if (crop.channels() == 4) {
+      cv::cvtColor(crop, distorted_, cv::COLOR_BGRA2BGR);
+    } else {
+      crop.copyTo(distorted_);
+    }
   }
   const double t2 = threadCpuMs();
   if (options_.effects) {
@@ -137,7 +172,12 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
 
 void CameraRenderer::applyDistortion() {
   // The margin keeps every lookup inside ideal_, so the border mode never matters.
-  cv::remap(ideal_, distorted_, remap_xy_, remap_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  if (ideal_.channels() == 4) {
+    cv::remap(ideal_, distorted4_, remap_xy_, remap_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    cv::cvtColor(distorted4_, distorted_, cv::COLOR_BGRA2BGR);  // bgr8 for the effects and the output
+  } else {
+    cv::remap(ideal_, distorted_, remap_xy_, remap_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  }
 }
 
 void CameraRenderer::applyEffects() {
@@ -243,13 +283,18 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
   const std::vector<BlockedLevel>* levels = tex ? &tex->blocked : nullptr;
   const double gain = band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir;
   const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
-  uchar flat[3];
-  if (kChannels == 3) {
-    for (int c = 0; c < 3; ++c) flat[c] = cv::saturate_cast<uchar>((surface.color[c] * gain_fixed) >> 8);
+  // Flat colour: one packed b, g, r, 0 pixel (visible) or one grey byte (IR).
+  uint32_t flat = 0;
+  if (kChannels == 4) {
+    for (int c = 0; c < 3; ++c) {
+      flat |= static_cast<uint32_t>(cv::saturate_cast<uchar>((surface.color[c] * gain_fixed) >> 8)) << (8 * c);
+    }
   } else {
     const double luma = 0.114 * surface.color[0] + 0.587 * surface.color[1] + 0.299 * surface.color[2];
-    flat[0] = cv::saturate_cast<uchar>(luma * gain_fixed / 256.0);
+    flat = cv::saturate_cast<uchar>(luma * gain_fixed / 256.0);
   }
+  const bool saturates = gain_fixed > 256;
+  const auto gain_u = static_cast<uint32_t>(gain_fixed);
   const double su = surface.repeat_u, sv = surface.repeat_v;
   const double ou = surface.offset_u, ov = surface.offset_v;
 
@@ -276,13 +321,19 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
     double nw = H(2, 0) * x0 + H(2, 1) * y + H(2, 2);
     float* depth = depth_.ptr<float>(y);
     uchar* row = ideal_.ptr<uchar>(y);
+    // CV_8UC4 rows are 4-byte aligned (cv::Mat allocates aligned; the step is a multiple of 4).
+    uint32_t* row4 = reinterpret_cast<uint32_t*>(row);
 
     if (!tex) {
       for (int x = x0; x <= x1; ++x, nw += H(2, 0)) {
         const float inv_z = static_cast<float>(nw);
         if (inv_z <= depth[x]) continue;
         depth[x] = inv_z;
-        for (int c = 0; c < kChannels; ++c) row[x * kChannels + c] = flat[c];
+        if (kChannels == 4) {
+          row4[x] = flat;
+        } else {
+          row[x] = static_cast<uchar>(flat);
+        }
       }
       continue;
     }
@@ -304,7 +355,8 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
     const int tw = img.width, th = img.height;
     const double scale_u = su * tw, scale_v = sv * th;
     const double off_u = ou * tw, off_v = ov * th;
-    const uchar* texels = kChannels == 3 ? img.bgr.data() : img.gray.data();
+    const uint32_t* texels4 = img.bgrx.data();
+    const uchar* texels1 = img.gray.data();
 
     // Perspective-correct coordinates exactly at the ends of 16-pixel segments, linear in between
     // (the error is far below a texel at these sizes and saves a division per pixel).
@@ -324,25 +376,31 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
       const int xe = std::min(xs + kSegment, x1 + 1);
       double u_end = u_start, v_end = v_start;
       if (xe - 1 > xs) texel_at(xe - 1, &u_end, &v_end);
-      const double du = xe - 1 > xs ? (u_end - u_start) / (xe - 1 - xs) : 0.0;
-      const double dv = xe - 1 > xs ? (v_end - v_start) / (xe - 1 - xs) : 0.0;
-      double u = u_start, v = v_start;
+      // Fixed point inside the segment: integer steps instead of a double add and two double->int
+      // conversions per pixel (1/65536 texel is far below the texel size).
+      int64_t u = toFixed(u_start), v = toFixed(v_start);
+      const int64_t du = xe - 1 > xs ? (toFixed(u_end) - u) / (xe - 1 - xs) : 0;
+      const int64_t dv = xe - 1 > xs ? (toFixed(v_end) - v) / (xe - 1 - xs) : 0;
       for (int x = xs; x < xe; ++x, nw += H(2, 0), u += du, v += dv) {
         const float inv_z = static_cast<float>(nw);
         if (inv_z <= depth[x]) continue;
         depth[x] = inv_z;
-        int iu = static_cast<int>(u), iv = static_cast<int>(v);
+        int iu, iv;
         if (repeat) {
-          iu &= mask_u;
-          iv &= mask_v;
+          iu = static_cast<int>((u >> 16) & mask_u);  // the bias keeps u positive
+          iv = static_cast<int>((v >> 16) & mask_v);
         } else {
-          iu = iu < 0 ? 0 : (iu >= tw ? tw - 1 : iu);
-          iv = iv < 0 ? 0 : (iv >= th ? th - 1 : iv);
+          const int64_t au = u >> 16, av = v >> 16;
+          iu = au < 0 ? 0 : (au >= tw ? tw - 1 : static_cast<int>(au));
+          iv = av < 0 ? 0 : (av >= th ? th - 1 : static_cast<int>(av));
         }
-        const uchar* t = texels + img.index(iu, iv) * kChannels;
-        for (int c = 0; c < kChannels; ++c) {
-          const int value = (t[c] * gain_fixed) >> 8;
-          row[x * kChannels + c] = static_cast<uchar>(value > 255 ? 255 : value);
+        const std::size_t index = img.index(iu, iv);
+        if (kChannels == 4) {
+          const uint32_t t = texels4[index];
+          row4[x] = saturates ? shadePackedSaturating(t, gain_u) : shadePacked(t, gain_u);
+        } else {
+          const uint32_t value = (texels1[index] * gain_u) >> 8;
+          row[x] = static_cast<uchar>(value > 255u ? 255u : value);
         }
       }
       if (xe <= x1) texel_at(xe, &u_start, &v_start);
@@ -351,6 +409,6 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
 }
 
 template void CameraRenderer::rasterize<1>(const Scene&, const Eigen::Isometry3d&);
-template void CameraRenderer::rasterize<3>(const Scene&, const Eigen::Isometry3d&);
+template void CameraRenderer::rasterize<4>(const Scene&, const Eigen::Isometry3d&);
 
 }  // namespace docking_sim

@@ -228,15 +228,14 @@ std::shared_ptr<Texture> makeTexture(const cv::Mat& bgr, bool repeat) {
     b.height = level.rows;
     b.blocks_x = (level.cols + 7) / 8;
     const std::size_t texels = static_cast<std::size_t>(b.blocks_x) * ((level.rows + 7) / 8) * 64;
-    b.bgr.assign(texels * 3, 0);
+    b.bgrx.assign(texels, 0);
     b.gray.assign(texels, 0);
     for (int v = 0; v < level.rows; ++v) {
       for (int u = 0; u < level.cols; ++u) {
         const std::size_t i = b.index(u, v);
         const cv::Vec3b& p = level.at<cv::Vec3b>(v, u);
-        b.bgr[3 * i] = p[0];
-        b.bgr[3 * i + 1] = p[1];
-        b.bgr[3 * i + 2] = p[2];
+        // Byte order in memory b, g, r, 0 (little-endian), the layout of a CV_8UC4 pixel.
+        b.bgrx[i] = static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 | static_cast<uint32_t>(p[2]) << 16;
         b.gray[i] = g.at<uchar>(v, u);
       }
     }
