@@ -21,6 +21,9 @@ struct BlockedLevel {
   /// shades all channels at once in one register.
   std::vector<uint32_t> bgrx;
   std::vector<uchar> gray;   ///< blocked, 1 byte per texel
+  /// index(u, v) == u_offset[u] + v_offset[v]: the blocked index split into its column and row parts
+  /// (they occupy disjoint bits), so the renderer's inner loop needs two table loads and an add.
+  std::vector<uint32_t> u_offset, v_offset;
   /// Texel index of (u, v) in the blocked layout (multiply by the channel count).
   std::size_t index(int u, int v) const {
     return ((static_cast<std::size_t>(v >> 3) * blocks_x + static_cast<std::size_t>(u >> 3)) << 6) |

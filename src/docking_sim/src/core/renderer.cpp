@@ -40,6 +40,53 @@ inline int64_t toFixed(double texel) {
   return static_cast<int64_t>(std::floor(std::clamp(texel, -1e9, 1e9) * 65536.0));
 }
 
+/// One segment of a textured span: depth test, texel fetch, shading, for `count` pixels from
+/// depth/row on. A separate function per (repeat, saturate) case keeps the loop free of branches
+/// that never change within a span and lets the compiler keep everything in registers.
+template <int kChannels, bool kRepeat, bool kSaturate>
+double shadeSegmentImpl(int count, double nw, double dnw, int64_t u, int64_t du, int64_t v, int64_t dv, float* depth,
+                        uchar* row, const BlockedLevel& img, uint32_t gain) {
+  const uint32_t* u_offset = img.u_offset.data();
+  const uint32_t* v_offset = img.v_offset.data();
+  const uint32_t* texels4 = img.bgrx.data();
+  const uchar* texels1 = img.gray.data();
+  uint32_t* row4 = reinterpret_cast<uint32_t*>(row);  // CV_8UC4 rows are 4-byte aligned
+  const int64_t mask_u = img.width - 1, mask_v = img.height - 1;
+  for (int i = 0; i < count; ++i, nw += dnw, u += du, v += dv) {
+    const float inv_z = static_cast<float>(nw);
+    if (inv_z <= depth[i]) continue;
+    depth[i] = inv_z;
+    int64_t iu = u >> 16, iv = v >> 16;
+    if (kRepeat) {
+      iu &= mask_u;  // the bias keeps u positive; sizes are powers of two
+      iv &= mask_v;
+    } else {
+      iu = iu < 0 ? 0 : (iu > mask_u ? mask_u : iu);
+      iv = iv < 0 ? 0 : (iv > mask_v ? mask_v : iv);
+    }
+    const uint32_t index = u_offset[iu] + v_offset[iv];
+    if (kChannels == 4) {
+      const uint32_t t = texels4[index];
+      row4[i] = kSaturate ? shadePackedSaturating(t, gain) : shadePacked(t, gain);
+    } else {
+      const uint32_t value = (texels1[index] * gain) >> 8;
+      row[i] = static_cast<uchar>(value > 255u ? 255u : value);
+    }
+  }
+  return nw;
+}
+
+template <int kChannels>
+double shadeSegment(bool repeat, bool saturate, int count, double nw, double dnw, int64_t u, int64_t du, int64_t v,
+                    int64_t dv, float* depth, uchar* row, const BlockedLevel& img, uint32_t gain) {
+  if (repeat) {
+    return saturate ? shadeSegmentImpl<kChannels, true, true>(count, nw, dnw, u, du, v, dv, depth, row, img, gain)
+                    : shadeSegmentImpl<kChannels, true, false>(count, nw, dnw, u, du, v, dv, depth, row, img, gain);
+  }
+  return saturate ? shadeSegmentImpl<kChannels, false, true>(count, nw, dnw, u, du, v, dv, depth, row, img, gain)
+                  : shadeSegmentImpl<kChannels, false, false>(count, nw, dnw, u, du, v, dv, depth, row, img, gain);
+}
+
 double threadCpuMs() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
@@ -321,10 +368,9 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
     double nw = H(2, 0) * x0 + H(2, 1) * y + H(2, 2);
     float* depth = depth_.ptr<float>(y);
     uchar* row = ideal_.ptr<uchar>(y);
-    // CV_8UC4 rows are 4-byte aligned (cv::Mat allocates aligned; the step is a multiple of 4).
-    uint32_t* row4 = reinterpret_cast<uint32_t*>(row);
-
     if (!tex) {
+      // CV_8UC4 rows are 4-byte aligned (cv::Mat allocates aligned; the step is a multiple of 4).
+      uint32_t* row4 = reinterpret_cast<uint32_t*>(row);
       for (int x = x0; x <= x1; ++x, nw += H(2, 0)) {
         const float inv_z = static_cast<float>(nw);
         if (inv_z <= depth[x]) continue;
@@ -355,13 +401,10 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
     const int tw = img.width, th = img.height;
     const double scale_u = su * tw, scale_v = sv * th;
     const double off_u = ou * tw, off_v = ov * th;
-    const uint32_t* texels4 = img.bgrx.data();
-    const uchar* texels1 = img.gray.data();
 
     // Perspective-correct coordinates exactly at the ends of 16-pixel segments, linear in between
     // (the error is far below a texel at these sizes and saves a division per pixel).
     const bool repeat = tex->repeat;
-    const int mask_u = tw - 1, mask_v = th - 1;
     const double bias_u = repeat ? off_u + 4096.0 * tw : off_u;  // keeps the cast positive when wrapping
     const double bias_v = repeat ? off_v + 4096.0 * th : off_v;
     auto texel_at = [&](int px, double* u, double* v) {
@@ -378,31 +421,13 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
       if (xe - 1 > xs) texel_at(xe - 1, &u_end, &v_end);
       // Fixed point inside the segment: integer steps instead of a double add and two double->int
       // conversions per pixel (1/65536 texel is far below the texel size).
+      // The steps come from the double difference (a 64-bit integer division costs more than the
+      // whole segment's pixels).
       int64_t u = toFixed(u_start), v = toFixed(v_start);
-      const int64_t du = xe - 1 > xs ? (toFixed(u_end) - u) / (xe - 1 - xs) : 0;
-      const int64_t dv = xe - 1 > xs ? (toFixed(v_end) - v) / (xe - 1 - xs) : 0;
-      for (int x = xs; x < xe; ++x, nw += H(2, 0), u += du, v += dv) {
-        const float inv_z = static_cast<float>(nw);
-        if (inv_z <= depth[x]) continue;
-        depth[x] = inv_z;
-        int iu, iv;
-        if (repeat) {
-          iu = static_cast<int>((u >> 16) & mask_u);  // the bias keeps u positive
-          iv = static_cast<int>((v >> 16) & mask_v);
-        } else {
-          const int64_t au = u >> 16, av = v >> 16;
-          iu = au < 0 ? 0 : (au >= tw ? tw - 1 : static_cast<int>(au));
-          iv = av < 0 ? 0 : (av >= th ? th - 1 : static_cast<int>(av));
-        }
-        const std::size_t index = img.index(iu, iv);
-        if (kChannels == 4) {
-          const uint32_t t = texels4[index];
-          row4[x] = saturates ? shadePackedSaturating(t, gain_u) : shadePacked(t, gain_u);
-        } else {
-          const uint32_t value = (texels1[index] * gain_u) >> 8;
-          row[x] = static_cast<uchar>(value > 255u ? 255u : value);
-        }
-      }
+      const double steps = xe - 1 > xs ? 1.0 / (xe - 1 - xs) : 0.0;
+      const int64_t du = toFixed((u_end - u_start) * steps), dv = toFixed((v_end - v_start) * steps);
+      nw = shadeSegment<kChannels>(repeat, saturates, xe - xs, nw, H(2, 0), u, du, v, dv, depth + xs,
+                                   row + static_cast<std::size_t>(xs) * kChannels, img, gain_u);
       if (xe <= x1) texel_at(xe, &u_start, &v_start);
     }
   }

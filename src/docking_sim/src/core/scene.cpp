@@ -229,6 +229,8 @@ std::shared_ptr<Texture> makeTexture(const cv::Mat& bgr, bool repeat) {
     b.blocks_x = (level.cols + 7) / 8;
     const std::size_t texels = static_cast<std::size_t>(b.blocks_x) * ((level.rows + 7) / 8) * 64;
     b.bgrx.assign(texels, 0);
+    for (int u = 0; u < level.cols; ++u) b.u_offset.push_back(static_cast<uint32_t>(b.index(u, 0)));
+    for (int v = 0; v < level.rows; ++v) b.v_offset.push_back(static_cast<uint32_t>(b.index(0, v)));
     b.gray.assign(texels, 0);
     for (int v = 0; v < level.rows; ++v) {
       for (int u = 0; u < level.cols; ++u) {
