@@ -60,11 +60,14 @@ class CameraRenderer {
   cv::Matx33d ideal_K_;
   cv::Mat ideal_;          ///< pinhole render with margin (visible: CV_8UC4 b, g, r, 0)
   cv::Mat depth_;          ///< CV_32F, 1/z (0 = nothing)
-  /// Distortion as a precomputed fixed-point cv::remap map (CV_16SC2 source pixel, CV_16UC1
+  /// Distortion, IR: a precomputed fixed-point cv::remap map (CV_16SC2 source pixel, CV_16UC1
   /// sub-pixel index) from each output pixel into ideal_.
   cv::Mat remap_xy_, remap_frac_;
+  /// Distortion, visible: per output pixel the byte offset of the top-left source pixel in ideal_
+  /// and four bilinear weights (top-left, bottom-left, top-right, bottom-right; sum 2^14).
+  std::vector<int32_t> remap_offset_;
+  std::vector<int16_t> remap_weights_;
   void applyDistortion();
-  cv::Mat distorted4_;     ///< visible band: the remapped CV_8UC4 image before dropping the 4th byte
   cv::Mat distorted_;
   cv::Mat blurred_;
   cv::Mat glare_;          ///< additive, same type as the output (empty: no glare)

@@ -3,7 +3,10 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <emmintrin.h>  // SSE2: part of every x86-64 CPU
+
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <ctime>
 
@@ -35,9 +38,10 @@ inline uint32_t shadePackedSaturating(uint32_t texel, uint32_t gain) {
 }
 
 /// A texel coordinate in 16.16 fixed point (bounded first: an almost edge-on span can send the
-/// homography's quotient anywhere, and the conversion must stay defined).
+/// homography's quotient anywhere, and the conversion must stay defined). Truncation, not floor:
+/// repeating textures are biased positive, and clamped ones map (-1, 0) to texel 0 either way.
 inline int64_t toFixed(double texel) {
-  return static_cast<int64_t>(std::floor(std::clamp(texel, -1e9, 1e9) * 65536.0));
+  return static_cast<int64_t>(std::fmin(std::fmax(texel, -1e9), 1e9) * 65536.0);
 }
 
 /// One segment of a textured span: depth test, texel fetch, shading, for `count` pixels from
@@ -104,6 +108,7 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
 
   // Where each raw (distorted) pixel looks in the ideal pinhole image: undistort every pixel centre
   // once. Barrel distortion looks beyond the pinhole frame, so the ideal image gets a margin.
+  cv::Mat map_x, map_y;  // where each output pixel samples ideal_ (kept for the lookup tables below)
   if (options.distortion) {
     std::vector<cv::Point2f> raw;
     raw.reserve(static_cast<std::size_t>(w) * h);
@@ -125,7 +130,8 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
     // Fixed-point maps for cv::remap (integer source pixel + 1/32-px bilinear weights): its SIMD
     // bilinear path is several times faster than a per-pixel lookup, and 1/32 px of map quantisation
     // is far below the blur the effects add afterwards.
-    cv::Mat map_x(h, w, CV_32F), map_y(h, w, CV_32F);
+    map_x.create(h, w, CV_32F);
+    map_y.create(h, w, CV_32F);
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
         const cv::Point2f& p = ideal[static_cast<std::size_t>(y) * w + x];
@@ -133,14 +139,33 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
         map_y.at<float>(y, x) = p.y + static_cast<float>(pad_.y);
       }
     }
-    cv::convertMaps(map_x, map_y, remap_xy_, remap_frac_, CV_16SC2);
+    if (band == Band::kInfrared) cv::convertMaps(map_x, map_y, remap_xy_, remap_frac_, CV_16SC2);
   }
   ideal_K_ = calibration.K;
   ideal_K_(0, 2) += pad_.x;
   ideal_K_(1, 2) += pad_.y;
-  // Visible: 4 bytes per ideal pixel (b, g, r, 0) so that the rasteriser moves whole texels and
-  // cv::remap takes its vectorised 4-channel path (it has none for 3 channels).
+  // Visible: 4 bytes per ideal pixel (b, g, r, 0) so that the rasteriser moves whole texels and the
+  // distortion lookup interpolates all channels of a pixel in one SIMD register.
   ideal_.create(h + 2 * pad_.y, w + 2 * pad_.x, band == Band::kVisible ? CV_8UC4 : CV_8UC1);
+  if (options.distortion && band == Band::kVisible) {
+    // Per output pixel: byte offset of the top-left source pixel and the four bilinear weights
+    // (7-bit per axis, products <= 2^14, summing to 2^14), in the order the SIMD loop consumes them.
+    remap_offset_.resize(static_cast<std::size_t>(w) * h);
+    remap_weights_.resize(4 * remap_offset_.size());
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * w + x;
+        const double sx = map_x.at<float>(y, x), sy = map_y.at<float>(y, x);
+        const int x0 = static_cast<int>(std::floor(sx)), y0 = static_cast<int>(std::floor(sy));
+        const int wx = static_cast<int>(std::lround((sx - x0) * 128.0)), wy = static_cast<int>(std::lround((sy - y0) * 128.0));
+        remap_offset_[i] = static_cast<int32_t>(y0 * ideal_.step + x0 * 4);
+        remap_weights_[4 * i + 0] = static_cast<int16_t>((128 - wx) * (128 - wy));  // top-left
+        remap_weights_[4 * i + 1] = static_cast<int16_t>((128 - wx) * wy);          // bottom-left
+        remap_weights_[4 * i + 2] = static_cast<int16_t>(wx * (128 - wy));          // top-right
+        remap_weights_[4 * i + 3] = static_cast<int16_t>(wx * wy);                  // bottom-right
+      }
+    }
+  }
   depth_.create(ideal_.size(), CV_32F);
   output_.create(h, w, type);
 
@@ -217,11 +242,53 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
   return output_;
 }
 
+namespace {
+
+/// Bilinear lookup from a b,g,r,0 image into a bgr8 one through precomputed offsets and weights:
+/// one pixel per SSE2 step (two 8-byte loads fetch the 2x2 neighbourhood, two multiply-adds weigh
+/// it, all four channels at once). OpenCV's remap has no vectorised 3-channel path, and its
+/// 4-channel one still costs about 40 instructions per pixel here.
+void bilinearBgrx(const cv::Mat& src, const std::vector<int32_t>& offsets, const std::vector<int16_t>& weights,
+                  cv::Mat& dst) {
+  const uchar* base = src.data;
+  const std::size_t stride = src.step;
+  const int32_t* off = offsets.data();
+  const int16_t* wts = weights.data();
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i round = _mm_set1_epi32(1 << 13);
+  for (int y = 0; y < dst.rows; ++y) {
+    uchar* out = dst.ptr<uchar>(y);
+    for (int x = 0; x < dst.cols; ++x, ++off, wts += 4) {
+      const uchar* p = base + *off;
+      // 16-bit lanes: top = TL(b,g,r,0) TR(b,g,r,0), bottom = BL BR.
+      const __m128i top = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero);
+      const __m128i bottom = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + stride)), zero);
+      // Pairs (top, bottom) per channel: left column, then right column.
+      const __m128i left = _mm_unpacklo_epi16(top, bottom);
+      const __m128i right = _mm_unpackhi_epi16(top, bottom);
+      const __m128i w = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(wts));  // (TL, BL), (TR, BR)
+      __m128i sum = _mm_add_epi32(_mm_madd_epi16(left, _mm_shuffle_epi32(w, 0x00)),
+                                  _mm_madd_epi16(right, _mm_shuffle_epi32(w, 0x55)));
+      sum = _mm_srai_epi32(_mm_add_epi32(sum, round), 14);
+      const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(sum, zero), zero);
+      const uint32_t bgrx = static_cast<uint32_t>(_mm_cvtsi128_si32(bytes));
+      if (x + 1 < dst.cols) {
+        std::memcpy(out, &bgrx, 4);  // the 4th byte is overwritten by the next pixel
+      } else {
+        std::memcpy(out, &bgrx, 3);  // the row's last pixel: nothing may be written past it
+      }
+      out += 3;
+    }
+  }
+}
+
+}  // namespace
+
 void CameraRenderer::applyDistortion() {
   // The margin keeps every lookup inside ideal_, so the border mode never matters.
   if (ideal_.channels() == 4) {
-    cv::remap(ideal_, distorted4_, remap_xy_, remap_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-    cv::cvtColor(distorted4_, distorted_, cv::COLOR_BGRA2BGR);  // bgr8 for the effects and the output
+    distorted_.create(output_.size(), output_.type());
+    bilinearBgrx(ideal_, remap_offset_, remap_weights_, distorted_);
   } else {
     cv::remap(ideal_, distorted_, remap_xy_, remap_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
   }
@@ -388,15 +455,19 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
     const BlockedLevel& base = (*levels)[0];
     const double xm = 0.5 * (x0 + x1);
     auto uv_at = [&](double px, double py) {
-      const double w = H(2, 0) * px + H(2, 1) * py + H(2, 2);
-      return Eigen::Vector2d((H(0, 0) * px + H(0, 1) * py + H(0, 2)) / w * su * base.width,
-                             (H(1, 0) * px + H(1, 1) * py + H(1, 2)) / w * sv * base.height);
+      const double inv_w = 1.0 / (H(2, 0) * px + H(2, 1) * py + H(2, 2));  // one division, not two
+      return Eigen::Vector2d((H(0, 0) * px + H(0, 1) * py + H(0, 2)) * inv_w * su * base.width,
+                             (H(1, 0) * px + H(1, 1) * py + H(1, 2)) * inv_w * sv * base.height);
     };
     const Eigen::Vector2d c0 = uv_at(xm, y);
-    const double footprint = std::max((uv_at(xm + 1, y) - c0).norm(), (uv_at(xm, y + 1) - c0).norm());
-    // Level whose texel best matches the pixel footprint (rounded: a little softer, far less aliasing).
-    int level = footprint > 1.41 ? static_cast<int>(std::log2(footprint) + 0.5) : 0;
-    level = std::min(level, static_cast<int>(levels->size()) - 1);
+    const double footprint2 =
+        std::max((uv_at(xm + 1, y) - c0).squaredNorm(), (uv_at(xm, y + 1) - c0).squaredNorm());
+    // Level whose texel best matches the pixel footprint f (rounded: a little softer, far less
+    // aliasing): round(log2 f), i.e. level L for f in [2^(L-1/2), 2^(L+1/2)), found on f^2 against
+    // 2^(2L+1) without a log or a square root.
+    const int max_level = static_cast<int>(levels->size()) - 1;
+    int level = 0;
+    for (double limit = 2.0; level < max_level && footprint2 >= limit; limit *= 4.0) ++level;
     const BlockedLevel& img = (*levels)[static_cast<std::size_t>(level)];
     const int tw = img.width, th = img.height;
     const double scale_u = su * tw, scale_v = sv * th;
@@ -408,9 +479,9 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
     const double bias_u = repeat ? off_u + 4096.0 * tw : off_u;  // keeps the cast positive when wrapping
     const double bias_v = repeat ? off_v + 4096.0 * th : off_v;
     auto texel_at = [&](int px, double* u, double* v) {
-      const double w = H(2, 0) * px + H(2, 1) * y + H(2, 2);
-      *u = (H(0, 0) * px + H(0, 1) * y + H(0, 2)) / w * scale_u + bias_u;
-      *v = (H(1, 0) * px + H(1, 1) * y + H(1, 2)) / w * scale_v + bias_v;
+      const double inv_w = 1.0 / (H(2, 0) * px + H(2, 1) * y + H(2, 2));
+      *u = (H(0, 0) * px + H(0, 1) * y + H(0, 2)) * inv_w * scale_u + bias_u;
+      *v = (H(1, 0) * px + H(1, 1) * y + H(1, 2)) * inv_w * scale_v + bias_v;
     };
     constexpr int kSegment = 16;
     double u_start, v_start;
