@@ -60,11 +60,10 @@ class CameraRenderer {
   cv::Matx33d ideal_K_;
   cv::Mat ideal_;          ///< pinhole render with margin (visible: CV_8UC4 b, g, r, 0)
   cv::Mat depth_;          ///< CV_32F, 1/z (0 = nothing)
-  /// Distortion, IR: a precomputed fixed-point cv::remap map (CV_16SC2 source pixel, CV_16UC1
-  /// sub-pixel index) from each output pixel into ideal_.
-  cv::Mat remap_xy_, remap_frac_;
-  /// Distortion, visible: per output pixel the byte offset of the top-left source pixel in ideal_
-  /// and four bilinear weights (top-left, bottom-left, top-right, bottom-right; sum 2^14).
+  /// Distortion: per output pixel the byte offset of the top-left source pixel in ideal_ and four
+  /// bilinear weights (sum 2^14). Visible: per pixel top-left, bottom-left, top-right, bottom-right;
+  /// IR: per group of four pixels the (top-left, top-right) pairs, then the (bottom-left,
+  /// bottom-right) pairs.
   std::vector<int32_t> remap_offset_;
   std::vector<int16_t> remap_weights_;
   void applyDistortion();

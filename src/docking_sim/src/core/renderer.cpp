@@ -127,9 +127,6 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
     }
     pad_.x = static_cast<int>(std::ceil(std::max(-min_x, max_x - (w - 1)))) + 2;
     pad_.y = static_cast<int>(std::ceil(std::max(-min_y, max_y - (h - 1)))) + 2;
-    // Fixed-point maps for cv::remap (integer source pixel + 1/32-px bilinear weights): its SIMD
-    // bilinear path is several times faster than a per-pixel lookup, and 1/32 px of map quantisation
-    // is far below the blur the effects add afterwards.
     map_x.create(h, w, CV_32F);
     map_y.create(h, w, CV_32F);
     for (int y = 0; y < h; ++y) {
@@ -139,7 +136,6 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
         map_y.at<float>(y, x) = p.y + static_cast<float>(pad_.y);
       }
     }
-    if (band == Band::kInfrared) cv::convertMaps(map_x, map_y, remap_xy_, remap_frac_, CV_16SC2);
   }
   ideal_K_ = calibration.K;
   ideal_K_(0, 2) += pad_.x;
@@ -147,22 +143,31 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
   // Visible: 4 bytes per ideal pixel (b, g, r, 0) so that the rasteriser moves whole texels and the
   // distortion lookup interpolates all channels of a pixel in one SIMD register.
   ideal_.create(h + 2 * pad_.y, w + 2 * pad_.x, band == Band::kVisible ? CV_8UC4 : CV_8UC1);
-  if (options.distortion && band == Band::kVisible) {
+  if (options.distortion) {
     // Per output pixel: byte offset of the top-left source pixel and the four bilinear weights
-    // (7-bit per axis, products <= 2^14, summing to 2^14), in the order the SIMD loop consumes them.
+    // (7-bit per axis, products <= 2^14, summing to 2^14), in the order the SIMD loops consume them.
+    const bool visible = band == Band::kVisible;
     remap_offset_.resize(static_cast<std::size_t>(w) * h);
-    remap_weights_.resize(4 * remap_offset_.size());
+    remap_weights_.assign(4 * ((remap_offset_.size() + 3) / 4 * 4), 0);
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
         const std::size_t i = static_cast<std::size_t>(y) * w + x;
         const double sx = map_x.at<float>(y, x), sy = map_y.at<float>(y, x);
         const int x0 = static_cast<int>(std::floor(sx)), y0 = static_cast<int>(std::floor(sy));
         const int wx = static_cast<int>(std::lround((sx - x0) * 128.0)), wy = static_cast<int>(std::lround((sy - y0) * 128.0));
-        remap_offset_[i] = static_cast<int32_t>(y0 * ideal_.step + x0 * 4);
-        remap_weights_[4 * i + 0] = static_cast<int16_t>((128 - wx) * (128 - wy));  // top-left
-        remap_weights_[4 * i + 1] = static_cast<int16_t>((128 - wx) * wy);          // bottom-left
-        remap_weights_[4 * i + 2] = static_cast<int16_t>(wx * (128 - wy));          // top-right
-        remap_weights_[4 * i + 3] = static_cast<int16_t>(wx * wy);                  // bottom-right
+        remap_offset_[i] = static_cast<int32_t>(y0 * ideal_.step + x0 * ideal_.elemSize());
+        const auto tl = static_cast<int16_t>((128 - wx) * (128 - wy)), tr = static_cast<int16_t>(wx * (128 - wy));
+        const auto bl = static_cast<int16_t>((128 - wx) * wy), br = static_cast<int16_t>(wx * wy);
+        if (visible) {  // per pixel: TL, BL, TR, BR
+          const int16_t wts[4] = {tl, bl, tr, br};
+          std::copy(wts, wts + 4, remap_weights_.begin() + 4 * i);
+        } else {  // per group of 4 pixels: (TL, TR) of each, then (BL, BR) of each
+          const std::size_t group = 16 * (i / 4), k = 2 * (i % 4);
+          remap_weights_[group + k] = tl;
+          remap_weights_[group + k + 1] = tr;
+          remap_weights_[group + 8 + k] = bl;
+          remap_weights_[group + 8 + k + 1] = br;
+        }
       }
     }
   }
@@ -282,15 +287,57 @@ void bilinearBgrx(const cv::Mat& src, const std::vector<int32_t>& offsets, const
   }
 }
 
+/// The same for a grey image, four output pixels per SSE2 step: the 2-byte top and bottom pairs of
+/// four neighbourhoods are gathered into two registers and weighed with two multiply-adds.
+void bilinearGray(const cv::Mat& src, const std::vector<int32_t>& offsets, const std::vector<int16_t>& weights,
+                  cv::Mat& dst) {
+  const uchar* base = src.data;
+  const std::size_t stride = src.step;
+  const int32_t* off = offsets.data();
+  const int16_t* wts = weights.data();
+  uchar* out = dst.data;  // continuous (created by create()): one flat run of pixels
+  const std::size_t n = dst.total();
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i round = _mm_set1_epi32(1 << 13);
+  auto pair = [](const uchar* p) {
+    uint16_t v;
+    std::memcpy(&v, p, 2);
+    return static_cast<uint32_t>(v);
+  };
+  std::size_t i = 0;
+  for (; i + 4 <= n; i += 4, off += 4, wts += 16) {
+    const uchar* p0 = base + off[0];
+    const uchar* p1 = base + off[1];
+    const uchar* p2 = base + off[2];
+    const uchar* p3 = base + off[3];
+    const auto top01 = static_cast<int>(pair(p0) | pair(p1) << 16), top23 = static_cast<int>(pair(p2) | pair(p3) << 16);
+    const auto bot01 = static_cast<int>(pair(p0 + stride) | pair(p1 + stride) << 16);
+    const auto bot23 = static_cast<int>(pair(p2 + stride) | pair(p3 + stride) << 16);
+    const __m128i top = _mm_unpacklo_epi8(_mm_set_epi32(0, 0, top23, top01), zero);
+    const __m128i bottom = _mm_unpacklo_epi8(_mm_set_epi32(0, 0, bot23, bot01), zero);
+    __m128i sum = _mm_add_epi32(_mm_madd_epi16(top, _mm_loadu_si128(reinterpret_cast<const __m128i*>(wts))),
+                                _mm_madd_epi16(bottom, _mm_loadu_si128(reinterpret_cast<const __m128i*>(wts + 8))));
+    sum = _mm_srai_epi32(_mm_add_epi32(sum, round), 14);
+    const auto four = static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(sum, zero), zero)));
+    std::memcpy(out + i, &four, 4);
+  }
+  for (std::size_t k = 0; i < n; ++i, ++k) {  // the tail (when the pixel count is not a multiple of 4)
+    const uchar* p = base + off[k];
+    const int value = p[0] * wts[2 * k] + p[1] * wts[2 * k + 1] + p[stride] * wts[8 + 2 * k] +
+                      p[stride + 1] * wts[8 + 2 * k + 1];
+    out[i] = static_cast<uchar>((value + (1 << 13)) >> 14);
+  }
+}
+
 }  // namespace
 
 void CameraRenderer::applyDistortion() {
-  // The margin keeps every lookup inside ideal_, so the border mode never matters.
+  // The margin keeps every 2x2 neighbourhood inside ideal_: no bounds checks per pixel.
+  distorted_.create(output_.size(), output_.type());
   if (ideal_.channels() == 4) {
-    distorted_.create(output_.size(), output_.type());
     bilinearBgrx(ideal_, remap_offset_, remap_weights_, distorted_);
   } else {
-    cv::remap(ideal_, distorted_, remap_xy_, remap_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    bilinearGray(ideal_, remap_offset_, remap_weights_, distorted_);
   }
 }
 
