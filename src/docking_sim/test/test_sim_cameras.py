@@ -16,7 +16,9 @@ from sensor_msgs.msg import CameraInfo, Image
 CAMERAS = {
     # topic base: (frame id, encoding, calibration file)
     "stereo/left": ("stereo_left_optical_frame", "bgr8", "cameras/stereo_left.yaml"),
-    "stereo/right": ("stereo_right_optical_frame", "bgr8", "cameras/stereo_right.yaml"),
+    # Both images of the stereo pair carry the left frame (robot.yaml image_frame_id): stereo_image_proc
+    # requires one frame per pair.
+    "stereo/right": ("stereo_left_optical_frame", "bgr8", "cameras/stereo_right.yaml"),
     "ir": ("ir_optical_frame", "mono8", "cameras/ir.yaml"),
 }
 
