@@ -2,7 +2,6 @@
 # their ROS-free core library and tests. Included by CMakeLists.txt after catkin_package().
 # Targets: ${PROJECT_NAME}_camera_core, ${PROJECT_NAME}_camera_nodelets (nodelet_plugins.xml),
 # stereo_camera, ir_camera, camera_frames_publisher.
-find_package(yaml-cpp REQUIRED)
 
 # ROS-free logic: source parsing, reconnect backoff, the capture rig, frame formats, calibration checks,
 # camera mounts from robot.yaml.
@@ -53,7 +52,6 @@ if(CATKIN_ENABLE_TESTING)
   endif()
 
   # Node tests (rostest): one executable, one .test file per scenario.
-  find_package(rostest REQUIRED)
   catkin_add_executable_with_gtest(camera_nodes_rostest test/camera/camera_nodes_rostest.cpp EXCLUDE_FROM_ALL)
   if(TARGET camera_nodes_rostest)
     target_link_libraries(camera_nodes_rostest ${catkin_LIBRARIES} yaml-cpp)

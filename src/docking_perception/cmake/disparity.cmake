@@ -69,7 +69,6 @@ if(CATKIN_ENABLE_TESTING)
   endif()
 
   # The node end to end on synthetic DisparityImage messages (needs a roscore: rostest).
-  find_package(rostest REQUIRED)
   add_rostest_gtest(test_disparity_detector_node test/disparity/disparity_detector_node.test
     test/disparity/test_disparity_detector_node.cpp)
   if(TARGET test_disparity_detector_node)

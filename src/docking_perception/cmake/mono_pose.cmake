@@ -3,7 +3,6 @@
 #                                 matching, LED pattern, paper 5-point solver, planar PnP, velocities
 #   test_mono_core                gtests of the core (no roscore)
 #   bench_mono                    timing of detection + pose (stages mono_full, mono_tracking)
-find_package(yaml-cpp REQUIRED)
 
 set(MONO_CORE_SOURCES
   src/mono/pose_types.cpp
@@ -27,6 +26,7 @@ target_link_libraries(docking_perception_mono_synthetic docking_perception_mono_
 
 add_executable(bench_mono test/mono/bench_mono.cpp)
 target_link_libraries(bench_mono docking_perception_mono_synthetic docking_perception_mono_core)
+install(TARGETS bench_mono RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_mono_core
