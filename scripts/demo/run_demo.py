@@ -93,6 +93,20 @@ def run(args):
     return 1 if failure else 0
 
 
+def died_processes(log_path):
+    """Names of the processes roslaunch reported dead (non-required ones, e.g. a nodelet manager, do
+    not stop the launch by themselves)."""
+    try:
+        text = log_path.read_text(errors="replace")
+    except OSError:
+        return []
+    out = []
+    for line in text.splitlines():
+        if "process has died" in line and "[" in line:
+            out.append(line[line.index("[") + 1:line.index("]")].split("[")[-1])
+    return out
+
+
 def monitor(launch, args, outcome):
     """Waits for DOCKED or the sim-time timeout. Returns None, or why the run could not be carried out."""
     import rospy
@@ -127,7 +141,11 @@ def monitor(launch, args, outcome):
     t0 = rospy.get_time()
     reported = None
     docked_at = None
+    log_path = pathlib.Path(os.environ["ROS_HOME"]).parent / "launch.log"
     while True:
+        died = died_processes(log_path)
+        if died:
+            return "process died during the run: " + ", ".join(died) + " (see launch.log)"
         if launch.poll() is not None:
             return "roslaunch exited during the run (a required node died or the scenario ended): see launch.log"
         now = rospy.get_time()

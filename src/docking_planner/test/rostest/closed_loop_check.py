@@ -43,6 +43,7 @@ class ClosedLoopCheck(unittest.TestCase):
         self.states = []      # (receipt sim time, DockingState)
         self.cmds = []        # (receipt sim time, Twist)
         self.relaying = True
+        self.last_relayed = (0.0, 0.0)
         self.buffer = tf2_ros.Buffer(cache_time=rospy.Duration(600.0))
         self.listener = tf2_ros.TransformListener(self.buffer)
         rospy.Subscriber("docking/state", DockingState, self.on_state, queue_size=50)
@@ -63,6 +64,17 @@ class ClosedLoopCheck(unittest.TestCase):
     def on_estimate(self, msg):
         if self.relaying:
             self.relay_pub.publish(msg)
+            self.last_relayed = (rospy.get_time(), msg.header.stamp.to_sec())
+
+    def timeline(self, n0, t_ref):
+        out, prev = [], None
+        with self.lock:
+            for t, s in self.states[n0:]:
+                if s.state_name != prev:
+                    out.append("%+.2f %s (%s, visible %s)" % (s.header.stamp.to_sec() - t_ref, s.state_name,
+                                                              s.reason[:60], s.target_visible))
+                    prev = s.state_name
+        return "; ".join(out)
 
     def wait_clock(self):
         wall_limit = rospy.get_param("~startup_wall_timeout_s", 120.0)
@@ -138,7 +150,9 @@ class ClosedLoopCheck(unittest.TestCase):
             s = self.latest_state()
             if s is not None and s.state == DockingState.APPROACH and approach_t is None:
                 approach_t = rospy.get_time()
-            if approach_t is not None and rospy.get_time() - approach_t >= lose_after:
+            # Cut while the planner is approaching on a visible target (not in a natural dropout).
+            if (approach_t is not None and rospy.get_time() - approach_t >= lose_after and
+                    s.state == DockingState.APPROACH and s.target_visible):
                 break
             rospy.sleep(0.05)
         self.assertIsNotNone(approach_t, "the planner never reached APPROACH")
@@ -154,9 +168,12 @@ class ClosedLoopCheck(unittest.TestCase):
                         "the chaser was not moving before the target vanished")
         # 2. HOLD, then SEARCH.
         hold_t = search_t = None
+        settle = 0.3
         while rospy.get_time() - lost_t < timeout and search_t is None:
             with self.lock:
                 for t, s in self.states[n0:]:
+                    if s.header.stamp.to_sec() < lost_t + settle:
+                        continue  # cycles that may still have seen estimates in flight at the cut
                     if hold_t is None and s.state == DockingState.HOLD:
                         hold_t = t
                     if hold_t is not None and search_t is None and s.state == DockingState.SEARCH:
@@ -165,8 +182,10 @@ class ClosedLoopCheck(unittest.TestCase):
                         self.assertIn(s.state, (DockingState.APPROACH,),
                                       "left APPROACH for %s, not HOLD: %s" % (s.state_name, s.reason))
                     elif search_t is None:
-                        self.assertEqual(s.state, DockingState.HOLD, "HOLD went to %s, not SEARCH: %s"
-                                         % (s.state_name, s.reason))
+                        self.assertEqual(s.state, DockingState.HOLD, "HOLD went to %s, not SEARCH: %s; "
+                                         "last estimate relayed %.2f s after the cut (stamp %.2f s before it); %s"
+                                         % (s.state_name, s.reason, self.last_relayed[0] - lost_t,
+                                            lost_t - self.last_relayed[1], self.timeline(n0, lost_t)))
             rospy.sleep(0.05)
         self.assertIsNotNone(hold_t, "no HOLD after the target vanished")
         self.assertIsNotNone(search_t, "no SEARCH within %.0f s after HOLD" % timeout)
