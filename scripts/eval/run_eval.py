@@ -74,7 +74,12 @@ def run_scenario(name, lighting, args, raw_dir, log_dir):
         try:
             launch.wait(timeout=20)
         except subprocess.TimeoutExpired:
+            pass
+        # Whatever roslaunch left behind in its process group (a master interrupted while starting).
+        try:
             os.killpg(launch.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
         log.close()
     if not ok:
         print(f"  {name}: FAILED (see {log_dir / (name + '.log')})")
