@@ -99,8 +99,9 @@ def plot(scenarios, out_dir):
         pts = [(r, v) for r, v in pts if v["position_error_median_m"] is not None]
         if not pts:
             continue
-        pts.sort()
-        axes[0].plot([r for r, _ in pts], [100 * v["position_error_median_m"] for _, v in pts], marker,
+        pts.sort(key=lambda rv: rv[0])
+        # Range error in cm (the stereo limit is a depth error); position error adds the lateral part.
+        axes[0].plot([r for r, _ in pts], [r * v["range_error_median_pct"] for r, v in pts], marker,
                      label=source, linestyle="none")
         axes[1].plot([r for r, _ in pts], [v["detection_rate"] for _, v in pts], marker, label=source,
                      linestyle="none")
@@ -111,7 +112,7 @@ def plot(scenarios, out_dir):
         # Stereo limit: Z^2 * 0.25 px / (f b), f = 550 px, b = 0.10 m; the goal is twice that.
         axes[0].plot(z, 100 * 2 * z ** 2 * 0.25 / (550 * 0.10), "k--", label="goal: 2x stereo limit")
     axes[0].set_xlabel("true range at start [m]")
-    axes[0].set_ylabel("median position error [cm]")
+    axes[0].set_ylabel("median range error [cm]")
     axes[0].set_yscale("log")
     axes[0].grid(True, which="both", alpha=0.3)
     axes[0].legend()
@@ -155,6 +156,8 @@ def main():
     parser.add_argument("--real-time-factor", type=float, default=0.5)
     parser.add_argument("--timeout", type=float, default=240.0, help="wall seconds per scenario at most")
     parser.add_argument("--out", default=str(ROOT / "results" / "eval"))
+    parser.add_argument("--plot-only", action="store_true",
+                        help="rebuild summary.json and the plots from the raw results of earlier runs")
     args = parser.parse_args()
 
     out_dir = pathlib.Path(args.out)
@@ -164,6 +167,10 @@ def main():
     runs = [(n, dict(SETS["all"]).get(n, "nominal")) for n in args.only] if args.only else SETS[args.set]
 
     scenarios, failed = [], []
+    if args.plot_only:
+        names = [n for n, _ in runs]
+        scenarios = [json.loads((raw_dir / f"{n}.json").read_text()) for n in names if (raw_dir / f"{n}.json").exists()]
+        runs = []
     for name, lighting in runs:
         print(f"eval: {name} ({lighting})", flush=True)
         result = run_scenario(name, lighting, args, raw_dir, log_dir)
