@@ -20,6 +20,9 @@ import subprocess
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "scripts" / "eval"))
+from eval_recorder import percentile  # noqa: E402  (one percentile for eval, demo and campaign)
+
 LIGHTING = ["nominal"] * 6 + ["dark"] * 2 + ["glare"] * 2
 
 
@@ -104,15 +107,6 @@ def main():
     print(json.dumps({k: s[k] for k in ("runs", "success_rate", "position_error_mm", "yaw_error_deg")}, indent=2))
 
 
-def pct(values, p):
-    if not values:
-        return None
-    v = sorted(values)
-    k = (len(v) - 1) * p / 100.0
-    lo, hi = math.floor(k), math.ceil(k)
-    return v[lo] + (v[hi] - v[lo]) * (k - lo)
-
-
 def write_summary(out, rows):
     docked = [r for r in rows if r.get("docked")]
     pos = [1000 * r["final_position_error_m"] for r in docked]
@@ -127,9 +121,9 @@ def write_summary(out, rows):
         "runs": len(rows),
         "success_rate": (sum(r["success"] for r in rows) / len(rows)) if rows else 0.0,
         "docked_rate": (len(docked) / len(rows)) if rows else 0.0,
-        "position_error_mm": {"median": pct(pos, 50), "p95": pct(pos, 95), "max": max(pos) if pos else None},
-        "yaw_error_deg": {"median": pct(yaw, 50), "p95": pct(yaw, 95), "max": max(yaw) if yaw else None},
-        "time_to_dock_s": {"median": pct(ttd, 50), "p95": pct(ttd, 95)},
+        "position_error_mm": {"median": percentile(pos, 50), "p95": percentile(pos, 95), "max": max(pos) if pos else None},
+        "yaw_error_deg": {"median": percentile(yaw, 50), "p95": percentile(yaw, 95), "max": max(yaw) if yaw else None},
+        "time_to_dock_s": {"median": percentile(ttd, 50), "p95": percentile(ttd, 95)},
         "failure_causes": causes,
         "failures": [{"run": r["run"], "cause": r.get("cause"), "lighting": r["lighting"], "range_m": r["range_m"]}
                      for r in rows if not r["success"]],
