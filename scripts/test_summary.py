@@ -4,6 +4,7 @@
 
 catkin_test_results reports suites; this counts test cases, and lists each failing one by name.
 A crashed gtest or rostest leaves a MISSING-RESULT file or an <error>, which counts as a failure.
+Each failure is printed with the last lines of its message, so a CI log says why it failed.
 """
 import pathlib
 import sys
@@ -27,8 +28,14 @@ def main(results_dir):
             continue
         for case in cases:
             name = f"{path.parent.name}/{case.get('classname', '')}.{case.get('name', '')}"
-            if case.find("failure") is not None or case.find("error") is not None:
-                failed.append(name)
+            problem = case.find("failure")
+            if problem is None:
+                problem = case.find("error")
+            if problem is not None:
+                # Say why, briefly: CI logs show only this script's output for a failure.
+                text = (problem.get("message") or "") + "\n" + (problem.text or "")
+                lines = [ln for ln in text.strip().splitlines() if ln.strip()][-12:]
+                failed.append(name + "".join("\n    " + ln for ln in lines))
             elif case.find("skipped") is not None:
                 skipped += 1
             else:
