@@ -154,14 +154,9 @@ int main(int argc, char** argv) {
     rectifyMaps(right_calibration, &right_map1, &right_map2);
     auto matcher = testing::createMatcher(settings);
     const DisparityDetector detector(params);
-    StereoGeometry geometry;
-    geometry.focal_px = scene.focal_px;
-    geometry.cx_px = scene.cx_px;
-    geometry.cy_px = scene.cy_px;
-    geometry.baseline_m = scene.baseline_m;
+    const StereoGeometry geometry = testing::geometryOf(scene);
     const int range = (settings.disparity_range / 16) * 16;
-    const int blind = settings.min_disparity + range + settings.correlation_window_size / 2;
-    const cv::Rect valid_region(blind, 0, left_raw.cols - blind, left_raw.rows);
+    const cv::Rect valid_region = testing::matcherValidRegion(settings, left_raw.size());
 
     // CPU time of this thread: on a shared machine, wall time measures the other users too.
     struct Clock {
@@ -191,7 +186,7 @@ int main(int argc, char** argv) {
       const double disparity_ms = ms_since(disparity_start);
       const auto detection_start = Clock::now();
       detection = detector.detect(disparity, geometry, settings.min_disparity,
-                                  settings.min_disparity + range - 1, valid_region);
+                                  testing::maxDisparity(settings), valid_region);
       const double detection_ms = ms_since(detection_start);
       const double total_ms = ms_since(start);
       if (frame < warmup) continue;

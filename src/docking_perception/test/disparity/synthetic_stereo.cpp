@@ -277,6 +277,24 @@ cv::Mat computeDisparity(cv::StereoMatcher& matcher, const cv::Mat& left_rect,
   return disparity;
 }
 
+int maxDisparity(const MatcherSettings& settings) {
+  return settings.min_disparity + (settings.disparity_range / 16) * 16 - 1;
+}
+
+cv::Rect matcherValidRegion(const MatcherSettings& settings, cv::Size image_size) {
+  const int blind = maxDisparity(settings) + 1 + settings.correlation_window_size / 2;
+  return cv::Rect(blind, 0, image_size.width - blind, image_size.height);
+}
+
+StereoGeometry geometryOf(const SyntheticScene& scene) {
+  StereoGeometry geometry;
+  geometry.focal_px = scene.focal_px;
+  geometry.cx_px = scene.cx_px;
+  geometry.cy_px = scene.cy_px;
+  geometry.baseline_m = scene.baseline_m;
+  return geometry;
+}
+
 }  // namespace testing
 }  // namespace disparity
 }  // namespace docking_perception

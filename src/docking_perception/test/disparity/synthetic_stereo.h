@@ -63,6 +63,13 @@ cv::Ptr<cv::StereoMatcher> createMatcher(const MatcherSettings& settings);
 cv::Mat computeDisparity(cv::StereoMatcher& matcher, const cv::Mat& left_rect,
                          const cv::Mat& right_rect);
 
+// The highest disparity the matcher searches (its range is rounded down to a multiple of 16).
+int maxDisparity(const MatcherSettings& settings);
+
+// The part of the left image where the matcher can produce disparities: the left border is blind
+// (no right-image pixels for the largest disparity plus half the correlation window).
+cv::Rect matcherValidRegion(const MatcherSettings& settings, cv::Size image_size);
+
 // The detector's parameters from config/disparity_detector.yaml (the node's own file). Throws
 // std::runtime_error naming the file and field when one is missing or not a number.
 DetectorParams loadDetectorParams(const std::string& path);
@@ -78,6 +85,9 @@ CameraCalibration loadCameraCalibration(const std::string& path);
 // rectified optical frame), with its body and solar panels behind the face, on a floor 0.25 m below
 // the cameras, in front of a wall at `wall_z_m`.
 SyntheticScene targetScene(double x_m, double y_m, double z_m, double wall_z_m);
+
+// The rectified stereo geometry the scene was rendered with.
+StereoGeometry geometryOf(const SyntheticScene& scene);
 
 }  // namespace testing
 }  // namespace disparity

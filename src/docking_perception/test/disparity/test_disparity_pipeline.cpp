@@ -29,18 +29,12 @@ PipelineResult runPipeline(double x, double y, double z) {
   auto matcher = testing::createMatcher(settings);
   const cv::Mat disparity = testing::computeDisparity(*matcher, left, right);
 
-  StereoGeometry geometry;
-  geometry.focal_px = scene.focal_px;
-  geometry.cx_px = scene.cx_px;
-  geometry.cy_px = scene.cy_px;
-  geometry.baseline_m = scene.baseline_m;
-  const int range = (settings.disparity_range / 16) * 16;
-  const int blind = settings.min_disparity + range + settings.correlation_window_size / 2;
-  const cv::Rect valid(blind, 0, disparity.cols - blind, disparity.rows);
+  const StereoGeometry geometry = testing::geometryOf(scene);
+  const cv::Rect valid = testing::matcherValidRegion(settings, disparity.size());
 
   PipelineResult result;
   result.detection = DisparityDetector(params).detect(
-      disparity, geometry, settings.min_disparity, settings.min_disparity + range - 1, valid);
+      disparity, geometry, settings.min_disparity, testing::maxDisparity(settings), valid);
   result.stereo_limit_m = z * z * 0.25 / (geometry.focal_px * geometry.baseline_m);
   return result;
 }
