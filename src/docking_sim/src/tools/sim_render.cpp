@@ -1,15 +1,30 @@
-// Renders the simulator's three cameras without ROS: saves frames as PNG, or benchmarks the renderer.
+// Renders the simulator's cameras without ROS: saves frames as PNG, renders a sequence with its ground
+// truth (for offline evaluation), or benchmarks the renderer.
 //
 //   sim_render --config DIR --scenario NAME [--time S] [--out PREFIX]     save PREFIX_{stereo_left,...}.png
 //   sim_render --config DIR --scenario NAME --bench N                      CPU ms per frame, per camera
+//   sim_render --config DIR --scenario NAME --sequence N [--dt S] [--time T0] --out FOLDER
+//       N frames of the left camera at T0, T0 + dt, ... as the visible mono_pose instance sees them
+//       (stereo/left/image_rect: grey, rectified): FOLDER/left_rect_NNNN.png and FOLDER/sequence.json
+//       (intrinsics of the rectified image, and per frame the stamp, the pose of the docking port in the
+//       rectified optical frame and its linear and angular velocity in that frame).
+//   --target FILE   another target model instead of DIR/target.yaml (e.g. config/target_tagged.yaml)
 //
 // DIR is the workspace's config folder (sim.yaml, target.yaml, robot.yaml, omni_base.yaml, scenarios/).
+#include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
+#include <cstdio>
 #include <ctime>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 #include <string>
+#include <sys/stat.h>
+
+#include <yaml-cpp/yaml.h>
 
 #include "docking_sim/config_error.h"
 #include "docking_sim/simulation.h"
@@ -23,16 +38,113 @@ double cpuSeconds() {
 }
 
 int usage() {
-  std::cerr << "usage: sim_render --config DIR --scenario NAME [--time S] [--out PREFIX] [--bench N]\n";
+  std::cerr << "usage: sim_render --config DIR --scenario NAME [--target FILE] [--time S] [--out PREFIX] [--bench N]\n"
+               "       sim_render --config DIR --scenario NAME [--target FILE] --sequence N [--dt S] [--time T0] "
+               "--out FOLDER\n";
   return 2;
+}
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.12g", v);
+  return buf;
+}
+
+template <typename Vec>
+std::string jsonArray(const Vec& v, int n) {
+  std::string s = "[";
+  for (int i = 0; i < n; ++i) s += (i ? ", " : "") + num(v[i]);
+  return s + "]";
+}
+
+std::string jsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+/// The sequence mode: the left camera's frames rectified as image_proc does it on the robot
+/// (image_proc/debayer: bgr8 -> mono8 with cvtColor; image_proc/rectify: cv::remap of the
+/// initUndistortRectifyMap(K, D, R, P) maps, bilinear), with the truth in the rectified frame.
+int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, const std::string& target_file,
+                   int frames, double dt_s, const std::string& folder) {
+  const int cam = docking_sim::RobotModel::kStereoLeft;
+  const docking_sim::CameraCalibration& cal = sim.robot().cameras[cam].calibration;
+  // R: the rectification rotation (rectified <- raw optical frame), from the calibration file (the loader
+  // keeps K, D, P only); P's left 3x3: the rectified intrinsics. Our left camera has R = I, P = K.
+  cv::Matx33d rect_R = cv::Matx33d::eye();
+  try {
+    const YAML::Node r = YAML::LoadFile(cal.file)["rectification_matrix"]["data"];
+    if (r && r.IsSequence() && r.size() == 9)
+      for (int i = 0; i < 9; ++i) rect_R(i / 3, i % 3) = r[static_cast<std::size_t>(i)].as<double>();
+  } catch (const YAML::Exception& e) {
+    std::cerr << cal.file << ": rectification_matrix: " << e.what() << "\n";
+    return 1;
+  }
+  const cv::Matx33d new_K(cal.P(0, 0), cal.P(0, 1), cal.P(0, 2), cal.P(1, 0), cal.P(1, 1), cal.P(1, 2), 0, 0, 1);
+  cv::Mat map1, map2;
+  cv::initUndistortRectifyMap(cal.K, cal.D, rect_R, new_K, cv::Size(cal.width, cal.height), CV_16SC2, map1, map2);
+  ::mkdir(folder.c_str(), 0755);
+  std::ostringstream json;
+  json << "{\n  \"scenario\": " << jsonString(scenario) << ",\n  \"target\": " << jsonString(target_file)
+       << ",\n  \"camera\": \"stereo_left\",\n"
+       << "  \"rectification\": \"rendered with the calibration's plumb_bob distortion, converted to grey and "
+          "rectified with cv::initUndistortRectifyMap(K, D, R, P) + bilinear cv::remap, as image_proc does\",\n"
+       << "  \"frame_id\": \"stereo_left_optical_frame\",\n"
+       << "  \"intrinsics\": {\"width\": " << cal.width << ", \"height\": " << cal.height << ", \"fx\": "
+       << num(new_K(0, 0)) << ", \"fy\": " << num(new_K(1, 1)) << ", \"cx\": " << num(new_K(0, 2))
+       << ", \"cy\": " << num(new_K(1, 2)) << "},\n"
+       << "  \"dt_s\": " << num(dt_s) << ",\n  \"frames\": [\n";
+  Eigen::Matrix3d R_rect;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) R_rect(i, j) = rect_R(i, j);
+  cv::Mat gray, rect;
+  for (int k = 0; k < frames; ++k) {
+    if (k > 0) sim.advance(dt_s);
+    const cv::Mat& raw = sim.render(cam);
+    if (raw.channels() == 3) cv::cvtColor(raw, gray, cv::COLOR_BGR2GRAY);
+    else gray = raw;
+    cv::remap(gray, rect, map1, map2, cv::INTER_LINEAR);
+    char name[64];
+    std::snprintf(name, sizeof(name), "left_rect_%04d.png", k);
+    if (!cv::imwrite(folder + "/" + name, rect)) {
+      std::cerr << "cannot write " << folder << "/" << name << "\n";
+      return 1;
+    }
+    const docking_sim::RelativeTruth truth = sim.truthInCamera(cam);
+    const Eigen::Matrix3d R = R_rect * truth.camera_T_port.linear();
+    const Eigen::Vector3d t = R_rect * truth.camera_T_port.translation();
+    const Eigen::Quaterniond q(R);
+    const Eigen::Vector3d v = R_rect * truth.linear_m_s, w = R_rect * truth.angular_rad_s;
+    Eigen::Matrix<double, 9, 1> r9;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) r9(3 * i + j) = R(i, j);
+    json << "    {\"index\": " << k << ", \"stamp_s\": " << num(sim.time()) << ", \"image\": \"" << name
+         << "\", \"position_m\": " << jsonArray(t, 3) << ", \"rotation\": " << jsonArray(r9, 9)
+         << ", \"quaternion_xyzw\": [" << num(q.x()) << ", " << num(q.y()) << ", " << num(q.z()) << ", "
+         << num(q.w()) << "], \"linear_m_s\": " << jsonArray(v, 3) << ", \"angular_rad_s\": " << jsonArray(w, 3)
+         << "}" << (k + 1 < frames ? "," : "") << "\n";
+  }
+  json << "  ]\n}\n";
+  std::ofstream file(folder + "/sequence.json");
+  file << json.str();
+  if (!file) {
+    std::cerr << "cannot write " << folder << "/sequence.json\n";
+    return 1;
+  }
+  std::cout << "wrote " << frames << " frames and " << folder << "/sequence.json\n";
+  return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string config_dir, scenario = "default", out = "frame";
-  double time_s = 0.0;
-  int bench = 0;
+  std::string config_dir, scenario = "default", out = "frame", target_file;
+  double time_s = 0.0, dt_s = 1.0 / 30.0;
+  int bench = 0, sequence = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (i + 1 >= argc) return usage();
@@ -42,13 +154,16 @@ int main(int argc, char** argv) {
     else if (arg == "--time") time_s = std::stod(value);
     else if (arg == "--out") out = value;
     else if (arg == "--bench") bench = std::stoi(value);
+    else if (arg == "--sequence") sequence = std::stoi(value);
+    else if (arg == "--dt") dt_s = std::stod(value);
+    else if (arg == "--target") target_file = value;
     else return usage();
   }
-  if (config_dir.empty()) return usage();
+  if (config_dir.empty() || sequence < 0 || !(dt_s > 0.0)) return usage();
   docking_sim::SimulationFiles files;
   files.sim_config = config_dir + "/sim.yaml";
   files.scenario = config_dir + "/scenarios/" + scenario + ".yaml";
-  files.target_config = config_dir + "/target.yaml";
+  files.target_config = target_file.empty() ? config_dir + "/target.yaml" : target_file;
   files.robot_config = config_dir + "/robot.yaml";
   files.omni_base_config = config_dir + "/omni_base.yaml";
   // One core, as the node runs: OpenCV's worker threads would only add hand-over cost here.
@@ -56,6 +171,7 @@ int main(int argc, char** argv) {
   try {
     docking_sim::Simulation sim(files);
     while (sim.time() < time_s - 1e-9) sim.advance(std::min(0.005, time_s - sim.time()));
+    if (sequence > 0) return renderSequence(sim, scenario, files.target_config, sequence, dt_s, out);
     const char* names[3] = {"stereo_left", "stereo_right", "ir"};
     if (bench > 0) {
       std::cout << "scenario " << scenario << ", " << bench << " frames per camera, 640x480\n";
