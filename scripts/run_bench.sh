@@ -20,7 +20,11 @@ echo "== bench_mono (detection + pose, full frame and tracking)"
 "$lib/bench_mono" "$out/parts/mono.json" config/target.yaml || status=1
 if [ -x "$lib/bench_apriltag" ]; then
   echo "== bench_apriltag (AprilTag 3 on the tagged target variant)"
-  "$lib/bench_apriltag" "$out/parts/apriltag.json" || status=1
+  # The tagged target (config/target_tagged.yaml) 1 m ahead, left camera rectified as mono_pose sees it.
+  devel/lib/docking_sim/sim_render --config config --scenario eval_near_1m_on --time 1.0 --sequence 1 \
+    --target config/target_tagged.yaml --out "$out/frames/tagged1m" >/dev/null
+  "$lib/bench_apriltag" "$out/parts/apriltag.json" --sequence "$out/frames/tagged1m" \
+    --target config/target_tagged.yaml || status=1
 fi
 /usr/bin/python3 - "$out" <<'PY'
 import json, pathlib, sys
