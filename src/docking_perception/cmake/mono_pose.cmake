@@ -61,3 +61,14 @@ install(TARGETS docking_perception_mono_core docking_perception_mono_pose_nodele
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 endif()
+
+# Against the simulator's truth (rostest; needs docking_sim, omni_base and camera_frames_publisher):
+# the visible instance at 1 m, and the IR instance in the dark while the visible one reports invalid.
+if(CATKIN_ENABLE_TESTING AND NOT MONO_CORE_ONLY)
+  add_rostest_gtest(test_mono_sim test/mono/mono_sim_near_1m.test test/mono/test_mono_sim.cpp)
+  if(TARGET test_mono_sim)
+    target_link_libraries(test_mono_sim ${catkin_LIBRARIES})
+    add_dependencies(test_mono_sim docking_perception_mono_pose_nodelet ${catkin_EXPORTED_TARGETS})
+  endif()
+  add_rostest(test/mono/mono_sim_dark_1m.test DEPENDENCIES test_mono_sim docking_perception_mono_pose_nodelet)
+endif()
