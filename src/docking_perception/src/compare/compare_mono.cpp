@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -45,6 +46,7 @@ struct Outcome {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   double ms = 0.0;
+  std::string status;  // why not valid
   Velocity filter, frame_difference;
 };
 
@@ -95,16 +97,37 @@ std::string methodJson(const std::string& name, const std::string& input, const 
     rot_deg.push_back(cmp::rotationErrorDeg(out[i].rotation, truth[i].rotation));
   }
   const double rate = static_cast<double>(valid) / static_cast<double>(out.size());
+  // Signed mean position error in the camera frame: a bias shared by every method points at the
+  // renderer or the truth, one of a single method at that method.
+  Eigen::Vector3d bias = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (out[i].valid) bias += (out[i].position - truth[i].position_m) / std::max(valid, 1);
   std::ostringstream s;
   s << "    \"" << name << "\": {\"frames\": \"" << input << "\", \"detection_rate\": " << num(rate)
     << ",\n      \"position_error_m\": {\"median\": " << num(cmp::percentile(pos_m, 0.5))
     << ", \"p95\": " << num(cmp::percentile(pos_m, 0.95)) << "}"
     << ", \"position_error_pct_of_range\": {\"median\": " << num(cmp::percentile(pos_pct, 0.5))
     << ", \"p95\": " << num(cmp::percentile(pos_pct, 0.95)) << "}"
+    << ", \"position_bias_xyz_m\": [" << num(bias.x()) << ", " << num(bias.y()) << ", " << num(bias.z()) << "]"
     << ",\n      \"orientation_error_deg\": {\"median\": " << num(cmp::percentile(rot_deg, 0.5))
     << ", \"p95\": " << num(cmp::percentile(rot_deg, 0.95)) << "}"
     << ", \"ms_per_frame\": {\"median\": " << num(cmp::percentile(ms, 0.5))
     << ", \"p95\": " << num(cmp::percentile(ms, 0.95)) << "}";
+  std::map<std::string, int> failures;
+  for (const Outcome& o : out)
+    if (!o.valid) ++failures[o.status.empty() ? "not found" : o.status];
+  s << ",\n      \"failures\": {";
+  bool first_failure = true;
+  for (const auto& [reason, count] : failures) {
+    std::string escaped;
+    for (char c : reason) {
+      if (c == '"' || c == '\\') escaped += '\\';
+      escaped += c;
+    }
+    s << (first_failure ? "" : ", ") << "\"" << escaped << "\": " << count;
+    first_failure = false;
+  }
+  s << "}";
   if (filter || frame_difference) {
     s << ",\n      \"velocity\": {";
     if (filter) s << "\"filter\": " << velocityJson(out, truth, &Outcome::filter);
@@ -197,6 +220,7 @@ int main(int argc, char** argv) {
         o.rotation = r.pose.rotation;
         o.position = r.pose.translation;
         o.ms = r.processing_time_ms;
+        o.status = r.status;
         o.filter = fromTwist(r.twist_filter);
         o.frame_difference = fromTwist(r.twist_frame_difference);
         out.push_back(o);
@@ -223,6 +247,7 @@ int main(int argc, char** argv) {
         o.rotation = r.camera_T_target.linear();
         o.position = r.camera_T_target.translation();
         o.ms = r.processing_time_ms;
+        o.status = r.status;
         if (r.found) {
           dp::mono::PoseWithCovariance pose;
           pose.rotation = o.rotation;

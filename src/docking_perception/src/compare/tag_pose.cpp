@@ -136,7 +136,10 @@ TagResult TagDetector::detect(const cv::Mat& gray, const mono::CameraIntrinsics&
     if (det->id == spec_.id && (!best || det->decision_margin > best->decision_margin)) best = det;
   }
   if (best) {
-    apriltag_detection_info_t info{best, spec_.size_m, camera.fx, camera.fy, camera.cx, camera.cy};
+    // apriltag's pixel coordinates put a pixel's centre at (i + 0.5, j + 0.5) (its quad fit adds half a
+    // pixel), OpenCV's and camera_info's at (i, j): shifting the principal point by half a pixel is the
+    // same as shifting every detected corner back.
+    apriltag_detection_info_t info{best, spec_.size_m, camera.fx, camera.fy, camera.cx + 0.5, camera.cy + 0.5};
     apriltag_pose_t pose{nullptr, nullptr};
     result.object_space_error = estimate_tag_pose(&info, &pose);
     Eigen::Isometry3d camera_T_tag = Eigen::Isometry3d::Identity();
