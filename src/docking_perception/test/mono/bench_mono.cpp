@@ -121,13 +121,20 @@ int main(int argc, char** argv) {
     infrared.push_back(frame);
   }
 
-  MonoPoseParams full;
+  // The feature settings of config/mono_pose_visible.yaml (the struct defaults are the older ones).
+  MonoPoseParams deployed;
+  deployed.features.fast_threshold = 10;
+  deployed.features.model_widths_px = {400, 280, 200, 140, 100, 80, 64};
+  deployed.features.min_inliers = 10;
+  deployed.features.max_refined_points = 220;
+  deployed.leds.threshold = 160;
+  MonoPoseParams full = deployed;
   full.use_tracking_region = false;
-  MonoPoseParams tracking;
+  MonoPoseParams tracking = deployed;
   tracking.use_tracking_region = true;
   MonoPoseParams five_point = full;
   five_point.solver = PoseSolverType::kPaperFivePoint;
-  MonoPoseParams ir;
+  MonoPoseParams ir = deployed;
   ir.mode = MonoMode::kIr;
   ir.solver = PoseSolverType::kPaperFivePoint;
 
