@@ -46,9 +46,14 @@ ArbiterConfig loadConfig(const ros::NodeHandle& pnh) {
   c.hysteresis_m = requireParam<double>(pnh, "hysteresis_m");
   c.timeout_s = requireParam<double>(pnh, "timeout_s");
   c.future_tolerance_s = requireParam<double>(pnh, "future_tolerance_s");
-  const int inliers = requireParam<int>(pnh, "min_mono_inliers");
-  if (inliers < 0) throw std::invalid_argument("parameter 'min_mono_inliers' must be >= 0");
-  c.min_mono_inliers = static_cast<std::uint32_t>(inliers);
+  const auto count = [&pnh](const char* name) {
+    const int value = requireParam<int>(pnh, name);
+    if (value < 0) throw std::invalid_argument(std::string("parameter '") + name + "' must be >= 0");
+    return static_cast<std::uint32_t>(value);
+  };
+  c.min_visible_inliers = count("min_visible_inliers");
+  c.min_ir_inliers = count("min_ir_inliers");
+  c.min_disparity_range_m = requireParam<double>(pnh, "min_disparity_range_m");
   c.max_mono_reprojection_error_px = requireParam<double>(pnh, "max_mono_reprojection_error_px");
   try {
     validate(c);
@@ -134,7 +139,9 @@ class ArbiterNode {
     c.hysteresis_m = cfg.hysteresis_m;
     c.timeout_s = cfg.timeout_s;
     c.future_tolerance_s = cfg.future_tolerance_s;
-    c.min_mono_inliers = static_cast<std::uint32_t>(std::max(0, cfg.min_mono_inliers));
+    c.min_visible_inliers = static_cast<std::uint32_t>(std::max(0, cfg.min_visible_inliers));
+    c.min_ir_inliers = static_cast<std::uint32_t>(std::max(0, cfg.min_ir_inliers));
+    c.min_disparity_range_m = cfg.min_disparity_range_m;
     c.max_mono_reprojection_error_px = cfg.max_mono_reprojection_error_px;
     try {
       arbiter_.reconfigure(c);
@@ -146,7 +153,9 @@ class ArbiterNode {
       cfg.hysteresis_m = kept.hysteresis_m;
       cfg.timeout_s = kept.timeout_s;
       cfg.future_tolerance_s = kept.future_tolerance_s;
-      cfg.min_mono_inliers = static_cast<int>(kept.min_mono_inliers);
+      cfg.min_visible_inliers = static_cast<int>(kept.min_visible_inliers);
+      cfg.min_ir_inliers = static_cast<int>(kept.min_ir_inliers);
+      cfg.min_disparity_range_m = kept.min_disparity_range_m;
       cfg.max_mono_reprojection_error_px = kept.max_mono_reprojection_error_px;
     }
   }

@@ -61,6 +61,9 @@ void validate(const ArbiterConfig& c) {
   if (!std::isfinite(c.max_mono_reprojection_error_px) || c.max_mono_reprojection_error_px <= 0.0) {
     throw std::invalid_argument("max_mono_reprojection_error_px must be positive");
   }
+  if (!std::isfinite(c.min_disparity_range_m) || c.min_disparity_range_m < 0.0) {
+    throw std::invalid_argument("min_disparity_range_m must be a number >= 0");
+  }
 }
 
 SourceArbiter::SourceArbiter(const ArbiterConfig& config) : config_(config) { validate(config_); }
@@ -112,6 +115,12 @@ std::string SourceArbiter::unusableReason(const EstimateSummary& e, double now_s
   if (!e.valid) return e.status.empty() ? "no target" : "no target (" + e.status + ")";
   if (!e.position_valid) return "no position";
   if (isMono(e.source) && !e.orientation_valid) return "no orientation";
+  if (e.source == Source::kDisparity && e.range_m < config_.min_disparity_range_m) {
+    // Near the target the detector sees a blob of the nearest surface (or the background), not the
+    // port: its position is then worse than none.
+    return "too near (" + formatDouble("%.2f", e.range_m) + " m < " +
+           formatDouble("%.2f", config_.min_disparity_range_m) + " m)";
+  }
   const double age = now_s - e.stamp_s;
   if (age > config_.timeout_s) return "stale (" + formatDouble("%.2f", age) + " s old)";
   if (age < -config_.future_tolerance_s) {
@@ -122,9 +131,10 @@ std::string SourceArbiter::unusableReason(const EstimateSummary& e, double now_s
 
 std::string SourceArbiter::poorQualityReason(const EstimateSummary& e) const {
   if (!isMono(e.source)) return {};
-  if (e.feature_inliers < config_.min_mono_inliers) {
-    return "poor (" + std::to_string(e.feature_inliers) + " inliers < " +
-           std::to_string(config_.min_mono_inliers) + ")";
+  const std::uint32_t min_inliers =
+      e.source == Source::kMonoIr ? config_.min_ir_inliers : config_.min_visible_inliers;
+  if (e.feature_inliers < min_inliers) {
+    return "poor (" + std::to_string(e.feature_inliers) + " inliers < " + std::to_string(min_inliers) + ")";
   }
   if (!std::isfinite(e.reprojection_error_px) ||
       e.reprojection_error_px > config_.max_mono_reprojection_error_px) {

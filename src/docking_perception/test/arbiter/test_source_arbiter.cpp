@@ -251,3 +251,56 @@ TEST(SourceArbiter, ReconfigureMovesTheSwitchRangeAndRefusesInvalidValues) {
   EXPECT_THROW(arbiter.reconfigure(bad), std::invalid_argument);
   EXPECT_DOUBLE_EQ(arbiter.config().hysteresis_m, 0.2);  // the old one is kept
 }
+
+TEST(SourceArbiter, DisparityIsNeverUsedInsideTheMinimumRange) {
+  ArbiterConfig c;
+  c.min_disparity_range_m = 0.9;
+  SourceArbiter arbiter{c};
+  // Far and near the limit: disparity is used (far regime; near regime as the only usable source).
+  EXPECT_EQ(offerAll(arbiter, 1.0, 3.0).source, Source::kDisparity);
+  ASSERT_TRUE(arbiter.offer(lost(Source::kMonoVisible, 1.1)).accepted);
+  ASSERT_TRUE(arbiter.offer(lost(Source::kMonoIr, 1.1)).accepted);
+  ASSERT_TRUE(arbiter.offer(good(Source::kDisparity, 1.1, 1.0)).accepted);
+  Decision d = arbiter.decide(1.11);
+  ASSERT_TRUE(d.valid);
+  EXPECT_EQ(d.source, Source::kDisparity);
+  // Inside the limit, with the mono poses lost: nothing is usable, and the reason says why.
+  ASSERT_TRUE(arbiter.offer(lost(Source::kMonoVisible, 1.2)).accepted);
+  ASSERT_TRUE(arbiter.offer(lost(Source::kMonoIr, 1.2)).accepted);
+  ASSERT_TRUE(arbiter.offer(good(Source::kDisparity, 1.2, 0.6)).accepted);
+  d = arbiter.decide(1.21);
+  EXPECT_FALSE(d.valid);
+  EXPECT_NE(d.reason.find("disparity too near"), std::string::npos) << d.reason;
+  // A mono pose at that range is used.
+  ASSERT_TRUE(arbiter.offer(good(Source::kMonoIr, 1.3, 0.6)).accepted);
+  ASSERT_TRUE(arbiter.offer(good(Source::kDisparity, 1.3, 0.6)).accepted);
+  d = arbiter.decide(1.31);
+  ASSERT_TRUE(d.valid);
+  EXPECT_EQ(d.source, Source::kMonoIr);
+}
+
+TEST(SourceArbiter, VisibleAndIrHaveTheirOwnInlierThresholds) {
+  ArbiterConfig c;
+  c.min_visible_inliers = 12;
+  c.min_ir_inliers = 5;
+  SourceArbiter arbiter{c};
+  // Five inliers: enough for the IR pose (its five LEDs), too few for the visible one.
+  EstimateSummary visible = good(Source::kMonoVisible, 1.0, 1.0);
+  visible.feature_inliers = 5;
+  EstimateSummary ir = good(Source::kMonoIr, 1.0, 1.0);
+  ir.feature_inliers = 5;
+  ASSERT_TRUE(arbiter.offer(visible).accepted);
+  ASSERT_TRUE(arbiter.offer(ir).accepted);
+  Decision d = arbiter.decide(1.01);
+  ASSERT_TRUE(d.valid);
+  EXPECT_EQ(d.source, Source::kMonoIr);
+  EXPECT_NE(d.reason.find("5 inliers < 12"), std::string::npos) << d.reason;
+  // Four IR inliers: poor too; nothing usable.
+  visible.stamp_s = ir.stamp_s = 1.1;
+  ir.feature_inliers = 4;
+  ASSERT_TRUE(arbiter.offer(visible).accepted);
+  ASSERT_TRUE(arbiter.offer(ir).accepted);
+  d = arbiter.decide(1.11);
+  EXPECT_FALSE(d.valid);
+  EXPECT_NE(d.reason.find("4 inliers < 5"), std::string::npos) << d.reason;
+}

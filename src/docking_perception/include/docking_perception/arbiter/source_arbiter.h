@@ -36,7 +36,9 @@ struct ArbiterConfig {
   double hysteresis_m{0.2};        ///< switch to mono below switch - h, back to disparity above switch + h
   double timeout_s{0.5};           ///< an estimate older than this (against `now`) is never used
   double future_tolerance_s{0.05}; ///< stamps this far ahead of `now` are accepted (clock skew)
-  std::uint32_t min_mono_inliers{12};          ///< fewer: the mono estimate is poor
+  std::uint32_t min_visible_inliers{12};       ///< fewer: the visible mono estimate is poor
+  std::uint32_t min_ir_inliers{5};             ///< fewer: the IR estimate is poor (an IR pose has 5 LEDs)
+  double min_disparity_range_m{0.0};           ///< disparity nearer than this is never used (0: no limit)
   double max_mono_reprojection_error_px{2.5};  ///< larger: the mono estimate is poor
 };
 
