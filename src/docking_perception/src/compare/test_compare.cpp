@@ -4,9 +4,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <string>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "error_stats.h"
@@ -20,11 +20,16 @@ namespace mono = docking_perception::mono;
 
 namespace {
 
-std::string tempFolder(const std::string& name) {
-  const std::string folder = "/tmp/test_compare_" + name + "_" + std::to_string(::getpid());
-  ::mkdir(folder.c_str(), 0755);
-  return folder;
-}
+// A scratch folder under the system's temporary directory, removed at the end of the test.
+struct TempFolder {
+  explicit TempFolder(const std::string& name)
+      : path((std::filesystem::temp_directory_path() / ("test_compare_" + name + "_" + std::to_string(::getpid())))
+                 .string()) {
+    std::filesystem::create_directories(path);
+  }
+  ~TempFolder() { std::filesystem::remove_all(path); }
+  std::string path;
+};
 
 // A face turned towards the camera (x_target = -z_camera), yawed by yaw_rad about the face's vertical.
 Eigen::Isometry3d facePose(const Eigen::Vector3d& position, double yaw_rad) {
@@ -63,7 +68,8 @@ const char* kSequenceJson = R"({
 }  // namespace
 
 TEST(SequenceReader, ReadsTheFormatSimRenderWrites) {
-  const std::string folder = tempFolder("seq");
+  const TempFolder temp("seq");
+  const std::string& folder = temp.path;
   std::ofstream(folder + "/sequence.json") << kSequenceJson;
   const cmp::Sequence seq = cmp::readSequence(folder);
   EXPECT_EQ(seq.scenario, "test");
@@ -85,7 +91,8 @@ TEST(SequenceReader, ReadsTheFormatSimRenderWrites) {
 }
 
 TEST(SequenceReader, NamesTheBadField) {
-  const std::string folder = tempFolder("bad");
+  const TempFolder temp("bad");
+  const std::string& folder = temp.path;
   std::string text = kSequenceJson;
   text.replace(text.find("[1, 0, 0, 0, 1, 0, 0, 0, 1]"), 27, "[1, 0, 0, 0, 1, 0, 0, 0, 2]");
   std::ofstream(folder + "/sequence.json") << text;
@@ -103,7 +110,8 @@ TEST(MonoParams, LoadsTheShippedFileAndNamesAMissingKey) {
   std::string error;
   ASSERT_TRUE(cmp::loadMonoParams(std::string(CONFIG_DIR) + "/mono_pose_visible.yaml", &params, &error)) << error;
   EXPECT_EQ(params.mode, mono::MonoMode::kVisible);
-  const std::string folder = tempFolder("params");
+  const TempFolder temp("params");
+  const std::string& folder = temp.path;
   std::ifstream in(std::string(CONFIG_DIR) + "/mono_pose_visible.yaml");
   std::ofstream out(folder + "/p.yaml");
   for (std::string line; std::getline(in, line);)
