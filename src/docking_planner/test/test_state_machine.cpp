@@ -289,3 +289,75 @@ TEST_F(StateMachineTest, ResetLeavesDockedForSearchAndForgetsTheTarget) {
   EXPECT_FALSE(out.has_target);
   EXPECT_TRUE(isZero(out.command));
 }
+
+TEST_F(StateMachineTest, PositionOnlyApproachesToTheSearchOrbitThenOrbitsFacingTheTarget) {
+  const PlannerConfig& c = planner_.config();
+  ASSERT_GT(c.search_orbit_radius_m, c.law.safe_radius_m);
+  auto positionOnly = [&](double stamp) {
+    TargetObservation o = portAt(stamp, port_);
+    o.orientation_valid = false;
+    o.source = 0;
+    return o;
+  };
+  // Far: towards the target, and the goal is on the search orbit, not on the safe circle.
+  t_ += kDt;
+  planner_.addObservation(positionOnly(t_));
+  PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
+  t_ += kDt;
+  planner_.addObservation(positionOnly(t_));
+  out = planner_.update(t_, odomAt(t_, kFar));
+  EXPECT_EQ(out.state, DockingPhase::kApproach);
+  EXPECT_NE(out.reason.find("position only"), std::string::npos) << out.reason;
+  EXPECT_GT(out.command.vx, 0.1);  // the chaser faces the target (yaw pi): advancing is +x in base_link
+  const double far_range = std::hypot(kFar.x, kFar.y);
+  EXPECT_NEAR(out.goal_distance_m, far_range - c.search_orbit_radius_m, 0.05);
+
+  // On the orbit, looking 0.3 rad to the side of the target: moves along the orbit (no radial
+  // motion into it), and turns towards the target.
+  const double r = c.search_orbit_radius_m;
+  const Pose2D on_orbit{r, 0.0, M_PI + 0.3};
+  t_ += kDt;
+  planner_.addObservation(positionOnly(t_));
+  out = planner_.update(t_, odomAt(t_, on_orbit));
+  EXPECT_EQ(out.state, DockingPhase::kApproach);
+  EXPECT_NE(out.reason.find("orbiting"), std::string::npos) << out.reason;
+  const double speed = std::hypot(out.command.vx, out.command.vy);
+  EXPECT_NEAR(speed, c.orbit_speed_mps, 1e-6);
+  // Odom velocity: rotate body -> odom; tangential (+y at this point: counter-clockwise), not radial.
+  const double vx_odom = std::cos(on_orbit.yaw) * out.command.vx - std::sin(on_orbit.yaw) * out.command.vy;
+  const double vy_odom = std::sin(on_orbit.yaw) * out.command.vx + std::cos(on_orbit.yaw) * out.command.vy;
+  EXPECT_GT(vy_odom, 0.9 * c.orbit_speed_mps);
+  EXPECT_NEAR(vx_odom, 0.0, 0.02);
+  EXPECT_LT(out.command.wz, 0.0);  // the target is at -0.3 rad from the heading: turn right
+  // The safe circle was never the goal: the chaser is well outside it.
+  EXPECT_GT(out.geometry.range_m, c.law.safe_radius_m + 0.5);
+}
+
+TEST_F(StateMachineTest, PositionOnlyEstimateFarFromTheHeldTargetIsNotUsed) {
+  const PlannerConfig& c = planner_.config();
+  ASSERT_GT(c.position_only_gate_m, 0.0);
+  runFor(0.5, kFar, true);  // target held at the origin
+  TargetObservation elsewhere = portAt(t_ + kDt, Pose2D{2.0, 2.0, 0.0});  // another object of the room
+  elsewhere.orientation_valid = false;
+  const TrackUpdate rejected = planner_.addObservation(elsewhere);
+  EXPECT_FALSE(rejected.accepted);
+  EXPECT_NE(rejected.reason.find("from the held target"), std::string::npos) << rejected.reason;
+  // Near the held target: used.
+  TargetObservation near = portAt(t_ + 2 * kDt, Pose2D{0.005, -0.005, 0.0});
+  near.orientation_valid = false;
+  EXPECT_TRUE(planner_.addObservation(near).accepted);
+  // Persistent far estimates never restart the track while it is fresh: after many of them, the
+  // target is still held at the origin and, unseen, the planner holds.
+  for (int i = 0; i < 20; ++i) {
+    t_ += kDt;
+    TargetObservation o = portAt(t_ + 2 * kDt, Pose2D{2.0, 2.0, 0.0});
+    o.orientation_valid = false;
+    EXPECT_FALSE(planner_.addObservation(o).accepted);
+    planner_.update(t_, odomAt(t_, kFar));
+  }
+  const PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
+  EXPECT_EQ(out.state, DockingPhase::kHold);
+  EXPECT_TRUE(isZero(out.command));
+  ASSERT_TRUE(out.port.has_value());
+  EXPECT_LT(std::hypot(out.port->pose.x, out.port->pose.y), 0.1);
+}

@@ -161,3 +161,35 @@ TEST(TargetTrack, FirstOrientationAfterPositionOnlyKeepsThePosition) {
   EXPECT_NEAR(p.pose.y, -1.0, 1e-3);
   EXPECT_NEAR(p.pose.yaw, 2.5, 1e-9);
 }
+
+TEST(TargetTrack, FirstOrientationRestartsFromItAndPlacesTheTurningCentreBehindThePort) {
+  TrackConfig c;
+  c.initial_offset_m = 0.15;
+  TargetTrack track{c};
+  double t = 0.0;
+  // Position-only (stereo) estimates 0.2 m off the port, as the target's blob is.
+  for (int i = 0; i < 30; ++i) {
+    TargetObservation o = observe(t += 0.1, 2.2, 1.0, 0.0);
+    o.orientation_valid = false;
+    o.position_sigma_m = 0.1;
+    ASSERT_TRUE(track.update(o).accepted);
+  }
+  // The first monocular pose: the port at (2, 1), axis along +y. The held port is that pose, not a
+  // blend with the stereo ones, and the turning centre is 0.15 m behind it along the axis: a turn of
+  // the target (known rate) moves the port on that circle.
+  ASSERT_TRUE(track.update(observe(t += 0.1, 2.0, 1.0, M_PI / 2)).accepted);
+  PortState p = track.predict(t);
+  EXPECT_NEAR(p.pose.x, 2.0, 1e-3);
+  EXPECT_NEAR(p.pose.y, 1.0, 1e-3);
+  // Feed a turn rate of 0.1 rad/s through the estimates of a port turning about (2, 0.85).
+  const double t0 = t;
+  for (int i = 0; i < 40; ++i) {
+    t += 0.1;
+    const double yaw = M_PI / 2 + 0.1 * (t - t0);
+    ASSERT_TRUE(track.update(observe(t, 2.0 + 0.15 * std::cos(yaw), 0.85 + 0.15 * std::sin(yaw), yaw)).accepted);
+  }
+  p = track.predict(t + 5.0);  // 5 s blind
+  const double yaw = M_PI / 2 + 0.1 * (t + 5.0 - t0);
+  EXPECT_NEAR(p.pose.x, 2.0 + 0.15 * std::cos(yaw), 0.01);
+  EXPECT_NEAR(p.pose.y, 0.85 + 0.15 * std::sin(yaw), 0.01);
+}

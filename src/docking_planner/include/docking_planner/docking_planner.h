@@ -57,6 +57,15 @@ struct PlannerConfig {
   double blind_final_range_m{0.35};        ///< FINAL: with the probe tip this near, a lost target is dead-reckoned
   double odometry_only_range_m{0.12};      ///< FINAL: with the probe tip this near, estimates are ignored
   double max_blind_s{10.0};                ///< FINAL on odometry for longer than this -> ABORT
+  /// Port orientation unknown (position-only source, far away or the face turned away): approach to
+  /// this radius around the target only, then orbit it there until a camera sees the face. Must be
+  /// >= safe_radius_m; the stereo detector still sees the target well at this range.
+  double search_orbit_radius_m{1.3};
+  double orbit_speed_mps{0.2};             ///< speed along that orbit
+  /// A position-only estimate farther than this from the held target (predicted to its stamp) is not
+  /// used, while the target was seen within hold_timeout_s (the stereo detector can lock on to another
+  /// object of the scene near the target). 0: no such gate.
+  double position_only_gate_m{0.5};
 };
 
 /// Throws std::invalid_argument naming the bad field.
@@ -110,6 +119,7 @@ class DockingPlanner {
 
   PlannerConfig config_;
   SafeCircleApproach law_;
+  SafeCircleApproach orbit_law_;  // the same law on the search orbit (orientation unknown)
   TargetTrack track_;
   DockingPhase state_{DockingPhase::kSearch};
   std::string state_reason_{"started: no target yet"};

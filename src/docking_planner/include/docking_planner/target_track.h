@@ -52,7 +52,10 @@ struct TrackConfig {
   double centre_velocity_random_walk{0.005};  ///< m/s per sqrt(s): how fast the target's drift may change
   double initial_centre_speed_sigma_mps{0.05};  ///< prior on the target's drift speed
   double offset_random_walk{0.001};           ///< m per sqrt(s): the port offset (constant in truth)
-  double initial_offset_sigma_m{0.3};         ///< prior on the port's offset from the turning centre
+  /// Prior on the port's offset from the turning centre, along the port axis (the test bed's target
+  /// robots turn about their centre, the port 0.15 m ahead of it), and its std. dev.
+  double initial_offset_m{0.15};
+  double initial_offset_sigma_m{0.05};
   double initial_yaw_rate_sigma_radps{0.1};   ///< prior on the target's yaw rate
   double max_port_yaw_rate_radps{0.3};        ///< the estimated yaw rate is clamped to this
   double max_port_speed_mps{0.1};             ///< the predicted port speed is clamped to this

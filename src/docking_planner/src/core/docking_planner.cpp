@@ -89,13 +89,29 @@ void validate(const PlannerConfig& c) {
     throw std::invalid_argument("odometry_only_range_m must be in [0, blind_final_range_m]");
   }
   requirePositive(c.max_blind_s, "max_blind_s");
+  if (!std::isfinite(c.search_orbit_radius_m) || c.search_orbit_radius_m < c.law.safe_radius_m) {
+    throw std::invalid_argument("search_orbit_radius_m must be a number >= safe_radius_m");
+  }
+  requirePositive(c.orbit_speed_mps, "orbit_speed_mps");
+  if (!std::isfinite(c.position_only_gate_m) || c.position_only_gate_m < 0.0) {
+    throw std::invalid_argument("position_only_gate_m must be a number >= 0");
+  }
   if (c.orientation_timeout_s < c.max_blind_s) {
     throw std::invalid_argument("orientation_timeout_s must be >= max_blind_s (the blind finish needs the port axis)");
   }
 }
 
+namespace {
+ApproachConfig orbitLaw(const PlannerConfig& c) {
+  ApproachConfig law = c.law;
+  law.safe_radius_m = c.search_orbit_radius_m;
+  law.align_speed_mps = c.orbit_speed_mps;
+  return law;
+}
+}  // namespace
+
 DockingPlanner::DockingPlanner(const PlannerConfig& config)
-    : config_((validate(config), config)), law_(config.law), track_(config.track) {}
+    : config_((validate(config), config)), law_(config.law), orbit_law_(orbitLaw(config)), track_(config.track) {}
 
 void DockingPlanner::reset(double now_s) {
   track_.reset();
@@ -116,6 +132,18 @@ TrackUpdate DockingPlanner::addObservation(const TargetObservation& observation)
   if (state_ == DockingPhase::kFinal && last_tip_error_m_ < config_.odometry_only_range_m) {
     // Near contact the cameras see only part of the target: finish on the pose held in odom.
     return TrackUpdate{false, "inside the odometry-only range: estimate not used"};
+  }
+  if (config_.position_only_gate_m > 0.0 && observation.valid && !observation.orientation_valid &&
+      track_.hasPosition() && std::isfinite(observation.stamp_s) &&
+      observation.stamp_s - track_.lastStamp() < config_.hold_timeout_s) {
+    const Vec2 held = track_.predict(observation.stamp_s).pose.position();
+    const double off = (observation.pose.position() - held).norm();
+    if (std::isfinite(off) && off > config_.position_only_gate_m) {
+      // Another object of the scene (the stereo detector picks the best blob): not the target.
+      TrackUpdate rejected{false, fmt("position-only estimate %.2f m from the held target: not used", off)};
+      last_rejection_ = rejected.reason;
+      return rejected;
+    }
   }
   TrackUpdate result = track_.update(observation);
   if (result.accepted) {
@@ -298,15 +326,35 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
 
         if (state_ == DockingPhase::kApproach) {
           if (!orientation_known) {
-            const LawCommand cmd = law_.command(Phase::kApproach, chaser, port);
-            if (cmd.goal_distance_m > config_.approach_goal_tolerance_m) {
-              return finish(drive(out, Phase::kApproach, "approaching on position only (port orientation unknown)"));
+            // Position only (stereo far away, or the face turned away): go to the search orbit, not to
+            // the safe circle (the stereo detector does not see the target well inside it), and orbit
+            // there, always the same way (counter-clockwise), until a camera sees the face.
+            const double r_orbit = config_.search_orbit_radius_m;
+            const LawCommand to_orbit = orbit_law_.command(Phase::kApproach, chaser, port);
+            if (g.range_m > r_orbit + 4.0 * config_.circle_tolerance_m) {
+              PlannerOutput o = out;
+              o.command = to_orbit.twist;
+              o.goal_distance_m = to_orbit.goal_distance_m;
+              o.path = orbit_law_.plannedPath(Phase::kApproach, chaser, port.pose);
+              o.reason = fmt("approaching on position only (port orientation unknown) to %.2f m", r_orbit);
+              return finish(o);
             }
-            // On the circle and the port face still not seen (it faces away): orbit, always the same
-            // way, until a camera sees the face. Done with the ALIGN law around an axis kept a fixed
-            // angle ahead of the chaser.
-            port.pose.yaw = wrapAngle(port.pose.yaw + kOrbitLeadRad);
-            return finish(drive(out, Phase::kAlign, "orbiting the safe circle to find the port face"));
+            // The ALIGN law around an axis kept a fixed angle ahead of the chaser moves it along the
+            // orbit; the heading points the cameras at the target (the law's would keep it at the
+            // edge of the view).
+            PortState lead = port;
+            lead.pose.yaw = wrapAngle(port.pose.yaw + kOrbitLeadRad);
+            const LawCommand cmd = orbit_law_.command(Phase::kAlign, chaser, lead);
+            const double line_of_sight = std::atan2(port.pose.y - chaser.y, port.pose.x - chaser.x);
+            const double orbit_rate = g.range_m > 1e-3 ? config_.orbit_speed_mps / g.range_m : 0.0;
+            PlannerOutput o = out;
+            o.command = cmd.twist;
+            o.command.wz = clampAbs(orbit_rate + config_.law.yaw_gain * wrapAngle(line_of_sight - chaser.yaw),
+                                    config_.law.max_yaw_rate_radps);
+            o.goal_distance_m = cmd.goal_distance_m;
+            o.path = orbit_law_.plannedPath(Phase::kAlign, chaser, lead.pose);
+            o.reason = fmt("orbiting the target at %.2f m to find the port face", r_orbit);
+            return finish(o);
           }
           const LawCommand cmd = law_.command(Phase::kApproach, chaser, port);
           if (cmd.goal_distance_m < config_.approach_goal_tolerance_m) {

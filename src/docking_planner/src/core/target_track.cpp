@@ -35,6 +35,7 @@ void validate(const TrackConfig& c) {
   requirePositive(c.initial_centre_speed_sigma_mps, "initial_centre_speed_sigma_mps");
   requireNonNegative(c.offset_random_walk, "offset_random_walk");
   requirePositive(c.initial_offset_sigma_m, "initial_offset_sigma_m");
+  if (!std::isfinite(c.initial_offset_m)) throw std::invalid_argument("initial_offset_m must be a finite number");
   requirePositive(c.initial_yaw_rate_sigma_radps, "initial_yaw_rate_sigma_radps");
   requireNonNegative(c.max_port_yaw_rate_radps, "max_port_yaw_rate_radps");
   requireNonNegative(c.max_port_speed_mps, "max_port_speed_mps");
@@ -126,13 +127,21 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
   const Vec2 measured = o.pose.position();
   const double gate2 = config_.outlier_gate_sigma * config_.outlier_gate_sigma;
 
+  if (o.orientation_valid && !last_orientation_stamp_s_) {
+    // The first orientation (the monocular pose, after position-only stereo estimates): start afresh
+    // from it. The stereo positions are those of the target's blob, decimetres off the port, and
+    // without a port axis the offset of the port from the turning centre could not be placed.
+    last_position_stamp_s_.reset();
+  }
   if (!last_position_stamp_s_) {
-    // First estimate: centre under the port, offset unknown (prior), yaw rate unknown (prior).
+    // First estimate: the centre behind the port by the prior offset (along the port axis; with no
+    // orientation yet the placeholder yaw 0), yaw rate unknown (prior).
     yaw_state_ = Eigen::Vector2d(o.orientation_valid ? wrapAngle(o.pose.yaw) : 0.0, 0.0);
     yaw_cov_ = Eigen::Vector2d(o.orientation_valid ? yaw_var : M_PI * M_PI,
                                std::pow(config_.initial_yaw_rate_sigma_radps, 2))
                    .asDiagonal();
-    pos_state_ << measured.x(), measured.y(), 0.0, 0.0, 0.0, 0.0;
+    const Vec2 offset0 = rotation(yaw_state_(0)) * Vec2(config_.initial_offset_m, 0.0);
+    pos_state_ << measured.x() - offset0.x(), measured.y() - offset0.y(), config_.initial_offset_m, 0.0, 0.0, 0.0;
     const double s0 = std::pow(config_.initial_offset_sigma_m, 2);
     // Without the drift model, u starts at 0 with no uncertainty and no process noise: it stays 0.
     const double su = config_.model_target_drift ? std::pow(config_.initial_centre_speed_sigma_mps, 2) : 0.0;

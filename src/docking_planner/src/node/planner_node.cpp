@@ -74,6 +74,7 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   t.centre_velocity_random_walk = requireDouble(p, "centre_velocity_random_walk");
   t.initial_centre_speed_sigma_mps = requireDouble(p, "initial_centre_speed_sigma_mps");
   t.offset_random_walk = requireDouble(p, "offset_random_walk");
+  t.initial_offset_m = requireDouble(p, "initial_offset_m");
   t.initial_offset_sigma_m = requireDouble(p, "initial_offset_sigma_m");
   t.initial_yaw_rate_sigma_radps = requireDouble(p, "initial_yaw_rate_sigma_radps");
   t.max_port_yaw_rate_radps = requireDouble(p, "max_port_yaw_rate_radps");
@@ -103,6 +104,9 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   c.blind_final_range_m = requireDouble(p, "blind_final_range_m");
   c.odometry_only_range_m = requireDouble(p, "odometry_only_range_m");
   c.max_blind_s = requireDouble(p, "max_blind_s");
+  c.search_orbit_radius_m = requireDouble(p, "search_orbit_radius_m");
+  c.orbit_speed_mps = requireDouble(p, "orbit_speed_mps");
+  c.position_only_gate_m = requireDouble(p, "position_only_gate_m");
   try {
     validate(c);  // messages start with the field name, which is the parameter name
   } catch (const std::invalid_argument& e) {
