@@ -15,8 +15,10 @@ import os
 import pathlib
 import signal
 import socket
+import struct
 import subprocess
 import sys
+import threading
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -84,11 +86,16 @@ def run(args):
     summary, data, raw = analyze_run.analyze(bag, timeout_s=args.timeout)
     summary.update({"scenario": args.scenario_file or args.scenario, "real_time_factor": args.real_time_factor,
                     "timeout_s": args.timeout, "run_failure": failure,
-                    "bag_size_mb": bag.stat().st_size / 1e6, "wall_time_s": outcome.get("wall_s")})
+                    "bag_size_mb": bag.stat().st_size / 1e6, "wall_time_s": outcome.get("wall_s"),
+                    "image_to_cmd_vel_latency_wall": outcome.get("latency")})
     analyze_run.plot(summary, data, raw, out)
     with open(out / "summary.json", "w") as f:
         json.dump(summary, f, indent=2)
     analyze_run.print_summary(summary)
+    lat = summary["image_to_cmd_vel_latency_wall"] or {}
+    if lat.get("count"):
+        print(f"  image -> cmd_vel latency (wall, {lat['count']} estimates): median {lat['median_ms']:.1f} ms, "
+              f"p95 {lat['p95_ms']:.1f} ms, max {lat['max_ms']:.1f} ms")
     print(f"  bag {bag} ({summary['bag_size_mb']:.1f} MB), plots {out}/trajectory.png, {out}/timeline.png")
     return 1 if failure else 0
 
@@ -105,6 +112,57 @@ def died_processes(log_path):
         if "process has died" in line and "[" in line:
             out.append(line[line.index("[") + 1:line.index("]")].split("[")[-1])
     return out
+
+
+class LatencyProbe:
+    """Image -> cmd_vel latency in wall time, measured from outside the stack: the wall time this node
+    receives a camera image (the simulator publishing it), keyed by its stamp, against the wall time it
+    receives the first cmd_vel after the arbiter's estimate with that stamp (the planner runs a cycle
+    on each estimate). Images are subscribed as AnyMsg and only their header is read."""
+
+    def __init__(self):
+        import rospy
+        from docking_msgs.msg import TargetEstimate
+        from geometry_msgs.msg import Twist
+        self.lock = threading.Lock()
+        self.image_wall = {}     # stamp (ns) -> wall time received
+        self.pending = []        # estimate stamps waiting for a cmd_vel
+        self.samples = []        # seconds
+        for topic in ("/stereo/left/image_raw", "/ir/image_raw"):
+            rospy.Subscriber(topic, rospy.AnyMsg, self.on_image, queue_size=5, buff_size=2 ** 24)
+        rospy.Subscriber("/target/estimate", TargetEstimate, self.on_estimate, queue_size=10)
+        rospy.Subscriber("/cmd_vel", Twist, self.on_cmd, queue_size=10)
+
+    def on_image(self, msg):
+        wall = time.time()
+        seq, secs, nsecs = struct.unpack_from("<III", msg._buff, 0)
+        with self.lock:
+            self.image_wall[secs * 1000000000 + nsecs] = wall
+            if len(self.image_wall) > 400:
+                for key in sorted(self.image_wall)[:200]:
+                    del self.image_wall[key]
+
+    def on_estimate(self, msg):
+        if msg.valid:
+            with self.lock:
+                self.pending.append(msg.header.stamp.to_nsec())
+
+    def on_cmd(self, _msg):
+        wall = time.time()
+        with self.lock:
+            for stamp in self.pending:
+                if stamp in self.image_wall:
+                    self.samples.append(wall - self.image_wall[stamp])
+            self.pending = []
+
+    def summary(self):
+        with self.lock:
+            xs = sorted(self.samples)
+        if not xs:
+            return {"count": 0}
+        pick = lambda q: xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
+        return {"count": len(xs), "median_ms": 1e3 * pick(0.5), "p95_ms": 1e3 * pick(0.95),
+                "max_ms": 1e3 * xs[-1]}
 
 
 def monitor(launch, args, outcome):
@@ -132,6 +190,7 @@ def monitor(launch, args, outcome):
         last["count"] += 1
 
     rospy.Subscriber("/docking/state", DockingState, on_state, queue_size=10)
+    latency = LatencyProbe()
     while rospy.get_time() == 0.0:
         if launch.poll() is not None:
             return "roslaunch exited before /clock"
@@ -167,6 +226,7 @@ def monitor(launch, args, outcome):
             break
         time.sleep(0.2)
     outcome["wall_s"] = time.time() - wall0
+    outcome["latency"] = latency.summary()
     rospy.signal_shutdown("done")
     return None
 
