@@ -198,9 +198,43 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
 
 void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   if (levels_.empty()) return;
-  // The level whose width is closest (in ratio) to the face's apparent width.
+  // Candidates: the inliers, plus the model corners of the level nearest the face's apparent size
+  // (distinct, well-textured points the matcher did not pair): far more constraints for the pose at
+  // the same refinement cost each.
   const double apparent_width = 0.5 * (cv::norm(match->face_outline[1] - match->face_outline[0]) +
                                        cv::norm(match->face_outline[2] - match->face_outline[3]));
+  const ModelLevel* nearest = &levels_.front();
+  for (const ModelLevel& candidate : levels_) {
+    if (std::abs(std::log(candidate.width_px / apparent_width)) < std::abs(std::log(nearest->width_px / apparent_width))) {
+      nearest = &candidate;
+    }
+  }
+  std::vector<cv::Point2f> candidates = match->inlier_texture_points;
+  const int extra_budget = std::max(0, params_.max_refined_points - static_cast<int>(candidates.size()));
+  if (extra_budget > 0 && nearest->row_count > 0) {
+    const int stride = std::max(1, nearest->row_count / extra_budget);
+    for (int row = nearest->first_row; row < nearest->first_row + nearest->row_count; row += stride) {
+      candidates.push_back(model_points_[static_cast<size_t>(row)]);
+    }
+  }
+  if (!refinePass(gray, candidates, match)) return;
+  for (int pass = 1; pass < params_.refine_passes; ++pass) {
+    const std::vector<cv::Point2f> kept = match->inlier_texture_points;
+    FaceMatch again = *match;
+    if (!refinePass(gray, kept, &again)) break;
+    *match = again;
+  }
+}
+
+bool FeatureMatcher::refinePass(const cv::Mat& gray, const std::vector<cv::Point2f>& candidates,
+                                FaceMatch* match) const {
+  std::vector<cv::Point2f> outline;
+  const float tw = static_cast<float>(texture_size_.width) - 0.5f;
+  const float th = static_cast<float>(texture_size_.height) - 0.5f;
+  cv::perspectiveTransform(std::vector<cv::Point2f>{{-0.5f, -0.5f}, {tw, -0.5f}, {tw, th}, {-0.5f, th}}, outline,
+                           cv::Mat(match->homography));
+  // The level whose width is closest (in ratio) to the face's apparent width.
+  const double apparent_width = 0.5 * (cv::norm(outline[1] - outline[0]) + cv::norm(outline[2] - outline[3]));
   const ModelLevel* level = &levels_.front();
   for (const ModelLevel& candidate : levels_) {
     if (std::abs(std::log(candidate.width_px / apparent_width)) < std::abs(std::log(level->width_px / apparent_width))) {
@@ -210,8 +244,8 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   constexpr int kPatchRadius = 5;
   constexpr int kSearch = 3;
   const cv::Rect image_rect(0, 0, gray.cols, gray.rows);
-  const cv::Rect face_box = cv::boundingRect(match->face_outline) & image_rect;
-  if (face_box.area() <= 0) return;
+  const cv::Rect face_box = cv::boundingRect(outline) & image_rect;
+  if (face_box.area() <= 0) return false;
   // Level pixel -> texture pixel, then the homography, then shift into the face box.
   const double s = level->scale;
   const cv::Matx33d level_to_texture(1.0 / s, 0.0, 0.5 / s - 0.5, 0.0, 1.0 / s, 0.5 / s - 0.5, 0.0, 0.0, 1.0);
@@ -227,16 +261,6 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   std::vector<cv::Point2f> texture_points;
   std::vector<cv::Point2f> image_points;
   cv::Mat response;
-  // Candidates: the inliers, plus the model corners of the chosen level (distinct, well-textured points
-  // the matcher did not pair): far more constraints for the pose at the same refinement cost each.
-  std::vector<cv::Point2f> candidates = match->inlier_texture_points;
-  const int extra_budget = std::max(0, params_.max_refined_points - static_cast<int>(candidates.size()));
-  if (extra_budget > 0 && level->row_count > 0) {
-    const int stride = std::max(1, level->row_count / extra_budget);
-    for (int row = level->first_row; row < level->first_row + level->row_count; row += stride) {
-      candidates.push_back(model_points_[static_cast<size_t>(row)]);
-    }
-  }
   for (const cv::Point2f& texture_point : candidates) {
     const cv::Vec3d projected = match->homography * cv::Vec3d(texture_point.x, texture_point.y, 1.0);
     const cv::Point2d predicted(projected[0] / projected[2], projected[1] / projected[2]);
@@ -267,11 +291,11 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
     texture_points.push_back(texture_point);
     image_points.emplace_back(static_cast<float>(predicted.x + offset_x), static_cast<float>(predicted.y + offset_y));
   }
-  if (static_cast<int>(image_points.size()) < params_.min_inliers) return;  // keep the unrefined ones
+  if (static_cast<int>(image_points.size()) < params_.min_inliers) return false;  // keep the unrefined ones
   // A last RANSAC on the refined points (tight threshold) drops the few that locked onto a wrong peak.
   std::vector<unsigned char> mask;
   const cv::Mat homography = cv::findHomography(texture_points, image_points, cv::RANSAC, 1.0, mask, 2000, 0.995);
-  if (homography.empty()) return;
+  if (homography.empty()) return false;
   std::vector<cv::Point2f> kept_texture;
   std::vector<cv::Point2f> kept_image;
   for (size_t i = 0; i < mask.size(); ++i) {
@@ -279,11 +303,12 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
     kept_texture.push_back(texture_points[i]);
     kept_image.push_back(image_points[i]);
   }
-  if (static_cast<int>(kept_image.size()) < params_.min_inliers) return;
+  if (static_cast<int>(kept_image.size()) < params_.min_inliers) return false;
   match->homography = cv::Matx33d(homography);
   match->inlier_texture_points = kept_texture;
   match->inlier_image_points = kept_image;
   match->refined = true;
+  return true;
 }
 
 FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, double expected_face_width_px) const {

@@ -78,6 +78,7 @@ std::string validateParams(const MonoPoseParams& p) {
       p.filter.gate_chi2 >= 0.0 ? "" : "gate_chi2 must not be negative",
       p.filter.max_rejections >= 1 ? "" : "max_rejections must be at least 1",
       p.features.max_refined_points >= 0 ? "" : "max_refined_points must not be negative",
+      p.features.refine_passes >= 1 && p.features.refine_passes <= 5 ? "" : "refine_passes must be 1..5",
       p.features.fast_threshold > 0 ? "" : "fast_threshold must be positive",
       p.features.max_model_keypoints_per_level >= 10 ? "" : "max_model_keypoints_per_level must be at least 10",
       p.features.min_face_area_px >= 0.0 ? "" : "min_face_area_px must not be negative",

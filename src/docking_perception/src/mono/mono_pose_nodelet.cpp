@@ -113,6 +113,7 @@ bool MonoPoseNodelet::readParameters(std::vector<std::string>* errors) {
   require("refine_matches", &p.features.refine, errors);
   require("min_correlation", &p.features.min_correlation, errors);
   require("max_refined_points", &p.features.max_refined_points, errors);
+  require("refine_passes", &p.features.refine_passes, errors);
   require("led_threshold", &p.leds.threshold, errors);
   require("led_min_area_px", &p.leds.min_area_px, errors);
   require("led_max_area_px", &p.leds.max_area_px, errors);

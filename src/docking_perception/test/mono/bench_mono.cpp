@@ -142,6 +142,9 @@ int main(int argc, char** argv) {
   stages.push_back(runStage("mono_full", model, camera, full, visible, false));
   stages.push_back(runStage("mono_tracking", model, camera, tracking, visible, true));
   stages.push_back(runStage("mono_full_paper_5point", model, camera, five_point, visible, false));
+  MonoPoseParams tracking_two_passes = tracking;  // refine_passes: 2 (not deployed; its cost)
+  tracking_two_passes.features.refine_passes = 2;
+  stages.push_back(runStage("mono_tracking_2_passes", model, camera, tracking_two_passes, visible, true));
   stages.push_back(runStage("mono_ir", model, camera, ir, infrared, false));
 
   std::printf("bench_mono: 640x480, 1 thread, %zu frames, %s\n", visible.size(), texture_source.c_str());

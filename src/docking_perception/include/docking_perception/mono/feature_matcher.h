@@ -38,6 +38,10 @@ struct FeatureMatcherParams {
   bool refine = true;               // sub-pixel refinement of the inliers
   double min_correlation = 0.75;    // refined points below this correlation are dropped
   int max_refined_points = 150;     // inliers plus model corners of the nearest level, refined by NCC
+  // Refinement passes: each later pass re-renders the texture with the homography of the previous
+  // one and correlates the points it kept again, so the parabolic peak fit works near zero offset,
+  // where it is unbiased (a first pass with offsets up to +-3 px leans toward whole pixels).
+  int refine_passes = 1;
 };
 
 struct FaceMatch {
@@ -82,6 +86,9 @@ class FeatureMatcher {
   };
   void detect(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, int max_keypoints) const;
   void refine(const cv::Mat& gray, FaceMatch* match) const;
+  // One refinement pass over candidates (texture pixels) with match->homography; false (match
+  // unchanged) when too few points survive.
+  bool refinePass(const cv::Mat& gray, const std::vector<cv::Point2f>& candidates, FaceMatch* match) const;
 
   FeatureMatcherParams params_;
   cv::Ptr<cv::BRISK> brisk_;
