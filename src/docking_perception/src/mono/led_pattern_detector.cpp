@@ -82,6 +82,9 @@ std::vector<LedBlob> LedPatternDetector::detectBlobs(const cv::Mat& gray, const 
       }
     }
     if (sum_w <= 0.0) continue;
+    // An LED is a spot brighter than what surrounds it; a patch of bright texture or wall that merely
+    // crosses the threshold is not.
+    if (peak - background < params_.min_contrast) continue;
     LedBlob blob;
     blob.centroid = {sum_x / sum_w + roi.x, sum_y / sum_w + roi.y};
     blob.area_px = area;

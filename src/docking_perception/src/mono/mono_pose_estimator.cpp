@@ -67,6 +67,7 @@ std::string validateParams(const MonoPoseParams& p) {
       p.leds.threshold >= 1 && p.leds.threshold <= 255 ? "" : "led_threshold must be 1..255",
       p.leds.max_area_px > p.leds.min_area_px ? "" : "led_max_area_px must exceed led_min_area_px",
       p.leds.max_blobs >= kMarkerCount ? "" : "led_max_blobs must be at least 5",
+      p.leds.min_contrast >= 0.0 ? "" : "led_min_contrast must not be negative",
       positive("led_collinearity_tolerance", p.leds.collinearity_tolerance),
       positive("led_midpoint_tolerance", p.leds.midpoint_tolerance),
       positive("dot_search_radius_factor", p.dots.search_radius_factor),

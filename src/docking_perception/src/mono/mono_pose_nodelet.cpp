@@ -120,6 +120,7 @@ bool MonoPoseNodelet::readParameters(std::vector<std::string>* errors) {
   require("led_min_fill_ratio", &p.leds.min_fill_ratio, errors);
   require("led_max_aspect_ratio", &p.leds.max_aspect_ratio, errors);
   require("led_max_blobs", &p.leds.max_blobs, errors);
+  require("led_min_contrast", &p.leds.min_contrast, errors);
   require("led_collinearity_tolerance", &p.leds.collinearity_tolerance, errors);
   require("led_midpoint_tolerance", &p.leds.midpoint_tolerance, errors);
   require("dot_search_radius_factor", &p.dots.search_radius_factor, errors);

@@ -127,7 +127,8 @@ int main(int argc, char** argv) {
   deployed.features.model_widths_px = {400, 280, 200, 140, 100, 80, 64};
   deployed.features.min_inliers = 10;
   deployed.features.max_refined_points = 220;
-  deployed.leds.threshold = 160;
+  deployed.leds.threshold = 140;
+  deployed.leds.min_contrast = 40.0;
   MonoPoseParams full = deployed;
   full.use_tracking_region = false;
   MonoPoseParams tracking = deployed;

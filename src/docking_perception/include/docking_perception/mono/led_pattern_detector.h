@@ -32,6 +32,7 @@ struct LedDetectorParams {
   double min_fill_ratio = 0.35;       // blob area / bounding box area
   double max_aspect_ratio = 3.0;      // bounding box long side / short side
   int max_blobs = 16;                 // the brightest-by-area blobs kept for pattern search
+  double min_contrast = 0.0;          // peak above the blob's surroundings (its box grown by 2 px); 0: off
   double collinearity_tolerance = 0.04;  // distance of the middle blob from the line / triple length
   double midpoint_tolerance = 0.2;       // |position along the triple - 0.5|
   double min_arm_angle_deg = 15.0;       // the two arms must not look parallel
