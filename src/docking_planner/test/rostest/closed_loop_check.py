@@ -11,7 +11,9 @@ mode "lost": this node relays the arbiter's target/estimate to the planner (rema
   cmd_vel from HOLD until SEARCH (and SEARCH's standing wait) must be zero; the chaser must not move
   (truth) while it holds.
 """
+import faulthandler
 import math
+import signal
 import sys
 import threading
 import unittest
@@ -39,7 +41,7 @@ class ClosedLoopCheck(unittest.TestCase):
         rospy.init_node("closed_loop_check")
 
     def setUp(self):
-        self.lock = threading.Lock()
+        self.lock = threading.RLock()  # timeline() is also called with the lock held (assert messages)
         self.states = []      # (receipt sim time, DockingState)
         self.cmds = []        # (receipt sim time, Twist)
         self.relaying = True
@@ -169,9 +171,12 @@ class ClosedLoopCheck(unittest.TestCase):
         # 2. HOLD, then SEARCH.
         hold_t = search_t = None
         settle = 0.3
+        scanned = n0  # each state message is checked once (a rescan would test APPROACH cycles against HOLD)
         while rospy.get_time() - lost_t < timeout and search_t is None:
             with self.lock:
-                for t, s in self.states[n0:]:
+                fresh = self.states[scanned:]
+                scanned += len(fresh)
+                for t, s in fresh:
                     if s.header.stamp.to_sec() < lost_t + settle:
                         continue  # cycles that may still have seen estimates in flight at the cut
                     if hold_t is None and s.state == DockingState.HOLD:
@@ -211,4 +216,5 @@ class ClosedLoopCheck(unittest.TestCase):
 
 
 if __name__ == "__main__":
+    faulthandler.register(signal.SIGUSR1)  # kill -USR1 <pid>: where a hung check is waiting
     rostest.rosrun(PKG, "closed_loop_check", ClosedLoopCheck, sys.argv)
