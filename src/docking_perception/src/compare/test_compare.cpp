@@ -9,6 +9,10 @@
 #include <string>
 #include <unistd.h>
 
+#include <set>
+#include <yaml-cpp/yaml.h>
+
+#include "docking_perception/mono/mono_pose_param_keys.h"
 #include "error_stats.h"
 #include "mono_params_yaml.h"
 #include "sequence_io.h"
@@ -119,6 +123,21 @@ TEST(MonoParams, LoadsTheShippedFileAndNamesAMissingKey) {
   out.close();
   EXPECT_FALSE(cmp::loadMonoParams(folder + "/p.yaml", &params, &error));
   EXPECT_NE(error.find("min_inliers"), std::string::npos) << error;
+}
+
+// Every key of the shipped files is one the node reads (the parameter list, plus the strings the node
+// reads itself), and every listed parameter is in both files: a key added on one side only fails here.
+TEST(MonoParams, ShippedFilesHoldExactlyTheListedKeys) {
+  std::set<std::string> listed = {"mode", "target_yaml", "solver", "velocity_method", "publish_debug_image"};
+  mono::MonoPoseParams params;
+  mono::visitMonoPoseParams(params, [&](const char* key, auto*) { listed.insert(key); });
+  for (const std::string file : {"mono_pose_visible.yaml", "mono_pose_ir.yaml"}) {
+    const YAML::Node root = YAML::LoadFile(std::string(CONFIG_DIR) + "/" + file);
+    std::set<std::string> in_file;
+    for (const auto& entry : root) in_file.insert(entry.first.as<std::string>());
+    for (const auto& key : in_file) EXPECT_TRUE(listed.count(key)) << file << ": '" << key << "' is read by nobody";
+    for (const auto& key : listed) EXPECT_TRUE(in_file.count(key)) << file << ": '" << key << "' is missing";
+  }
 }
 
 TEST(Stats, Percentile) {

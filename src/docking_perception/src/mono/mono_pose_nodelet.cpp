@@ -25,6 +25,7 @@
 #include "docking_perception/MonoPoseConfig.h"
 #include "docking_perception/mono/debug_drawing.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
+#include "docking_perception/mono/mono_pose_param_keys.h"
 
 namespace docking_perception {
 
@@ -92,46 +93,7 @@ bool MonoPoseNodelet::readParameters(std::vector<std::string>* errors) {
   require("solver", &solver, errors);
   require("velocity_method", &velocity, errors);
   mono::MonoPoseParams& p = params_;
-  require("use_tracking_region", &p.use_tracking_region, errors);
-  require("tracking_margin_px", &p.tracking_margin_px, errors);
-  require("max_reprojection_px", &p.max_reprojection_px, errors);
-  require("min_pixel_sigma", &p.min_pixel_sigma, errors);
-  require("min_range_m", &p.min_range_m, errors);
-  require("max_range_m", &p.max_range_m, errors);
-  require("max_pattern_candidates", &p.max_pattern_candidates, errors);
-  require("use_brisk_detector", &p.features.use_brisk_detector, errors);
-  require("fast_threshold", &p.features.fast_threshold, errors);
-  require("brisk_threshold", &p.features.brisk_threshold, errors);
-  require("brisk_octaves", &p.features.brisk_octaves, errors);
-  require("max_image_keypoints", &p.features.max_image_keypoints, errors);
-  require("max_model_keypoints_per_level", &p.features.max_model_keypoints_per_level, errors);
-  require("model_widths_px", &p.features.model_widths_px, errors);
-  require("feature_ratio", &p.features.ratio, errors);
-  require("ransac_threshold_px", &p.features.ransac_threshold_px, errors);
-  require("min_inliers", &p.features.min_inliers, errors);
-  require("min_face_area_px", &p.features.min_face_area_px, errors);
-  require("refine_matches", &p.features.refine, errors);
-  require("min_correlation", &p.features.min_correlation, errors);
-  require("max_refined_points", &p.features.max_refined_points, errors);
-  require("refine_passes", &p.features.refine_passes, errors);
-  require("led_threshold", &p.leds.threshold, errors);
-  require("led_min_area_px", &p.leds.min_area_px, errors);
-  require("led_max_area_px", &p.leds.max_area_px, errors);
-  require("led_min_fill_ratio", &p.leds.min_fill_ratio, errors);
-  require("led_max_aspect_ratio", &p.leds.max_aspect_ratio, errors);
-  require("led_max_blobs", &p.leds.max_blobs, errors);
-  require("led_min_contrast", &p.leds.min_contrast, errors);
-  require("led_collinearity_tolerance", &p.leds.collinearity_tolerance, errors);
-  require("led_midpoint_tolerance", &p.leds.midpoint_tolerance, errors);
-  require("dot_search_radius_factor", &p.dots.search_radius_factor, errors);
-  require("dot_min_contrast", &p.dots.min_contrast, errors);
-  require("pnp_ambiguity_ratio", &p.pnp.ambiguity_ratio, errors);
-  require("pnp_ambiguity_floor_px", &p.pnp.ambiguity_floor_px, errors);
-  require("accel_noise", &p.filter.accel_noise, errors);
-  require("angular_accel_noise", &p.filter.angular_accel_noise, errors);
-  require("max_gap_s", &p.filter.max_gap_s, errors);
-  require("gate_chi2", &p.filter.gate_chi2, errors);
-  require("max_rejections", &p.filter.max_rejections, errors);
+  mono::visitMonoPoseParams(p, [&](const char* key, auto* field) { require(key, field, errors); });
   require("publish_debug_image", &publish_debug_image_, errors);
   if (!errors->empty()) return false;
 

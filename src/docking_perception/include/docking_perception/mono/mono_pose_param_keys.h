@@ -1,0 +1,58 @@
+// The one list of the numeric and boolean MonoPoseParams fields and their parameter names (the keys of
+// config/mono_pose_<mode>.yaml). The mono_pose nodelet reads them from the ROS parameter server and
+// offline tools from the YAML file through this list, so a new parameter cannot be read by one and
+// forgotten by the other. `mode`, `solver` and `velocity_method` are strings and parsed separately.
+#pragma once
+
+#include "docking_perception/mono/mono_pose_estimator.h"
+
+namespace docking_perception {
+namespace mono {
+
+// Calls visit(key, &field) for every field; field types are bool, int, double and std::vector<int>.
+template <typename Visitor>
+void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
+  visit("use_tracking_region", &p.use_tracking_region);
+  visit("tracking_margin_px", &p.tracking_margin_px);
+  visit("max_reprojection_px", &p.max_reprojection_px);
+  visit("min_pixel_sigma", &p.min_pixel_sigma);
+  visit("min_range_m", &p.min_range_m);
+  visit("max_range_m", &p.max_range_m);
+  visit("max_pattern_candidates", &p.max_pattern_candidates);
+  visit("use_brisk_detector", &p.features.use_brisk_detector);
+  visit("fast_threshold", &p.features.fast_threshold);
+  visit("brisk_threshold", &p.features.brisk_threshold);
+  visit("brisk_octaves", &p.features.brisk_octaves);
+  visit("max_image_keypoints", &p.features.max_image_keypoints);
+  visit("max_model_keypoints_per_level", &p.features.max_model_keypoints_per_level);
+  visit("model_widths_px", &p.features.model_widths_px);
+  visit("feature_ratio", &p.features.ratio);
+  visit("ransac_threshold_px", &p.features.ransac_threshold_px);
+  visit("min_inliers", &p.features.min_inliers);
+  visit("min_face_area_px", &p.features.min_face_area_px);
+  visit("refine_matches", &p.features.refine);
+  visit("min_correlation", &p.features.min_correlation);
+  visit("max_refined_points", &p.features.max_refined_points);
+  visit("refine_passes", &p.features.refine_passes);
+  visit("led_threshold", &p.leds.threshold);
+  visit("led_min_area_px", &p.leds.min_area_px);
+  visit("led_max_area_px", &p.leds.max_area_px);
+  visit("led_min_fill_ratio", &p.leds.min_fill_ratio);
+  visit("led_max_aspect_ratio", &p.leds.max_aspect_ratio);
+  visit("led_max_blobs", &p.leds.max_blobs);
+  visit("led_min_contrast", &p.leds.min_contrast);
+  visit("led_collinearity_tolerance", &p.leds.collinearity_tolerance);
+  visit("led_midpoint_tolerance", &p.leds.midpoint_tolerance);
+  visit("dot_search_radius_factor", &p.dots.search_radius_factor);
+  visit("dot_min_contrast", &p.dots.min_contrast);
+  visit("pnp_ambiguity_ratio", &p.pnp.ambiguity_ratio);
+  visit("pnp_ambiguity_floor_px", &p.pnp.ambiguity_floor_px);
+  visit("accel_noise", &p.filter.accel_noise);
+  visit("angular_accel_noise", &p.filter.angular_accel_noise);
+  visit("max_gap_s", &p.filter.max_gap_s);
+  visit("gate_chi2", &p.filter.gate_chi2);
+  visit("max_rejections", &p.filter.max_rejections);
+}
+
+}  // namespace mono
+}  // namespace docking_perception
