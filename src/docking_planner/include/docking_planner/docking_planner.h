@@ -40,7 +40,7 @@ struct PlannerConfig {
   TrackConfig track;
   double estimate_timeout_s{0.6};          ///< the target is visible while its last estimate is younger
   double odom_timeout_s{0.3};              ///< older odometry: zero velocity (HOLD)
-  double orientation_timeout_s{15.0};      ///< a held port axis older than this is forgotten (>= max_blind_s)
+  double orientation_timeout_s{20.0};      ///< a held port axis older than this is forgotten (>= max_blind_s)
   double search_wait_s{2.0};               ///< SEARCH: stand still this long before turning
   double search_yaw_rate_radps{0.3};       ///< SEARCH: then turn in place at this rate
   double hold_timeout_s{3.0};              ///< HOLD: then ABORT or SEARCH
@@ -50,13 +50,13 @@ struct PlannerConfig {
   double align_lateral_tolerance_m{0.02};  ///< ALIGN -> FINAL: off the port axis by less than this...
   double align_yaw_tolerance_rad{0.05};    ///< ...and heading error below this
   double docked_position_tolerance_m{0.003};  ///< DOCKED: probe tip within this of the port centre...
-  double docked_yaw_tolerance_rad{0.0087};    ///< ...and heading error within this
+  double docked_yaw_tolerance_rad{0.005};     ///< ...and heading error within this
   double final_abort_lateral_m{0.08};      ///< FINAL -> ABORT when off the axis by more than this...
   double final_abort_yaw_rad{0.3};         ///< ...or the heading error exceeds this
   double divergence_margin_m{0.3};         ///< APPROACH/ALIGN -> ABORT when the goal distance grows this much
   double blind_final_range_m{0.35};        ///< FINAL: with the probe tip this near, a lost target is dead-reckoned
   double odometry_only_range_m{0.12};      ///< FINAL: with the probe tip this near, estimates are ignored
-  double max_blind_s{10.0};                ///< FINAL on odometry for longer than this -> ABORT
+  double max_blind_s{15.0};                ///< FINAL on odometry for longer than this -> ABORT
   /// Port orientation unknown (position-only source, far away or the face turned away): approach to
   /// this radius around the target only, then orbit it there until a camera sees the face. Must be
   /// >= safe_radius_m; the stereo detector still sees the target well at this range.
