@@ -196,3 +196,189 @@ TEST(Renderer, DeterministicForASeedAndNoisyAcrossFrames) {
   const cv::Mat fa2 = a.render(RobotModel::kStereoLeft);
   EXPECT_GT(cv::norm(fa, fa2, cv::NORM_L1), 0.0) << "sensor noise must change from frame to frame";
 }
+
+namespace {
+
+/// A 640x480 pinhole camera with the principal point off the pixel grid (no distortion, no effects).
+docking_sim::CameraRenderer pinholeRenderer(docking_sim::Band band) {
+  docking_sim::CameraCalibration cal;
+  cal.width = 640;
+  cal.height = 480;
+  cal.K = cv::Matx33d(540, 0, 319.3, 0, 540, 240.6, 0, 0, 1);
+  cal.D = {0, 0, 0, 0, 0};
+  docking_sim::LightingScenario light;
+  light.visible.noise_sigma = 0;
+  light.ir.noise_sigma = 0;
+  light.led_intensity = 1.0;
+  docking_sim::CameraEffects effects;
+  effects.blur_sigma_px = 0;
+  effects.vignetting = 0;
+  return docking_sim::CameraRenderer(cal, band, effects, light, 1, clean());
+}
+
+/// Centroid of |image - background| in a square window of half size `half` around `centre`.
+cv::Point2d contrastCentroid(const cv::Mat& gray, cv::Point2d centre, int half, double background) {
+  double sx = 0, sy = 0, sw = 0;
+  for (int y = cvRound(centre.y) - half; y <= cvRound(centre.y) + half; ++y) {
+    for (int x = cvRound(centre.x) - half; x <= cvRound(centre.x) + half; ++x) {
+      const double w = std::abs(gray.at<uchar>(y, x) - background);
+      sx += w * x;
+      sy += w * y;
+      sw += w;
+    }
+  }
+  return sw > 0 ? cv::Point2d(sx / sw, sy / sw) : cv::Point2d(-1, -1);
+}
+
+}  // namespace
+
+// A face-on textured square (0.2 m, 512x512 texels: mip levels 1 to 3 at these distances) with a dark
+// Gaussian blob off its centre: the blob's image centroid must be the pinhole projection of the
+// blob's centre. Mip levels built with cv::pyrDown (texel j of level L centred at texel 2^L j of
+// level 0, not at 2^L (j + 0.5) - 0.5) moved it by (2^L - 1) / 2 texels of level 0: 0.2-0.4 px here.
+TEST(Renderer, TextureLandsOnThePinholeProjectionAtEveryMipLevel) {
+  const int size = 512;
+  // A blob wide enough (several texels at level 3) that nearest-texel sampling jitter stays small.
+  const double blob_s = 0.43, blob_t = 0.56, sigma = 0.07;  // texture coordinates (fractions)
+  cv::Mat texture(size, size, CV_8UC3);
+  for (int v = 0; v < size; ++v) {
+    for (int u = 0; u < size; ++u) {
+      // Texel (u, v) covers [u, u + 1) / size: its centre is at (u + 0.5) / size.
+      const double ds = (u + 0.5) / size - blob_s, dt = (v + 0.5) / size - blob_t;
+      const double value = 220.0 - 190.0 * std::exp(-(ds * ds + dt * dt) / (2 * sigma * sigma));
+      texture.at<cv::Vec3b>(v, u) = cv::Vec3b::all(cv::saturate_cast<uchar>(value));
+    }
+  }
+  const auto tex = docking_sim::makeTexture(texture, false);
+  ASSERT_GE(tex->blocked.size(), 4u);
+  const double side = 0.2;
+  for (const double z : {0.5, 1.0, 1.4, 2.0}) {
+    for (const double lateral : {-0.013, 0.021}) {
+      auto renderer = pinholeRenderer(docking_sim::Band::kVisible);
+      docking_sim::Surface square;
+      square.origin = Eigen::Vector3d(lateral - side / 2, 0.7 * lateral - side / 2, z);
+      square.edge_u = Eigen::Vector3d(side, 0, 0);
+      square.edge_v = Eigen::Vector3d(0, side, 0);
+      square.texture = tex;
+      docking_sim::Scene scene;
+      scene.addSurface(square);
+      scene.update(Eigen::Isometry3d::Identity());
+      cv::Mat gray;
+      cv::cvtColor(renderer.render(scene, Eigen::Isometry3d::Identity()), gray, cv::COLOR_BGR2GRAY);
+      const cv::Matx33d K(540, 0, 319.3, 0, 540, 240.6, 0, 0, 1);
+      const Eigen::Vector3d centre = square.origin + blob_s * square.edge_u + blob_t * square.edge_v;
+      const cv::Point2d predicted = project(K, centre);
+      const double sigma_px = 540 * sigma * side / z;
+      const cv::Point2d found = contrastCentroid(gray, predicted, static_cast<int>(std::ceil(4.5 * sigma_px)), 220.0);
+      EXPECT_LE(std::hypot(found.x - predicted.x, found.y - predicted.y), 0.05)
+          << "at " << z << " m, lateral " << lateral << ": predicted " << predicted << " found " << found;
+    }
+  }
+}
+
+// An LED disc (the scene's 24-gon, emissive decal) in the plane of a dark face: its intensity
+// centroid must be the projection of its centre to 0.05 px (a hard-edged disc was off by up to
+// 0.3 px), it must show although it lies exactly in the face's plane, and a nearer surface hides it.
+TEST(Renderer, LedDiscCentroidIsItsProjectedCentre) {
+  const cv::Matx33d K(540, 0, 319.3, 0, 540, 240.6, 0, 0, 1);
+  auto disc = [](const Eigen::Vector3d& centre, double r) {
+    docking_sim::Surface s;
+    s.origin = centre;
+    s.edge_u = Eigen::Vector3d(r, 0, 0);
+    s.edge_v = Eigen::Vector3d(0, r, 0);
+    s.outline.clear();
+    for (int k = 0; k < 24; ++k) {
+      const double a = 2 * M_PI * k / 24;
+      s.outline.emplace_back(std::cos(a), std::sin(a));
+    }
+    s.color = cv::Vec3b(255, 255, 255);
+    s.bands = docking_sim::kInfraredBand;
+    s.emissive = true;
+    s.decal = true;
+    return s;
+  };
+  int case_index = 0;
+  for (const double z : {0.6, 1.0, 2.0, 3.0}) {
+    for (int k = 0; k < 3; ++k, ++case_index) {
+      // Centres at varied sub-pixel phases; a face turned 25 deg about y (an oblique plane).
+      const Eigen::Vector3d centre(0.0123 * (k - 1) + 0.0007 * case_index, -0.0091 * k + 0.0011 * case_index, z);
+      const Eigen::Matrix3d tilt = Eigen::AngleAxisd(25.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+      docking_sim::Surface face;
+      face.origin = centre - tilt * Eigen::Vector3d(0.1, 0.1, 0);
+      face.edge_u = tilt * Eigen::Vector3d(0.2, 0, 0);
+      face.edge_v = tilt * Eigen::Vector3d(0, 0.2, 0);
+      face.color = cv::Vec3b(40, 40, 40);
+      docking_sim::Surface led = disc(centre, 0.005);
+      led.edge_u = tilt * led.edge_u;
+      led.edge_v = tilt * led.edge_v;
+      docking_sim::Scene scene;
+      scene.addSurface(led);  // before the face in the list: the decal still draws over it
+      scene.addSurface(face);
+      scene.update(Eigen::Isometry3d::Identity());
+      auto renderer = pinholeRenderer(docking_sim::Band::kInfrared);
+      const cv::Mat ir = renderer.render(scene, Eigen::Isometry3d::Identity()).clone();
+      const cv::Point2d predicted = project(K, centre);
+      const int half = static_cast<int>(std::ceil(540 * 0.005 / z)) + 3;
+      const double background = ir.at<uchar>(cvRound(predicted.y) + half + 1, cvRound(predicted.x));  // the face
+      EXPECT_GT(ir.at<uchar>(cvRound(predicted.y), cvRound(predicted.x)), background + 60) << "z " << z;
+      const cv::Point2d found = contrastCentroid(ir, predicted, half, background);
+      // Area sampling (what a pixel does) moves the centroid of a shape only a few pixels wide by up
+      // to ~0.125 px / its width: < 0.05 px from 1.35 px radius (2 m) on; at 3 m (0.9 px) 0.08 px.
+      EXPECT_LE(std::hypot(found.x - predicted.x, found.y - predicted.y), z < 2.5 ? 0.05 : 0.08)
+          << "at " << z << " m: predicted " << predicted << " found " << found;
+
+      // A card 1 cm in front of the LED hides it.
+      docking_sim::Surface card;
+      card.origin = centre + Eigen::Vector3d(-0.1, -0.1, -0.01);
+      card.edge_u = Eigen::Vector3d(0.2, 0, 0);
+      card.edge_v = Eigen::Vector3d(0, 0.2, 0);
+      card.color = cv::Vec3b(90, 90, 90);
+      scene.addSurface(card);
+      scene.update(Eigen::Isometry3d::Identity());
+      const cv::Mat hidden = renderer.render(scene, Eigen::Isometry3d::Identity());
+      EXPECT_EQ(hidden.at<uchar>(cvRound(predicted.y), cvRound(predicted.x)), 90)
+          << "z " << z << ": the LED (255) must be hidden by the card (90)";
+    }
+  }
+}
+
+// The simulator's own scene (config/target.yaml, dark room, IR camera, clean render): the centroid of
+// what the LEDs add (render with LEDs minus render with led_intensity 0) is, for every LED, the
+// pinhole projection of its marker position in target.yaml, in an oblique view (20 deg) at 1 m, so
+// the LEDs lie in the face plane (they were drawn 1-2 mm in front of it: 0.3 px off here).
+TEST(Renderer, SceneLedsLandOnTheMarkerPositions) {
+  const std::string path = writeTempFile("led_positions", scenarioText(1.15, 0.0, 180.0, 0.0, "dark"));
+  docking_sim::Simulation sim(files(path), clean());
+  const auto& cam = sim.robot().cameras[RobotModel::kIr];
+  docking_sim::LightingScenario lit = sim.lighting(), unlit = sim.lighting();
+  unlit.led_intensity = 0.0;
+  // Target robot at the world origin; the camera 1 m in front of the port, 20 deg off its axis.
+  const Eigen::Isometry3d port = sim.target().robot_T_port;
+  const double angle = 20.0 * M_PI / 180.0;
+  const Eigen::Vector3d out = port.linear() * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
+  Eigen::Isometry3d world_T_camera = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d z_axis = -out, y_axis(0, 0, -1);
+  world_T_camera.linear().col(0) = y_axis.cross(z_axis);
+  world_T_camera.linear().col(1) = y_axis;
+  world_T_camera.linear().col(2) = z_axis;
+  world_T_camera.translation() = port.translation() + 1.0 * out;
+  cv::Mat images[2];
+  for (int k = 0; k < 2; ++k) {
+    docking_sim::Scene scene(sim.settings(), sim.target(), k == 0 ? lit : unlit, 1);
+    scene.update(Eigen::Isometry3d::Identity());
+    docking_sim::CameraRenderer renderer(cam.calibration, docking_sim::Band::kInfrared, sim.settings().ir_effects,
+                                         k == 0 ? lit : unlit, 1, clean());
+    images[k] = renderer.render(scene, world_T_camera).clone();
+  }
+  cv::Mat added;
+  cv::subtract(images[0], images[1], added);
+  const Eigen::Isometry3d camera_T_port = world_T_camera.inverse() * port;
+  const int half = static_cast<int>(std::ceil(cam.calibration.K(0, 0) * sim.target().led_radius_m * 2.2)) + 3;
+  for (std::size_t i = 0; i < sim.target().markers_m.size(); ++i) {
+    const cv::Point2d predicted = project(cam.calibration.K, camera_T_port * sim.target().markers_m[i]);
+    ASSERT_GT(added.at<uchar>(cvRound(predicted.y), cvRound(predicted.x)), 150) << "LED " << i;
+    const cv::Point2d found = contrastCentroid(added, predicted, half, 0.0);
+    EXPECT_LE(std::hypot(found.x - predicted.x, found.y - predicted.y), 0.05)
+        << "LED " << i << " predicted " << predicted << " found " << found;
+  }
+}

@@ -48,6 +48,15 @@ class CameraRenderer {
   void rasterize(const Scene& scene, const Eigen::Isometry3d& camera_T_world);
   template <int kChannels>
   void drawSurface(const Surface& surface, const Eigen::Isometry3d& camera_T_world);
+  /// A decal (Surface::decal): area coverage of each pixel's square (exact polygon clipping on the
+  /// outline's edge pixels), blended over the image; depth test against the z-buffer with a bias.
+  template <int kChannels>
+  void drawDecal(const Surface& surface, const Eigen::Isometry3d& camera_T_world);
+  /// Clips the outline to z >= near, projects it into projected_ (ideal_ pixels) and computes the
+  /// pixel -> (s, t, 1/z) homography H. False when nothing of it can show.
+  bool projectOutline(const Surface& surface, const Eigen::Isometry3d& camera_T_world, Eigen::Matrix3d* H);
+  template <int kChannels>
+  uint32_t flatColour(const Surface& surface, int gain_fixed) const;
   void applyEffects();
 
   CameraCalibration calibration_;
@@ -78,6 +87,8 @@ class CameraRenderer {
   // Scratch polygons (kept to avoid per-frame allocation).
   std::vector<Eigen::Vector3d> clip_a_, clip_b_;
   std::vector<Eigen::Vector2d> projected_;
+  std::vector<Eigen::Vector2d> cover_a_, cover_b_;  ///< decal coverage: outline clipped to a pixel
+  std::vector<Eigen::Vector3d> edges_;              ///< decal: outward unit normal (x, y) and offset
   std::vector<std::pair<double, std::size_t>> order_;  ///< draw order: (squared distance, surface)
 };
 

@@ -59,6 +59,10 @@ struct Surface {
   bool emissive{false};          ///< lights itself (IR LEDs): not shaded, not scaled by the room light
   double emission{1.0};          ///< brightness of an emissive surface relative to led_intensity
   bool moves_with_target{false}; ///< defined in the target robot's frame
+  /// Lies on another surface (IR LEDs on the face): drawn after all other surfaces, in `surfaces()`
+  /// order, with area-coverage anti-aliasing (blended over what is there), winning depth ties with
+  /// the surface under it by a relative 1/z bias, writing no depth. Flat colour only (no texture).
+  bool decal{false};
   // Filled per frame by Scene::update: the brightness factor in each band.
   double gain_visible{1.0};
   double gain_ir{1.0};

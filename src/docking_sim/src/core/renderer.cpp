@@ -386,12 +386,16 @@ void CameraRenderer::rasterize(const Scene& scene, const Eigen::Isometry3d& came
   const unsigned band_bit = band_ == Band::kVisible ? kVisibleBand : kInfraredBand;
   for (const auto& entry : order_) {
     const Surface& surface = surfaces[entry.second];
-    if (surface.bands & band_bit) drawSurface<kChannels>(surface, camera_T_world);
+    if ((surface.bands & band_bit) && !surface.decal) drawSurface<kChannels>(surface, camera_T_world);
+  }
+  // Decals last, blended over the finished opaque image, in the scene's order (halo, then LED).
+  for (const Surface& surface : surfaces) {
+    if ((surface.bands & band_bit) && surface.decal) drawDecal<kChannels>(surface, camera_T_world);
   }
 }
 
-template <int kChannels>
-void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d& camera_T_world) {
+bool CameraRenderer::projectOutline(const Surface& surface, const Eigen::Isometry3d& camera_T_world,
+                                    Eigen::Matrix3d* H) {
   const Eigen::Matrix3d R = camera_T_world.linear();
   const Eigen::Vector3d O = camera_T_world * surface.origin;
   const Eigen::Vector3d U = R * surface.edge_u;
@@ -411,8 +415,9 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
       clip_b_.push_back(a + t * (b - a));
     }
   }
-  if (clip_b_.size() < 3) return;
+  if (clip_b_.size() < 3) return false;
 
+  // Pixel centres at integer coordinates of ideal_ (OpenCV's convention, shifted by the margin).
   const double fx = ideal_K_(0, 0), fy = ideal_K_(1, 1), cx = ideal_K_(0, 2), cy = ideal_K_(1, 2);
   const int width = ideal_.cols, height = ideal_.rows;
   projected_.clear();
@@ -425,7 +430,8 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
     min_y = std::min(min_y, q.y());
     max_y = std::max(max_y, q.y());
   }
-  if (max_x < 0 || min_x > width - 1 || max_y < 0 || min_y > height - 1) return;
+  // (One pixel of slack: an anti-aliased decal touches pixels up to half a pixel outside.)
+  if (max_x < -1 || min_x > width || max_y < -1 || min_y > height) return false;
 
   // Pixel -> surface coordinates: (s, t, 1) ~ H (x, y, 1) with H = (K [U V O])^-1; the third row of
   // H gives 1/z directly, affine in the pixel (the z-buffer value).
@@ -436,15 +442,14 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
   M.col(1) = V;
   M.col(2) = O;
   const Eigen::Matrix3d G = K * M;
-  if (std::abs(G.determinant()) < 1e-12) return;  // seen exactly edge-on
-  const Eigen::Matrix3d H = G.inverse();
+  if (std::abs(G.determinant()) < 1e-12) return false;  // seen exactly edge-on
+  *H = G.inverse();
+  return true;
+}
 
-  // Texture set-up.
-  const Texture* tex = surface.texture.get();
-  const std::vector<BlockedLevel>* levels = tex ? &tex->blocked : nullptr;
-  const double gain = band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir;
-  const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
-  // Flat colour: one packed b, g, r, 0 pixel (visible) or one grey byte (IR).
+template <int kChannels>
+uint32_t CameraRenderer::flatColour(const Surface& surface, int gain_fixed) const {
+  // One packed b, g, r, 0 pixel (visible) or one grey byte (IR).
   uint32_t flat = 0;
   if (kChannels == 4) {
     for (int c = 0; c < 3; ++c) {
@@ -454,6 +459,129 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
     const double luma = 0.114 * surface.color[0] + 0.587 * surface.color[1] + 0.299 * surface.color[2];
     flat = cv::saturate_cast<uchar>(luma * gain_fixed / 256.0);
   }
+  return flat;
+}
+
+namespace {
+
+/// Area of the convex polygon `poly` inside the unit pixel square centred at (x, y): the polygon
+/// clipped against the square's four sides (Sutherland-Hodgman), then the shoelace formula.
+double pixelCoverage(const std::vector<Eigen::Vector2d>& poly, double x, double y, std::vector<Eigen::Vector2d>& a,
+                     std::vector<Eigen::Vector2d>& b) {
+  a = poly;
+  // The sides as (axis, sign, limit): a point p is inside when sign * (p[axis] - limit) <= 0.
+  const int axes[4] = {0, 0, 1, 1};
+  const double signs[4] = {-1, 1, -1, 1};
+  const double limits[4] = {x - 0.5, x + 0.5, y - 0.5, y + 0.5};
+  for (int side = 0; side < 4 && a.size() >= 3; ++side) {
+    const int k = axes[side];
+    const double sg = signs[side], lim = limits[side];
+    b.clear();
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const Eigen::Vector2d& p = a[i];
+      const Eigen::Vector2d& q = a[(i + 1) % a.size()];
+      const double dp = sg * (p[k] - lim), dq = sg * (q[k] - lim);
+      if (dp <= 0) b.push_back(p);
+      if ((dp <= 0) != (dq <= 0)) b.push_back(p + (dp / (dp - dq)) * (q - p));
+    }
+    std::swap(a, b);
+  }
+  if (a.size() < 3) return 0.0;
+  double twice_area = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Eigen::Vector2d& p = a[i];
+    const Eigen::Vector2d& q = a[(i + 1) % a.size()];
+    twice_area += p.x() * q.y() - q.x() * p.y();
+  }
+  return std::min(1.0, 0.5 * std::abs(twice_area));
+}
+
+}  // namespace
+
+template <int kChannels>
+void CameraRenderer::drawDecal(const Surface& surface, const Eigen::Isometry3d& camera_T_world) {
+  Eigen::Matrix3d H;
+  if (!projectOutline(surface, camera_T_world, &H)) return;
+  const std::size_t n = projected_.size();
+  double twice_area = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d& p = projected_[i];
+    const Eigen::Vector2d& q = projected_[(i + 1) % n];
+    twice_area += p.x() * q.y() - q.x() * p.y();
+  }
+  if (std::abs(twice_area) < 1e-12) return;
+  const double orientation = twice_area > 0 ? 1.0 : -1.0;
+  // Per edge of the projected (convex) outline: outward unit normal and offset, (nx, ny, c); the
+  // signed distance of a pixel centre p outside the edge's line is nx * p.x + ny * p.y - c.
+  edges_.clear();
+  double min_x = 1e300, max_x = -1e300, min_y = 1e300, max_y = -1e300;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d& p = projected_[i];
+    const Eigen::Vector2d d = projected_[(i + 1) % n] - p;
+    min_x = std::min(min_x, p.x());
+    max_x = std::max(max_x, p.x());
+    min_y = std::min(min_y, p.y());
+    max_y = std::max(max_y, p.y());
+    const double len = d.norm();
+    if (len < 1e-12) continue;
+    const Eigen::Vector2d normal = orientation * Eigen::Vector2d(d.y(), -d.x()) / len;
+    edges_.emplace_back(normal.x(), normal.y(), normal.dot(p));
+  }
+  // Every pixel whose square the outline touches.
+  const int x_begin = std::max(0, static_cast<int>(std::floor(min_x + 0.5)));
+  const int x_end = std::min(ideal_.cols - 1, static_cast<int>(std::ceil(max_x - 0.5)));
+  const int y_begin = std::max(0, static_cast<int>(std::floor(min_y + 0.5)));
+  const int y_end = std::min(ideal_.rows - 1, static_cast<int>(std::ceil(max_y - 0.5)));
+
+  const double gain = band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir;
+  const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
+  const uint32_t flat = flatColour<kChannels>(surface, gain_fixed);
+  // A pixel square lies wholly inside an edge's half-plane when its centre is more than half the
+  // diagonal inside, wholly outside when more than that outside.
+  constexpr double kHalfDiagonal = 0.70710678118654752 + 1e-9;
+  // The depth tie with the surface the decal lies on: 1e-4 relative (0.1 mm at 1 m) is far above
+  // float rounding and far below any real gap between surfaces.
+  constexpr float kDepthBias = 1.0f + 1e-4f;
+  for (int y = y_begin; y <= y_end; ++y) {
+    const float* depth = depth_.ptr<float>(y);
+    uchar* row = ideal_.ptr<uchar>(y);
+    for (int x = x_begin; x <= x_end; ++x) {
+      double outside = -1e300;
+      for (const auto& e : edges_) outside = std::max(outside, e.x() * x + e.y() * y - e.z());
+      if (outside >= kHalfDiagonal) continue;
+      const double inv_z = H(2, 0) * x + H(2, 1) * y + H(2, 2);
+      if (static_cast<float>(inv_z) * kDepthBias <= depth[x]) continue;  // behind something
+      const double cover = outside <= -kHalfDiagonal ? 1.0 : pixelCoverage(projected_, x, y, cover_a_, cover_b_);
+      if (cover <= 0.0) continue;
+      // Blend: pixel + cover * (colour - pixel), rounded to nearest, per channel.
+      const int weight = static_cast<int>(std::lround(cover * 256.0));
+      for (int c = 0; c < (kChannels == 4 ? 3 : 1); ++c) {
+        uchar& px = row[x * kChannels + c];
+        const int diff = static_cast<int>((flat >> (8 * c)) & 0xffu) - px;
+        const int step = diff >= 0 ? (diff * weight + 128) >> 8 : -((-diff * weight + 128) >> 8);
+        px = static_cast<uchar>(px + step);
+      }
+    }
+  }
+}
+
+template <int kChannels>
+void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d& camera_T_world) {
+  Eigen::Matrix3d H;
+  if (!projectOutline(surface, camera_T_world, &H)) return;
+  const int width = ideal_.cols, height = ideal_.rows;
+  double min_y = 1e300, max_y = -1e300;
+  for (const auto& q : projected_) {
+    min_y = std::min(min_y, q.y());
+    max_y = std::max(max_y, q.y());
+  }
+
+  // Texture set-up.
+  const Texture* tex = surface.texture.get();
+  const std::vector<BlockedLevel>* levels = tex ? &tex->blocked : nullptr;
+  const double gain = band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir;
+  const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
+  const uint32_t flat = flatColour<kChannels>(surface, gain_fixed);
   const bool saturates = gain_fixed > 256;
   const auto gain_u = static_cast<uint32_t>(gain_fixed);
   const double su = surface.repeat_u, sv = surface.repeat_v;

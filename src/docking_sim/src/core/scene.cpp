@@ -192,6 +192,30 @@ cv::Mat solarTexture() {
   return img;
 }
 
+/// The next mip level: half the size, texel centres at (j + 0.5) / size like every level's, so that
+/// the renderer's one mapping (texel j of a level spans [j, j + 1) / size) holds at all levels. A
+/// centred [1 2 1] / 4 low-pass (no shift), then an area average over each 2x2 block (for even sizes
+/// [1 3 3 1] / 8 per axis, centred at 2j + 0.5 of the finer level). cv::pyrDown is not usable here:
+/// its texel j is centred at 2j of the finer level, which shifts level L by (2^L - 1) / 2 texels of
+/// level 0 towards +u, +v.
+cv::Mat halveLevel(const cv::Mat& prev, bool repeat) {
+  cv::Mat smooth;
+  const cv::Mat kernel = (cv::Mat_<float>(1, 3) << 0.25f, 0.5f, 0.25f);
+  if (repeat) {
+    // The filters have no wrapping border: pad with a wrapped copy, filter, crop.
+    cv::Mat padded, filtered;
+    cv::copyMakeBorder(prev, padded, 1, 1, 1, 1, cv::BORDER_WRAP);
+    cv::sepFilter2D(padded, filtered, -1, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+    smooth = filtered(cv::Rect(1, 1, prev.cols, prev.rows));
+  } else {
+    cv::sepFilter2D(prev, smooth, -1, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+  }
+  // INTER_AREA maps output centres to input centres ((j + 0.5) * scale - 0.5), also for odd sizes.
+  cv::Mat next;
+  cv::resize(smooth, next, cv::Size(prev.cols / 2, prev.rows / 2), 0, 0, cv::INTER_AREA);
+  return next;
+}
+
 /// Normal of a surface (not normalised away from zero: edges are never parallel).
 Eigen::Vector3d normalOf(const Surface& s) { return s.edge_u.cross(s.edge_v).normalized(); }
 
@@ -206,18 +230,7 @@ std::shared_ptr<Texture> makeTexture(const cv::Mat& bgr, bool repeat) {
   tex->repeat = repeat;
   tex->bgr.push_back(bgr.clone());
   while (tex->bgr.back().cols > 4 && tex->bgr.back().rows > 4) {
-    const cv::Mat& prev = tex->bgr.back();
-    cv::Mat next;
-    if (repeat) {
-      // pyrDown has no wrapping border: pad with a wrapped copy, reduce, crop.
-      cv::Mat padded, reduced;
-      cv::copyMakeBorder(prev, padded, 4, 4, 4, 4, cv::BORDER_WRAP);
-      cv::pyrDown(padded, reduced);
-      next = reduced(cv::Rect(2, 2, prev.cols / 2, prev.rows / 2)).clone();
-    } else {
-      cv::pyrDown(prev, next, cv::Size(prev.cols / 2, prev.rows / 2));
-    }
-    tex->bgr.push_back(next);
+    tex->bgr.push_back(halveLevel(tex->bgr.back(), repeat));
   }
   for (const auto& level : tex->bgr) {
     cv::Mat g;
@@ -344,12 +357,13 @@ void Scene::addTargetRobot(const TargetModel& t) {
   }
 
   // IR LEDs at the marker positions: a bright disc and a dimmer halo (the glow a real LED makes on
-  // the sensor), just in front of the face; IR cameras only.
+  // the sensor), in the face plane exactly where target.yaml puts them; IR cameras only. Decals: drawn
+  // over the face after all other surfaces, anti-aliased (area coverage), halo first, then the disc.
   for (const auto& m : t.markers_m) {
     for (int layer = 0; layer < 2; ++layer) {
       const double r = layer == 0 ? t.led_radius_m * 2.2 : t.led_radius_m;
       Surface s;
-      s.origin = m + Eigen::Vector3d(layer == 0 ? 0.001 : 0.002, 0, 0);
+      s.origin = m;
       s.edge_u = Eigen::Vector3d(0, r, 0);
       s.edge_v = Eigen::Vector3d(0, 0, -r);
       s.outline.clear();
@@ -360,6 +374,7 @@ void Scene::addTargetRobot(const TargetModel& t) {
       s.color = cv::Vec3b(255, 255, 255);
       s.bands = kInfraredBand;
       s.emissive = true;
+      s.decal = true;
       s.emission = layer == 0 ? 0.35 : 1.0;
       addInPortFrame(s);
     }
