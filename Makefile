@@ -18,7 +18,11 @@ SETUP := source $(CURDIR)/devel/setup.bash
 deps:
 	@scripts/install-deps.sh
 
+# devel/lib/python3/dist-packages must exist when cmake first configures: catkin writes the
+# environment that `run_tests` uses (build/catkin_generated/setup_cached.sh) then, with PYTHONPATH
+# only if that folder exists. Without it, on a fresh clone, python rostests cannot import docking_msgs.
 build: deps
+	@mkdir -p devel/lib/python3/dist-packages
 	$(CATKIN_MAKE)
 
 # Builds and runs every gtest and rostest, then prints one line `N passed, N failed`.
