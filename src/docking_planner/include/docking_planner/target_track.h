@@ -41,8 +41,15 @@ struct TrackConfig {
   double default_position_sigma_m{0.01};      ///< when the estimate gives none
   double default_yaw_sigma_rad{0.03};         ///< when the estimate gives none
   double yaw_rate_sigma_radps{0.02};          ///< std. dev. of a yaw rate taken from the estimate's twist
-  bool use_estimate_yaw_rate{true};           ///< fuse the twist's yaw rate when valid
-  double yaw_rate_random_walk{0.005};         ///< rad/s per sqrt(s): how fast the target's rate may change
+  /// Fuse the twist's yaw rate when valid. Off by default: the monocular twist is relative to the
+  /// camera, and adding the chaser's odometry yaw rate to it left a bias (0.06 deg/s on a still
+  /// target in the simulator) that the blind finish integrated into the docked yaw.
+  bool use_estimate_yaw_rate{false};
+  /// rad/s per sqrt(s): how fast the target's rate may change. Small, because a free target turns at
+  /// a constant rate, and because this sets how long the filter averages the rate: with 0.005 the rate
+  /// came out 0.08 deg/s (1 sigma) off after 12 s of 0.06 deg poses, 0.5 deg over a 7 s blind finish;
+  /// with 0.0003 it is 0.01 deg/s.
+  double yaw_rate_random_walk{0.0003};
   double centre_random_walk{0.01};           ///< m per sqrt(s): the turning centre's jitter
   /// Estimate a drift velocity u of the target (else u = 0). Off by default: over the few seconds a
   /// near-range camera sees the port, a drift and a turn are hard to tell apart, and modelling the

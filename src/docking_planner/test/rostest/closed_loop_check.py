@@ -136,8 +136,10 @@ class ClosedLoopCheck(unittest.TestCase):
         (cx, cy, cyaw), (px, py, pyaw) = self.truth(docked.header.stamp)
         tip_err = math.hypot(cx + probe_x * math.cos(cyaw) - px, cy + probe_x * math.sin(cyaw) - py)
         yaw_err = math.degrees(abs(wrap(cyaw - (pyaw + math.pi))))
-        rospy.loginfo("closed_loop_check: DOCKED at %.1f s (sim), true tip error %.1f mm, yaw %.2f deg; %s",
-                      docked.header.stamp.to_sec() - t0, 1000 * tip_err, yaw_err, " -> ".join(names))
+        result = "closed_loop_check: DOCKED at %.1f s (sim), true tip error %.1f mm, yaw %.2f deg; %s" % (
+            docked.header.stamp.to_sec() - t0, 1000 * tip_err, yaw_err, " -> ".join(names))
+        rospy.loginfo(result)
+        print(result, flush=True)  # also in the test's XML result (system-out), for CI logs
         self.assertLessEqual(tip_err, max_pos, "true probe-tip error %.1f mm > %.1f mm" % (1000 * tip_err, 1000 * max_pos))
         self.assertLessEqual(yaw_err, max_yaw, "true yaw error %.2f deg > %.2f deg" % (yaw_err, max_yaw))
 
