@@ -1,5 +1,6 @@
 // Renderer geometry: markers land where the pinhole model puts them, stereo disparity equals f*b/Z,
-// nearer surfaces hide farther ones (whatever the drawing order), the LEDs light up in IR.
+// nearer surfaces hide farther ones (whatever the drawing order), the LEDs light up in IR as
+// saturated, lens-blurred spots at their projections.
 #include <gtest/gtest.h>
 
 #include <opencv2/calib3d.hpp>
@@ -276,9 +277,10 @@ TEST(Renderer, TextureLandsOnThePinholeProjectionAtEveryMipLevel) {
   }
 }
 
-// An LED disc (the scene's 24-gon, emissive decal) in the plane of a dark face: its intensity
-// centroid must be the projection of its centre to 0.05 px (a hard-edged disc was off by up to
-// 0.3 px), it must show although it lies exactly in the face's plane, and a nearer surface hides it.
+// An emissive disc decal (a 24-gon, as the LEDs were drawn before they became light spots) in the
+// plane of a dark face: its intensity centroid must be the projection of its centre to 0.05 px (a
+// hard-edged disc was off by up to 0.3 px), it must show although it lies exactly in the face's
+// plane, and a nearer surface hides it.
 TEST(Renderer, LedDiscCentroidIsItsProjectedCentre) {
   const cv::Matx33d K(540, 0, 319.3, 0, 540, 240.6, 0, 0, 1);
   auto disc = [](const Eigen::Vector3d& centre, double r) {
@@ -380,5 +382,131 @@ TEST(Renderer, SceneLedsLandOnTheMarkerPositions) {
     const cv::Point2d found = contrastCentroid(added, predicted, half, 0.0);
     EXPECT_LE(std::hypot(found.x - predicted.x, found.y - predicted.y), 0.05)
         << "LED " << i << " predicted " << predicted << " found " << found;
+  }
+}
+
+namespace {
+
+/// A dark flat face at depth z facing the camera, with an LED (radius 5 mm, as target.yaml) on it.
+docking_sim::Scene ledOnDarkFace(const Eigen::Vector3d& centre, double led_radiance) {
+  docking_sim::Scene scene;
+  docking_sim::Surface face;
+  face.origin = centre + Eigen::Vector3d(-0.2, -0.2, 0.0);
+  face.edge_u = Eigen::Vector3d(0.4, 0, 0);
+  face.edge_v = Eigen::Vector3d(0, 0.4, 0);
+  face.color = cv::Vec3b(20, 20, 20);
+  scene.addSurface(face);
+  docking_sim::Led led;
+  led.centre = centre;
+  led.normal = Eigen::Vector3d(0, 0, -1);  // towards the camera at the origin
+  led.radius_m = 0.005;
+  scene.addLed(led);
+  docking_sim::LightingScenario light;
+  docking_sim::CameraEffects ir;
+  ir.led_radiance = led_radiance;
+  scene.setLighting(light, Eigen::Vector3d(0, 0, 1), 1.0, docking_sim::CameraEffects(), ir);
+  scene.update(Eigen::Isometry3d::Identity());
+  return scene;
+}
+
+}  // namespace
+
+// An LED at 4 m through the IR camera's full pipeline (its calibration with distortion, sim.yaml's
+// led_radiance, lens blur; no noise): a saturated spot, above the IR detector's led_threshold (140)
+// over a few pixels, centred within 0.5 px of the pinhole + distortion projection of the LED's
+// centre, hidden by a card in front of it, and not seen by a visible camera.
+TEST(Renderer, FarIrLedIsASaturatedSpotAtItsDistortedProjection) {
+  const std::string path = writeTempFile("far_led", scenarioText(1.15, 0.0, 180.0, 0.0, "dark"));
+  docking_sim::Simulation sim(files(path), clean());
+  const docking_sim::CameraCalibration& cal = sim.robot().cameras[RobotModel::kIr].calibration;
+  const docking_sim::CameraEffects effects = sim.settings().ir_effects;
+  docking_sim::LightingScenario quiet;
+  quiet.ir.noise_sigma = 0;
+  quiet.visible.noise_sigma = 0;
+  // Off axis (normalised 0.4, 0.25): barrel distortion moves it ~4 px from the pinhole projection.
+  const Eigen::Vector3d centre(1.6, 1.0, 4.0);
+  docking_sim::Scene scene = ledOnDarkFace(centre, effects.led_radiance);
+  docking_sim::CameraRenderer renderer(cal, docking_sim::Band::kInfrared, effects, quiet, 1);
+  const cv::Mat ir = renderer.render(scene, Eigen::Isometry3d::Identity()).clone();
+  std::vector<cv::Point2f> predicted;
+  cv::projectPoints(std::vector<cv::Point3f>{cv::Point3f(1.6f, 1.0f, 4.0f)}, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0),
+                    cv::Mat(cal.K), cv::Mat(cal.D), predicted);
+  const cv::Point2d p(predicted[0].x, predicted[0].y);
+  const cv::Rect window(cvRound(p.x) - 5, cvRound(p.y) - 5, 11, 11);
+  double lo, hi;
+  cv::minMaxLoc(ir(window), &lo, &hi);
+  EXPECT_EQ(hi, 255.0) << "a far LED must saturate the sensor";
+  EXPECT_GE(cv::countNonZero(ir(window) > 140), 4) << "too small for the IR detector (led_min_area_px 2)";
+  const double background = ir.at<uchar>(cvRound(p.y) + 12, cvRound(p.x));  // the face
+  EXPECT_LT(background, 40.0);
+  const cv::Point2d found = contrastCentroid(ir, p, 5, background);
+  EXPECT_LE(std::hypot(found.x - p.x, found.y - p.y), 0.5) << "predicted " << p << " found " << found;
+  EXPECT_GT(std::hypot(p.x - (cal.K(0, 0) * 0.4 + cal.K(0, 2)), p.y - (cal.K(1, 1) * 0.25 + cal.K(1, 2))), 2.0)
+      << "the test must exercise the distortion";
+
+  // A card 1 cm in front of the LED hides it (the depth test at its centre).
+  docking_sim::Surface card;
+  card.origin = centre + Eigen::Vector3d(-0.1, -0.1, -0.01);
+  card.edge_u = Eigen::Vector3d(0.2, 0, 0);
+  card.edge_v = Eigen::Vector3d(0, 0.2, 0);
+  card.color = cv::Vec3b(90, 90, 90);
+  scene.addSurface(card);
+  scene.update(Eigen::Isometry3d::Identity());
+  cv::minMaxLoc(renderer.render(scene, Eigen::Isometry3d::Identity())(window), &lo, &hi);
+  EXPECT_LT(hi, 100.0) << "the card (90 before vignetting) must hide the LED";
+
+  // Seen from behind (the camera on the other side of the face), nothing shows.
+  docking_sim::Scene behind = ledOnDarkFace(centre, effects.led_radiance);
+  Eigen::Isometry3d world_T_camera = Eigen::Isometry3d::Identity();
+  world_T_camera.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  world_T_camera.translation() = Eigen::Vector3d(0, 0, 8.0);
+  cv::minMaxLoc(renderer.render(behind, world_T_camera), &lo, &hi);
+  EXPECT_LT(hi, 40.0) << "an LED seen from behind must not light up";
+
+  // The visible cameras do not see the IR LEDs.
+  docking_sim::CameraRenderer visible(cal, docking_sim::Band::kVisible, effects, quiet, 1);
+  cv::Mat grey;
+  cv::cvtColor(visible.render(ledOnDarkFace(centre, effects.led_radiance), Eigen::Isometry3d::Identity()), grey,
+               cv::COLOR_BGR2GRAY);
+  cv::minMaxLoc(grey(window), &lo, &hi);
+  EXPECT_LT(hi, 40.0);
+}
+
+// Below saturation the light an LED brings (the sum of what it adds to the image) is radiance x
+// 255 x its projected disc area, so it falls as 1 / z^2, and its peak falls with distance.
+TEST(Renderer, LedSpotBrightnessFallsWithDistanceAsItsProjectedArea) {
+  docking_sim::CameraCalibration cal;
+  cal.width = 640;
+  cal.height = 480;
+  cal.K = cv::Matx33d(520, 0, 319.5, 0, 520, 239.5, 0, 0, 1);
+  cal.D = {0, 0, 0, 0, 0};
+  docking_sim::LightingScenario quiet;
+  quiet.ir.noise_sigma = 0;
+  docking_sim::CameraEffects effects;
+  effects.blur_sigma_px = 0.8;
+  effects.vignetting = 0;
+  docking_sim::RenderOptions no_distortion;
+  no_distortion.distortion = false;
+  constexpr double kRadiance = 0.5;  // peaks 180, 94, 32 grey levels at 1, 2, 4 m: unsaturated
+  double last_peak = 1e9;
+  for (const double z : {1.0, 2.0, 4.0}) {
+    const Eigen::Vector3d centre(0.013, -0.021, z);
+    docking_sim::CameraRenderer renderer(cal, docking_sim::Band::kInfrared, effects, quiet, 1, no_distortion);
+    const cv::Mat with_led = renderer.render(ledOnDarkFace(centre, kRadiance), Eigen::Isometry3d::Identity()).clone();
+    const cv::Mat without = renderer.render(ledOnDarkFace(centre, 0.0), Eigen::Isometry3d::Identity()).clone();
+    cv::Mat added;
+    cv::subtract(with_led, without, added, cv::noArray(), CV_32F);
+    const cv::Point2d p = project(cal.K, centre);
+    const cv::Rect window(cvRound(p.x) - 12, cvRound(p.y) - 12, 25, 25);
+    const double light = cv::sum(added(window))[0];
+    const double radius_px = 520 * 0.005 / z;
+    const double expected = kRadiance * 255.0 * M_PI * radius_px * radius_px;
+    EXPECT_NEAR(light / expected, 1.0, 0.06) << "at " << z << " m: " << light << " vs " << expected;
+    EXPECT_EQ(cv::sum(added)[0], light) << "at " << z << " m: light outside the spot";
+    double lo, hi;
+    cv::minMaxLoc(added, &lo, &hi);
+    EXPECT_LT(hi, 250.0) << "at " << z << " m the spot must stay below saturation for this test";
+    EXPECT_LT(hi, last_peak) << "at " << z << " m";
+    last_peak = hi;
   }
 }

@@ -36,7 +36,7 @@ struct LightingScenario {
   std::string name;
   BandLighting visible;
   BandLighting ir;
-  double led_intensity{1.0};  ///< IR LED brightness, 1 = full scale (independent of the room light)
+  double led_intensity{1.0};  ///< IR LED drive, 1 = nominal (scales cameras.ir.led_radiance; independent of the room light)
   GlareSpot glare;            ///< visible cameras only
 };
 
@@ -45,6 +45,9 @@ struct CameraEffects {
   double exposure{1.0};        ///< multiplies the scene brightness
   double blur_sigma_px{0.6};   ///< Gaussian optical blur
   double vignetting{0.25};     ///< relative darkening at the image corners
+  /// IR only: the LEDs' radiance at led_intensity 1, relative to the sensor's full scale at exposure 1
+  /// (> 1: brighter than anything the exposure is set for; the lens spreads it, the sensor clips it).
+  double led_radiance{1.0};
 };
 
 struct ClutterBox {

@@ -58,6 +58,13 @@ class CameraRenderer {
   template <int kChannels>
   uint32_t flatColour(const Surface& surface, int gain_fixed) const;
   void applyEffects();
+  /// IR: the scene's LEDs that show (facing the camera, their centre not hidden in the z-buffer),
+  /// projected through the lens model into led_spots_ (output pixels).
+  void projectLeds(const Scene& scene, const Eigen::Isometry3d& camera_T_world);
+  /// Adds the spots of led_spots_ to `image` (the output's size, CV_8UC1), saturating: each a
+  /// Gaussian with the disc's variance plus the lens's (lens_sigma_px) and the pixel's own, darkened
+  /// by `vignette` (per pixel, 256 = 1; null: none).
+  void addLedSpots(cv::Mat& image, double lens_sigma_px, const uint16_t* vignette);
 
   CameraCalibration calibration_;
   Band band_;
@@ -90,6 +97,13 @@ class CameraRenderer {
   std::vector<Eigen::Vector2d> cover_a_, cover_b_;  ///< decal coverage: outline clipped to a pixel
   std::vector<Eigen::Vector3d> edges_;              ///< decal: outward unit normal (x, y) and offset
   std::vector<std::pair<double, std::size_t>> order_;  ///< draw order: (squared distance, surface)
+  /// An LED as the sensor sees it this frame: centre (output pixels), the variance of its projected
+  /// disc (px^2) and the light it brings (grey levels * px^2: radiance * 255 * projected area).
+  struct LedSpot {
+    double x, y, disc_variance, integral;
+  };
+  std::vector<LedSpot> led_spots_;
+  std::vector<float> spot_row_, spot_col_;  ///< the separable Gaussian's factors along x and y
 };
 
 }  // namespace docking_sim

@@ -56,16 +56,29 @@ struct Surface {
   double repeat_u{1.0}, repeat_v{1.0};
   double offset_u{0.0}, offset_v{0.0};     ///< texture coordinate at s = 0, t = 0 (in repeats)
   unsigned bands{kBothBands};
-  bool emissive{false};          ///< lights itself (IR LEDs): not shaded, not scaled by the room light
+  bool emissive{false};          ///< lights itself: not shaded, not scaled by the room light
   double emission{1.0};          ///< brightness of an emissive surface relative to led_intensity
   bool moves_with_target{false}; ///< defined in the target robot's frame
-  /// Lies on another surface (IR LEDs on the face): drawn after all other surfaces, in `surfaces()`
+  /// Lies on another surface (a sticker, a painted mark): drawn after all other surfaces, in `surfaces()`
   /// order, with area-coverage anti-aliasing (blended over what is there), winning depth ties with
   /// the surface under it by a relative 1/z bias, writing no depth. Flat colour only (no texture).
   bool decal{false};
   // Filled per frame by Scene::update: the brightness factor in each band.
   double gain_visible{1.0};
   double gain_ir{1.0};
+};
+
+/// An IR LED: a small emitting disc far brighter than the diffuse scene. Not a surface: the IR
+/// renderer draws it after rasterisation as the lens-blurred spot of its disc, added before the
+/// sensor clips (so a far LED is a saturated spot a few pixels wide, not a dim sub-pixel dot).
+struct Led {
+  Eigen::Vector3d centre{Eigen::Vector3d::Zero()};
+  Eigen::Vector3d normal{Eigen::Vector3d::UnitX()};  ///< unit, out of the face it sits on
+  double radius_m{0.005};
+  bool moves_with_target{false};  ///< defined in the target robot's frame
+  /// Filled per frame by Scene::update: radiance relative to the IR sensor's full scale
+  /// (led_intensity * cameras.ir.led_radiance * ir exposure).
+  double radiance_ir{1.0};
 };
 
 class Scene {
@@ -77,9 +90,12 @@ class Scene {
   Scene() = default;
 
   void addSurface(const Surface& s) { local_.push_back(s); }
-  /// Places the target surfaces at world_T_target_robot and recomputes the shading of every surface.
+  void addLed(const Led& led) { leds_local_.push_back(led); }
+  /// Places the target surfaces and LEDs at world_T_target_robot and recomputes the shading of every
+  /// surface and the radiance of every LED.
   void update(const Eigen::Isometry3d& world_T_target_robot);
   const std::vector<Surface>& surfaces() const { return world_; }
+  const std::vector<Led>& leds() const { return leds_world_; }
 
   void setLighting(const LightingScenario& lighting, const Eigen::Vector3d& light_direction, double ambient,
                    const CameraEffects& visible, const CameraEffects& ir);
@@ -91,10 +107,13 @@ class Scene {
 
   std::vector<Surface> local_;   ///< static surfaces in world, target surfaces in the robot frame
   std::vector<Surface> world_;
+  std::vector<Led> leds_local_;  ///< like local_
+  std::vector<Led> leds_world_;
   LightingScenario lighting_;
   Eigen::Vector3d light_direction_{0.3, 0.2, -1.0};
   double ambient_{0.45};
   double visible_exposure_{1.0}, ir_exposure_{1.0};
+  double led_radiance_{1.0};  ///< cameras.ir.led_radiance
 };
 
 }  // namespace docking_sim

@@ -79,6 +79,7 @@ SimSettings loadSimSettings(const std::string& path) {
 
   s.visible_effects = readEffects(root["cameras"]["visible"]);
   s.ir_effects = readEffects(root["cameras"]["ir"]);
+  s.ir_effects.led_radiance = root["cameras"]["ir"]["led_radiance"].asDouble(0.0, 1000.0);
 
   const YamlField lighting = root["lighting"];
   for (const auto& name : lighting.keys()) {

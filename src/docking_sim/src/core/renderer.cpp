@@ -224,6 +224,7 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
     rasterize<4>(scene, camera_T_world);
   } else {
     rasterize<1>(scene, camera_T_world);
+    projectLeds(scene, camera_T_world);
   }
   const double t1 = threadCpuMs();
   if (options_.distortion) {
@@ -241,6 +242,7 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
     applyEffects();
   } else {
     distorted_.copyTo(output_);
+    addLedSpots(output_, 0.0, nullptr);  // no lens blur, no vignetting: the disc as the pixels sample it
   }
   const double t3 = threadCpuMs();
   timing_ = RenderTiming{t1 - t0, t2 - t1, t3 - t2};
@@ -342,12 +344,14 @@ void CameraRenderer::applyDistortion() {
 }
 
 void CameraRenderer::applyEffects() {
-  const cv::Mat* src = &distorted_;
+  cv::Mat* src = &distorted_;
+  double lens_sigma_px = 0.0;
   if (effects_.blur_sigma_px > 0.05) {
     // Kernel +-3 sigma, at least 3x3 (OpenCV's fixed-point path for small 8-bit kernels).
     const int half = std::max(1, static_cast<int>(std::ceil(3.0 * effects_.blur_sigma_px)) - 1);
     cv::GaussianBlur(distorted_, blurred_, cv::Size(2 * half + 1, 2 * half + 1), effects_.blur_sigma_px);
     src = &blurred_;
+    lens_sigma_px = effects_.blur_sigma_px;
   }
   if (!glare_.empty()) {
     cv::add(*src, glare_, blurred_);  // saturating
@@ -366,6 +370,117 @@ void CameraRenderer::applyEffects() {
     for (int i = 0; i < row_bytes; ++i) {
       const int value = ((in[i] * vig[base + i]) >> 8) + noise[base + i];
       out[i] = static_cast<uchar>(std::min(255, std::max(0, value)));
+    }
+  }
+  // The LEDs last: their spots carry the lens blur, vignetting darkens them before the sensor clips
+  // (it is optical), and noise is additive (the same before or after, except where they saturate:
+  // a saturated pixel shows none, as on a real sensor).
+  addLedSpots(output_, lens_sigma_px, vignette_.data());
+}
+
+namespace {
+
+/// The plumb_bob model (D = k1 k2 p1 p2 k3): normalised pinhole coordinates -> distorted
+/// normalised coordinates, as cv::projectPoints computes them.
+Eigen::Vector2d distortNormalised(const std::vector<double>& D, const Eigen::Vector2d& p) {
+  const double x = p.x(), y = p.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (D[0] + r2 * (D[1] + r2 * D[4]));
+  return {x * radial + 2.0 * D[2] * x * y + D[3] * (r2 + 2.0 * x * x),
+          y * radial + D[2] * (r2 + 2.0 * y * y) + 2.0 * D[3] * x * y};
+}
+
+}  // namespace
+
+void CameraRenderer::projectLeds(const Scene& scene, const Eigen::Isometry3d& camera_T_world) {
+  led_spots_.clear();
+  const double fx = ideal_K_(0, 0), fy = ideal_K_(1, 1), cx = ideal_K_(0, 2), cy = ideal_K_(1, 2);
+  // The same depth tie as a decal's: the LED lies in the plane of the face under it.
+  constexpr float kDepthBias = 1.0f + 1e-4f;
+  for (const Led& led : scene.leds()) {
+    if (led.radiance_ir <= 0.0) continue;
+    const Eigen::Vector3d c = camera_T_world * led.centre;
+    if (c.z() < kNearPlaneM) continue;
+    const Eigen::Vector3d n = camera_T_world.linear() * led.normal;
+    const double n_dot_c = n.dot(c);
+    if (n_dot_c >= 0.0) continue;  // seen from behind or edge-on
+    // Visible when its centre is: the depth of the LED's plane at the centre pixel of the ideal
+    // image (exactly what the face under it wrote there) against the z-buffer.
+    const double px = fx * c.x() / c.z() + cx, py = fy * c.y() / c.z() + cy;
+    const long xi = std::lround(px), yi = std::lround(py);
+    if (xi < 0 || yi < 0 || xi >= ideal_.cols || yi >= ideal_.rows) continue;
+    const Eigen::Vector3d ray((static_cast<double>(xi) - cx) / fx, (static_cast<double>(yi) - cy) / fy, 1.0);
+    const double inv_z = n.dot(ray) / n_dot_c > 0.0 ? n.dot(ray) / n_dot_c : 1.0 / c.z();
+    if (static_cast<float>(inv_z) * kDepthBias <= depth_.at<float>(static_cast<int>(yi), static_cast<int>(xi))) {
+      continue;  // behind something
+    }
+    // The disc's projected area: two in-plane unit vectors through d(x/z, y/z)/dP, then through the
+    // distortion's Jacobian (finite differences; it changes little over a pixel) and the focal lengths.
+    const Eigen::Vector3d e1 = n.cross(std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY())
+                                   .normalized();
+    const Eigen::Vector3d e2 = n.cross(e1);
+    Eigen::Matrix<double, 2, 3> pinhole_jacobian;
+    pinhole_jacobian << 1.0, 0.0, -c.x() / c.z(), 0.0, 1.0, -c.y() / c.z();
+    pinhole_jacobian /= c.z();
+    Eigen::Matrix2d in_plane;
+    in_plane.col(0) = pinhole_jacobian * e1;
+    in_plane.col(1) = pinhole_jacobian * e2;
+    const Eigen::Vector2d normalised(c.x() / c.z(), c.y() / c.z());
+    Eigen::Vector2d centre = normalised;
+    Eigen::Matrix2d lens_jacobian = Eigen::Matrix2d::Identity();
+    if (options_.distortion) {
+      constexpr double kStep = 1e-5;
+      centre = distortNormalised(calibration_.D, normalised);
+      lens_jacobian.col(0) = (distortNormalised(calibration_.D, normalised + Eigen::Vector2d(kStep, 0)) - centre) / kStep;
+      lens_jacobian.col(1) = (distortNormalised(calibration_.D, normalised + Eigen::Vector2d(0, kStep)) - centre) / kStep;
+    }
+    const cv::Matx33d& K = calibration_.K;
+    const double area_px = M_PI * led.radius_m * led.radius_m * K(0, 0) * K(1, 1) *
+                           std::abs((lens_jacobian * in_plane).determinant());
+    LedSpot spot;
+    spot.x = K(0, 0) * centre.x() + K(0, 1) * centre.y() + K(0, 2);
+    spot.y = K(1, 1) * centre.y() + K(1, 2);
+    spot.disc_variance = area_px / (4.0 * M_PI);  // a uniform disc of radius r: r^2 / 4 per axis
+    spot.integral = 255.0 * led.radiance_ir * area_px;
+    led_spots_.push_back(spot);
+  }
+}
+
+void CameraRenderer::addLedSpots(cv::Mat& image, double lens_sigma_px, const uint16_t* vignette) {
+  // A pixel integrates over its square: variance 1/12 per axis (keeps a tiny spot from falling
+  // between pixel centres).
+  constexpr double kPixelVariance = 1.0 / 12.0;
+  for (const LedSpot& spot : led_spots_) {
+    const double variance = lens_sigma_px * lens_sigma_px + spot.disc_variance + kPixelVariance;
+    const double peak = spot.integral / (2.0 * M_PI * variance);
+    if (peak < 0.5) continue;
+    // Out to where the spot adds less than half a grey level.
+    const double reach = std::sqrt(2.0 * variance * std::log(2.0 * peak));
+    const int x0 = std::max(0, static_cast<int>(std::ceil(spot.x - reach)));
+    const int x1 = std::min(image.cols - 1, static_cast<int>(std::floor(spot.x + reach)));
+    const int y0 = std::max(0, static_cast<int>(std::ceil(spot.y - reach)));
+    const int y1 = std::min(image.rows - 1, static_cast<int>(std::floor(spot.y + reach)));
+    if (x0 > x1 || y0 > y1) continue;
+    // Separable: exp(-(dx^2 + dy^2) / 2v) = exp(-dx^2 / 2v) exp(-dy^2 / 2v), the peak folded into the rows.
+    spot_row_.resize(static_cast<std::size_t>(x1 - x0 + 1));
+    spot_col_.resize(static_cast<std::size_t>(y1 - y0 + 1));
+    for (int x = x0; x <= x1; ++x) {
+      const double dx = x - spot.x;
+      spot_row_[static_cast<std::size_t>(x - x0)] = static_cast<float>(peak * std::exp(-dx * dx / (2.0 * variance)));
+    }
+    for (int y = y0; y <= y1; ++y) {
+      const double dy = y - spot.y;
+      spot_col_[static_cast<std::size_t>(y - y0)] = static_cast<float>(std::exp(-dy * dy / (2.0 * variance)));
+    }
+    for (int y = y0; y <= y1; ++y) {
+      uchar* row = image.ptr<uchar>(y);
+      const float weight = spot_col_[static_cast<std::size_t>(y - y0)];
+      const uint16_t* vignette_row = vignette ? vignette + static_cast<std::size_t>(y) * image.cols : nullptr;
+      for (int x = x0; x <= x1; ++x) {
+        float added = weight * spot_row_[static_cast<std::size_t>(x - x0)];
+        if (vignette_row) added *= static_cast<float>(vignette_row[x]) * (1.0f / 256.0f);
+        row[x] = static_cast<uchar>(std::min(255.0f, row[x] + added + 0.5f));
+      }
     }
   }
 }

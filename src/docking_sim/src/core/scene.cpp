@@ -356,28 +356,15 @@ void Scene::addTargetRobot(const TargetModel& t) {
     }
   }
 
-  // IR LEDs at the marker positions: a bright disc and a dimmer halo (the glow a real LED makes on
-  // the sensor), in the face plane exactly where target.yaml puts them; IR cameras only. Decals: drawn
-  // over the face after all other surfaces, anti-aliased (area coverage), halo first, then the disc.
+  // IR LEDs at the marker positions, in the face plane exactly where target.yaml puts them, facing
+  // out of the face (+x of the port frame); IR cameras only (the renderer draws them as light spots).
   for (const auto& m : t.markers_m) {
-    for (int layer = 0; layer < 2; ++layer) {
-      const double r = layer == 0 ? t.led_radius_m * 2.2 : t.led_radius_m;
-      Surface s;
-      s.origin = m;
-      s.edge_u = Eigen::Vector3d(0, r, 0);
-      s.edge_v = Eigen::Vector3d(0, 0, -r);
-      s.outline.clear();
-      for (int k = 0; k < 24; ++k) {
-        const double a = 2 * M_PI * k / 24;
-        s.outline.emplace_back(std::cos(a), std::sin(a));
-      }
-      s.color = cv::Vec3b(255, 255, 255);
-      s.bands = kInfraredBand;
-      s.emissive = true;
-      s.decal = true;
-      s.emission = layer == 0 ? 0.35 : 1.0;
-      addInPortFrame(s);
-    }
+    Led led;
+    led.centre = rp * m;
+    led.normal = rp.linear() * Eigen::Vector3d::UnitX();
+    led.radius_m = t.led_radius_m;
+    led.moves_with_target = true;
+    leds_local_.push_back(led);
   }
 
   // The target robot under the mockup: a dark base on a low wheel block, filling the gap up to the face.
@@ -514,6 +501,7 @@ void Scene::setLighting(const LightingScenario& lighting, const Eigen::Vector3d&
   ambient_ = ambient;
   visible_exposure_ = visible.exposure;
   ir_exposure_ = ir.exposure;
+  led_radiance_ = ir.led_radiance;
 }
 
 void Scene::update(const Eigen::Isometry3d& world_T_target_robot) {
@@ -539,6 +527,16 @@ void Scene::update(const Eigen::Isometry3d& world_T_target_robot) {
       s.gain_visible = shade * lighting_.visible.illumination * visible_exposure_;
       s.gain_ir = shade * lighting_.ir.illumination * ir_exposure_;
     }
+  }
+  if (leds_world_.size() != leds_local_.size()) leds_world_ = leds_local_;
+  for (std::size_t i = 0; i < leds_world_.size(); ++i) {
+    Led& led = leds_world_[i];
+    const Led& local = leds_local_[i];
+    if (local.moves_with_target) {
+      led.centre = world_T_target_robot * local.centre;
+      led.normal = world_T_target_robot.linear() * local.normal;
+    }
+    led.radiance_ir = lighting_.led_intensity * led_radiance_ * ir_exposure_;
   }
 }
 
