@@ -95,7 +95,9 @@ def run(args):
     lat = summary["image_to_cmd_vel_latency_wall"] or {}
     if lat.get("count"):
         print(f"  image -> cmd_vel latency (wall, {lat['count']} estimates): median {lat['median_ms']:.1f} ms, "
-              f"p95 {lat['p95_ms']:.1f} ms, max {lat['max_ms']:.1f} ms")
+              f"p95 {lat['p95_ms']:.1f} ms, max {lat['max_ms']:.1f} ms; of which perception (image -> estimate) "
+              f"median {lat['perception_median_ms']:.1f} / p95 {lat['perception_p95_ms']:.1f} ms, planner (estimate -> "
+              f"cmd_vel) median {lat['planner_median_ms']:.1f} / p95 {lat['planner_p95_ms']:.1f} ms")
     print(f"  bag {bag} ({summary['bag_size_mb']:.1f} MB), plots {out}/trajectory.png, {out}/timeline.png")
     return 1 if failure else 0
 
@@ -118,20 +120,25 @@ class LatencyProbe:
     """Image -> cmd_vel latency in wall time, measured from outside the stack: the wall time this node
     receives a camera image (the simulator publishing it), keyed by its stamp, against the wall time it
     receives the first cmd_vel after the arbiter's estimate with that stamp (the planner runs a cycle
-    on each estimate). Images are subscribed as AnyMsg and only their header is read."""
+    on each estimate it takes), split at the estimate into perception (image -> estimate) and planner
+    (estimate -> cmd_vel). Only estimates the planner acts on are counted: not while it finishes on
+    odometry or is DOCKED (DockingState.target_visible false), when it ignores them on purpose. Images
+    are subscribed as AnyMsg and only their header is read."""
 
     def __init__(self):
         import rospy
-        from docking_msgs.msg import TargetEstimate
+        from docking_msgs.msg import DockingState, TargetEstimate
         from geometry_msgs.msg import Twist
         self.lock = threading.Lock()
         self.image_wall = {}     # stamp (ns) -> wall time received
-        self.pending = []        # estimate stamps waiting for a cmd_vel
-        self.samples = []        # seconds
+        self.pending = []        # (estimate stamp, wall time received) waiting for a cmd_vel
+        self.samples = []        # (total, perception, planner) seconds
+        self.in_use = False      # the planner's last state: acting on estimates
         for topic in ("/stereo/left/image_raw", "/ir/image_raw"):
             rospy.Subscriber(topic, rospy.AnyMsg, self.on_image, queue_size=5, buff_size=2 ** 24)
         rospy.Subscriber("/target/estimate", TargetEstimate, self.on_estimate, queue_size=10)
         rospy.Subscriber("/cmd_vel", Twist, self.on_cmd, queue_size=10)
+        rospy.Subscriber("/docking/state", DockingState, self.on_state, queue_size=10)
 
     def on_image(self, msg):
         wall = time.time()
@@ -142,27 +149,43 @@ class LatencyProbe:
                 for key in sorted(self.image_wall)[:200]:
                     del self.image_wall[key]
 
+    def on_state(self, msg):
+        with self.lock:
+            self.in_use = msg.target_visible and msg.state != msg.DOCKED
+
     def on_estimate(self, msg):
+        wall = time.time()
         if msg.valid:
             with self.lock:
-                self.pending.append(msg.header.stamp.to_nsec())
+                if self.in_use:
+                    self.pending.append((msg.header.stamp.to_nsec(), wall))
 
     def on_cmd(self, _msg):
         wall = time.time()
         with self.lock:
-            for stamp in self.pending:
+            for stamp, estimate_wall in self.pending:
                 if stamp in self.image_wall:
-                    self.samples.append(wall - self.image_wall[stamp])
+                    image_wall = self.image_wall[stamp]
+                    self.samples.append((wall - image_wall, estimate_wall - image_wall, wall - estimate_wall))
             self.pending = []
 
     def summary(self):
         with self.lock:
-            xs = sorted(self.samples)
-        if not xs:
+            rows = list(self.samples)
+        if not rows:
             return {"count": 0}
-        pick = lambda q: xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
-        return {"count": len(xs), "median_ms": 1e3 * pick(0.5), "p95_ms": 1e3 * pick(0.95),
-                "max_ms": 1e3 * xs[-1]}
+
+        def stats(xs):
+            xs = sorted(xs)
+            pick = lambda q: xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
+            return 1e3 * pick(0.5), 1e3 * pick(0.95), 1e3 * xs[-1]
+
+        median, p95, worst = stats([r[0] for r in rows])
+        perception = stats([r[1] for r in rows])
+        planner = stats([r[2] for r in rows])
+        return {"count": len(rows), "median_ms": median, "p95_ms": p95, "max_ms": worst,
+                "perception_median_ms": perception[0], "perception_p95_ms": perception[1],
+                "planner_median_ms": planner[0], "planner_p95_ms": planner[1]}
 
 
 def monitor(launch, args, outcome):

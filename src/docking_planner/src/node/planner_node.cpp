@@ -4,6 +4,7 @@
 // config/planner.yaml (see README.md); a missing or invalid one stops the node, naming it.
 #include <csignal>
 #include <deque>
+#include <map>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -25,6 +26,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include "docking_planner/docking_planner.h"
+#include "docking_planner/odometry_history.h"
 
 namespace docking_planner {
 namespace {
@@ -130,6 +132,10 @@ class PlannerNode {
     use_estimate_covariance_ = requireBool(pnh, "use_estimate_covariance");
     tf_wait_s_ = requireDouble(pnh, "tf_wait_s");
     if (!(tf_wait_s_ >= 0.0)) throw std::invalid_argument("parameter ~tf_wait_s must be >= 0");
+    max_odom_extrapolation_s_ = requireDouble(pnh, "max_odom_extrapolation_s");
+    if (!(max_odom_extrapolation_s_ >= 0.0 && max_odom_extrapolation_s_ <= 0.2)) {
+      throw std::invalid_argument("parameter ~max_odom_extrapolation_s must be in [0, 0.2]");
+    }
 
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>(docking_msgs::topics::kCmdVel, 1);
     state_pub_ = nh.advertise<docking_msgs::DockingState>(docking_msgs::topics::kDockingState, 10);
@@ -151,6 +157,7 @@ class PlannerNode {
   // Back to SEARCH with no target (e.g. after DOCKED, to start another run without a restart).
   bool onReset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
     pending_.clear();
+    odometry_history_.clear();
     planner_.reset(ros::Time::now().toSec());
     ROS_INFO("planner: reset to SEARCH");
     return true;
@@ -170,6 +177,11 @@ class PlannerNode {
     o.twist.vy = msg->twist.twist.linear.y;
     o.twist.wz = msg->twist.twist.angular.z;
     odometry_ = o;
+    if (!odometry_history_.add(OdometrySample{o.stamp_s, o.pose, o.twist})) {
+      ROS_WARN_THROTTLE(5.0, "planner: odometry sample not kept (not finite, or stamp not after the last one)");
+    }
+    // An estimate that waited for odometry at its stamp can be placed now.
+    if (!pending_.empty() && processPending() && update_on_estimate_) runCycle();
   }
 
   void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg) {
@@ -183,10 +195,10 @@ class PlannerNode {
     if (processPending() && update_on_estimate_) runCycle();
   }
 
-  // Estimates wait here until tf can place the camera in odom at their stamp (odometry may lag the
-  // image by a cycle), for at most tf_wait_s. Returns true when a valid estimate was taken.
+  // Estimates wait here until the camera can be placed in odom at their stamp (placeCamera), for at
+  // most tf_wait_s. Returns true when a valid estimate was placed and given to the planner.
   bool processPending() {
-    bool took_valid = false;
+    bool placed = false;
     while (!pending_.empty()) {
       const auto& msg = pending_.front();
       if (!msg->valid) {
@@ -198,32 +210,75 @@ class PlannerNode {
         pending_.pop_front();
         continue;
       }
-      std::string error;
-      if (!tf_buffer_.canTransform(odom_frame_, msg->header.frame_id, msg->header.stamp, &error)) {
-        if ((ros::Time::now() - msg->header.stamp).toSec() <= tf_wait_s_) return took_valid;  // retry later
-        ++tf_failures_;
-        last_tf_error_ = error;
-        ROS_WARN_THROTTLE(2.0, "planner: dropped an estimate: no transform %s -> %s at its stamp: %s",
-                          msg->header.frame_id.c_str(), odom_frame_.c_str(), error.c_str());
-        pending_.pop_front();
-        continue;
-      }
       Eigen::Isometry3d odom_from_camera;
-      try {
-        odom_from_camera =
-            tf2::transformToEigen(tf_buffer_.lookupTransform(odom_frame_, msg->header.frame_id, msg->header.stamp));
-      } catch (const tf2::TransformException& e) {
+      const Placement placement = placeCamera(*msg, &odom_from_camera);
+      if (placement == Placement::kWait) return placed;  // retry with the next odometry or tick
+      if (placement == Placement::kFailed) {
         ++tf_failures_;
-        last_tf_error_ = e.what();
+        ROS_WARN_THROTTLE(2.0, "planner: dropped an estimate: cannot place %s in %s at its stamp: %s",
+                          msg->header.frame_id.c_str(), odom_frame_.c_str(), last_tf_error_.c_str());
         pending_.pop_front();
         continue;
       }
       const TrackUpdate result = planner_.addObservation(toObservation(*msg, odom_from_camera));
       if (!result.accepted) ROS_DEBUG("planner: estimate not used: %s", result.reason.c_str());
-      took_valid = took_valid || result.accepted;
+      placed = true;  // acted on at once even when not used (an outlier, near contact): the planner has decided
       pending_.pop_front();
     }
-    return took_valid;
+    return placed;
+  }
+
+  enum class Placement { kPlaced, kWait, kFailed };
+
+  // The camera in odom at the estimate's stamp: base_link from the odometry history (interpolated, or
+  // advanced along the newest twist by at most max_odom_extrapolation_s: no wait for the next odometry
+  // message) times the camera's mount on base_link (static, from tf). Falls back to tf at the stamp
+  // for stamps older than the history. kWait while the stamp is too new for both, up to tf_wait_s.
+  Placement placeCamera(const docking_msgs::TargetEstimate& msg, Eigen::Isometry3d* odom_from_camera) {
+    const double stamp = msg.header.stamp.toSec();
+    const std::optional<Pose2D> base = odometry_history_.poseAt(stamp, max_odom_extrapolation_s_);
+    if (base) {
+      std::string error;
+      const std::optional<Eigen::Isometry3d> mount = cameraMount(msg.header.frame_id, &error);
+      if (mount) {
+        Eigen::Isometry3d odom_from_base = Eigen::Isometry3d::Identity();
+        odom_from_base.translation() << base->x, base->y, 0.0;
+        odom_from_base.linear() = Eigen::AngleAxisd(base->yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        *odom_from_camera = odom_from_base * *mount;
+        ++placed_from_odometry_;
+        return Placement::kPlaced;
+      }
+      last_tf_error_ = error;
+    }
+    std::string error;
+    if (tf_buffer_.canTransform(odom_frame_, msg.header.frame_id, msg.header.stamp, &error)) {
+      try {
+        *odom_from_camera =
+            tf2::transformToEigen(tf_buffer_.lookupTransform(odom_frame_, msg.header.frame_id, msg.header.stamp));
+        return Placement::kPlaced;
+      } catch (const tf2::TransformException& e) {
+        last_tf_error_ = e.what();
+        return Placement::kFailed;
+      }
+    }
+    if ((ros::Time::now() - msg.header.stamp).toSec() <= tf_wait_s_) return Placement::kWait;
+    last_tf_error_ = error;
+    return Placement::kFailed;
+  }
+
+  // base_link <- camera: a fixed mount (robot.yaml's static transforms), looked up once per frame.
+  std::optional<Eigen::Isometry3d> cameraMount(const std::string& camera_frame, std::string* error) {
+    const auto known = camera_mounts_.find(camera_frame);
+    if (known != camera_mounts_.end()) return known->second;
+    try {
+      const Eigen::Isometry3d mount =
+          tf2::transformToEigen(tf_buffer_.lookupTransform(base_frame_, camera_frame, ros::Time(0)));
+      camera_mounts_.emplace(camera_frame, mount);
+      return mount;
+    } catch (const tf2::TransformException& e) {
+      *error = e.what();
+      return std::nullopt;
+    }
   }
 
   TargetObservation toObservation(const docking_msgs::TargetEstimate& msg, const Eigen::Isometry3d& odom_from_camera) {
@@ -343,6 +398,7 @@ class PlannerNode {
       stat.add("probe tip error (m)", last_.geometry.tip_error_m);
     }
     stat.add("estimates dropped (no tf)", tf_failures_);
+    stat.add("estimates placed from the odometry history", placed_from_odometry_);
     if (tf_failures_ > 0) stat.add("last tf error", last_tf_error_);
   }
 
@@ -359,6 +415,10 @@ class PlannerNode {
   ros::ServiceServer reset_service_;
   ros::Timer timer_;
   std::optional<ChaserOdometry> odometry_;
+  OdometryHistory odometry_history_;
+  double max_odom_extrapolation_s_{0.05};
+  std::map<std::string, Eigen::Isometry3d> camera_mounts_;
+  std::uint64_t placed_from_odometry_{0};
   std::deque<docking_msgs::TargetEstimateConstPtr> pending_;
   PlannerOutput last_;
   DockingPhase last_state_{DockingPhase::kSearch};
