@@ -22,6 +22,7 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts" / "eval"))
 from eval_recorder import percentile  # noqa: E402  (one percentile for eval, demo and campaign)
+from make_eval_scenarios import robot_centre_for_port, scenario_yaml  # noqa: E402  (one scenario writer)
 
 LIGHTING = ["nominal"] * 6 + ["dark"] * 2 + ["glare"] * 2
 
@@ -33,24 +34,12 @@ def make_scenario(rng, index, seed):
     rate = rng.uniform(-4.0, 4.0)
     light = rng.choice(LIGHTING)
     px, py = rng_m * math.cos(bearing), rng_m * math.sin(bearing)
-    # The port faces the chaser (yaw = bearing + 180) turned by port_off; the robot centre sits 0.15 m
-    # behind the port along its axis.
+    # The port faces the chaser (yaw = bearing + 180) turned by port_off.
     yaw = math.degrees(bearing) + 180.0 + port_off
-    cx, cy = px - 0.15 * math.cos(math.radians(yaw)), py - 0.15 * math.sin(math.radians(yaw))
-    text = f"""# make campaign run {index} (seed {seed}): range {rng_m:.2f} m, bearing {math.degrees(bearing):.1f} deg,
-# port {port_off:.1f} deg off the line of sight, {rate:.2f} deg/s, {light}.
-scenario:
-  description: "campaign {index}"
-  duration_s: 900.0
-  seed: {seed}
-  lighting: {light}
-  chaser: {{x_m: 0.0, y_m: 0.0, yaw_deg: 0.0}}
-  target:
-    x_m: {cx:.4f}
-    y_m: {cy:.4f}
-    yaw_deg: {yaw:.2f}
-    motion: {{yaw_rate_deg_s: {rate:.3f}, velocity_m_s: [0.0, 0.0]}}
-"""
+    cx, cy = robot_centre_for_port(px, py, math.radians(yaw))
+    text = scenario_yaml(f"make campaign run {index} (seed {seed}): range {rng_m:.2f} m, bearing "
+                         f"{math.degrees(bearing):.1f} deg,\nport {port_off:.1f} deg off the line of sight, "
+                         f"{rate:.2f} deg/s, {light}.", f"campaign {index}", 900.0, seed, light, cx, cy, yaw, rate)
     params = {"range_m": rng_m, "bearing_deg": math.degrees(bearing), "port_angle_deg": port_off,
               "yaw_rate_deg_s": rate, "lighting": light, "seed": seed}
     return text, params

@@ -21,32 +21,44 @@ FAR_RANGES = [2.0, 3.0, 4.0, 6.0]
 NEAR_RANGES = [0.4, 0.7, 1.0, 1.4, 2.0]
 
 
+def robot_centre_for_port(port_x, port_y, yaw_rad):
+    """The target robot's centre for a port at (port_x, port_y) whose axis points along yaw_rad."""
+    return (port_x - PORT_AHEAD_OF_TARGET_CENTRE * math.cos(yaw_rad),
+            port_y - PORT_AHEAD_OF_TARGET_CENTRE * math.sin(yaw_rad))
+
+
 def target_pose(range_m, bearing_deg, port_turn_deg):
     b = math.radians(bearing_deg)
     port_x = CAMERA_X + range_m * math.cos(b)
     port_y = CAMERA_Y + range_m * math.sin(b)
     # The port's axis points back at the camera, then turned away by port_turn_deg.
     yaw = math.atan2(CAMERA_Y - port_y, CAMERA_X - port_x) + math.radians(port_turn_deg)
-    x = port_x - PORT_AHEAD_OF_TARGET_CENTRE * math.cos(yaw)
-    y = port_y - PORT_AHEAD_OF_TARGET_CENTRE * math.sin(yaw)
+    x, y = robot_centre_for_port(port_x, port_y, yaw)
     return x, y, math.degrees(yaw)
 
 
-def write(name, description, range_m, bearing, turn, lighting="nominal", yaw_rate=0.0, duration=14.0, seed=11):
-    x, y, yaw = target_pose(range_m, bearing, turn)
-    text = f"""# Evaluation scenario (written by scripts/eval/make_eval_scenarios.py): {description}.
-scenario:
+def scenario_yaml(comment, description, duration_s, seed, lighting, x, y, yaw_deg, yaw_rate_deg_s):
+    """A scenario file's text (docking_sim's format): the chaser at the origin facing +x, the target
+    robot at (x, y, yaw_deg) turning at yaw_rate_deg_s. `comment`: the header lines, without '#'."""
+    header = "".join(f"# {line}\n" for line in comment.splitlines())
+    return f"""{header}scenario:
   description: "{description}"
-  duration_s: {duration}
+  duration_s: {duration_s}
   seed: {seed}
   lighting: {lighting}
   chaser: {{x_m: 0.0, y_m: 0.0, yaw_deg: 0.0}}
   target:
     x_m: {x:.4f}
     y_m: {y:.4f}
-    yaw_deg: {yaw:.3f}
-    motion: {{yaw_rate_deg_s: {yaw_rate}, velocity_m_s: [0.0, 0.0]}}
+    yaw_deg: {yaw_deg:.3f}
+    motion: {{yaw_rate_deg_s: {yaw_rate_deg_s:.3f}, velocity_m_s: [0.0, 0.0]}}
 """
+
+
+def write(name, description, range_m, bearing, turn, lighting="nominal", yaw_rate=0.0, duration=14.0, seed=11):
+    x, y, yaw = target_pose(range_m, bearing, turn)
+    text = scenario_yaml(f"Evaluation scenario (written by scripts/eval/make_eval_scenarios.py): {description}.",
+                         description, duration, seed, lighting, x, y, yaw, yaw_rate)
     (OUT / f"{name}.yaml").write_text(text)
     return name
 

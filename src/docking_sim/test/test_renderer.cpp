@@ -19,6 +19,16 @@ using docking_sim_test::writeTempFile;
 
 namespace {
 
+/// An undistorted pinhole camera: focal length f px, principal point (cx, cy).
+docking_sim::CameraCalibration pinholeCalibration(int width, int height, double f, double cx, double cy) {
+  docking_sim::CameraCalibration cal;
+  cal.width = width;
+  cal.height = height;
+  cal.K = cv::Matx33d(f, 0, cx, 0, f, cy, 0, 0, 1);
+  cal.D = {0, 0, 0, 0, 0};
+  return cal;
+}
+
 docking_sim::RenderOptions clean() {
   docking_sim::RenderOptions o;
   o.distortion = false;
@@ -143,11 +153,7 @@ TEST(Renderer, StereoDisparityMatchesFocalTimesBaselineOverDepth) {
 }
 
 TEST(Renderer, NearerSurfacesOccludeFartherOnesWhateverTheDrawingOrder) {
-  docking_sim::CameraCalibration cal;
-  cal.width = 160;
-  cal.height = 120;
-  cal.K = cv::Matx33d(100, 0, 79.5, 0, 100, 59.5, 0, 0, 1);
-  cal.D = {0, 0, 0, 0, 0};
+  const docking_sim::CameraCalibration cal = pinholeCalibration(160, 120, 100, 79.5, 59.5);
   docking_sim::LightingScenario light;
   light.visible.noise_sigma = 0;
   docking_sim::CameraEffects effects;
@@ -202,11 +208,7 @@ namespace {
 
 /// A 640x480 pinhole camera with the principal point off the pixel grid (no distortion, no effects).
 docking_sim::CameraRenderer pinholeRenderer(docking_sim::Band band) {
-  docking_sim::CameraCalibration cal;
-  cal.width = 640;
-  cal.height = 480;
-  cal.K = cv::Matx33d(540, 0, 319.3, 0, 540, 240.6, 0, 0, 1);
-  cal.D = {0, 0, 0, 0, 0};
+  const docking_sim::CameraCalibration cal = pinholeCalibration(640, 480, 540, 319.3, 240.6);
   docking_sim::LightingScenario light;
   light.visible.noise_sigma = 0;
   light.ir.noise_sigma = 0;
@@ -475,11 +477,7 @@ TEST(Renderer, FarIrLedIsASaturatedSpotAtItsDistortedProjection) {
 // Below saturation the light an LED brings (the sum of what it adds to the image) is radiance x
 // 255 x its projected disc area, so it falls as 1 / z^2, and its peak falls with distance.
 TEST(Renderer, LedSpotBrightnessFallsWithDistanceAsItsProjectedArea) {
-  docking_sim::CameraCalibration cal;
-  cal.width = 640;
-  cal.height = 480;
-  cal.K = cv::Matx33d(520, 0, 319.5, 0, 520, 239.5, 0, 0, 1);
-  cal.D = {0, 0, 0, 0, 0};
+  const docking_sim::CameraCalibration cal = pinholeCalibration(640, 480, 520, 319.5, 239.5);
   docking_sim::LightingScenario quiet;
   quiet.ir.noise_sigma = 0;
   docking_sim::CameraEffects effects;
