@@ -345,8 +345,7 @@ TEST_F(StateMachineTest, PositionOnlyEstimateFarFromTheHeldTargetIsNotUsed) {
   // Near the held target: used.
   TargetObservation near = portAt(t_ + 2 * kDt, Pose2D{0.005, -0.005, 0.0});
   near.orientation_valid = false;
-  EXPECT_TRUE(planner_.addObservation(near).accepted);
-  // Persistent far estimates never restart the track while it is fresh: after many of them, the
+  EXPECT_TRUE(planner_.addObservation(near).accepted);  // Persistent far estimates never restart the track while it is fresh: after many of them, the
   // target is still held at the origin and, unseen, the planner holds.
   for (int i = 0; i < 20; ++i) {
     t_ += kDt;
@@ -360,4 +359,22 @@ TEST_F(StateMachineTest, PositionOnlyEstimateFarFromTheHeldTargetIsNotUsed) {
   EXPECT_TRUE(isZero(out.command));
   ASSERT_TRUE(out.port.has_value());
   EXPECT_LT(std::hypot(out.port->pose.x, out.port->pose.y), 0.1);
+}
+
+TEST_F(StateMachineTest, PositionOnlyEstimatesDoNotMoveAPortHeldFromPoses) {
+  runFor(1.0, kFar, true);  // poses (with orientation, default noise) of a port at the origin
+  // Three seconds of stereo blob centres 10 cm to the side, each claiming 1 cm accuracy: they keep
+  // the target seen (no HOLD), but the held port stays where the poses put it.
+  for (int i = 0; i < 60; ++i) {
+    t_ += kDt;
+    TargetObservation blob = portAt(t_, Pose2D{0.0, 0.10, 0.0});
+    blob.orientation_valid = false;
+    blob.position_sigma_m = 0.01;
+    EXPECT_TRUE(planner_.addObservation(blob).accepted);
+    const PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
+    EXPECT_NE(out.state, DockingPhase::kHold);
+  }
+  const PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
+  ASSERT_TRUE(out.port.has_value());
+  EXPECT_LT(std::abs(out.port->pose.y), 0.002) << "the blob pulled the held port to y = " << out.port->pose.y;
 }

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "docking_planner/target_track.h"
@@ -192,4 +193,40 @@ TEST(TargetTrack, FirstOrientationRestartsFromItAndPlacesTheTurningCentreBehindT
   const double yaw = M_PI / 2 + 0.1 * (t + 5.0 - t0);
   EXPECT_NEAR(p.pose.x, 2.0 + 0.15 * std::cos(yaw), 0.01);
   EXPECT_NEAR(p.pose.y, 0.85 + 0.15 * std::sin(yaw), 0.01);
+}
+
+// Far poses whose orientation is off by degrees while their covariance claims 0.06 deg (what the
+// monocular pose does at 2-3 m), then 8 s of good near poses: the turn rate held for the blind finish
+// must come from the near poses. Without the range floor the far poses' swing sets a rate that costs
+// more than the 1 deg docking tolerance over 7 s of dead reckoning.
+TEST(TargetTrack, FarPosesWithOverconfidentYawDoNotSetTheTurnRate) {
+  const double rate = 2.0 * M_PI / 180.0;
+  auto run = [&](double yaw_sigma_per_range2) {
+    TrackConfig config;
+    config.yaw_sigma_per_range2 = yaw_sigma_per_range2;
+    TargetTrack track{config};
+    double t = 0.0;
+    for (int i = 0; i < 60; ++i, t += 0.0667) {  // 4 s at 2.5 m: yaw swinging +-8 deg
+      TargetObservation o = rotatingPort(t, rate);
+      o.pose.yaw += 8.0 * M_PI / 180.0 * std::sin(1.5 * t);
+      o.yaw_sigma_rad = 0.001;
+      o.range_m = 2.5;
+      track.update(o);
+    }
+    for (int i = 0; i < 120; ++i, t += 0.0667) {  // 8 s at 0.5 m: exact
+      TargetObservation o = rotatingPort(t, rate);
+      o.yaw_sigma_rad = 0.001;
+      o.range_m = 0.5;
+      track.update(o);  // without the floor some are refused as outliers of the far poses' yaw
+    }
+    const double blind_s = 7.0;
+    return std::abs(wrapAngle(track.predict(t + blind_s).pose.yaw - rotatingPort(t + blind_s, rate).pose.yaw)) *
+           180.0 / M_PI;
+  };
+  const double with_floor = run(TrackConfig{}.yaw_sigma_per_range2);
+  const double without_floor = run(0.0);
+  std::printf("[ yaw floor ] yaw error after 7 s blind: %.3f deg with the range floor, %.3f without\n", with_floor,
+              without_floor);
+  EXPECT_LT(with_floor, 0.3) << "yaw error after 7 s blind, deg";
+  EXPECT_GT(without_floor, 1.0) << "the case the floor is for did not arise (yaw error, deg)";
 }

@@ -62,6 +62,11 @@ struct PlannerConfig {
   /// >= safe_radius_m; the stereo detector still sees the target well at this range.
   double search_orbit_radius_m{1.3};
   double orbit_speed_mps{0.2};             ///< speed along that orbit
+  /// While a port orientation is held (a monocular pose within orientation_timeout_s), a position-only
+  /// estimate near the held target only counts as "seen": it does not move the held port. It locates
+  /// the stereo blob's centre, a decimetre or more off the port; taken into the track between two
+  /// monocular poses, it pulled the port's offset from the target's turning centre, and the blind
+  /// finish on a turning target followed that offset (a campaign run docked 7.5 cm off).
   /// A position-only estimate farther than this from the held target (predicted to its stamp) is not
   /// used, while the target was seen within hold_timeout_s (the stereo detector can lock on to another
   /// object of the scene near the target). 0: no such gate.
@@ -129,6 +134,7 @@ class DockingPlanner {
   double last_tip_error_m_{1e9};                        // to ignore estimates at contact range
   std::string last_rejection_;
   bool nan_estimate_{false};  // the latest estimate offered had a NaN: treated as no target
+  double last_seen_s_{-1e300};  // stamp of the last estimate taken, into the track or as "seen"
 };
 
 }  // namespace docking_planner

@@ -115,6 +115,7 @@ DockingPlanner::DockingPlanner(const PlannerConfig& config)
 
 void DockingPlanner::reset(double now_s) {
   track_.reset();
+  last_seen_s_ = -1e300;
   last_rejection_.clear();
   nan_estimate_ = false;
   last_tip_error_m_ = 1e9;
@@ -145,8 +146,18 @@ TrackUpdate DockingPlanner::addObservation(const TargetObservation& observation)
       return rejected;
     }
   }
+  if (observation.valid && !observation.orientation_valid && track_.hasOrientation() &&
+      std::isfinite(observation.stamp_s) && std::isfinite(observation.pose.x) && std::isfinite(observation.pose.y) &&
+      observation.stamp_s - track_.lastOrientationStamp() <= config_.orientation_timeout_s) {
+    // The target is there, but the stereo blob's centre is not the port: keep the held port pose.
+    last_seen_s_ = std::max(last_seen_s_, observation.stamp_s);
+    last_rejection_.clear();
+    nan_estimate_ = false;
+    return TrackUpdate{true, "position-only estimate: target seen, the port pose held from the poses"};
+  }
   TrackUpdate result = track_.update(observation);
   if (result.accepted) {
+    last_seen_s_ = std::max(last_seen_s_, observation.stamp_s);
     last_rejection_.clear();
     nan_estimate_ = false;
   } else {
@@ -158,13 +169,13 @@ TrackUpdate DockingPlanner::addObservation(const TargetObservation& observation)
 
 bool DockingPlanner::targetVisible(double now_s) const {
   if (nan_estimate_ || !track_.hasPosition()) return false;
-  const double age = now_s - track_.lastStamp();
+  const double age = now_s - last_seen_s_;
   return age <= config_.estimate_timeout_s && age >= -config_.estimate_timeout_s;
 }
 
 std::string DockingPlanner::lostReason(double now_s) const {
   if (nan_estimate_) return "latest estimate contains NaN";
-  std::string reason = track_.hasPosition() ? fmt("target not seen for %.1f s", now_s - track_.lastStamp())
+  std::string reason = track_.hasPosition() ? fmt("target not seen for %.1f s", now_s - last_seen_s_)
                                             : std::string("no target estimate yet");
   if (!last_rejection_.empty()) reason += " (" + last_rejection_ + ")";
   return reason;

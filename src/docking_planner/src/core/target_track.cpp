@@ -1,6 +1,7 @@
 #include "docking_planner/target_track.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -28,6 +29,7 @@ Eigen::Matrix2d rotation(double a) {
 void validate(const TrackConfig& c) {
   requirePositive(c.default_position_sigma_m, "default_position_sigma_m");
   requirePositive(c.default_yaw_sigma_rad, "default_yaw_sigma_rad");
+  requireNonNegative(c.yaw_sigma_per_range2, "yaw_sigma_per_range2");
   requirePositive(c.yaw_rate_sigma_radps, "yaw_rate_sigma_radps");
   requireNonNegative(c.yaw_rate_random_walk, "yaw_rate_random_walk");
   requireNonNegative(c.centre_random_walk, "centre_random_walk");
@@ -123,7 +125,9 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
     return result;
   }
   const double pos_var = std::pow(o.position_sigma_m > 0.0 ? o.position_sigma_m : config_.default_position_sigma_m, 2);
-  const double yaw_var = std::pow(o.yaw_sigma_rad > 0.0 ? o.yaw_sigma_rad : config_.default_yaw_sigma_rad, 2);
+  const double yaw_floor = std::isfinite(o.range_m) ? config_.yaw_sigma_per_range2 * o.range_m * o.range_m : 0.0;
+  const double yaw_var =
+      std::pow(std::max(o.yaw_sigma_rad > 0.0 ? o.yaw_sigma_rad : config_.default_yaw_sigma_rad, yaw_floor), 2);
   const Vec2 measured = o.pose.position();
   const double gate2 = config_.outlier_gate_sigma * config_.outlier_gate_sigma;
 

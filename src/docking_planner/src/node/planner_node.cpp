@@ -69,6 +69,7 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   t.default_position_sigma_m = requireDouble(p, "default_position_sigma_m");
   t.default_yaw_sigma_rad = requireDouble(p, "default_yaw_sigma_rad");
   t.yaw_rate_sigma_radps = requireDouble(p, "yaw_rate_sigma_radps");
+  t.yaw_sigma_per_range2 = requireDouble(p, "yaw_sigma_per_range2");
   t.use_estimate_yaw_rate = requireBool(p, "use_estimate_yaw_rate");
   t.yaw_rate_random_walk = requireDouble(p, "yaw_rate_random_walk");
   t.centre_random_walk = requireDouble(p, "centre_random_walk");
@@ -288,6 +289,7 @@ class PlannerNode {
     o.status = msg.position_valid ? msg.status : "no position";
     o.source = msg.selected_source;
     const auto& p = msg.pose.pose.position;
+    o.range_m = Eigen::Vector3d(p.x, p.y, p.z).norm();
     const Eigen::Vector3d position = odom_from_camera * Eigen::Vector3d(p.x, p.y, p.z);
     o.pose.x = position.x();
     o.pose.y = position.y();
