@@ -33,7 +33,7 @@ struct ApproachConfig {
   double approach_gain{0.8};          ///< 1/s: APPROACH velocity per metre of goal error
   double radial_gain{1.5};            ///< 1/s: ALIGN / BACK_OFF, holding the circle radius
   double tangential_gain{0.8};        ///< 1/s: ALIGN velocity per metre of arc to the port axis
-  double axial_gain{0.8};             ///< 1/s: FINAL velocity per metre to contact
+  double axial_gain{1.5};             ///< 1/s: FINAL velocity per metre to contact
   double lateral_gain{1.5};           ///< 1/s: FINAL velocity per metre off the port axis
   double yaw_gain{1.5};               ///< 1/s: yaw rate per radian of heading error
 
@@ -41,8 +41,8 @@ struct ApproachConfig {
   double max_yaw_rate_radps{1.0};
   double align_speed_mps{0.15};       ///< ALIGN / BACK_OFF correction speed limit
   double final_speed_mps{0.08};       ///< FINAL correction speed limit
-  double final_slow_speed_mps{0.02};  ///< FINAL speed limit with the probe tip near contact
-  double final_slow_distance_m{0.08}; ///< probe tip closer than this to the port: slow speed
+  double final_slow_speed_mps{0.04};  ///< FINAL speed limit with the probe tip near contact
+  double final_slow_distance_m{0.05}; ///< probe tip closer than this to the port: slow speed
   double final_lateral_gate_m{0.03};  ///< FINAL: axial speed falls to zero at this lateral error...
   double final_yaw_gate_rad{0.08};    ///< ...or at this heading error (fix those first)
 };

@@ -56,7 +56,7 @@ struct TrackConfig {
   /// came out 0.08 deg/s (1 sigma) off after 12 s of 0.06 deg poses, 0.5 deg over a 7 s blind finish;
   /// with 0.0003 it is 0.01 deg/s.
   double yaw_rate_random_walk{0.0003};
-  double centre_random_walk{0.01};           ///< m per sqrt(s): the turning centre's jitter
+  double centre_random_walk{0.002};          ///< m per sqrt(s): the turning centre's jitter (a turning target's centre stays put; 0.01 let it absorb the port's circle)
   /// Estimate a drift velocity u of the target (else u = 0). Off by default: over the few seconds a
   /// near-range camera sees the port, a drift and a turn are hard to tell apart, and modelling the
   /// drift costs a target that only turns ~1 cm of dead-reckoned accuracy (and gains the same for
