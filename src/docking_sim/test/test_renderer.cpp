@@ -20,6 +20,17 @@ using docking_sim_test::writeTempFile;
 namespace {
 
 /// An undistorted pinhole camera: focal length f px, principal point (cx, cy).
+/// A 20 cm grey (90) card facing the camera, 1 cm in front of `centre` (camera frame): it must hide
+/// whatever lies at `centre`.
+docking_sim::Surface greyCardInFrontOf(const Eigen::Vector3d& centre) {
+  docking_sim::Surface card;
+  card.origin = centre + Eigen::Vector3d(-0.1, -0.1, -0.01);
+  card.edge_u = Eigen::Vector3d(0.2, 0, 0);
+  card.edge_v = Eigen::Vector3d(0, 0.2, 0);
+  card.color = cv::Vec3b(90, 90, 90);
+  return card;
+}
+
 docking_sim::CameraCalibration pinholeCalibration(int width, int height, double f, double cx, double cy) {
   docking_sim::CameraCalibration cal;
   cal.width = width;
@@ -332,12 +343,7 @@ TEST(Renderer, LedDiscCentroidIsItsProjectedCentre) {
           << "at " << z << " m: predicted " << predicted << " found " << found;
 
       // A card 1 cm in front of the LED hides it.
-      docking_sim::Surface card;
-      card.origin = centre + Eigen::Vector3d(-0.1, -0.1, -0.01);
-      card.edge_u = Eigen::Vector3d(0.2, 0, 0);
-      card.edge_v = Eigen::Vector3d(0, 0.2, 0);
-      card.color = cv::Vec3b(90, 90, 90);
-      scene.addSurface(card);
+      scene.addSurface(greyCardInFrontOf(centre));
       scene.update(Eigen::Isometry3d::Identity());
       const cv::Mat hidden = renderer.render(scene, Eigen::Isometry3d::Identity());
       EXPECT_EQ(hidden.at<uchar>(cvRound(predicted.y), cvRound(predicted.x)), 90)
@@ -447,12 +453,7 @@ TEST(Renderer, FarIrLedIsASaturatedSpotAtItsDistortedProjection) {
       << "the test must exercise the distortion";
 
   // A card 1 cm in front of the LED hides it (the depth test at its centre).
-  docking_sim::Surface card;
-  card.origin = centre + Eigen::Vector3d(-0.1, -0.1, -0.01);
-  card.edge_u = Eigen::Vector3d(0.2, 0, 0);
-  card.edge_v = Eigen::Vector3d(0, 0.2, 0);
-  card.color = cv::Vec3b(90, 90, 90);
-  scene.addSurface(card);
+  scene.addSurface(greyCardInFrontOf(centre));
   scene.update(Eigen::Isometry3d::Identity());
   cv::minMaxLoc(renderer.render(scene, Eigen::Isometry3d::Identity())(window), &lo, &hi);
   EXPECT_LT(hi, 100.0) << "the card (90 before vignetting) must hide the LED";
