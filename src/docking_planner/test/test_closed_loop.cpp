@@ -103,6 +103,7 @@ Result run(const Scenario& s) {
   PlannerConfig config;  // the defaults, which config/planner.yaml repeats
   config.track.model_target_drift = s.model_target_drift;
   DockingPlanner planner{config};
+  if (!planner.start(0.0, DockingLimits{}, nullptr)) return Result{};
   World w;
   w.target_rate = s.target_rate_radps;
   w.target_velocity = s.target_velocity;

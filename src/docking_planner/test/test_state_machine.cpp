@@ -38,6 +38,9 @@ class StateMachineTest : public ::testing::Test {
   DockingPlanner planner_{PlannerConfig{}};
   double t_{100.0};
 
+  // Every test but the IDLE ones runs inside a docking.
+  void SetUp() override { ASSERT_TRUE(planner_.start(t_, DockingLimits{}, nullptr)); }
+
   // One cycle: optionally an estimate, then update with odometry at `chaser`.
   PlannerOutput step(const Pose2D& chaser, bool see_target) {
     t_ += kDt;
@@ -108,10 +111,15 @@ TEST_F(StateMachineTest, FullSequenceSearchApproachAlignFinalDocked) {
   out = step(kDocked, true);
   EXPECT_EQ(out.state, DockingPhase::kDocked) << out.reason;
   EXPECT_TRUE(isZero(out.command));
-  // Latched, whatever happens next.
-  EXPECT_EQ(step(kFar, true).state, DockingPhase::kDocked);
-  EXPECT_EQ(runFor(10.0, kDocked, false).state, DockingPhase::kDocked);
-  EXPECT_TRUE(isZero(step(kDocked, false).command));
+  ASSERT_TRUE(out.outcome.has_value());
+  EXPECT_EQ(*out.outcome, DockingOutcome::kDocked);
+  // The docking is over: IDLE with zero velocity, whatever happens next, until the next start().
+  EXPECT_FALSE(planner_.active());
+  out = step(kFar, true);
+  EXPECT_EQ(out.state, DockingPhase::kIdle);
+  EXPECT_FALSE(out.outcome.has_value());
+  EXPECT_EQ(runFor(10.0, kFar, true).state, DockingPhase::kIdle);
+  EXPECT_TRUE(isZero(step(kFar, true).command));
 }
 
 TEST_F(StateMachineTest, LostBrieflyHoldsWithZeroVelocityThenResumes) {
@@ -279,15 +287,111 @@ TEST_F(StateMachineTest, ErrorsReportedForDockingState) {
   EXPECT_EQ(out.estimate_source, 1);
 }
 
-TEST_F(StateMachineTest, ResetLeavesDockedForSearchAndForgetsTheTarget) {
+TEST_F(StateMachineTest, ResetEndsTheDockingAndForgetsTheTarget) {
   step(kOnCircleOff, true);
-  step(kSafePoint, true);
-  ASSERT_EQ(step(kDocked, true).state, DockingPhase::kDocked);
+  ASSERT_EQ(step(kOnCircleOff, true).state, DockingPhase::kAlign);
   planner_.reset(t_);
-  const PlannerOutput out = step(kDocked, false);
-  EXPECT_EQ(out.state, DockingPhase::kSearch);
+  const PlannerOutput out = step(kOnCircleOff, false);
+  EXPECT_EQ(out.state, DockingPhase::kIdle);
   EXPECT_FALSE(out.has_target);
   EXPECT_TRUE(isZero(out.command));
+}
+
+// ---- Docking on command: IDLE until start(), every end back to IDLE with zero velocity ----
+
+TEST(DockingOnCommand, StartsIdleAndNeverMovesWithoutAGoal) {
+  DockingPlanner planner{PlannerConfig{}};
+  const Pose2D port{0.0, 0.0, 0.0};
+  double t = 10.0;
+  for (int i = 0; i < 400; ++i, t += kDt) {  // 20 s with the target in plain view
+    planner.addObservation(portAt(t, port));
+    const PlannerOutput out = planner.update(t, odomAt(t, kFar));
+    ASSERT_EQ(out.state, DockingPhase::kIdle);
+    ASSERT_TRUE(isZero(out.command)) << "moved at " << t;
+    ASSERT_FALSE(out.outcome.has_value());
+  }
+  // The target was tracked meanwhile: the errors are there for a user to see.
+  EXPECT_TRUE(planner.update(t, odomAt(t, kFar)).has_target);
+  EXPECT_FALSE(planner.active());
+}
+
+TEST(DockingOnCommand, RejectsUnusableLimitsAndASecondStart) {
+  DockingPlanner planner{PlannerConfig{}};
+  std::string why;
+  DockingLimits bad;
+  bad.time_budget_s = -1.0;
+  EXPECT_FALSE(planner.start(1.0, bad, &why));
+  EXPECT_NE(why.find("time_budget_s"), std::string::npos) << why;
+  bad = DockingLimits{};
+  bad.max_speed_mps = NAN;
+  EXPECT_FALSE(planner.start(1.0, bad, &why));
+  EXPECT_NE(why.find("max_speed_mps"), std::string::npos) << why;
+  EXPECT_FALSE(planner.active());
+  ASSERT_TRUE(planner.start(1.0, DockingLimits{}, &why));
+  EXPECT_FALSE(planner.start(1.1, DockingLimits{}, &why));
+  EXPECT_NE(why.find("already running"), std::string::npos) << why;
+}
+
+TEST_F(StateMachineTest, CancelStopsAtOnceAndGoesIdle) {
+  step(kFar, true);
+  ASSERT_FALSE(isZero(step(kFar, true).command));
+  planner_.cancel(t_, "cancelled by the client");
+  const PlannerOutput out = step(kFar, true);
+  EXPECT_EQ(out.state, DockingPhase::kIdle);
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_EQ(out.reason, "cancelled by the client");
+  EXPECT_FALSE(out.outcome.has_value());  // asked for: the caller knows
+  // A new goal starts where the target is.
+  ASSERT_TRUE(planner_.start(t_, DockingLimits{}, nullptr));
+  EXPECT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+}
+
+TEST_F(StateMachineTest, TimeBudgetEndsTheDocking) {
+  planner_.cancel(t_, "test");
+  DockingLimits limits;
+  limits.time_budget_s = 2.0;
+  ASSERT_TRUE(planner_.start(t_, limits, nullptr));
+  PlannerOutput out = runFor(1.9, kFar, true);
+  EXPECT_EQ(out.state, DockingPhase::kApproach);
+  EXPECT_FALSE(out.outcome.has_value());
+  out = runFor(0.2, kFar, true);
+  ASSERT_TRUE(out.outcome.has_value());
+  EXPECT_EQ(*out.outcome, DockingOutcome::kTimeBudget);
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_EQ(step(kFar, true).state, DockingPhase::kIdle);
+}
+
+TEST_F(StateMachineTest, SearchingPastTheTimeoutEndsAsTargetLost) {
+  planner_.cancel(t_, "test");
+  DockingLimits limits;
+  limits.search_timeout_s = 5.0;
+  ASSERT_TRUE(planner_.start(t_, limits, nullptr));
+  PlannerOutput out = runFor(4.9, kFar, false);
+  EXPECT_EQ(out.state, DockingPhase::kSearch);
+  EXPECT_FALSE(isZero(out.command));  // turning to look
+  bool ended = false;
+  for (int i = 0; i < 10 && !ended; ++i) {
+    out = step(kFar, false);
+    ended = out.outcome.has_value();
+  }
+  ASSERT_TRUE(ended);
+  EXPECT_EQ(*out.outcome, DockingOutcome::kTargetLost);
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_EQ(step(kFar, false).state, DockingPhase::kIdle);
+}
+
+TEST_F(StateMachineTest, SpeedCapOfTheGoalLimitsTheLinearSpeed) {
+  step(kFar, true);
+  const PlannerOutput free_run = step(kFar, true);
+  ASSERT_GT(std::hypot(free_run.command.vx, free_run.command.vy), 0.1);
+  planner_.cancel(t_, "test");
+  DockingLimits limits;
+  limits.max_speed_mps = 0.05;
+  ASSERT_TRUE(planner_.start(t_, limits, nullptr));
+  step(kFar, true);
+  const PlannerOutput capped = step(kFar, true);
+  EXPECT_EQ(capped.state, DockingPhase::kApproach);
+  EXPECT_NEAR(std::hypot(capped.command.vx, capped.command.vy), 0.05, 1e-9);
 }
 
 TEST_F(StateMachineTest, PositionOnlyApproachesToTheSearchOrbitThenOrbitsFacingTheTarget) {

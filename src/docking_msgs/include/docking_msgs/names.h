@@ -32,6 +32,7 @@ constexpr const char kArbiterStatus[] = "target/arbiter_status";  // std_msgs/St
 // Planner
 constexpr const char kDockingState[] = "docking/state";        // docking_msgs/DockingState
 constexpr const char kDockingPath[] = "docking/path";          // nav_msgs/Path
+constexpr const char kDockAction[] = "docking/dock";           // actionlib: docking_msgs/Dock (goal, cancel, feedback, result)
 
 // Simulator ground truth: nav_msgs/Odometry of the target in each camera's optical frame, at each
 // image stamp (header.frame_id = camera optical frame, child_frame_id = target).

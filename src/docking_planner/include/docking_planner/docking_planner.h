@@ -1,16 +1,20 @@
 // The docking state machine around SafeCircleApproach (ROS-free). The node feeds it the target
 // estimates (already in odom) and the chaser's odometry, and calls update() at a fixed rate.
 //
+//   IDLE     no docking asked for (the start-up state): zero velocity, whatever the cameras see;
+//            estimates still go into the track, so a docking can start on a target already in view
 //   SEARCH   no target: stop; after search_wait_s turn slowly in place to look for it
 //   APPROACH straight to the safe circle (see safe_circle_approach.h)
 //   ALIGN    along the safe circle to the port axis
 //   FINAL    along the port axis to contact; near contact, on odometry (the target pose held in odom)
-//   DOCKED   within the docked tolerances: zero velocity, latched until reset()
+//   DOCKED   within the docked tolerances: zero velocity for that cycle, then IDLE
 //   HOLD     target lost (or odometry bad): zero velocity; back to where it was when the target
 //            returns; after hold_timeout_s ABORT (inside the safe circle) or SEARCH
 //   ABORT    lost too long near the target, or errors growing: back off to the safe circle on the held
 //            target pose, then SEARCH
-// Every failure path commands zero velocity: bad odometry, NaN, no target, HOLD, DOCKED.
+// A docking runs from start() until it ends: DOCKED, cancel(), its time budget spent, or no target for
+// its search timeout; every end goes back to IDLE and the cycle it ends in reports the outcome.
+// Every failure path commands zero velocity: bad odometry, NaN, no target, HOLD, DOCKED, IDLE.
 #pragma once
 
 #include <cstdint>
@@ -31,9 +35,31 @@ enum class DockingPhase : std::uint8_t {
   kFinal = 3,
   kDocked = 4,
   kHold = 5,
-  kAbort = 6
+  kAbort = 6,
+  kIdle = 7
 };
 const char* stateName(DockingPhase state);
+
+/// How a docking ended; numbered as docking_msgs/DockResult's constants.
+enum class DockingOutcome : std::uint8_t {
+  kDocked = 1,
+  kCancelled = 2,
+  kTimeBudget = 3,
+  kTargetLost = 4,
+  kClientGone = 5,
+  kRejected = 6,
+  kShutdown = 7
+};
+const char* outcomeName(DockingOutcome outcome);
+
+/// Limits of one docking (the action's goal). 0 means "the planner's configured value" / no limit.
+struct DockingLimits {
+  double time_budget_s{0.0};     ///< give up after this long; 0: no limit
+  double search_timeout_s{0.0};  ///< give up after searching this long; 0: PlannerConfig::search_timeout_s
+  double max_speed_mps{0.0};     ///< cap on the linear speed; 0: the law's max_speed_mps
+};
+/// Empty when the limits are usable, otherwise why not (negative, NaN, infinite).
+std::string checkLimits(const DockingLimits& limits);
 
 struct PlannerConfig {
   ApproachConfig law;
@@ -43,6 +69,7 @@ struct PlannerConfig {
   double orientation_timeout_s{20.0};      ///< a held port axis older than this is forgotten (>= max_blind_s)
   double search_wait_s{2.0};               ///< SEARCH: stand still this long before turning
   double search_yaw_rate_radps{0.3};       ///< SEARCH: then turn in place at this rate
+  double search_timeout_s{60.0};           ///< SEARCH this long without a target: the docking ends (IDLE)
   double hold_timeout_s{3.0};              ///< HOLD: then ABORT or SEARCH
   double abort_timeout_s{20.0};            ///< ABORT: give up backing off after this (-> SEARCH)
   double approach_goal_tolerance_m{0.05};  ///< APPROACH -> ALIGN within this of the goal on the circle
@@ -96,6 +123,9 @@ struct PlannerOutput {
   double goal_distance_m{0.0};
   std::optional<PortState> port;       ///< the port pose the command was computed from
   std::vector<Pose2D> path;            ///< planned path in odom (empty without a target)
+  /// Set in the one cycle in which a docking ended by itself (DOCKED, time budget, target lost); the
+  /// planner is IDLE from the next cycle on. Ends asked for with cancel() are not reported here.
+  std::optional<DockingOutcome> outcome;
 };
 
 class DockingPlanner {
@@ -110,8 +140,20 @@ class DockingPlanner {
   /// One planner cycle at time `now_s` with the latest odometry (absent: none received yet).
   PlannerOutput update(double now_s, const std::optional<ChaserOdometry>& odometry);
 
-  /// Back to SEARCH, forgetting the target (e.g. after DOCKED, to start again).
+  /// Starts a docking (SEARCH) from IDLE. False, with the reason, for unusable limits or when a docking
+  /// is already running (cancel() it first).
+  bool start(double now_s, const DockingLimits& limits, std::string* why_not);
+
+  /// Ends the running docking (if any): IDLE, zero velocity from the next update().
+  void cancel(double now_s, const std::string& reason);
+
+  /// IDLE, forgetting the target.
   void reset(double now_s);
+
+  /// A docking is running (any state but IDLE).
+  bool active() const { return state_ != DockingPhase::kIdle; }
+  /// Time since start() of the running docking, s (0 when IDLE).
+  double elapsed(double now_s) const { return active() ? now_s - started_s_ : 0.0; }
 
   DockingPhase state() const { return state_; }
   const PlannerConfig& config() const { return config_; }
@@ -126,8 +168,12 @@ class DockingPlanner {
   SafeCircleApproach law_;
   SafeCircleApproach orbit_law_;  // the same law on the search orbit (orientation unknown)
   TargetTrack track_;
-  DockingPhase state_{DockingPhase::kSearch};
-  std::string state_reason_{"started: no target yet"};
+  void scaleToSpeedCap(BodyTwist* command) const;
+
+  DockingPhase state_{DockingPhase::kIdle};
+  std::string state_reason_{"waiting for a docking goal"};
+  DockingLimits limits_;     // of the running docking
+  double started_s_{0.0};    // when it started
   std::optional<double> state_since_s_;
   DockingPhase resume_state_{DockingPhase::kApproach};  // where HOLD returns to
   double min_goal_distance_m_{0.0};                     // divergence check within APPROACH / ALIGN

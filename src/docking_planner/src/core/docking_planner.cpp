@@ -54,8 +54,38 @@ const char* stateName(DockingPhase state) {
       return "HOLD";
     case DockingPhase::kAbort:
       return "ABORT";
+    case DockingPhase::kIdle:
+      return "IDLE";
   }
   return "UNKNOWN";
+}
+
+const char* outcomeName(DockingOutcome outcome) {
+  switch (outcome) {
+    case DockingOutcome::kDocked:
+      return "DOCKED";
+    case DockingOutcome::kCancelled:
+      return "CANCELLED";
+    case DockingOutcome::kTimeBudget:
+      return "TIME_BUDGET";
+    case DockingOutcome::kTargetLost:
+      return "TARGET_LOST";
+    case DockingOutcome::kClientGone:
+      return "CLIENT_GONE";
+    case DockingOutcome::kRejected:
+      return "REJECTED";
+    case DockingOutcome::kShutdown:
+      return "SHUTDOWN";
+  }
+  return "UNKNOWN";
+}
+
+std::string checkLimits(const DockingLimits& limits) {
+  const auto usable = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  if (!usable(limits.time_budget_s)) return "time_budget_s must be a number >= 0 (0: no limit)";
+  if (!usable(limits.search_timeout_s)) return "search_timeout_s must be a number >= 0 (0: the planner's)";
+  if (!usable(limits.max_speed_mps)) return "max_speed_mps must be a number >= 0 (0: the planner's)";
+  return "";
 }
 
 void validate(const PlannerConfig& c) {
@@ -68,6 +98,7 @@ void validate(const PlannerConfig& c) {
   if (!std::isfinite(c.search_yaw_rate_radps) || std::abs(c.search_yaw_rate_radps) > c.law.max_yaw_rate_radps) {
     throw std::invalid_argument("search_yaw_rate_radps must be finite and within max_yaw_rate_radps");
   }
+  requirePositive(c.search_timeout_s, "search_timeout_s");
   requirePositive(c.hold_timeout_s, "hold_timeout_s");
   requirePositive(c.abort_timeout_s, "abort_timeout_s");
   requirePositive(c.approach_goal_tolerance_m, "approach_goal_tolerance_m");
@@ -119,7 +150,35 @@ void DockingPlanner::reset(double now_s) {
   last_rejection_.clear();
   nan_estimate_ = false;
   last_tip_error_m_ = 1e9;
-  enter(DockingPhase::kSearch, now_s, "reset: no target yet");
+  enter(DockingPhase::kIdle, now_s, "reset: target forgotten; waiting for a docking goal");
+}
+
+bool DockingPlanner::start(double now_s, const DockingLimits& limits, std::string* why_not) {
+  std::string problem = checkLimits(limits);
+  if (problem.empty() && active()) problem = std::string("a docking is already running (") + stateName(state_) + ")";
+  if (problem.empty() && !std::isfinite(now_s)) problem = "planner time is not finite";
+  if (!problem.empty()) {
+    if (why_not) *why_not = problem;
+    return false;
+  }
+  limits_ = limits;
+  started_s_ = now_s;
+  last_tip_error_m_ = 1e9;
+  enter(DockingPhase::kSearch, now_s, "docking started");
+  return true;
+}
+
+void DockingPlanner::cancel(double now_s, const std::string& reason) {
+  if (active()) enter(DockingPhase::kIdle, now_s, reason);
+}
+
+void DockingPlanner::scaleToSpeedCap(BodyTwist* command) const {
+  if (limits_.max_speed_mps <= 0.0) return;
+  const double speed = std::hypot(command->vx, command->vy);
+  if (speed > limits_.max_speed_mps) {
+    command->vx *= limits_.max_speed_mps / speed;
+    command->vy *= limits_.max_speed_mps / speed;
+  }
 }
 
 void DockingPlanner::enter(DockingPhase state, double now_s, const std::string& reason) {
@@ -233,8 +292,22 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
   auto finish = [&](PlannerOutput o) {
     o.state = state_;
     o.time_in_state_s = now_s - *state_since_s_;
+    scaleToSpeedCap(&o.command);
     return o;
   };
+  // The docking ends by itself: the outcome is reported in this cycle's output, IDLE from the next.
+  auto end = [&](PlannerOutput o, DockingOutcome outcome, const std::string& reason) {
+    o = finish(stop(o, reason));
+    o.outcome = outcome;
+    enter(DockingPhase::kIdle, now_s, reason);
+    return o;
+  };
+
+  if (state_ == DockingPhase::kIdle) return finish(stop(out, state_reason_));
+  if (limits_.time_budget_s > 0.0 && now_s - started_s_ > limits_.time_budget_s) {
+    return end(out, DockingOutcome::kTimeBudget,
+               fmt("time budget of %.1f s spent", limits_.time_budget_s) + " in " + stateName(state_));
+  }
 
   if (!odom_problem.empty()) {
     if (moving(state_)) {
@@ -263,18 +336,28 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
   for (int pass = 0; pass < 6; ++pass) {
     const double in_state_s = now_s - *state_since_s_;
     switch (state_) {
-      case DockingPhase::kDocked:
+      case DockingPhase::kIdle:
         return finish(stop(out, state_reason_));
 
-      case DockingPhase::kSearch:
+      case DockingPhase::kDocked:
+        return end(out, DockingOutcome::kDocked, state_reason_);
+
+      case DockingPhase::kSearch: {
         if (out.target_visible) {
           enter(DockingPhase::kApproach, now_s, "target found");
           continue;
+        }
+        const double search_timeout_s =
+            limits_.search_timeout_s > 0.0 ? limits_.search_timeout_s : config_.search_timeout_s;
+        if (in_state_s > search_timeout_s) {
+          return end(out, DockingOutcome::kTargetLost,
+                     fmt("no target for %.0f s of search", search_timeout_s) + " (" + lostReason(now_s) + ")");
         }
         if (in_state_s < config_.search_wait_s) return finish(stop(out, lostReason(now_s) + ": waiting"));
         out.command = BodyTwist{0.0, 0.0, config_.search_yaw_rate_radps};
         out.reason = lostReason(now_s) + ": turning to look for it";
         return finish(out);
+      }
 
       case DockingPhase::kHold:
         if (out.target_visible) {

@@ -1,7 +1,9 @@
 // planner: a thin node around DockingPlanner. Brings each FUSED target estimate into odom with tf2 at
 // the estimate's stamp, feeds it and the odometry to the core on a ros::Timer (sim-time friendly),
-// and publishes cmd_vel, DockingState, the planned path and diagnostics. Parameters:
-// config/planner.yaml (see README.md); a missing or invalid one stops the node, naming it.
+// and publishes cmd_vel, DockingState, the planned path and diagnostics. Docking runs on command: the
+// action server docking/dock (docking_msgs/Dock) starts it; until then, and after every end, the
+// planner is IDLE with zero velocity. Parameters: config/planner.yaml (see README.md); a missing or
+// invalid one stops the node, naming it.
 #include <csignal>
 #include <deque>
 #include <map>
@@ -10,7 +12,9 @@
 #include <stdexcept>
 #include <string>
 
+#include <actionlib/server/simple_action_server.h>
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <docking_msgs/DockAction.h>
 #include <docking_msgs/DockingState.h>
 #include <docking_msgs/TargetEstimate.h>
 #include <docking_msgs/names.h>
@@ -93,6 +97,7 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   c.orientation_timeout_s = requireDouble(p, "orientation_timeout_s");
   c.search_wait_s = requireDouble(p, "search_wait_s");
   c.search_yaw_rate_radps = requireDouble(p, "search_yaw_rate_radps");
+  c.search_timeout_s = requireDouble(p, "search_timeout_s");
   c.hold_timeout_s = requireDouble(p, "hold_timeout_s");
   c.abort_timeout_s = requireDouble(p, "abort_timeout_s");
   c.approach_goal_tolerance_m = requireDouble(p, "approach_goal_tolerance_m");
@@ -121,10 +126,26 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
 volatile std::sig_atomic_t g_stop_requested = 0;
 void onSigint(int) { g_stop_requested = 1; }
 
+using DockServer = actionlib::SimpleActionServer<docking_msgs::DockAction>;
+using DockResultMsg = docking_msgs::DockResult;
+static_assert(static_cast<int>(DockingOutcome::kDocked) == DockResultMsg::DOCKED &&
+                  static_cast<int>(DockingOutcome::kCancelled) == DockResultMsg::CANCELLED &&
+                  static_cast<int>(DockingOutcome::kTimeBudget) == DockResultMsg::TIME_BUDGET &&
+                  static_cast<int>(DockingOutcome::kTargetLost) == DockResultMsg::TARGET_LOST &&
+                  static_cast<int>(DockingOutcome::kClientGone) == DockResultMsg::CLIENT_GONE &&
+                  static_cast<int>(DockingOutcome::kRejected) == DockResultMsg::REJECTED &&
+                  static_cast<int>(DockingOutcome::kShutdown) == DockResultMsg::SHUTDOWN,
+              "DockingOutcome is numbered as docking_msgs/DockResult");
+static_assert(static_cast<int>(DockingPhase::kIdle) == docking_msgs::DockingState::IDLE,
+              "DockingPhase is numbered as docking_msgs/DockingState");
+
 class PlannerNode {
  public:
   PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
-      : planner_(loadConfig(pnh)), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
+      : planner_(loadConfig(pnh)),
+        tf_listener_(tf_buffer_),
+        diagnostics_(nh, pnh),
+        dock_server_(nh, docking_msgs::topics::kDockAction, false) {
     odom_frame_ = pnh.param<std::string>("odom_frame", docking_msgs::frames::kOdom);
     base_frame_ = pnh.param<std::string>("base_frame", docking_msgs::frames::kBaseLink);
     const double rate_hz = requireDouble(pnh, "rate_hz");
@@ -146,22 +167,147 @@ class PlannerNode {
 
     reset_service_ = pnh.advertiseService("reset", &PlannerNode::onReset, this);
 
+    feedback_period_s_ = 1.0 / requireDouble(pnh, "feedback_rate_hz");
+    client_loss_timeout_s_ = requireDouble(pnh, "client_loss_timeout_s");
+    if (!(feedback_period_s_ > 0.0 && feedback_period_s_ <= 10.0)) {
+      throw std::invalid_argument("parameter ~feedback_rate_hz must be in [0.1, inf)");
+    }
+    if (!(client_loss_timeout_s_ >= 0.0 && client_loss_timeout_s_ <= 60.0)) {
+      throw std::invalid_argument("parameter ~client_loss_timeout_s must be in [0, 60] (0: never)");
+    }
+    // The client's liveness: an action client subscribes to the server's feedback topic. roscpp shares
+    // one publication per topic within a node, so this publisher's connect/disconnect callbacks see the
+    // server's feedback subscribers by node name; a publisher notices a subscriber's connection closing
+    // at once (a killed client included). The goal's sender comes from the goal topic's message events.
+    feedback_watch_ = nh.advertise<docking_msgs::DockActionFeedback>(
+        std::string(docking_msgs::topics::kDockAction) + "/feedback", 1,
+        boost::bind(&PlannerNode::onFeedbackSubscriber, this, _1, +1),
+        boost::bind(&PlannerNode::onFeedbackSubscriber, this, _1, -1));
+    goal_watch_ = nh.subscribe(std::string(docking_msgs::topics::kDockAction) + "/goal", 10,
+                               &PlannerNode::onGoalMessage, this);
+    dock_server_.registerGoalCallback(boost::bind(&PlannerNode::onGoal, this));
+    dock_server_.registerPreemptCallback(boost::bind(&PlannerNode::onPreempt, this));
+    dock_server_.start();
+
     diagnostics_.setHardwareID("none");
     diagnostics_.add("docking planner", this, &PlannerNode::diagnose);
     timer_ = nh.createTimer(ros::Duration(1.0 / rate_hz), &PlannerNode::onTimer, this);
   }
 
-  /// Zero velocity on the way out (the base would also stop on its own after its cmd_vel timeout).
-  void publishStop() { cmd_pub_.publish(geometry_msgs::Twist()); }
+  /// Zero velocity on the way out (the base would also stop on its own after its cmd_vel timeout), and
+  /// the running goal, if any, ended.
+  void shutdown() {
+    endGoal(DockingOutcome::kShutdown, "the planner is shutting down");
+    cmd_pub_.publish(geometry_msgs::Twist());
+  }
 
  private:
-  // Back to SEARCH with no target (e.g. after DOCKED, to start another run without a restart).
+  // IDLE with no target; a running docking ends as cancelled.
   bool onReset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+    endGoal(DockingOutcome::kCancelled, "the planner was reset (~reset service)");
     pending_.clear();
     odometry_history_.clear();
     planner_.reset(ros::Time::now().toSec());
-    ROS_INFO("planner: reset to SEARCH");
+    ROS_INFO("planner: reset to IDLE, target forgotten");
     return true;
+  }
+
+  // ---- The docking action ----
+
+  // A new goal; one running is preempted first (SimpleActionServer ends it as preempted on accept).
+  void onGoal() {
+    const double now = ros::Time::now().toSec();
+    // Ended here, with our result: SimpleActionServer would otherwise end it with an empty one.
+    if (dock_server_.isActive()) endGoal(DockingOutcome::kCancelled, "preempted by a new docking goal");
+    const docking_msgs::DockGoalConstPtr goal = dock_server_.acceptNewGoal();
+    if (!goal) return;  // cancelled before it could start
+    DockingLimits limits;
+    limits.time_budget_s = goal->time_budget_s;
+    limits.search_timeout_s = goal->search_timeout_s;
+    limits.max_speed_mps = goal->max_speed_mps;
+    std::string why_not;
+    if (!planner_.start(now, limits, &why_not)) {
+      ROS_WARN("planner: docking goal rejected: %s", why_not.c_str());
+      dock_server_.setAborted(makeResult(DockingOutcome::kRejected, why_not, now), why_not);
+      return;
+    }
+    goal_started_s_ = now;
+    last_feedback_s_ = -1e300;
+    client_seen_s_ = now;
+    // goal_watch_ subscribed before the server: roscpp queues one message's callbacks in subscription
+    // order, so onGoalMessage has already seen this goal.
+    goal_owner_ = last_goal_sender_;
+    ROS_INFO("planner: docking started (time budget %.0f s, search timeout %.0f s, speed cap %.2f m/s; 0 = default)",
+             limits.time_budget_s, limits.search_timeout_s, limits.max_speed_mps);
+    runCycle();  // IDLE -> SEARCH published at once
+  }
+
+  void onFeedbackSubscriber(const ros::SingleSubscriberPublisher& link, int change) {
+    const int count = (feedback_subscribers_[link.getSubscriberName()] += change);
+    if (count <= 0) feedback_subscribers_.erase(link.getSubscriberName());
+  }
+
+  void onGoalMessage(const ros::MessageEvent<docking_msgs::DockActionGoal const>& event) {
+    last_goal_sender_ = event.getPublisherName();
+  }
+
+  // Cancel from the client (a new goal is handled in onGoal).
+  void onPreempt() {
+    if (dock_server_.isNewGoalAvailable()) return;
+    endGoal(DockingOutcome::kCancelled, "cancelled by the client");
+  }
+
+  docking_msgs::DockResult makeResult(DockingOutcome outcome, const std::string& reason, double now) const {
+    docking_msgs::DockResult result;
+    result.outcome = static_cast<std::uint8_t>(outcome);
+    result.reason = reason;
+    result.duration_s = now - goal_started_s_;
+    result.final_state = last_state_msg_;
+    return result;
+  }
+
+  // Ends the running goal (if any) with `outcome`; the planner goes IDLE and zero velocity goes out now.
+  void endGoal(DockingOutcome outcome, const std::string& reason) {
+    const double now = ros::Time::now().toSec();
+    const bool was_active = planner_.active();
+    planner_.cancel(now, reason);
+    if (was_active) cmd_pub_.publish(geometry_msgs::Twist());
+    if (!dock_server_.isActive()) return;
+    const docking_msgs::DockResult result = makeResult(outcome, reason, now);
+    if (outcome == DockingOutcome::kCancelled) {
+      dock_server_.setPreempted(result, reason);
+    } else {
+      dock_server_.setAborted(result, reason);
+    }
+    ROS_INFO("planner: docking ended, %s: %s", outcomeName(outcome), reason.c_str());
+  }
+
+  // Reports the running goal: its end when the core ended the docking this cycle, otherwise feedback
+  // at feedback_rate_hz; and ends it when no client listens any more.
+  void serveGoal(double now) {
+    if (!dock_server_.isActive()) return;
+    if (last_.outcome) {
+      const docking_msgs::DockResult result = makeResult(*last_.outcome, last_.reason, now);
+      if (*last_.outcome == DockingOutcome::kDocked) {
+        dock_server_.setSucceeded(result, last_.reason);
+      } else {
+        dock_server_.setAborted(result, last_.reason);
+      }
+      ROS_INFO("planner: docking ended, %s: %s", outcomeName(*last_.outcome), last_.reason.c_str());
+      return;
+    }
+    if (feedback_subscribers_.count(goal_owner_) > 0) client_seen_s_ = now;
+    if (client_loss_timeout_s_ > 0.0 && now - client_seen_s_ > client_loss_timeout_s_) {
+      endGoal(DockingOutcome::kClientGone, "the goal's client (" + goal_owner_ + ") is gone");
+      return;
+    }
+    if (now - last_feedback_s_ >= feedback_period_s_) {
+      docking_msgs::DockFeedback feedback;
+      feedback.state = last_state_msg_;
+      feedback.elapsed_s = now - goal_started_s_;
+      dock_server_.publishFeedback(feedback);
+      last_feedback_s_ = now;
+    }
   }
 
   void onOdometry(const nav_msgs::OdometryConstPtr& msg) {
@@ -362,6 +508,8 @@ class PlannerNode {
     state.yaw_error_rad = last_.has_target ? last_.geometry.yaw_error_rad : unknown;
     state.bearing_rad = last_.has_target ? last_.geometry.bearing_rad : unknown;
     state_pub_.publish(state);
+    last_state_msg_ = state;
+    serveGoal(now.toSec());
 
     if (last_.state != last_state_) {
       ROS_INFO("planner: %s -> %s: %s", stateName(last_state_), stateName(last_.state), last_.reason.c_str());
@@ -387,6 +535,7 @@ class PlannerNode {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
     const bool failing = last_.state == DockingPhase::kHold || last_.state == DockingPhase::kAbort;
+    stat.add("docking goal active", dock_server_.isActive());
     stat.summaryf(failing ? DiagnosticStatus::WARN : DiagnosticStatus::OK, "%s: %s", stateName(last_.state),
                   last_.reason.c_str());
     stat.add("state", stateName(last_.state));
@@ -416,6 +565,17 @@ class PlannerNode {
   ros::Subscriber estimate_sub_, odom_sub_;
   ros::ServiceServer reset_service_;
   ros::Timer timer_;
+  DockServer dock_server_;
+  ros::Publisher feedback_watch_;
+  ros::Subscriber goal_watch_;
+  std::map<std::string, int> feedback_subscribers_;  // node name -> connections to the feedback topic
+  std::string last_goal_sender_, goal_owner_;
+  double feedback_period_s_{0.2};
+  double client_loss_timeout_s_{1.0};
+  double goal_started_s_{0.0};
+  double last_feedback_s_{-1e300};
+  double client_seen_s_{0.0};
+  docking_msgs::DockingState last_state_msg_;
   std::optional<ChaserOdometry> odometry_;
   OdometryHistory odometry_history_;
   double max_odom_extrapolation_s_{0.05};
@@ -423,7 +583,7 @@ class PlannerNode {
   std::uint64_t placed_from_odometry_{0};
   std::deque<docking_msgs::TargetEstimateConstPtr> pending_;
   PlannerOutput last_;
-  DockingPhase last_state_{DockingPhase::kSearch};
+  DockingPhase last_state_{DockingPhase::kIdle};
   std::uint64_t tf_failures_{0};
   std::string last_tf_error_;
 };
@@ -443,8 +603,8 @@ int main(int argc, char** argv) {
       ros::spinOnce();
       ros::WallDuration(0.002).sleep();
     }
-    node.publishStop();
-    ros::WallDuration(0.1).sleep();  // let the zero command leave
+    node.shutdown();
+    ros::WallDuration(0.1).sleep();  // let the zero command and the goal's end leave
   } catch (const std::exception& e) {
     ROS_FATAL("planner: %s", e.what());
     ros::shutdown();
