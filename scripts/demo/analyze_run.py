@@ -16,7 +16,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts" / "eval"))
 from eval_recorder import EvalRecorder, SOURCES, TRUTH_TOPICS  # noqa: E402  (reused, not copied)
 
-STATE_NAMES = ["SEARCH", "APPROACH", "ALIGN", "FINAL", "DOCKED", "HOLD", "ABORT"]
+STATE_NAMES = ["SEARCH", "APPROACH", "ALIGN", "FINAL", "DOCKED", "HOLD", "ABORT", "IDLE"]
 SOURCE_NAMES = ["disparity", "mono_visible", "mono_ir", "fused"]
 DOCKED = 4
 
@@ -84,7 +84,7 @@ def read_bag(bag_path):
     import rosbag
     data = {"chaser": Series(), "port": Series(), "states": [], "arbiter": [], "paths": [],
             "truth": {frame: {} for frame in TRUTH_TOPICS}, "estimates": {n: [] for n in SOURCES},
-            "world_to_odom": None, "cmd_vel": []}
+            "world_to_odom": None, "cmd_vel": [], "goal_times": []}
     truth_topic_frame = {topic: frame for frame, topic in TRUTH_TOPICS.items()}
     source_topic = {topic: name for name, topic in SOURCES.items()}
     last_clock = None
@@ -115,6 +115,8 @@ def read_bag(bag_path):
                 data["truth"][truth_topic_frame[topic]][msg.header.stamp.to_nsec()] = msg
             elif topic in source_topic:
                 data["estimates"][source_topic[topic]].append(msg)
+            elif topic == "/docking/dock/goal":
+                data["goal_times"].append(last_clock)
             elif topic == "/cmd_vel":
                 data["cmd_vel"].append((last_clock, msg.linear.x, msg.linear.y, msg.angular.z))
     return data
@@ -137,7 +139,8 @@ def analyze(bag_path, probe_x=None, timeout_s=None):
     states = data["states"]
     if not data["chaser"].t or not data["port"].t:
         raise RuntimeError(f"{bag_path}: no truth poses (world -> chaser_truth / target_truth) in the bag")
-    t0 = data["chaser"].t[0]
+    # Time counts from the docking goal (the planner is IDLE before it), or from the start of the run.
+    t0 = data["goal_times"][0] if data["goal_times"] else data["chaser"].t[0]
     docked_msg = next((s for s in states if s.state == DOCKED), None)
     t_end = docked_msg.header.stamp.to_sec() if docked_msg else data["chaser"].t[-1]
     pos_err, yaw_err = docking_errors(data["chaser"].at(t_end), data["port"].at(t_end), probe_x)
@@ -157,7 +160,7 @@ def analyze(bag_path, probe_x=None, timeout_s=None):
     for seg in source_tl:
         source_time[seg["value"]] = source_time.get(seg["value"], 0.0) + seg["end_s"] - seg["start_s"]
     perception, raw = perception_errors(data)
-    last = states[-1] if states else None
+    last = docked_msg or (states[-1] if states else None)  # after DOCKED the planner goes IDLE
     visited = []
     for seg in state_tl:
         if not visited or visited[-1] != seg["value"]:
@@ -166,6 +169,7 @@ def analyze(bag_path, probe_x=None, timeout_s=None):
         "bag": str(bag_path),
         "docked": docked_msg is not None,
         "time_to_dock_s": (t_end - t0) if docked_msg else None,
+        "time_counted_from": "docking goal" if data["goal_times"] else "start of the run",
         "final_position_error_m": pos_err,
         "final_yaw_error_deg": yaw_err,
         "errors_at": "DOCKED" if docked_msg else "end of run",

@@ -2,7 +2,9 @@
 """make demo: one closed-loop docking in the simulator, headless.
 
 Starts launch/sim.launch (simulator, omni_base, perception, arbiter, planner, rosbag record) on its own
-ROS master, watches docking/state until DOCKED or a sim-time timeout, stops everything, then analyses
+ROS master, starts the docking through the planner's docking action (docking/dock, as an operator's
+`rosrun docking_planner dock start` does), watches docking/state until DOCKED, the action's end or a
+sim-time timeout, stops everything, then analyses
 the bag against the simulator's truth (scripts/demo/analyze_run.py): prints a summary and writes
 OUT/summary.json, OUT/run.bag, OUT/trajectory.png, OUT/timeline.png.
 
@@ -87,7 +89,8 @@ def run(args):
     summary.update({"scenario": args.scenario_file or args.scenario, "real_time_factor": args.real_time_factor,
                     "timeout_s": args.timeout, "run_failure": failure,
                     "bag_size_mb": bag.stat().st_size / 1e6, "wall_time_s": outcome.get("wall_s"),
-                    "image_to_cmd_vel_latency_wall": outcome.get("latency")})
+                    "image_to_cmd_vel_latency_wall": outcome.get("latency"),
+                    "action_outcome": outcome.get("action_outcome"), "action_reason": outcome.get("action_reason")})
     analyze_run.plot(summary, data, raw, out)
     with open(out / "summary.json", "w") as f:
         json.dump(summary, f, indent=2)
@@ -190,8 +193,9 @@ class LatencyProbe:
 
 def monitor(launch, args, outcome):
     """Waits for DOCKED or the sim-time timeout. Returns None, or why the run could not be carried out."""
+    import actionlib
     import rospy
-    from docking_msgs.msg import DockingState
+    from docking_msgs.msg import DockAction, DockGoal, DockResult, DockingState
 
     wall0 = time.time()
     # The master must answer before init_node.
@@ -220,6 +224,17 @@ def monitor(launch, args, outcome):
         if time.time() - wall0 > args.startup_timeout:
             return f"no /clock after {args.startup_timeout:.0f} s (wall)"
         time.sleep(0.1)
+    # The docking starts on command, through the action, like an operator's.
+    client = actionlib.SimpleActionClient("/docking/dock", DockAction)
+    while not client.wait_for_server(rospy.Duration(1.0)):
+        if launch.poll() is not None:
+            return "roslaunch exited before the docking action server came up"
+        if time.time() - wall0 > args.startup_timeout:
+            return f"no docking action server after {args.startup_timeout:.0f} s (wall)"
+    client.send_goal(DockGoal(time_budget_s=args.timeout))
+    outcome_names = {getattr(DockResult, n): n for n in dir(DockResult) if n.isupper() and
+                     isinstance(getattr(DockResult, n), int)}
+    print(f"  docking goal sent (time budget {args.timeout:.0f} s sim)", flush=True)
     t0 = rospy.get_time()
     reported = None
     docked_at = None
@@ -239,6 +254,10 @@ def monitor(launch, args, outcome):
             docked_at = now
         if docked_at is not None and now - docked_at > 1.0:
             break
+        result = client.get_result()
+        if result is not None and docked_at is None:
+            print(f"  the docking ended: {outcome_names.get(result.outcome, result.outcome)}: {result.reason}", flush=True)
+            break
         if now - t0 > args.timeout:
             print(f"  timeout: {args.timeout:.0f} s of sim time", flush=True)
             break
@@ -248,6 +267,10 @@ def monitor(launch, args, outcome):
             print(f"  wall-clock limit {args.wall_timeout:.0f} s reached at sim t={now - t0:.1f} s", flush=True)
             break
         time.sleep(0.2)
+    result = client.get_result()
+    if result is not None:
+        outcome["action_outcome"] = outcome_names.get(result.outcome, str(result.outcome))
+        outcome["action_reason"] = result.reason
     outcome["wall_s"] = time.time() - wall0
     outcome["latency"] = latency.summary()
     rospy.signal_shutdown("done")

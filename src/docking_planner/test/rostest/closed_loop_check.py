@@ -1,6 +1,10 @@
 #!/usr/bin/env python3
 """Closed-loop rostest checks against the simulator's truth (sim time throughout).
 
+Every docking starts through the docking action (docking/dock), as an operator starts it. With ~idle_s
+> 0 the check first waits that long without a goal and asserts that nothing moved: the planner IDLE,
+every cmd_vel zero, the chaser (truth) within 1 mm of where it was.
+
 mode "dock": the planner must reach DOCKED within ~timeout_s (sim); at that moment the TRUE probe tip
   (base_link x = probe_x_m on tf world -> chaser_truth) must be within max_position_error_m of the TRUE
   port origin (tf world -> target_truth) in the floor plane, and the chaser's x axis within
@@ -18,10 +22,11 @@ import sys
 import threading
 import unittest
 
+import actionlib
 import rospy
 import rostest
 import tf2_ros
-from docking_msgs.msg import DockingState, TargetEstimate
+from docking_msgs.msg import DockAction, DockGoal, DockResult, DockingState, TargetEstimate
 from geometry_msgs.msg import Twist
 
 PKG = "docking_planner"
@@ -100,6 +105,36 @@ class ClosedLoopCheck(unittest.TestCase):
         with self.lock:
             return self.states[-1][1] if self.states else None
 
+    def check_idle_then_start(self, t0):
+        """~idle_s without a goal: nothing moves. Then the docking goal."""
+        idle_s = rospy.get_param("~idle_s", 0.0)
+        if idle_s > 0.0:
+            start_truth = None
+            while start_truth is None:
+                try:
+                    start_truth = self.truth(rospy.Time.from_sec(rospy.get_time()))[0]
+                except tf2_ros.TransformException:
+                    rospy.sleep(0.2)
+            t_start = rospy.get_time()
+            rospy.sleep(idle_s)
+            now = rospy.get_time()
+            end_truth = self.truth(rospy.Time.from_sec(now - 0.5))[0]
+            moved = math.hypot(end_truth[0] - start_truth[0], end_truth[1] - start_truth[1])
+            with self.lock:
+                states = [s for t, s in self.states if t >= t_start]
+                cmds = [c for t, c in self.cmds if t >= t_start]
+            self.assertTrue(states and all(s.state == DockingState.IDLE for s in states),
+                            "not IDLE without a goal: %s" % sorted({s.state_name for s in states}))
+            self.assertTrue(all(c.linear.x == 0 and c.linear.y == 0 and c.angular.z == 0 for c in cmds),
+                            "non-zero cmd_vel without a goal")
+            self.assertLess(moved, 0.001, "the chaser moved %.4f m (truth) without a goal" % moved)
+            print("closed_loop_check: %.0f s (sim) without a goal: IDLE, %d zero cmd_vel, chaser moved %.5f m" % (
+                idle_s, len(cmds), moved), flush=True)
+        self.client = actionlib.SimpleActionClient("docking/dock", DockAction)
+        self.assertTrue(self.client.wait_for_server(rospy.Duration(60.0)), "no docking action server")
+        self.client.send_goal(DockGoal())
+        return rospy.get_time()
+
     def test_closed_loop(self):
         mode = rospy.get_param("~mode")
         if mode == "dock":
@@ -114,7 +149,7 @@ class ClosedLoopCheck(unittest.TestCase):
         probe_x = rospy.get_param("~probe_x_m", 0.18)
         max_pos = rospy.get_param("~max_position_error_m", 0.01)
         max_yaw = rospy.get_param("~max_yaw_error_deg", 1.0)
-        t0 = self.wait_clock()
+        t0 = self.check_idle_then_start(self.wait_clock())
         docked = None
         visited = []
         while not rospy.is_shutdown() and rospy.get_time() - t0 < timeout:
@@ -142,12 +177,18 @@ class ClosedLoopCheck(unittest.TestCase):
         print(result, flush=True)  # also in the test's XML result (system-out), for CI logs
         self.assertLessEqual(tip_err, max_pos, "true probe-tip error %.1f mm > %.1f mm" % (1000 * tip_err, 1000 * max_pos))
         self.assertLessEqual(yaw_err, max_yaw, "true yaw error %.2f deg > %.2f deg" % (yaw_err, max_yaw))
+        # The action's result says so, and the planner is IDLE (zero velocity) afterwards.
+        self.assertTrue(self.client.wait_for_result(rospy.Duration(10.0)), "no action result after DOCKED")
+        result = self.client.get_result()
+        self.assertEqual(result.outcome, DockResult.DOCKED, "action result %d: %s" % (result.outcome, result.reason))
+        rospy.sleep(1.0)
+        self.assertEqual(self.latest_state().state, DockingState.IDLE, "not IDLE after the docking ended")
 
     def check_lost(self):
         lose_after = rospy.get_param("~lose_after_s", 4.0)
         timeout = rospy.get_param("~timeout_s", 90.0)
         hold_to_search_max = rospy.get_param("~hold_to_search_max_s", 10.0)
-        t0 = self.wait_clock()
+        t0 = self.check_idle_then_start(self.wait_clock())
         # 1. Wait for APPROACH on the relayed estimates, then cut them after lose_after_s.
         approach_t = None
         while rospy.get_time() - t0 < timeout:
