@@ -11,6 +11,9 @@ constexpr const char kEStop[] = "e_stop";                    // std_msgs/Bool, t
 constexpr const char kWheelCommand[] = "wheels/command";     // docking_msgs/WheelCommand
 constexpr const char kWheelEncoders[] = "wheels/encoders";   // docking_msgs/WheelEncoders
 constexpr const char kWheelState[] = "wheels/state";         // docking_msgs/WheelState
+// sensor_msgs/JointState of the wheels for robot_state_publisher: names are the URDF's wheel joints
+// (omni_base.yaml wheels/names), position the accumulated angle (rad), velocity the measured speed.
+constexpr const char kJointStates[] = "joint_states";
 
 // Cameras (image_transport bases; camera_info beside each)
 constexpr const char kStereoLeftImageRaw[] = "stereo/left/image_raw";

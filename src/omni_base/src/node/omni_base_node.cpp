@@ -7,6 +7,7 @@
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
 #include <std_msgs/Bool.h>
 #include <std_srvs/Trigger.h>
 #include <tf2/LinearMath/Quaternion.h>
@@ -107,6 +108,7 @@ class OmniBaseNode {
     }
     odom_pub_ = nh.advertise<nav_msgs::Odometry>(docking_msgs::topics::kOdom, 20);
     wheel_state_pub_ = nh.advertise<docking_msgs::WheelState>(docking_msgs::topics::kWheelState, 20);
+    joint_state_pub_ = nh.advertise<sensor_msgs::JointState>(docking_msgs::topics::kJointStates, 20);
     cmd_sub_ = nh.subscribe(docking_msgs::topics::kCmdVel, 10, &OmniBaseNode::onCmdVel, this,
                             ros::TransportHints().tcpNoDelay());
     estop_sub_ = nh.subscribe(docking_msgs::topics::kEStop, 10, &OmniBaseNode::onEStop, this);
@@ -246,6 +248,15 @@ class OmniBaseNode {
     state.position = encoders_.positions();
     state.encoder_counts = reading.counts;
     wheel_state_pub_.publish(state);
+
+    // The same angles for robot_state_publisher, which only reads sensor_msgs/JointState: the names are
+    // the URDF's wheel joints (docking_description generates them from the same wheels/names).
+    sensor_msgs::JointState joints;
+    joints.header.stamp = reading.stamp;
+    joints.name = state.name;
+    joints.position = state.position;
+    joints.velocity = state.velocity;
+    joint_state_pub_.publish(joints);
   }
 
   void diagnoseCommand(diagnostic_updater::DiagnosticStatusWrapper& stat) {
@@ -289,6 +300,7 @@ class OmniBaseNode {
 
   ros::Publisher odom_pub_;
   ros::Publisher wheel_state_pub_;
+  ros::Publisher joint_state_pub_;
   ros::Subscriber cmd_sub_;
   ros::Subscriber estop_sub_;
   ros::ServiceServer release_srv_;

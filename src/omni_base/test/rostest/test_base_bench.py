@@ -9,6 +9,7 @@ import unittest
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from docking_msgs.msg import WheelState
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
@@ -27,12 +28,16 @@ class BaseBench(unittest.TestCase):
         cls.odom = None
         cls.wheels = []  # (stamp, max |speed|)
         cls.link_levels = []  # (stamp, level)
+        cls.joint_states = []  # sensor_msgs/JointState from omni_base (for robot_state_publisher)
+        cls.wheel_states = []  # docking_msgs/WheelState
         cls.cmd_pub = rospy.Publisher("/cmd_vel", Twist, queue_size=10)
         cls.estop_pub = rospy.Publisher("/e_stop", Bool, queue_size=1, latch=True)
         cls.fault_pub = rospy.Publisher("/fake_motor_board/fault", String, queue_size=1)
         rospy.Subscriber("/odom", Odometry, cls.on_odom)
         rospy.Subscriber("/fake_motor_board/wheels", JointState, cls.on_wheels)
         rospy.Subscriber("/diagnostics", DiagnosticArray, cls.on_diagnostics)
+        rospy.Subscriber("/joint_states", JointState, cls.on_joint_states)
+        rospy.Subscriber("/wheels/state", WheelState, cls.on_wheel_state)
         deadline = time.time() + 60.0
         while time.time() < deadline and (cls.odom is None or cls.cmd_pub.get_num_connections() == 0):
             time.sleep(0.1)
@@ -47,6 +52,16 @@ class BaseBench(unittest.TestCase):
     def on_wheels(cls, msg):
         with cls.lock:
             cls.wheels.append((msg.header.stamp.to_sec(), max(abs(v) for v in msg.velocity)))
+
+    @classmethod
+    def on_joint_states(cls, msg):
+        with cls.lock:
+            cls.joint_states.append(msg)
+
+    @classmethod
+    def on_wheel_state(cls, msg):
+        with cls.lock:
+            cls.wheel_states.append(msg)
 
     @classmethod
     def on_diagnostics(cls, msg):
@@ -168,6 +183,41 @@ class BaseBench(unittest.TestCase):
         with self.lock:
             self.assertEqual(self.link_levels[-1][1], DiagnosticStatus.OK)
         self.drive(0.0, 0.5)
+
+    def test_6_joint_states_carry_the_wheel_angles(self):
+        self.assertTrue(self.wait_until_stopped())
+        names = rospy.get_param("/omni_base/wheels/names")
+        angles = [math.radians(a) for a in rospy.get_param("/omni_base/wheels/drive_angles_deg")]
+        r = rospy.get_param("/omni_base/wheels/radius_m")
+        with self.lock:
+            self.joint_states.clear()
+            self.wheel_states.clear()
+        self.drive(0.2, 1.5)
+        self.drive(0.0, 1.0)
+        with self.lock:
+            joints, states = list(self.joint_states), list(self.wheel_states)
+        self.assertGreater(len(joints), 50, "omni_base published too few joint_states (50 Hz for 2.5 s)")
+        # Every joint_states message is the WheelState of the same encoder sample: same stamp, same angles.
+        by_stamp = {(s.header.stamp.secs, s.header.stamp.nsecs): s for s in states}
+        for js in joints:
+            self.assertEqual(list(js.name), names)
+            key = (js.header.stamp.secs, js.header.stamp.nsecs)
+            self.assertIn(key, by_stamp, "a joint_states stamp that no WheelState has")
+            self.assertEqual(list(js.position), list(by_stamp[key].position))
+            self.assertEqual(list(js.velocity), list(by_stamp[key].velocity))
+        # The angles advance as the base moves along x: wheel i turns by cos(a_i) * x / r (the kinematics).
+        moved = [joints[-1].position[i] - joints[0].position[i] for i in range(len(names))]
+        largest = max(abs(m) for m in moved)
+        self.assertGreater(largest, 5.0, "the wheels hardly turned: %r" % moved)
+        x_travel = sum(math.cos(a) * m for a, m in zip(angles, moved)) * r / sum(
+            math.cos(a) ** 2 for a in angles)
+        print("measured: joint_states over the drive: %s rad, i.e. %.3f m along x" % (
+            ", ".join("%.3f" % m for m in moved), x_travel))
+        for i, a in enumerate(angles):
+            self.assertAlmostEqual(moved[i], math.cos(a) * x_travel / r, delta=0.05 * largest,
+                                   msg="wheel %s turned %.3f rad of %r" % (names[i], moved[i], moved))
+        # 0.2 m/s for 1.5 s, less the acceleration ramp, plus the stop ramp.
+        self.assertAlmostEqual(x_travel, 0.3, delta=0.05)
 
 
 if __name__ == "__main__":
