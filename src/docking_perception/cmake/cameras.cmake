@@ -1,13 +1,11 @@
-# Cameras: stereo_camera and ir_camera (nodelets + standalone executables), camera_frames_publisher,
+# Cameras: stereo_camera and ir_camera (nodelets + standalone executables),
 # their ROS-free core library and tests. Included by CMakeLists.txt after catkin_package().
 # Targets: ${PROJECT_NAME}_camera_core, ${PROJECT_NAME}_camera_nodelets (nodelet_plugins.xml),
-# stereo_camera, ir_camera, camera_frames_publisher.
+# stereo_camera, ir_camera. The camera frames come from the robot model (docking_description).
 
-# ROS-free logic: source parsing, reconnect backoff, the capture rig, frame formats, calibration checks,
-# camera mounts from robot.yaml.
+# ROS-free logic: source parsing, reconnect backoff, the capture rig, frame formats, calibration checks.
 add_library(${PROJECT_NAME}_camera_core
   src/camera/calibration_check.cpp
-  src/camera/camera_mounts.cpp
   src/camera/capture_rig.cpp
   src/camera/frame_format.cpp
   src/camera/reconnect_backoff.cpp
@@ -24,13 +22,10 @@ target_link_libraries(stereo_camera ${catkin_LIBRARIES})
 add_executable(ir_camera src/camera/ir_camera_main.cpp)
 target_link_libraries(ir_camera ${catkin_LIBRARIES})
 
-add_executable(camera_frames_publisher src/camera/camera_frames_publisher.cpp)
-target_link_libraries(camera_frames_publisher ${PROJECT_NAME}_camera_core ${catkin_LIBRARIES})
-
 install(TARGETS ${PROJECT_NAME}_camera_core ${PROJECT_NAME}_camera_nodelets
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION})
-install(TARGETS camera_frames_publisher ir_camera stereo_camera
+install(TARGETS ir_camera stereo_camera
   RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 install(DIRECTORY include/${PROJECT_NAME}/camera/ DESTINATION ${CATKIN_PACKAGE_INCLUDE_DESTINATION}/camera)
 
@@ -39,7 +34,6 @@ if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(${PROJECT_NAME}_camera_core_test
     test/camera/gtest_main.cpp
     test/camera/test_calibration_check.cpp
-    test/camera/test_camera_mounts.cpp
     test/camera/test_capture_rig.cpp
     test/camera/test_frame_format.cpp
     test/camera/test_reconnect_backoff.cpp
@@ -58,7 +52,7 @@ if(CATKIN_ENABLE_TESTING)
     add_dependencies(camera_nodes_rostest ${catkin_EXPORTED_TARGETS})
     foreach(camera_test camera_frames camera_failures camera_sequence)
       add_rostest(test/camera/${camera_test}.test
-        DEPENDENCIES camera_frames_publisher camera_nodes_rostest ir_camera stereo_camera
+        DEPENDENCIES camera_nodes_rostest ir_camera stereo_camera
                      ${PROJECT_NAME}_camera_nodelets)
     endforeach()
   endif()

@@ -62,7 +62,7 @@ install(TARGETS docking_perception_mono_core docking_perception_mono_pose_nodele
   RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 endif()
 
-# Against the simulator's truth (rostest; needs docking_sim, omni_base and camera_frames_publisher):
+# Against the simulator's truth (rostest; needs docking_sim, omni_base and docking_description):
 # the visible instance at 1 m, and the IR instance in the dark while the visible one reports invalid.
 if(CATKIN_ENABLE_TESTING AND NOT MONO_CORE_ONLY)
   add_rostest_gtest(test_mono_sim test/mono/mono_sim_near_1m.test test/mono/test_mono_sim.cpp)
