@@ -354,8 +354,12 @@ TEST_F(StateMachineTest, TimeBudgetEndsTheDocking) {
   PlannerOutput out = runFor(1.9, kFar, true);
   EXPECT_EQ(out.state, DockingPhase::kApproach);
   EXPECT_FALSE(out.outcome.has_value());
-  out = runFor(0.2, kFar, true);
-  ASSERT_TRUE(out.outcome.has_value());
+  bool ended = false;
+  for (int i = 0; i < 4 && !ended; ++i) {
+    out = step(kFar, true);
+    ended = out.outcome.has_value();
+  }
+  ASSERT_TRUE(ended);
   EXPECT_EQ(*out.outcome, DockingOutcome::kTimeBudget);
   EXPECT_TRUE(isZero(out.command));
   EXPECT_EQ(step(kFar, true).state, DockingPhase::kIdle);

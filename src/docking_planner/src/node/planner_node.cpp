@@ -181,8 +181,8 @@ class PlannerNode {
     // at once (a killed client included). The goal's sender comes from the goal topic's message events.
     feedback_watch_ = nh.advertise<docking_msgs::DockActionFeedback>(
         std::string(docking_msgs::topics::kDockAction) + "/feedback", 1,
-        boost::bind(&PlannerNode::onFeedbackSubscriber, this, _1, +1),
-        boost::bind(&PlannerNode::onFeedbackSubscriber, this, _1, -1));
+        boost::bind(&PlannerNode::onFeedbackSubscriber, this, boost::placeholders::_1, +1),
+        boost::bind(&PlannerNode::onFeedbackSubscriber, this, boost::placeholders::_1, -1));
     goal_watch_ = nh.subscribe(std::string(docking_msgs::topics::kDockAction) + "/goal", 10,
                                &PlannerNode::onGoalMessage, this);
     dock_server_.registerGoalCallback(boost::bind(&PlannerNode::onGoal, this));
