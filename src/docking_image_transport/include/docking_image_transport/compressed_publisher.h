@@ -15,7 +15,7 @@ namespace docking_image_transport {
 
 // The default JPEG quality: chosen from the measurement in docs/PERFORMANCE.md ("Images across a
 // network link").
-constexpr int kDefaultJpegQuality = 90;
+constexpr int kDefaultJpegQuality = 95;
 constexpr int kDefaultPngLevel = 3;
 
 class CompressedPublisher : public image_transport::SimplePublisherPlugin<sensor_msgs::CompressedImage> {
