@@ -4,6 +4,8 @@
 #   compare_mono                both solvers, both velocity methods and AprilTag on sim_render sequences
 #   bench_apriltag              AprilTag detection + pose on one 640x480 frame (make bench, stage apriltag)
 #   make_tag_texture            the tagged target's face texture from libapriltag's tag36h11 codes
+#   pipeline_on_frames          perception.launch's image path (rectify, disparity + detector, both
+#                               mono_pose instances) on raw camera frames (scripts/eval/transport_cost.py)
 #   test_compare                gtests
 # AprilTag 3 is Debian's libapriltag-dev (C library, pkg-config `apriltag`).
 find_package(PkgConfig REQUIRED)
@@ -25,7 +27,12 @@ add_executable(bench_apriltag src/compare/bench_apriltag.cpp)
 target_link_libraries(bench_apriltag docking_perception_compare)
 add_executable(make_tag_texture src/compare/make_tag_texture.cpp)
 target_link_libraries(make_tag_texture docking_perception_compare)
-install(TARGETS compare_mono bench_apriltag make_tag_texture RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+# Needs the matcher and calibration readers of the disparity tests (cmake/disparity.cmake, included before).
+add_executable(pipeline_on_frames src/compare/pipeline_on_frames.cpp)
+target_include_directories(pipeline_on_frames PRIVATE test/disparity)
+target_link_libraries(pipeline_on_frames docking_perception_compare docking_perception_disparity_synthetic
+  docking_perception_disparity_core)
+install(TARGETS compare_mono bench_apriltag make_tag_texture pipeline_on_frames RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_compare src/compare/test_compare.cpp)

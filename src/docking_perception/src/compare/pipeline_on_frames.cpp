@@ -1,0 +1,174 @@
+// pipeline_on_frames: perception.launch's image path offline, on raw camera frames as the cameras (or
+// the simulator) publish them: image_proc's debayer (bgr8 -> mono8) and rectify (bilinear remap),
+// stereo_image_proc's disparity with config/stereo_image_proc.yaml, then the disparity detector and the
+// two mono_pose instances (visible on the rectified left image, IR on the rectified IR image), each
+// with its config file. Writes one JSON line per frame with every estimate. For comparing the same
+// frames before and after a lossy step (scripts/eval/transport_cost.py: JPEG over the network link).
+//
+//   pipeline_on_frames --config DIR --dt S FRAME_PREFIX...
+//
+// FRAME_PREFIX: files PREFIX_stereo_left.png, PREFIX_stereo_right.png, PREFIX_ir.png (sim_render's
+// names); frames are processed in the given order, stamped 0, dt, 2 dt, ... (mono_pose tracks between
+// frames). One thread. The detector's search band and valid region follow the matcher settings
+// (as the synthetic-pair tests do), not a DisparityImage message.
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/mono/mono_pose_estimator.h"
+#include "mono_params_yaml.h"
+#include "synthetic_stereo.h"
+
+namespace dp = docking_perception;
+namespace dt = docking_perception::disparity::testing;
+
+namespace {
+
+struct Rectifier {
+  cv::Mat map1, map2;
+  dp::mono::CameraIntrinsics intrinsics;  // of the rectified image (P)
+
+  explicit Rectifier(const dt::CameraCalibration& cal) {
+    cv::initUndistortRectifyMap(cal.camera_matrix, cal.distortion, cal.rectification,
+                                cal.projection(cv::Rect(0, 0, 3, 3)), cal.size, CV_16SC2, map1, map2);
+    intrinsics.fx = cal.projection.at<double>(0, 0);
+    intrinsics.fy = cal.projection.at<double>(1, 1);
+    intrinsics.cx = cal.projection.at<double>(0, 2);
+    intrinsics.cy = cal.projection.at<double>(1, 2);
+    intrinsics.width = cal.size.width;
+    intrinsics.height = cal.size.height;
+  }
+  // image_proc: debayer to grey (a bgr8 camera image -> mono8 with cvtColor), then rectify.
+  cv::Mat operator()(const cv::Mat& raw) const {
+    cv::Mat grey, rect;
+    if (raw.channels() == 3) cv::cvtColor(raw, grey, cv::COLOR_BGR2GRAY);
+    else grey = raw;
+    cv::remap(grey, rect, map1, map2, cv::INTER_LINEAR);
+    return rect;
+  }
+};
+
+std::string num(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.9g", v);
+  return buf;
+}
+
+std::string jsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += (c == '\n' ? ' ' : c);
+  }
+  return out + "\"";
+}
+
+std::string monoJson(const dp::mono::MonoPoseResult& r) {
+  std::string s = "{\"valid\": " + std::string(r.valid ? "true" : "false");
+  if (r.valid) {
+    const Eigen::Vector3d& t = r.pose.translation;
+    const Eigen::Quaterniond q(r.pose.rotation);
+    s += ", \"position_m\": [" + num(t.x()) + ", " + num(t.y()) + ", " + num(t.z()) + "]";
+    s += ", \"quaternion_xyzw\": [" + num(q.x()) + ", " + num(q.y()) + ", " + num(q.z()) + ", " + num(q.w()) + "]";
+  } else {
+    s += ", \"status\": " + jsonString(r.status);
+  }
+  return s + "}";
+}
+
+int usage() {
+  std::cerr << "usage: pipeline_on_frames --config DIR [--dt S] FRAME_PREFIX...\n";
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string config;
+  double dt_s = 1.0 / 15.0;
+  std::vector<std::string> prefixes;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--", 0) != 0) {
+      prefixes.push_back(arg);
+    } else if (i + 1 < argc && arg == "--config") {
+      config = argv[++i];
+    } else if (i + 1 < argc && arg == "--dt") {
+      dt_s = std::stod(argv[++i]);
+    } else {
+      return usage();
+    }
+  }
+  if (config.empty() || prefixes.empty() || !(dt_s > 0.0)) return usage();
+  cv::setNumThreads(1);
+  try {
+    const dt::CameraCalibration left_cal = dt::loadCameraCalibration(config + "/cameras/stereo_left.yaml");
+    const dt::CameraCalibration right_cal = dt::loadCameraCalibration(config + "/cameras/stereo_right.yaml");
+    const dt::CameraCalibration ir_cal = dt::loadCameraCalibration(config + "/cameras/ir.yaml");
+    const Rectifier left_rect(left_cal), right_rect(right_cal), ir_rect(ir_cal);
+
+    const dt::MatcherSettings matcher_settings = dt::loadMatcherSettings(config + "/stereo_image_proc.yaml");
+    cv::Ptr<cv::StereoMatcher> matcher = dt::createMatcher(matcher_settings);
+    const dp::disparity::DisparityDetector detector(dt::loadDetectorParams(config + "/disparity_detector.yaml"));
+    dp::disparity::StereoGeometry geometry;
+    geometry.focal_px = left_rect.intrinsics.fx;
+    geometry.cx_px = left_rect.intrinsics.cx;
+    geometry.cy_px = left_rect.intrinsics.cy;
+    geometry.baseline_m = -right_cal.projection.at<double>(0, 3) / right_cal.projection.at<double>(0, 0);
+
+    const dp::mono::TargetModel model = dp::mono::TargetModel::loadFromYaml(config + "/target.yaml");
+    std::unique_ptr<dp::mono::MonoPoseEstimator> mono[2];
+    const char* mono_files[2] = {"/mono_pose_visible.yaml", "/mono_pose_ir.yaml"};
+    const Rectifier* mono_rect[2] = {&left_rect, &ir_rect};
+    for (int m = 0; m < 2; ++m) {
+      dp::mono::MonoPoseParams params;
+      std::string error;
+      if (!dp::compare::loadMonoParams(config + mono_files[m], &params, &error)) {
+        std::cerr << error << "\n";
+        return 1;
+      }
+      mono[m] = std::make_unique<dp::mono::MonoPoseEstimator>(model, mono_rect[m]->intrinsics, params);
+    }
+
+    for (std::size_t k = 0; k < prefixes.size(); ++k) {
+      const std::string& p = prefixes[k];
+      const cv::Mat left = cv::imread(p + "_stereo_left.png", cv::IMREAD_UNCHANGED);
+      const cv::Mat right = cv::imread(p + "_stereo_right.png", cv::IMREAD_UNCHANGED);
+      const cv::Mat ir = cv::imread(p + "_ir.png", cv::IMREAD_UNCHANGED);
+      if (left.empty() || right.empty() || ir.empty()) {
+        std::cerr << p << "_{stereo_left,stereo_right,ir}.png: missing or unreadable\n";
+        return 1;
+      }
+      const double stamp = static_cast<double>(k) * dt_s;
+      const cv::Mat l = left_rect(left), r = right_rect(right), i = ir_rect(ir);
+      const cv::Mat disparity = dt::computeDisparity(*matcher, l, r);
+      const dp::disparity::Detection d =
+          detector.detect(disparity, geometry, matcher_settings.min_disparity, dt::maxDisparity(matcher_settings),
+                          dt::matcherValidRegion(matcher_settings, disparity.size()));
+      std::string line = "{\"frame\": " + jsonString(p) + ", \"stamp_s\": " + num(stamp) + ", \"disparity\": {\"valid\": " +
+                         (d.found ? "true" : "false");
+      if (d.found)
+        line += ", \"position_m\": [" + num(d.position_m.x()) + ", " + num(d.position_m.y()) + ", " +
+                num(d.position_m.z()) + "]";
+      else
+        line += ", \"status\": " + jsonString(dp::disparity::outcomeName(d.outcome));
+      line += "}, \"mono_visible\": " + monoJson(mono[0]->process(l, stamp));
+      line += ", \"mono_ir\": " + monoJson(mono[1]->process(i, stamp)) + "}";
+      std::cout << line << std::endl;
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "pipeline_on_frames: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
