@@ -10,6 +10,7 @@ per split against a 100 Mbit/s link. Run it beside a docking, e.g.
 Exit status 0; 1 when nothing was received.
 """
 import argparse
+import io
 import json
 import sys
 import threading
@@ -42,11 +43,19 @@ def main():
     counts = {}  # topic -> [messages, bytes]
     topics = sorted({t for ts in SPLITS.values() for t in ts})
 
+    def size_of(msg):
+        if hasattr(msg, "_buff"):
+            return len(msg._buff)
+        buff = io.BytesIO()  # a topic rospy itself subscribes to typed (/clock) arrives deserialized
+        msg.serialize(buff)
+        return buff.tell()
+
     def on_message(msg, topic):
+        size = size_of(msg) + 4  # + the TCPROS length prefix
         with lock:
             c = counts.setdefault(topic, [0, 0])
             c[0] += 1
-            c[1] += len(msg._buff) + 4  # + the TCPROS length prefix
+            c[1] += size
 
     for topic in topics:
         rospy.Subscriber(topic, rospy.AnyMsg, on_message, callback_args=topic, queue_size=100)
