@@ -206,8 +206,9 @@ def write_junit(path, cases):
     for name, problem in cases:
         case = ET.SubElement(suite, "testcase", classname="check_portable", name=name)
         if problem:
-            failure = ET.SubElement(case, "failure", message=problem.splitlines()[0])
-            failure.text = problem
+            first, _, rest = problem.partition("\n")
+            failure = ET.SubElement(case, "failure", message=first)
+            failure.text = rest  # test_summary.py prints the message, then this
     path.parent.mkdir(parents=True, exist_ok=True)
     ET.ElementTree(suite).write(path, encoding="utf-8", xml_declaration=True)
 
