@@ -6,8 +6,11 @@
 #   sudo scripts/arm64_chroot_build.sh            # as root, on an x86-64 Debian 12 host
 #
 # Environment: ARM64_ROOT (default /work/arm64-root: keep it outside any repository), JOBS (2),
-# FRESH=1 (delete the chroot's clone and build first), ROSTESTS ("" none, default; "all"; or
-# package names, e.g. "omni_base docking_planner"), MIRROR (default http://deb.debian.org/debian).
+# FRESH=1 (delete the chroot's clone and build first; needed when switching CROSS), ROSTESTS (""
+# none, default; "all"; or package names, e.g. "omni_base docking_planner"), MIRROR (default
+# http://deb.debian.org/debian), CROSS=1 (compile with Debian's x86-64 cross g++-aarch64-linux-gnu
+# installed in the chroot: the same GCC 12 and the same arm64 libraries, but the compiler runs at
+# native speed; cmake, the code generators and the tests still run emulated).
 set -euo pipefail
 
 ROOT="${ARM64_ROOT:-/work/arm64-root}"
@@ -109,9 +112,21 @@ for pkg in "${wanted[@]}" git; do  # git: the clone is made on the host, but han
 done
 missing=$(in_chroot "for p in ${install[*]}; do dpkg-query -W -f='\${Status}' \$p 2>/dev/null |
   grep -q 'install ok installed' || echo \$p; done")
+# An interrupted earlier run may have left packages unpacked but not configured.
+in_chroot "dpkg --configure -a"
 if [ -n "$missing" ]; then
   echo "installing in the chroot: $(echo $missing | wc -w) packages"
   in_chroot "apt-get update && apt-get install -y --no-install-recommends $(echo $missing)"
+fi
+COMPILERS=""
+if [ "${CROSS:-0}" = 1 ]; then
+  # The x86-64 cross compiler runs natively inside the arm64 chroot (multiarch amd64); Debian's
+  # cross gcc searches the multiarch folders /usr/include/aarch64-linux-gnu and /usr/lib/aarch64-linux-gnu.
+  if ! in_chroot "command -v aarch64-linux-gnu-g++ >/dev/null"; then
+    in_chroot "dpkg --add-architecture amd64 && apt-get update &&
+      apt-get install -y --no-install-recommends g++-aarch64-linux-gnu:amd64"
+  fi
+  COMPILERS="-DCMAKE_C_COMPILER=/usr/bin/aarch64-linux-gnu-gcc -DCMAKE_CXX_COMPILER=/usr/bin/aarch64-linux-gnu-g++"
 fi
 
 # --- the workspace -----------------------------------------------------------------------------
@@ -123,11 +138,11 @@ if [ -d "$ROOT$WS/.git" ]; then
 else
   git clone -q --branch "$BRANCH" "$REPO" "$ROOT$WS"
 fi
-echo "commit: $(git -C "$ROOT$WS" log -1 --format='%h %s')" | tee -a "$LOG"
+echo "commit: $(git -C "$ROOT$WS" log -1 --format="%h %s"), compiler: $([ "${CROSS:-0}" = 1 ] && echo "x86-64 cross g++" || echo "arm64 g++ under qemu")" | tee -a "$LOG"
 
 # The Makefile's flags (its `build` target would also run install-deps.sh, whose list includes the
 # excluded host tools: hence catkin_make directly).
-CATKIN="catkin_make -DCMAKE_BUILD_TYPE=Release -DCATKIN_WHITELIST_PACKAGES= -DPYTHON_EXECUTABLE=/usr/bin/python3"
+CATKIN="catkin_make -DCMAKE_BUILD_TYPE=Release -DCATKIN_WHITELIST_PACKAGES= -DPYTHON_EXECUTABLE=/usr/bin/python3 $COMPILERS"
 step "build"
 in_chroot "cd $WS && mkdir -p devel/lib/python3/dist-packages && $CATKIN -j$JOBS > build.log 2>&1" ||
   { tail -40 "$ROOT$WS/build.log"; exit 1; }
