@@ -28,6 +28,7 @@ build: deps
 # Builds and runs every gtest and rostest, then prints one line `N passed, N failed`.
 test: build
 	@rm -rf build/test_results
+	@scripts/check_portable.sh --self-test --junit build/test_results/portability/check_portable.xml || true  # counted below
 	@$(SETUP) && $(CATKIN_MAKE) tests > build/build_tests.log 2>&1 || { tail -40 build/build_tests.log; echo "0 passed, 1 failed"; exit 1; }
 	@# One test at a time: the simulator tests must not compete with each other for the two cores.
 	@$(SETUP) && $(CATKIN_MAKE_SERIAL) -j1 run_tests 2>&1 | tee build/run_tests.log | grep -E '^\[ +(OK|FAILED) +\]|^\[[a-z_]+\.rosunit-.*\]\[|^ \* RESULT' || true

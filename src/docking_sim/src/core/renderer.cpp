@@ -1,9 +1,9 @@
 #include "docking_sim/renderer.h"
 
+#include "bilinear.h"
+
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
-
-#include <emmintrin.h>  // SSE2: part of every x86-64 CPU
 
 #include <algorithm>
 #include <cstring>
@@ -249,97 +249,13 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
   return output_;
 }
 
-namespace {
-
-/// Bilinear lookup from a b,g,r,0 image into a bgr8 one through precomputed offsets and weights:
-/// one pixel per SSE2 step (two 8-byte loads fetch the 2x2 neighbourhood, two multiply-adds weigh
-/// it, all four channels at once). OpenCV's remap has no vectorised 3-channel path, and its
-/// 4-channel one still costs about 40 instructions per pixel here.
-void bilinearBgrx(const cv::Mat& src, const std::vector<int32_t>& offsets, const std::vector<int16_t>& weights,
-                  cv::Mat& dst) {
-  const uchar* base = src.data;
-  const std::size_t stride = src.step;
-  const int32_t* off = offsets.data();
-  const int16_t* wts = weights.data();
-  const __m128i zero = _mm_setzero_si128();
-  const __m128i round = _mm_set1_epi32(1 << 13);
-  for (int y = 0; y < dst.rows; ++y) {
-    uchar* out = dst.ptr<uchar>(y);
-    for (int x = 0; x < dst.cols; ++x, ++off, wts += 4) {
-      const uchar* p = base + *off;
-      // 16-bit lanes: top = TL(b,g,r,0) TR(b,g,r,0), bottom = BL BR.
-      const __m128i top = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero);
-      const __m128i bottom = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + stride)), zero);
-      // Pairs (top, bottom) per channel: left column, then right column.
-      const __m128i left = _mm_unpacklo_epi16(top, bottom);
-      const __m128i right = _mm_unpackhi_epi16(top, bottom);
-      const __m128i w = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(wts));  // (TL, BL), (TR, BR)
-      __m128i sum = _mm_add_epi32(_mm_madd_epi16(left, _mm_shuffle_epi32(w, 0x00)),
-                                  _mm_madd_epi16(right, _mm_shuffle_epi32(w, 0x55)));
-      sum = _mm_srai_epi32(_mm_add_epi32(sum, round), 14);
-      const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(sum, zero), zero);
-      const uint32_t bgrx = static_cast<uint32_t>(_mm_cvtsi128_si32(bytes));
-      if (x + 1 < dst.cols) {
-        std::memcpy(out, &bgrx, 4);  // the 4th byte is overwritten by the next pixel
-      } else {
-        std::memcpy(out, &bgrx, 3);  // the row's last pixel: nothing may be written past it
-      }
-      out += 3;
-    }
-  }
-}
-
-/// The same for a grey image, four output pixels per SSE2 step: the 2-byte top and bottom pairs of
-/// four neighbourhoods are gathered into two registers and weighed with two multiply-adds.
-void bilinearGray(const cv::Mat& src, const std::vector<int32_t>& offsets, const std::vector<int16_t>& weights,
-                  cv::Mat& dst) {
-  const uchar* base = src.data;
-  const std::size_t stride = src.step;
-  const int32_t* off = offsets.data();
-  const int16_t* wts = weights.data();
-  uchar* out = dst.data;  // continuous (created by create()): one flat run of pixels
-  const std::size_t n = dst.total();
-  const __m128i zero = _mm_setzero_si128();
-  const __m128i round = _mm_set1_epi32(1 << 13);
-  auto pair = [](const uchar* p) {
-    uint16_t v;
-    std::memcpy(&v, p, 2);
-    return static_cast<uint32_t>(v);
-  };
-  std::size_t i = 0;
-  for (; i + 4 <= n; i += 4, off += 4, wts += 16) {
-    const uchar* p0 = base + off[0];
-    const uchar* p1 = base + off[1];
-    const uchar* p2 = base + off[2];
-    const uchar* p3 = base + off[3];
-    const auto top01 = static_cast<int>(pair(p0) | pair(p1) << 16), top23 = static_cast<int>(pair(p2) | pair(p3) << 16);
-    const auto bot01 = static_cast<int>(pair(p0 + stride) | pair(p1 + stride) << 16);
-    const auto bot23 = static_cast<int>(pair(p2 + stride) | pair(p3 + stride) << 16);
-    const __m128i top = _mm_unpacklo_epi8(_mm_set_epi32(0, 0, top23, top01), zero);
-    const __m128i bottom = _mm_unpacklo_epi8(_mm_set_epi32(0, 0, bot23, bot01), zero);
-    __m128i sum = _mm_add_epi32(_mm_madd_epi16(top, _mm_loadu_si128(reinterpret_cast<const __m128i*>(wts))),
-                                _mm_madd_epi16(bottom, _mm_loadu_si128(reinterpret_cast<const __m128i*>(wts + 8))));
-    sum = _mm_srai_epi32(_mm_add_epi32(sum, round), 14);
-    const auto four = static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(sum, zero), zero)));
-    std::memcpy(out + i, &four, 4);
-  }
-  for (std::size_t k = 0; i < n; ++i, ++k) {  // the tail (when the pixel count is not a multiple of 4)
-    const uchar* p = base + off[k];
-    const int value = p[0] * wts[2 * k] + p[1] * wts[2 * k + 1] + p[stride] * wts[8 + 2 * k] +
-                      p[stride + 1] * wts[8 + 2 * k + 1];
-    out[i] = static_cast<uchar>((value + (1 << 13)) >> 14);
-  }
-}
-
-}  // namespace
-
 void CameraRenderer::applyDistortion() {
   // The margin keeps every 2x2 neighbourhood inside ideal_: no bounds checks per pixel.
   distorted_.create(output_.size(), output_.type());
   if (ideal_.channels() == 4) {
-    bilinearBgrx(ideal_, remap_offset_, remap_weights_, distorted_);
+    detail::bilinearBgrx(ideal_, remap_offset_.data(), remap_weights_.data(), distorted_);
   } else {
-    bilinearGray(ideal_, remap_offset_, remap_weights_, distorted_);
+    detail::bilinearGray(ideal_, remap_offset_.data(), remap_weights_.data(), distorted_);
   }
 }
 
