@@ -26,6 +26,9 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from eval_recorder import percentile  # noqa: E402  (one percentile for eval, demo and campaign)
+from mono_comparison import run  # noqa: E402  (one way to run a tool and stop on its failure)
 # Near range for the two mono_pose instances, far range for the disparity detector, and the dark
 # approach where only the IR instance sees the target.
 SCENARIOS = [
@@ -36,23 +39,6 @@ SCENARIOS = [
 CAMERAS = ["stereo_left", "stereo_right", "ir"]
 ESTIMATORS = ["disparity", "mono_visible", "mono_ir"]
 RATE_HZ = 15.0
-
-
-def run(cmd):
-    proc = subprocess.run([str(c) for c in cmd], cwd=ROOT, capture_output=True, text=True)
-    if proc.returncode != 0:
-        sys.stderr.write(proc.stdout + proc.stderr)
-        raise SystemExit(f"failed: {' '.join(str(c) for c in cmd)}")
-    return proc.stdout
-
-
-def percentile(values, q):
-    if not values:
-        return None
-    v = sorted(values)
-    k = (len(v) - 1) * q
-    lo, hi = math.floor(k), math.ceil(k)
-    return v[lo] + (v[hi] - v[lo]) * (k - lo)
 
 
 def angle_deg(qa, qb):
@@ -80,11 +66,11 @@ def compare(raw, coded):
                 rot.append(angle_deg(a["quaternion_xyzw"], b["quaternion_xyzw"]))
         out[est] = {
             "frames": n, "valid_raw": valid_raw, "valid_coded": valid_coded, "valid_both": len(pos_mm),
-            "position_diff_mm": {"median": percentile(pos_mm, 0.5), "p95": percentile(pos_mm, 0.95),
+            "position_diff_mm": {"median": percentile(pos_mm, 50), "p95": percentile(pos_mm, 95),
                                  "max": max(pos_mm) if pos_mm else None},
-            "position_diff_pct_of_range": {"median": percentile(pct, 0.5), "p95": percentile(pct, 0.95),
+            "position_diff_pct_of_range": {"median": percentile(pct, 50), "p95": percentile(pct, 95),
                                            "max": max(pct) if pct else None},
-            "orientation_diff_deg": {"median": percentile(rot, 0.5), "p95": percentile(rot, 0.95),
+            "orientation_diff_deg": {"median": percentile(rot, 50), "p95": percentile(rot, 95),
                                      "max": max(rot) if rot else None},
         }
     return out
@@ -169,8 +155,8 @@ def main():
             "bytes_per_frame_mean": mean_bytes,
             "bytes_per_frame_max": {cam: max(v) for cam, v in sizes.items()},
             "mb_per_s_at_15hz_all_three": sum(mean_bytes.values()) * RATE_HZ / 1e6,
-            "encode_ms_median": {cam: percentile(v, 0.5) for cam, v in enc_ms.items()},
-            "decode_ms_median": {cam: percentile(v, 0.5) for cam, v in dec_ms.items()},
+            "encode_ms_median": {cam: percentile(v, 50) for cam, v in enc_ms.items()},
+            "decode_ms_median": {cam: percentile(v, 50) for cam, v in dec_ms.items()},
             "estimates_vs_raw": compare(all_raw, all_coded),
             "per_scenario": {sc: compare(raw_est[sc], coded_est[sc]) for sc in args.scenarios},
         }
