@@ -51,7 +51,8 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   PlannerConfig c;
   ApproachConfig& l = c.law;
   l.safe_radius_m = requireDouble(p, "safe_radius_m");
-  l.probe_x_m = requireDouble(p, "probe_x_m");
+  // The robot's geometry has one home, config/robot.yaml, loaded under ~robot by the launch file.
+  l.probe_x_m = requireDouble(p, "robot/chaser/docking_probe_x_m");
   l.camera_half_fov_rad = requireDouble(p, "camera_half_fov_rad");
   l.fov_margin_rad = requireDouble(p, "fov_margin_rad");
   l.tangent_margin_rad = requireDouble(p, "tangent_margin_rad");

@@ -6,7 +6,7 @@ Every docking starts through the docking action (docking/dock), as an operator s
 every cmd_vel zero, the chaser (truth) within 1 mm of where it was.
 
 mode "dock": the planner must reach DOCKED within ~timeout_s (sim); at that moment the TRUE probe tip
-  (base_link x = probe_x_m on tf world -> chaser_truth) must be within max_position_error_m of the TRUE
+  (base_link x = robot.yaml's docking_probe_x_m on tf world -> chaser_truth) must be within max_position_error_m of the TRUE
   port origin (tf world -> target_truth) in the floor plane, and the chaser's x axis within
   max_yaw_error_deg of the reversed port axis.
 mode "lost": this node relays the arbiter's target/estimate to the planner (remapped onto
@@ -146,7 +146,8 @@ class ClosedLoopCheck(unittest.TestCase):
 
     def check_dock(self):
         timeout = rospy.get_param("~timeout_s", 240.0)
-        probe_x = rospy.get_param("~probe_x_m", 0.18)
+        # The probe tip from the one home of the robot's geometry (robot.yaml, loaded for the planner).
+        probe_x = rospy.get_param("/planner/robot/chaser/docking_probe_x_m")
         max_pos = rospy.get_param("~max_position_error_m", 0.01)
         max_yaw = rospy.get_param("~max_yaw_error_deg", 1.0)
         t0 = self.check_idle_then_start(self.wait_clock())

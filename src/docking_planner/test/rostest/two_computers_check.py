@@ -125,7 +125,7 @@ class TwoComputers(unittest.TestCase):
             check = [sys.executable, str(pathlib.Path(__file__).resolve()), "--inside", "--text",
                      "__name:=two_computers_inside", "_robot_ip:=" + robot_ip, "_laptop_ip:=" + laptop_ip]
             check += ["_%s:=%s" % (k, rospy.get_param("~" + k)) for k in
-                      ("mode", "timeout_s", "probe_x_m", "max_position_error_m", "max_yaw_error_deg")]
+                      ("mode", "timeout_s", "max_position_error_m", "max_yaw_error_deg")]
             inside = net.start(net.laptop, laptop_ip, check, log_dir / "check.log")
             procs.append(inside)
             code = inside.wait(timeout=rospy.get_param("~check_wall_timeout_s", 780.0))
