@@ -8,9 +8,9 @@
 # Environment: ARM64_ROOT (default /work/arm64-root: keep it outside any repository), JOBS (2),
 # FRESH=1 (delete the chroot's clone and build first; needed when switching CROSS), ROSTESTS (""
 # none, default; "all"; or package names, e.g. "omni_base docking_planner"), MIRROR (default
-# http://deb.debian.org/debian), CROSS=1 (compile with Debian's x86-64 cross g++-aarch64-linux-gnu
-# installed in the chroot: the same GCC 12 and the same arm64 libraries, but the compiler runs at
-# native speed; cmake, the code generators and the tests still run emulated).
+# http://deb.debian.org/debian), CROSS=1 (compile with Debian's x86-64 cross g++-12 for arm64,
+# unpacked in the chroot: the same GCC 12.2 and the same arm64 libraries, but the compiler runs at
+# native speed; cmake, make, the code generators and the tests still run emulated).
 set -euo pipefail
 
 ROOT="${ARM64_ROOT:-/work/arm64-root}"
@@ -120,13 +120,24 @@ if [ -n "$missing" ]; then
 fi
 COMPILERS=""
 if [ "${CROSS:-0}" = 1 ]; then
-  # The x86-64 cross compiler runs natively inside the arm64 chroot (multiarch amd64); Debian's
-  # cross gcc searches the multiarch folders /usr/include/aarch64-linux-gnu and /usr/lib/aarch64-linux-gnu.
-  if ! in_chroot "command -v aarch64-linux-gnu-g++ >/dev/null"; then
-    in_chroot "dpkg --add-architecture amd64 && apt-get update &&
-      apt-get install -y --no-install-recommends g++-aarch64-linux-gnu:amd64"
+  # Debian's x86-64 cross compiler for arm64, unpacked into /opt/xgcc of the chroot (installing it
+  # there would clash with the native arm64 gcc over /usr/bin/aarch64-linux-gnu-gcc-12). It runs
+  # natively inside the chroot with the amd64 libraries it needs (multiarch), and finds the
+  # chroot's arm64 headers and libraries in /usr/include/aarch64-linux-gnu and /usr/lib/aarch64-linux-gnu.
+  XGCC=/opt/xgcc/usr/bin/aarch64-linux-gnu
+  if [ ! -x "$ROOT$XGCC-g++-12" ]; then
+    in_chroot "dpkg --add-architecture amd64 && apt-get update && apt-get install -y --no-install-recommends \
+      libc6:amd64 libgcc-s1:amd64 libstdc++6:amd64 libgmp10:amd64 libisl23:amd64 libmpc3:amd64 \
+      libmpfr6:amd64 libzstd1:amd64 zlib1g:amd64 libjansson4:amd64 libbinutils:amd64"
+    mkdir -p "$ROOT/opt/xgcc-debs" "$ROOT/opt/xgcc"
+    (cd "$ROOT/opt/xgcc-debs" && apt-get download cpp-12-aarch64-linux-gnu gcc-12-aarch64-linux-gnu \
+      g++-12-aarch64-linux-gnu binutils-aarch64-linux-gnu libgcc-12-dev-arm64-cross \
+      libstdc++-12-dev-arm64-cross libstdc++6-arm64-cross libgcc-s1-arm64-cross)
+    for deb in "$ROOT"/opt/xgcc-debs/*.deb; do dpkg-deb -x "$deb" "$ROOT/opt/xgcc"; done
+    # The cross binutils' own x86-64 libraries, where the amd64 loader looks by default.
+    cp -an "$ROOT/opt/xgcc/usr/lib/x86_64-linux-gnu/." "$ROOT/usr/lib/x86_64-linux-gnu/"
   fi
-  COMPILERS="-DCMAKE_C_COMPILER=/usr/bin/aarch64-linux-gnu-gcc -DCMAKE_CXX_COMPILER=/usr/bin/aarch64-linux-gnu-g++"
+  COMPILERS="-DCMAKE_C_COMPILER=$XGCC-gcc-12 -DCMAKE_CXX_COMPILER=$XGCC-g++-12"
 fi
 
 # --- the workspace -----------------------------------------------------------------------------
