@@ -65,15 +65,18 @@ class SimCamerasTest(unittest.TestCase):
             self.assertAlmostEqual(rate, self.rate, delta=0.05 * self.rate, msg="%s rate %.2f Hz" % (base, rate))
             for a, b in zip(stamps, stamps[1:]):
                 self.assertAlmostEqual(b - a, 1.0 / self.rate, delta=1e-3, msg="%s: uneven frame spacing" % base)
-            img = images[-1]
+            # The newest image whose camera_info has arrived (the info of the very last image may still
+            # be on its way: image and info are two topics).
+            info_by_stamp = {m.header.stamp: m for m in self.infos[base]}
+            paired = [m for m in images if m.header.stamp in info_by_stamp]
+            self.assertGreater(len(paired), len(images) // 2, "%s: most images have no camera_info with their stamp" % base)
+            img = paired[-1]
             self.assertEqual(img.encoding, encoding)
             self.assertEqual((img.width, img.height), (640, 480))
             self.assertEqual(img.header.frame_id, frame)
             self.assertEqual(len(img.data), img.step * img.height)
             with open(os.path.join(self.config_dir, calib_file)) as f:
                 calib = yaml.safe_load(f)
-            info_by_stamp = {m.header.stamp: m for m in self.infos[base]}
-            self.assertIn(img.header.stamp, info_by_stamp, "%s: no camera_info with the image's stamp" % base)
             info = info_by_stamp[img.header.stamp]
             self.assertEqual(info.header.frame_id, frame)
             self.assertEqual((info.width, info.height), (640, 480))
@@ -99,7 +102,13 @@ class SimCamerasTest(unittest.TestCase):
             self.assertAlmostEqual(math.sqrt(p.x ** 2 + p.y ** 2 + p.z ** 2), 2.90, delta=0.01)
             self.assertGreater(p.z, 2.85)  # in front of the camera, along its optical axis
         truth_stamps = set(m.header.stamp for m in self.truth["sim/truth/stereo_left"])
-        self.assertTrue(left_stamps <= truth_stamps | {max(left_stamps)}, "images without truth")
+        # The two subscriptions connect at different moments (on a busy machine the truth one can come
+        # up several frames after the image one): compare over the span both were connected.
+        first, last = min(truth_stamps), max(truth_stamps)
+        overlap = {s for s in left_stamps if first <= s <= last}
+        self.assertGreater(len(overlap), len(left_stamps) // 2, "truth covers too few of the images")
+        missing = sorted(s.to_sec() for s in overlap - truth_stamps)
+        self.assertFalse(missing, "images without truth at %s" % missing[:5])
 
 
 if __name__ == "__main__":
