@@ -28,7 +28,7 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from eval_recorder import percentile  # noqa: E402  (one percentile for eval, demo and campaign)
-from mono_comparison import run  # noqa: E402  (one way to run a tool and stop on its failure)
+from mono_comparison import fmt, run  # noqa: E402  (one way to run a tool, one way to print a figure)
 # Near range for the two mono_pose instances, far range for the disparity detector, and the dark
 # approach where only the IR instance sees the target.
 SCENARIOS = [
@@ -74,10 +74,6 @@ def compare(raw, coded):
                                      "max": max(rot) if rot else None},
         }
     return out
-
-
-def fmt(v, spec):
-    return "-" if v is None else format(v, spec)
 
 
 def main():

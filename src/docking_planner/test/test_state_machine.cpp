@@ -47,6 +47,12 @@ class StateMachineTest : public ::testing::Test {
     if (see_target) planner_.addObservation(portAt(t_, port_));
     return planner_.update(t_, odomAt(t_, chaser));
   }
+  // Steps until the docking ends by itself (an output with an outcome), at most max_cycles.
+  PlannerOutput stepUntilEnded(const Pose2D& chaser, bool see_target, int max_cycles) {
+    PlannerOutput out;
+    for (int i = 0; i < max_cycles && !out.outcome; ++i) out = step(chaser, see_target);
+    return out;
+  }
   PlannerOutput runFor(double seconds, const Pose2D& chaser, bool see_target) {
     PlannerOutput out;
     const int cycles = static_cast<int>(std::round(seconds / kDt));
@@ -354,12 +360,8 @@ TEST_F(StateMachineTest, TimeBudgetEndsTheDocking) {
   PlannerOutput out = runFor(1.9, kFar, true);
   EXPECT_EQ(out.state, DockingPhase::kApproach);
   EXPECT_FALSE(out.outcome.has_value());
-  bool ended = false;
-  for (int i = 0; i < 4 && !ended; ++i) {
-    out = step(kFar, true);
-    ended = out.outcome.has_value();
-  }
-  ASSERT_TRUE(ended);
+  out = stepUntilEnded(kFar, true, 4);
+  ASSERT_TRUE(out.outcome.has_value());
   EXPECT_EQ(*out.outcome, DockingOutcome::kTimeBudget);
   EXPECT_TRUE(isZero(out.command));
   EXPECT_EQ(step(kFar, true).state, DockingPhase::kIdle);
@@ -373,12 +375,8 @@ TEST_F(StateMachineTest, SearchingPastTheTimeoutEndsAsTargetLost) {
   PlannerOutput out = runFor(4.9, kFar, false);
   EXPECT_EQ(out.state, DockingPhase::kSearch);
   EXPECT_FALSE(isZero(out.command));  // turning to look
-  bool ended = false;
-  for (int i = 0; i < 10 && !ended; ++i) {
-    out = step(kFar, false);
-    ended = out.outcome.has_value();
-  }
-  ASSERT_TRUE(ended);
+  out = stepUntilEnded(kFar, false, 10);
+  ASSERT_TRUE(out.outcome.has_value());
   EXPECT_EQ(*out.outcome, DockingOutcome::kTargetLost);
   EXPECT_TRUE(isZero(out.command));
   EXPECT_EQ(step(kFar, false).state, DockingPhase::kIdle);

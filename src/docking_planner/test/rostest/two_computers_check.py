@@ -63,7 +63,6 @@ class Network:
 
     def down(self):
         for ns in (self.robot, self.laptop):
-            run(["ip", "netns", "pids", ns])  # (informative only)
             run(["ip", "netns", "del", ns])  # deleting a namespace deletes its end of the veth pair
 
     def env(self, ip):
