@@ -106,8 +106,11 @@ def write_summary(out, rows):
         if not r["success"]:
             key = r["cause"].split(":")[0] if r.get("cause") else "unknown"
             causes[key] = causes.get(key, 0) + 1
+    seeds = [r["seed"] for r in rows]
     s = {
         "runs": len(rows),
+        # Report every campaign with its seeds: tune on one range, report on another (issue 11).
+        "seed_range": [min(seeds), max(seeds)] if seeds else None,
         "success_rate": (sum(r["success"] for r in rows) / len(rows)) if rows else 0.0,
         "docked_rate": (len(docked) / len(rows)) if rows else 0.0,
         "position_error_mm": {"median": percentile(pos, 50), "p95": percentile(pos, 95), "max": max(pos) if pos else None},

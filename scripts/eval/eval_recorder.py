@@ -39,6 +39,45 @@ def rotation_angle_deg(qa, qb):
     return math.degrees(2.0 * math.acos(min(1.0, dot)))
 
 
+def rotation_error_vector(q_est, q_true):
+    """dtheta with R_est = Exp(dtheta) * R_true (TargetEstimate's covariance convention: rotation about
+    the camera's axes), rad."""
+    re_, rt = quat_to_matrix(q_est), quat_to_matrix(q_true)
+    # D = R_est * R_true^T
+    d = [[sum(re_[i][k] * rt[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
+    cos_angle = max(-1.0, min(1.0, (d[0][0] + d[1][1] + d[2][2] - 1.0) / 2.0))
+    angle = math.acos(cos_angle)
+    axis = (d[2][1] - d[1][2], d[0][2] - d[2][0], d[1][0] - d[0][1])
+    s = math.sin(angle)
+    if s < 1e-9:
+        return tuple(0.5 * a for a in axis)  # small angle: the skew part is the vector itself
+    return tuple(angle * a / (2.0 * s) for a in axis)
+
+
+# An estimate is "confidently wrong" when it is valid and off by more than these (issue 11).
+WRONG_POSITION_FRACTION_OF_RANGE = 0.05
+WRONG_ORIENTATION_DEG = 10.0
+# Components whose variance is at least this are "not estimated" (TargetEstimate's convention).
+NOT_ESTIMATED_VARIANCE = 1e6
+AXES = ("x", "y", "z", "rx", "ry", "rz")
+
+
+def normalized_errors(est, truth):
+    """Per axis (x, y, z, rx, ry, rz): error / sigma from the estimate's covariance, None for an axis
+    the estimate does not claim (invalid part or variance >= 1e6)."""
+    pe, pt = est.pose.pose.position, truth.pose.pose.position
+    errors = [pe.x - pt.x, pe.y - pt.y, pe.z - pt.z]
+    if est.orientation_valid:
+        errors += list(rotation_error_vector(est.pose.pose.orientation, truth.pose.pose.orientation))
+    else:
+        errors += [None, None, None]
+    out = []
+    for i, e in enumerate(errors):
+        var = est.pose.covariance[7 * i]
+        out.append(None if (e is None or not (0.0 < var < NOT_ESTIMATED_VARIANCE)) else e / math.sqrt(var))
+    return out
+
+
 def percentile(values, p):
     if not values:
         return None
@@ -99,6 +138,8 @@ class EvalRecorder:
         frames = len(samples)
         valid = [(e, t) for e, t in samples if e.valid and e.position_valid]
         pos_err, range_err, ori_err, lin_err, ang_err, proc = [], [], [], [], [], []
+        normalized = {axis: [] for axis in AXES}
+        confident_wrong = 0
         unmatched = 0
         for est, truth in valid:
             if truth is None:
@@ -109,8 +150,14 @@ class EvalRecorder:
             true_range = math.sqrt(pt.x ** 2 + pt.y ** 2 + pt.z ** 2)
             est_range = math.sqrt(pe.x ** 2 + pe.y ** 2 + pe.z ** 2)
             range_err.append(100.0 * abs(est_range - true_range) / true_range)
+            wrong = pos_err[-1] > WRONG_POSITION_FRACTION_OF_RANGE * true_range
             if est.orientation_valid:
                 ori_err.append(rotation_angle_deg(est.pose.pose.orientation, truth.pose.pose.orientation))
+                wrong = wrong or ori_err[-1] > WRONG_ORIENTATION_DEG
+            confident_wrong += int(wrong)
+            for axis, z in zip(AXES, normalized_errors(est, truth)):
+                if z is not None:
+                    normalized[axis].append(z)
             if est.twist_valid:
                 le, lt = est.twist.twist.linear, truth.twist.twist.linear
                 ae, at = est.twist.twist.angular, truth.twist.twist.angular
@@ -132,6 +179,11 @@ class EvalRecorder:
             "angular_velocity_error_median_dps": median(ang_err),
             "rate_hz": ((frames - 1) / span) if span > 0 else 0.0,
             "processing_ms_median": median(proc),
+            # Issue 11: valid estimates off by > 5 % of range or > 10 deg, and the share of errors within
+            # 3 sigma of the estimate's own covariance, per axis it claims (None: no such estimate).
+            "confident_wrong": confident_wrong,
+            "within_3_sigma": {axis: (sum(1 for z in zs if abs(z) <= 3.0) / len(zs)) if zs else None
+                               for axis, zs in normalized.items()},
         }
         raw = [
             {"t": e.header.stamp.to_sec(), "valid": bool(e.valid), "selected_source": e.selected_source,

@@ -22,7 +22,22 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 FAR = [(f"eval_far_{r}m_{p}", "nominal") for r in ("2", "3", "4", "6") for p in ("on", "off")]
 NEAR = [(f"eval_near_{r}m_{p}", "nominal") for r in ("0p4", "0p7", "1", "1p4", "2") for p in ("on", "off")]
 SPECIAL = [("eval_rotating_1m", "nominal"), ("eval_dark_1m", "dark"), ("eval_glare_1m", "glare")]
-SETS = {"far": FAR, "near": NEAR, "special": SPECIAL, "all": FAR + NEAR + SPECIAL}
+
+
+def realistic_scenarios():
+    """Issue 11's scenarios (config/scenarios/eval_real_*.yaml: blur, exposure, glare, clutter), each with
+    the lighting its file names."""
+    import yaml
+    found = []
+    for path in sorted((ROOT / "config" / "scenarios").glob("eval_real_*.yaml")):
+        lighting = (yaml.safe_load(path.read_text()).get("scenario") or {}).get("lighting", "nominal")
+        found.append((path.stem, lighting))
+    return found
+
+
+REALISTIC = realistic_scenarios()
+SETS = {"far": FAR, "near": NEAR, "special": SPECIAL, "realistic": REALISTIC,
+        "all": FAR + NEAR + SPECIAL + REALISTIC}
 
 
 def free_port():
@@ -85,6 +100,15 @@ def run_scenario(name, lighting, args, raw_dir, log_dir):
         print(f"  {name}: FAILED (see {log_dir / (name + '.log')})")
         return None
     return json.loads(out_json.read_text())
+
+
+def coverage_text(entry):
+    """The worst per-axis share of errors within 3 sigma, and its axis ("n/a" when nothing claimed)."""
+    shares = [(share, axis) for axis, share in (entry.get("within_3_sigma") or {}).items() if share is not None]
+    if not shares:
+        return "n/a"
+    share, axis = min(shares)
+    return f"{share:.2f} ({axis})"
 
 
 def plot(scenarios, out_dir):
@@ -183,7 +207,8 @@ def main():
             print(f"  {source:13s} frames {v['frames']:4d}  detection {v['detection_rate']:.2f}  "
                   f"pos err median {('%.4f m' % err) if err is not None else '   n/a '}  "
                   f"range err {('%.2f %%' % v['range_error_median_pct']) if v['range_error_median_pct'] is not None else 'n/a'}  "
-                  f"{v['rate_hz']:.1f} Hz  {v['processing_ms_median'] or 0:.1f} ms", flush=True)
+                  f"{v['rate_hz']:.1f} Hz  {v['processing_ms_median'] or 0:.1f} ms  "
+                  f"wrong {v.get('confident_wrong', 0)}  3-sigma {coverage_text(v)}", flush=True)
 
     summary = {"scenarios": [{k: s[k] for k in ("name", "range_m", "lighting", "sources")} for s in scenarios]}
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2))
