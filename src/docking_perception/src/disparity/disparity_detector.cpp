@@ -133,14 +133,22 @@ BlobShape measureBlobShape(const BlobCandidate& blob, const cv::Mat& clean,
   return shape;
 }
 
-// Empty when the blob can be the mockup; otherwise what does not fit, with the numbers.
+// Whether `box` reaches within `margin` of the edge of `region` (the blob is cut there).
+bool touchesBorder(const cv::Rect& box, const cv::Rect& region, int margin) {
+  return box.x <= region.x + margin || box.x + box.width >= region.x + region.width - margin ||
+         box.y <= region.y + margin || box.y + box.height >= region.y + region.height - margin;
+}
+
+// Empty when the blob can be the mockup; otherwise what does not fit, with the numbers. A blob cut by
+// the border (`cut`) is only held to the upper bounds: the target partly out of view must stop the
+// search (and be reported as touching the border), not be looked behind.
 std::string shapeMismatch(const BlobShape& shape, const ShapeBounds& bounds, const DetectorParams& p,
-                          double focal_px) {
+                          double focal_px, bool cut) {
   if (!(shape.range_z_m > 0.0)) return "no valid disparity inside the blob";
   const double pixel_m = p.shape_tolerance_px * shape.range_z_m / focal_px;
   const double k = p.shape_tolerance_fraction;
   auto check = [&](const char* what, double value, double low, double high) -> std::string {
-    low = std::max(0.0, low * (1.0 - k) - pixel_m);
+    low = cut ? 0.0 : std::max(0.0, low * (1.0 - k) - pixel_m);
     high = high * (1.0 + k) + pixel_m;
     if (value >= low && value <= high) return "";
     return std::string(what) + " " + formatNumber(value) + " m outside [" + formatNumber(low) + ", " +
@@ -148,7 +156,7 @@ std::string shapeMismatch(const BlobShape& shape, const ShapeBounds& bounds, con
   };
   std::string misfit = check("width", shape.width_m, bounds.min_width_m, bounds.max_width_m);
   if (misfit.empty()) misfit = check("height", shape.height_m, bounds.min_height_m, bounds.max_height_m);
-  if (misfit.empty() && shape.fill < p.min_fill_fraction) {
+  if (misfit.empty() && !cut && shape.fill < p.min_fill_fraction) {
     misfit = "fill " + formatNumber(shape.fill) + " < min_fill_fraction " +
              formatNumber(p.min_fill_fraction) + " (not a solid object)";
   }
@@ -557,7 +565,9 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
         break;
       }
       candidate.shape = measureBlobShape(candidate, clean, geometry);
-      candidate.misfit = shapeMismatch(candidate.shape, bounds, p, geometry.focal_px);
+      candidate.misfit =
+          shapeMismatch(candidate.shape, bounds, p, geometry.focal_px,
+                        touchesBorder(candidate.box, region, p.border_margin_px));
       if (!candidate.misfit.empty()) {
         ++result.not_target_shaped_skipped;
         if (!first_misfit.valid) first_misfit = std::move(candidate);

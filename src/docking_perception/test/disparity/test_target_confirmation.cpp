@@ -165,6 +165,18 @@ TEST(ShapeCheck, TargetAtAnyRangeAndYawSizePasses) {
   }
 }
 
+TEST(ShapeCheck, ATargetCutByTheBorderStopsTheSearch) {
+  // The target at 1.0 m reaching out of the image on the left: it is rejected as touching the border,
+  // never looked behind to a mockup-sized box farther away.
+  cv::Mat disparity = invalidImage();
+  paintMockup(&disparity, 1.2, 5.0);    // a box of the mockup's size and shape, behind
+  paintMockup(&disparity, -0.85, 1.0);  // the target, all but its right panel out of view
+  const Detection result = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+  EXPECT_FALSE(result.found);
+  EXPECT_EQ(result.outcome, Outcome::kBlobTouchesBorder) << result.reason;
+  EXPECT_LT(result.position_m.z(), 2.0);
+}
+
 TEST(SearchHint, PrefersTheTargetShapedBlobInsideTheGate) {
   // Two mockup-sized boxes at the same depth: without a hint the larger/nearer is taken; with the
   // track's hint on the other one, that one.
