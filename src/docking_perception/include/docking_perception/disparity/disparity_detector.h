@@ -10,7 +10,7 @@
 //  4. threshold just below it (a depth band that holds the target's own depth), keep the largest
 //     blob (outer contour); if it is smaller than min_blob_area_px or thinner than
 //     min_blob_thickness_px (mismatches at occlusion edges, speckles), remove everything at that
-//     depth and search again behind it (at most 5 times);
+//     depth and search again behind it (at most 8 times);
 //     With the shape check on, every blob of the band (largest first) is measured: its metric
 //     width, height and fill must be those the mockup of config/target.yaml can show from some yaw
 //     (TargetShape). A band without such a blob is removed and the search looks behind it too, so a
@@ -166,7 +166,8 @@ struct Detection {
   int valid_pixels = 0;              // valid disparities in the region of interest
   double closest_disparity_px = 0;   // robust closest disparity of the whole image
   double threshold_disparity_px = 0; // mask = filtered disparity >= this
-  int near_objects_skipped = 0;      // nearer objects too small or thin that were looked behind
+  int near_objects_skipped = 0;      // nearer depth bands looked behind (too small, thin, or no
+                                     // target-shaped blob in them)
   double blob_thickness_px = 0;      // diameter of the largest disc inside the blob
   int not_target_shaped_skipped = 0; // blobs measured and found not target-shaped
   BlobShape shape;                   // of the chosen blob (when the shape check ran)
