@@ -4,8 +4,10 @@
 # ROS-free core: the paper's detector made robust (no ros:: here; gtests need no roscore).
 add_library(docking_perception_disparity_core
   src/disparity/disparity_detector.cpp
+  src/disparity/target_track_gate.cpp
 )
-target_link_libraries(docking_perception_disparity_core ${OpenCV_LIBRARIES})
+target_include_directories(docking_perception_disparity_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR})
+target_link_libraries(docking_perception_disparity_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES})
 
 # Test and benchmark support: a synthetic rectified stereo pair with known geometry, and the
 # matcher settings read from config/stereo_image_proc.yaml (the ones the launch file uses).
@@ -52,9 +54,12 @@ install(DIRECTORY include/${PROJECT_NAME}/disparity/
 
 if(CATKIN_ENABLE_TESTING)
   # The detector on synthetic disparity images with known answers.
-  catkin_add_gtest(test_disparity_detector test/disparity/test_disparity_detector.cpp)
+  catkin_add_gtest(test_disparity_detector test/disparity/test_disparity_detector.cpp
+    test/disparity/test_target_confirmation.cpp)
   if(TARGET test_disparity_detector)
     target_link_libraries(test_disparity_detector docking_perception_disparity_core gtest_main)
+    target_compile_definitions(test_disparity_detector PRIVATE
+      DISPARITY_CONFIG_DIR="${DISPARITY_CONFIG_DIR}")
   endif()
 
   # The whole far-range pipeline on rendered stereo pairs: matcher with the launch file's settings,

@@ -119,7 +119,9 @@ int main(int argc, char** argv) {
     const auto right_calibration =
         testing::loadCameraCalibration(config_dir + "/cameras/stereo_right.yaml");
     const auto settings = testing::loadMatcherSettings(config_dir + "/stereo_image_proc.yaml");
-    const auto params = testing::loadDetectorParams(config_dir + "/disparity_detector.yaml");
+    auto params = testing::loadDetectorParams(config_dir + "/disparity_detector.yaml");
+    params.target_shape =
+        docking_perception::disparity::loadTargetShape(config_dir + "/target.yaml");
 
     // The fixed scene: the target face-on at 3 m, slightly off-axis, floor and a wall at 8 m.
     const double truth_x = 0.3, truth_y = 0.0, truth_z = 3.0;
@@ -245,7 +247,11 @@ int main(int argc, char** argv) {
                 << detection.position_m.x() << ", " << detection.position_m.y() << ", "
                 << detection.position_m.z() << ") m, " << detection.blob_pixels << " px, thickness "
                 << detection.blob_thickness_px << " px, " << detection.near_objects_skipped
-                << " near objects skipped\n";
+                << " near objects skipped, " << detection.not_target_shaped_skipped
+                << " not target-shaped; blob " << detection.shape.width_m << " x "
+                << detection.shape.height_m << " m, fill " << detection.shape.fill << ", depth extent "
+                << detection.shape.depth_extent_m << " m; outcome "
+                << docking_perception::disparity::outcomeName(detection.outcome) << "\n";
       std::cout << "  wrote " << output_path << "\n";
       return 0;
     }

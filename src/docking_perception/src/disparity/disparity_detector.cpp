@@ -6,7 +6,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <climits>
+#include <functional>
+#include <limits>
+#include <utility>
+
 #include <opencv2/imgproc.hpp>
+#include <yaml-cpp/yaml.h>
 
 namespace docking_perception {
 namespace disparity {
@@ -14,8 +20,15 @@ namespace {
 
 // Sub-pixel resolution of the closest-disparity histogram: OpenCV's matchers give 1/16 px.
 constexpr double kHistogramBinsPerPx = 16.0;
-// How many too-small near objects the search may look behind before it gives up.
-constexpr int kMaxNearObjectsSkipped = 5;
+// How many nearer depth bands (too small, too thin or not target-shaped) the search may look behind
+// before it gives up: a lab has walls, furniture and people in front of a target 6 m away.
+constexpr int kMaxNearObjectsSkipped = 8;
+// Blobs of one band measured, largest first (the rest are crumbs).
+constexpr std::size_t kMaxBlobsPerBand = 6;
+// Yaw steps of the mockup's outline in shapeBounds (0 to 90 deg; the outline is symmetric).
+constexpr int kYawSteps = 90;
+// Columns sampled across the mockup's outline for its fill.
+constexpr int kFillSamples = 200;
 
 std::string joinErrors(const std::vector<std::string>& errors) {
   std::string joined;
@@ -67,7 +80,199 @@ double disparityBehind(const StereoGeometry& geometry, double disparity_px, doub
   return focal_baseline / (focal_baseline / disparity_px + depth_band_m);
 }
 
+
+// One blob of a depth band: its outer contour, bounding box and the band's pixels inside the contour.
+struct BlobCandidate {
+  bool valid = false;
+  std::vector<cv::Point> contour;
+  cv::Rect box;
+  cv::Mat local_mask;  // CV_8U, box-sized: 255 on the blob's pixels
+  int area = 0;
+  double thickness_px = 0.0;
+  BlobShape shape;
+  std::string misfit;  // why it is not the target (shape check), empty when it may be
+};
+
+BlobCandidate makeCandidate(const std::vector<cv::Point>& contour, const cv::Mat& band_mask) {
+  BlobCandidate candidate;
+  candidate.valid = true;
+  candidate.contour = contour;
+  candidate.box = cv::boundingRect(contour);
+  // The blob: thresholded pixels inside the contour (holes of invalid disparity stay out).
+  candidate.local_mask = cv::Mat(candidate.box.size(), CV_8UC1, cv::Scalar(0));
+  cv::drawContours(candidate.local_mask, std::vector<std::vector<cv::Point>>{contour}, 0,
+                   cv::Scalar(255), cv::FILLED, cv::LINE_8, cv::noArray(), INT_MAX,
+                   -candidate.box.tl());
+  cv::bitwise_and(candidate.local_mask, band_mask(candidate.box), candidate.local_mask);
+  candidate.area = cv::countNonZero(candidate.local_mask);
+  candidate.thickness_px = blobThickness(candidate.local_mask);
+  return candidate;
+}
+
+// Metric size of a blob at its median raw disparity (the filter chose the pixels).
+BlobShape measureBlobShape(const BlobCandidate& blob, const cv::Mat& clean,
+                           const StereoGeometry& geometry) {
+  std::vector<float> values;
+  values.reserve(static_cast<std::size_t>(blob.area));
+  for (int v = 0; v < blob.box.height; ++v) {
+    const std::uint8_t* mask_row = blob.local_mask.ptr<std::uint8_t>(v);
+    const float* row = clean.ptr<float>(blob.box.y + v) + blob.box.x;
+    for (int u = 0; u < blob.box.width; ++u) {
+      if (mask_row[u] != 0 && row[u] > 0.0f) values.push_back(row[u]);
+    }
+  }
+  BlobShape shape;
+  shape.fill = static_cast<double>(blob.area) / std::max(1, blob.box.area());
+  if (values.empty()) return shape;
+  const double focal_baseline = geometry.focal_px * geometry.baseline_m;
+  const double near_d = percentile(&values, 0.9), far_d = percentile(&values, 0.1);
+  shape.range_z_m = focal_baseline / median(&values);
+  shape.width_m = blob.box.width * shape.range_z_m / geometry.focal_px;
+  shape.height_m = blob.box.height * shape.range_z_m / geometry.focal_px;
+  shape.depth_extent_m = focal_baseline / far_d - focal_baseline / near_d;
+  return shape;
+}
+
+// Whether `box` reaches within `margin` of the edge of `region` (the blob is cut there).
+bool touchesBorder(const cv::Rect& box, const cv::Rect& region, int margin) {
+  return box.x <= region.x + margin || box.x + box.width >= region.x + region.width - margin ||
+         box.y <= region.y + margin || box.y + box.height >= region.y + region.height - margin;
+}
+
+// Empty when the blob can be the mockup; otherwise what does not fit, with the numbers. A blob cut by
+// the border (`cut`) is only held to the upper bounds: the target partly out of view must stop the
+// search (and be reported as touching the border), not be looked behind.
+std::string shapeMismatch(const BlobShape& shape, const ShapeBounds& bounds, const DetectorParams& p,
+                          double focal_px, bool cut) {
+  if (!(shape.range_z_m > 0.0)) return "no valid disparity inside the blob";
+  const double pixel_m = p.shape_tolerance_px * shape.range_z_m / focal_px;
+  const double k = p.shape_tolerance_fraction;
+  auto check = [&](const char* what, double value, double low, double high) -> std::string {
+    low = cut ? 0.0 : std::max(0.0, low * (1.0 - k) - pixel_m);
+    high = high * (1.0 + k) + pixel_m;
+    if (value >= low && value <= high) return "";
+    return std::string(what) + " " + formatNumber(value) + " m outside [" + formatNumber(low) + ", " +
+           formatNumber(high) + "] m of the mockup";
+  };
+  std::string misfit = check("width", shape.width_m, bounds.min_width_m, bounds.max_width_m);
+  if (misfit.empty()) misfit = check("height", shape.height_m, bounds.min_height_m, bounds.max_height_m);
+  if (misfit.empty() && !cut && shape.fill < p.min_fill_fraction) {
+    misfit = "fill " + formatNumber(shape.fill) + " < min_fill_fraction " +
+             formatNumber(p.min_fill_fraction) + " (not a solid object)";
+  }
+  if (misfit.empty()) return "";
+  return misfit + " (blob at " + formatNumber(shape.range_z_m) + " m, " +
+         formatNumber(shape.width_m) + " x " + formatNumber(shape.height_m) + " m, fill " +
+         formatNumber(shape.fill) + ")";
+}
+
+// Rough position of a blob (its pixel centroid at its median depth), for the hint's gate.
+Eigen::Vector3d candidatePosition(const BlobCandidate& blob, const StereoGeometry& geometry) {
+  const cv::Moments moments = cv::moments(blob.local_mask, true);
+  if (!(moments.m00 > 0.0) || !(blob.shape.range_z_m > 0.0)) {
+    return Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  }
+  const double u = blob.box.x + moments.m10 / moments.m00;
+  const double v = blob.box.y + moments.m01 / moments.m00;
+  const double z = blob.shape.range_z_m;
+  return {(u - geometry.cx_px) * z / geometry.focal_px, (v - geometry.cy_px) * z / geometry.focal_px, z};
+}
+
+// Copies the blob into the detection (contour, box, full-size mask, size figures).
+void adoptBlob(const BlobCandidate& blob, cv::Size image_size, Detection* result) {
+  result->contour = blob.contour;
+  result->bounding_box = blob.box;
+  result->mask = cv::Mat(image_size, CV_8UC1, cv::Scalar(0));
+  blob.local_mask.copyTo(result->mask(blob.box));
+  result->blob_thickness_px = blob.thickness_px;
+  result->shape = blob.shape;
+}
+
+// Extent of the mockup's outline across the line of sight at `yaw` (0: face-on): the box's columns at
+// full height, the panels' at theirs. Returns width and fill (mean column height / box height).
+void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill) {
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  // Projection of a point (x forward out of the face, y to the side) on the image's horizontal.
+  auto across = [&](double x, double y) { return y * c + x * s; };
+  const double half_w = t.face_width_m / 2.0;
+  const double box_a = std::min({across(0, -half_w), across(-t.body_depth_m, -half_w)});
+  const double box_b = std::max({across(0, half_w), across(-t.body_depth_m, half_w)});
+  const double mid_x = -t.body_depth_m / 2.0;  // panels at mid depth
+  const double left_a = std::min(across(mid_x, -half_w - t.panel_span_m), across(mid_x, -half_w));
+  const double left_b = std::max(across(mid_x, -half_w - t.panel_span_m), across(mid_x, -half_w));
+  const double right_a = std::min(across(mid_x, half_w), across(mid_x, half_w + t.panel_span_m));
+  const double right_b = std::max(across(mid_x, half_w), across(mid_x, half_w + t.panel_span_m));
+  const double low = std::min({box_a, left_a, right_a}), high = std::max({box_b, left_b, right_b});
+  *width = high - low;
+  const double box_height = std::max(t.face_height_m, t.panel_height_m);
+  double covered = 0.0;
+  for (int i = 0; i < kFillSamples; ++i) {
+    const double y = low + (i + 0.5) * (*width) / kFillSamples;
+    if (y >= box_a && y <= box_b) {
+      covered += t.face_height_m;
+    } else if ((y >= left_a && y <= left_b) || (y >= right_a && y <= right_b)) {
+      covered += t.panel_height_m;
+    }
+  }
+  *fill = covered / (kFillSamples * box_height);
+}
+
 }  // namespace
+
+ShapeBounds shapeBounds(const TargetShape& shape) {
+  ShapeBounds bounds;
+  bounds.min_width_m = std::numeric_limits<double>::infinity();
+  bounds.min_fill = 1.0;
+  for (int step = 0; step <= kYawSteps; ++step) {
+    const double yaw = 0.5 * M_PI * step / kYawSteps;
+    double width = 0.0, fill = 0.0;
+    outlineAtYaw(shape, yaw, &width, &fill);
+    bounds.min_width_m = std::min(bounds.min_width_m, width);
+    bounds.max_width_m = std::max(bounds.max_width_m, width);
+    bounds.min_fill = std::min(bounds.min_fill, fill);
+  }
+  // The box is as tall as the face and shows its full height from any yaw.
+  bounds.min_height_m = shape.face_height_m;
+  bounds.max_height_m = std::max(shape.face_height_m, shape.panel_height_m);
+  return bounds;
+}
+
+TargetShape loadTargetShape(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const std::exception& error) {
+    throw std::runtime_error("cannot read target model " + path + ": " + error.what());
+  }
+  auto number = [&](const YAML::Node& node, const std::string& field) {
+    if (!node || !node.IsScalar()) throw std::runtime_error(path + ": missing field '" + field + "'");
+    double value = 0.0;
+    try {
+      value = node.as<double>();
+    } catch (const std::exception&) {
+      throw std::runtime_error(path + ": field '" + field + "' is not a number");
+    }
+    if (!(std::isfinite(value) && value >= 0.0)) {
+      throw std::runtime_error(path + ": field '" + field + "' must be >= 0");
+    }
+    return value;
+  };
+  const YAML::Node target = root["target"];
+  TargetShape shape;
+  shape.face_width_m = number(target["face"]["width_m"], "target.face.width_m");
+  shape.face_height_m = number(target["face"]["height_m"], "target.face.height_m");
+  shape.body_depth_m = number(target["body"]["depth_m"], "target.body.depth_m");
+  shape.panel_span_m = 0.0;
+  shape.panel_height_m = 0.0;
+  if (target["solar_panels"]) {
+    shape.panel_span_m = number(target["solar_panels"]["span_m"], "target.solar_panels.span_m");
+    shape.panel_height_m = number(target["solar_panels"]["height_m"], "target.solar_panels.height_m");
+  }
+  if (!(shape.face_width_m > 0.0 && shape.face_height_m > 0.0)) {
+    throw std::runtime_error(path + ": target.face width_m and height_m must be > 0");
+  }
+  return shape;
+}
 
 std::vector<std::string> validateParams(const DetectorParams& p) {
   std::vector<std::string> errors;
@@ -115,6 +320,28 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
           "must be > 0", p.disparity_sigma_px);
   require(std::isfinite(p.centre_sigma_px) && p.centre_sigma_px > 0.0, "centre_sigma_px",
           "must be > 0", p.centre_sigma_px);
+  require(std::isfinite(p.shape_tolerance_fraction) && p.shape_tolerance_fraction >= 0.0 &&
+              p.shape_tolerance_fraction < 1.0,
+          "shape_tolerance_fraction", "must be in [0, 1)", p.shape_tolerance_fraction);
+  require(std::isfinite(p.shape_tolerance_px) && p.shape_tolerance_px >= 0.0, "shape_tolerance_px",
+          "must be >= 0", p.shape_tolerance_px);
+  const TargetShape& t = p.target_shape;
+  require(std::isfinite(t.face_width_m) && t.face_width_m > 0.0, "target_shape.face_width_m",
+          "must be > 0", t.face_width_m);
+  require(std::isfinite(t.face_height_m) && t.face_height_m > 0.0, "target_shape.face_height_m",
+          "must be > 0", t.face_height_m);
+  require(std::isfinite(t.body_depth_m) && t.body_depth_m >= 0.0 && std::isfinite(t.panel_span_m) &&
+              t.panel_span_m >= 0.0 && std::isfinite(t.panel_height_m) && t.panel_height_m >= 0.0,
+          "target_shape", "body depth and panel sizes must be >= 0", t.body_depth_m);
+  if (errors.empty()) {
+    // A fill bound above what the mockup itself shows at some yaw would reject the real target.
+    const double mockup_fill = shapeBounds(t).min_fill;
+    require(std::isfinite(p.min_fill_fraction) && p.min_fill_fraction >= 0.0 &&
+                p.min_fill_fraction <= mockup_fill,
+            "min_fill_fraction",
+            "must be in [0, " + formatNumber(mockup_fill) + "] (the mockup's own lowest fill)",
+            p.min_fill_fraction);
+  }
   return errors;
 }
 
@@ -142,6 +369,8 @@ const char* outcomeName(Outcome outcome) {
     case Outcome::kBlobTooLarge: return "blob_too_large";
     case Outcome::kBlobTouchesBorder: return "blob_touches_border";
     case Outcome::kDisparityOutOfRange: return "disparity_out_of_range";
+    case Outcome::kNotTargetShaped: return "not_target_shaped";
+    case Outcome::kOffTrack: return "off_track";
   }
   return "unknown";
 }
@@ -176,7 +405,7 @@ void reproject(const StereoGeometry& g, const cv::Point2d& centre_px, double dis
 
 Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeometry& geometry,
                                     double search_min_px, double search_max_px,
-                                    cv::Rect valid_region) const {
+                                    cv::Rect valid_region, const SearchHint& hint) const {
   Detection result;
   const DetectorParams& p = params_;
 
@@ -284,7 +513,8 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     return result;
   }
   cv::Mat mask(disparity.size(), CV_8UC1);
-  int blob_area = 0;
+  const ShapeBounds bounds = shapeBounds(p.target_shape);
+  BlobCandidate chosen, fallback, first_misfit, largest_small;
   int largest_skipped_area = 0;
   for (;;) {
     int collected = 0;
@@ -293,16 +523,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
       collected += histogram[static_cast<std::size_t>(closest_bin)];
       if (collected >= p.closest_min_pixels) break;
     }
-    if (collected < p.closest_min_pixels) {
-      // Only reachable after skipping: every object in view was too small (its contour and mask are
-      // still in `result` for the debug image).
-      result.outcome = Outcome::kBlobTooSmall;
-      result.reason = "blob too small: every object in view is smaller than min_blob_area_px " +
-                      std::to_string(p.min_blob_area_px) + " or thinner than min_blob_thickness_px " +
-                      formatNumber(p.min_blob_thickness_px) + " (largest " +
-                      std::to_string(largest_skipped_area) + " px)";
-      return result;
-    }
+    if (collected < p.closest_min_pixels) break;  // only after skipping: nothing left behind
     const double closest = closest_bin / kHistogramBinsPerPx;
     result.closest_disparity_px = closest;
 
@@ -317,45 +538,58 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     cv::Mat mask_region = mask(region);
     cv::compare(filtered_region, threshold, mask_region, cv::CMP_GE);  // writes into `mask`
 
-    // --- Largest blob: the outer contour of the biggest area (the paper's "biggest contour").
-    // findContours on the sparse mask costs a tenth of a connected-component labelling.
+    // --- The blobs of this band, largest first (the paper took the biggest contour). Without the
+    // shape check the largest of plausible size is the target; with it, the first target-shaped one
+    // (inside the hint's gate, when there is a hint).
     std::vector<std::vector<cv::Point>> contours;
     cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
-    const auto largest = std::max_element(
-        contours.begin(), contours.end(), [](const auto& a, const auto& b) {
-          const double area_a = cv::contourArea(a), area_b = cv::contourArea(b);
-          return area_a < area_b || (area_a == area_b && a.size() < b.size());
-        });
-    if (largest == contours.end()) {
-      result.outcome = result.near_objects_skipped > 0 ? Outcome::kBlobTooSmall : Outcome::kNoBlob;
-      result.reason = result.near_objects_skipped > 0
-                          ? "blob too small: every object in view is smaller than min_blob_area_px " +
-                                std::to_string(p.min_blob_area_px)
-                          : "no blob above the threshold disparity " + formatNumber(threshold) + " px";
+    if (contours.empty() && result.near_objects_skipped == 0) {
+      result.outcome = Outcome::kNoBlob;
+      result.reason = "no blob above the threshold disparity " + formatNumber(threshold) + " px";
       return result;
     }
-    result.contour = *largest;
-    result.bounding_box = cv::boundingRect(result.contour);
-    // The blob: thresholded pixels inside the contour (holes of invalid disparity stay out).
-    result.mask = cv::Mat(disparity.size(), CV_8UC1, cv::Scalar(0));
-    cv::drawContours(result.mask, std::vector<std::vector<cv::Point>>{result.contour}, 0,
-                     cv::Scalar(255), cv::FILLED);
-    cv::Mat blob_region = result.mask(result.bounding_box);
-    cv::bitwise_and(blob_region, mask(result.bounding_box), blob_region);
-    blob_area = cv::countNonZero(blob_region);
-    result.blob_thickness_px = blobThickness(blob_region);
-    const bool plausible_size = blob_area >= p.min_blob_area_px &&
-                                result.blob_thickness_px >= p.min_blob_thickness_px;
-    if (plausible_size || result.near_objects_skipped >= kMaxNearObjectsSkipped) {
-      break;
+    std::vector<std::pair<double, std::size_t>> by_area;
+    for (std::size_t i = 0; i < contours.size(); ++i) {
+      by_area.emplace_back(cv::contourArea(contours[i]) + contours[i].size(), i);
     }
+    std::sort(by_area.begin(), by_area.end(), std::greater<>());
+    if (by_area.size() > kMaxBlobsPerBand) by_area.resize(kMaxBlobsPerBand);
+    for (const auto& entry : by_area) {
+      BlobCandidate candidate = makeCandidate(contours[entry.second], mask);
+      if (candidate.area < p.min_blob_area_px || candidate.thickness_px < p.min_blob_thickness_px) {
+        if (!largest_small.valid || candidate.area > largest_small.area) largest_small = candidate;
+        continue;
+      }
+      if (!p.shape_check_enabled) {
+        chosen = std::move(candidate);
+        break;
+      }
+      candidate.shape = measureBlobShape(candidate, clean, geometry);
+      candidate.misfit =
+          shapeMismatch(candidate.shape, bounds, p, geometry.focal_px,
+                        touchesBorder(candidate.box, region, p.border_margin_px));
+      if (!candidate.misfit.empty()) {
+        ++result.not_target_shaped_skipped;
+        if (!first_misfit.valid) first_misfit = std::move(candidate);
+        continue;
+      }
+      if (!hint.valid || (candidatePosition(candidate, geometry) - hint.position_m).norm() <=
+                             hint.radius_m) {
+        chosen = std::move(candidate);
+        break;
+      }
+      if (!fallback.valid) fallback = std::move(candidate);
+    }
+    if (chosen.valid || result.near_objects_skipped >= kMaxNearObjectsSkipped) break;
 
-    // --- Everything at this depth is smaller than a target can be: mismatches at occlusion edges,
-    // speckles, dust. Remove it and look behind it, so it cannot hide the target.
+    // --- Nothing at this depth is the target: mismatches at occlusion edges, speckles, dust, or
+    // objects of another size (a wall, a person, furniture). Remove the band and look behind it,
+    // so it cannot hide the target.
     if (filtered.data == clean.data) {  // no filter ran: keep the raw values for the depth
       filtered = clean.clone();
       filtered_region = filtered(region);
     }
+    int band_pixels = 0;
     for (int v = 0; v < filtered_region.rows; ++v) {
       float* row = filtered.ptr<float>(region.y + v) + region.x;
       const std::uint8_t* mask_row = mask_region.ptr<std::uint8_t>(v);
@@ -363,12 +597,36 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
         if (mask_row[u] != 0) {
           --histogram[static_cast<std::size_t>(row[u] * kHistogramBinsPerPx)];
           row[u] = 0.0f;
+          ++band_pixels;
         }
       }
     }
     ++result.near_objects_skipped;
-    largest_skipped_area = std::max(largest_skipped_area, blob_area);
+    largest_skipped_area = std::max(largest_skipped_area, band_pixels);
   }
+
+  // --- The blob to report: the target; else a target-shaped blob outside the hint (the tracker
+  // decides); else the first blob that was not target-shaped, or the largest too-small one (reasons).
+  if (!chosen.valid && fallback.valid) {
+    chosen = std::move(fallback);
+    result.outside_hint = true;
+  }
+  std::string misfit_reason;
+  if (!chosen.valid && first_misfit.valid) {
+    misfit_reason = first_misfit.misfit;
+    chosen = std::move(first_misfit);
+  }
+  if (!chosen.valid) {
+    result.outcome = Outcome::kBlobTooSmall;
+    result.reason = "blob too small: every object in view is smaller than min_blob_area_px " +
+                    std::to_string(p.min_blob_area_px) + " or thinner than min_blob_thickness_px " +
+                    formatNumber(p.min_blob_thickness_px) + " (largest " +
+                    std::to_string(std::max(largest_skipped_area, largest_small.area)) + " px)";
+    if (largest_small.valid) adoptBlob(largest_small, disparity.size(), &result);
+    return result;
+  }
+  adoptBlob(chosen, disparity.size(), &result);
+  const int blob_area = chosen.area;
 
   // --- The blob's measured (unfiltered) disparities: the median filter chose the pixels, the raw
   // values give the depth, so the filter cannot bias it.
@@ -420,7 +678,10 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
   const bool touches_right = box.x + box.width >= region.x + region.width - margin;
   const bool touches_top = box.y <= region.y + margin;
   const bool touches_bottom = box.y + box.height >= region.y + region.height - margin;
-  if (result.blob_pixels < p.min_blob_area_px) {
+  if (!misfit_reason.empty()) {
+    result.outcome = Outcome::kNotTargetShaped;
+    result.reason = "not the target: " + misfit_reason;
+  } else if (result.blob_pixels < p.min_blob_area_px) {
     result.outcome = Outcome::kBlobTooSmall;
     result.reason = "blob too small: " + std::to_string(result.blob_pixels) + " px < min_blob_area_px " +
                     std::to_string(p.min_blob_area_px);

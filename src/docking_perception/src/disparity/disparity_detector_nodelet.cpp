@@ -67,6 +67,7 @@ void DisparityDetectorNodelet::onInit() {
     std::lock_guard<std::mutex> lock(state_mutex_);
     config_ = config;
     detector_.setParams(toDetectorParams(config));  // validated in loadConfig
+    track_gate_.setParams(toTrackGateParams(config));
   }
 
   // Live tuning: the server starts from the same parameter server values we just validated.
@@ -154,12 +155,36 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("ceiling_cut_y_m", &Config::ceiling_cut_y_m);
   read("disparity_sigma_px", &Config::disparity_sigma_px);
   read("centre_sigma_px", &Config::centre_sigma_px);
+  read("shape_check_enabled", &Config::shape_check_enabled);
+  read("shape_tolerance_fraction", &Config::shape_tolerance_fraction);
+  read("shape_tolerance_px", &Config::shape_tolerance_px);
+  read("min_fill_fraction", &Config::min_fill_fraction);
+  read("track_gate_enabled", &Config::track_gate_enabled);
+  read("track_max_speed_mps", &Config::track_max_speed_mps);
+  read("track_min_gate_m", &Config::track_min_gate_m);
+  read("track_gate_sigmas", &Config::track_gate_sigmas);
+  read("track_confirm_frames", &Config::track_confirm_frames);
+  read("track_timeout_s", &Config::track_timeout_s);
   read("debug_display_max_disparity_px", &Config::debug_display_max_disparity_px);
   read("diagnostic_window_frames", &Config::diagnostic_window_frames);
   read("min_detection_rate_ok", &Config::min_detection_rate_ok);
+  // The mockup's size for the shape check: the same target.yaml the simulator and mono_pose read.
+  std::string target_yaml;
+  if (!private_nh_.getParam("target_yaml", target_yaml) || target_yaml.empty()) {
+    errors.push_back("missing parameter " + ns + "/target_yaml (path of config/target.yaml)");
+  } else {
+    try {
+      target_shape_ = disparity::loadTargetShape(target_yaml);
+    } catch (const std::exception& error) {
+      errors.push_back(std::string("parameter ") + ns + "/target_yaml: " + error.what());
+    }
+  }
   if (errors.empty()) {
     // Rules between fields (e.g. max_disparity_px > min_disparity_px), named by the core.
     for (const auto& error : disparity::validateParams(toDetectorParams(*config))) {
+      errors.push_back("parameter " + ns + "/" + error);
+    }
+    for (const auto& error : disparity::validateTrackGateParams(toTrackGateParams(*config))) {
       errors.push_back("parameter " + ns + "/" + error);
     }
   }
@@ -167,7 +192,18 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   return errors.empty();
 }
 
-disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Config& c) {
+disparity::TrackGateParams DisparityDetectorNodelet::toTrackGateParams(const Config& c) {
+  disparity::TrackGateParams p;
+  p.enabled = c.track_gate_enabled;
+  p.max_speed_mps = c.track_max_speed_mps;
+  p.min_gate_m = c.track_min_gate_m;
+  p.gate_sigmas = c.track_gate_sigmas;
+  p.confirm_frames = c.track_confirm_frames;
+  p.timeout_s = c.track_timeout_s;
+  return p;
+}
+
+disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Config& c) const {
   disparity::DetectorParams p;
   p.median_kernel_px = c.median_kernel_px;
   p.gaussian_sigma_px = c.gaussian_sigma_px;
@@ -190,6 +226,11 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.ceiling_cut_y_m = c.ceiling_cut_y_m;
   p.disparity_sigma_px = c.disparity_sigma_px;
   p.centre_sigma_px = c.centre_sigma_px;
+  p.shape_check_enabled = c.shape_check_enabled;
+  p.shape_tolerance_fraction = c.shape_tolerance_fraction;
+  p.shape_tolerance_px = c.shape_tolerance_px;
+  p.min_fill_fraction = c.min_fill_fraction;
+  p.target_shape = target_shape_;
   return p;
 }
 
@@ -197,6 +238,7 @@ void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/)
   std::lock_guard<std::mutex> lock(state_mutex_);
   try {
     detector_.setParams(toDetectorParams(config));
+    track_gate_.setParams(toTrackGateParams(config));
     config_ = config;
   } catch (const std::invalid_argument& error) {
     // Keep running with the last good values, and show them back in rqt_reconfigure.
@@ -329,9 +371,21 @@ void DisparityDetectorNodelet::onDisparity(const stereo_msgs::DisparityImageCons
                              static_cast<int>(message->valid_window.height));
   }
 
-  const disparity::Detection detection =
+  // The tracked target tells the search which target-shaped blob to prefer, then judges the result.
+  // The gate is the one piece of state across frames (frames arrive in order on one subscriber).
+  const double stamp_s = message->header.stamp.toSec();
+  disparity::SearchHint hint;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    hint = track_gate_.hint(stamp_s);
+  }
+  disparity::Detection detection =
       detector.detect(disparity, geometry, message->min_disparity, message->max_disparity + 1.0,
-                      valid_region);
+                      valid_region, hint);
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    detection = track_gate_.apply(stamp_s, detection);
+  }
 
   docking_msgs::TargetEstimate estimate = blankEstimate(message->header);
   estimate.valid = detection.found;

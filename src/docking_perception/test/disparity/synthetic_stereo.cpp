@@ -176,6 +176,23 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.ceiling_cut_y_m = number("ceiling_cut_y_m");
   p.disparity_sigma_px = number("disparity_sigma_px");
   p.centre_sigma_px = number("centre_sigma_px");
+  p.shape_check_enabled = number("shape_check_enabled") != 0.0;
+  p.shape_tolerance_fraction = number("shape_tolerance_fraction");
+  p.shape_tolerance_px = number("shape_tolerance_px");
+  p.min_fill_fraction = number("min_fill_fraction");
+  return p;
+}
+
+TrackGateParams loadTrackGateParams(const std::string& path) {
+  const auto fields = readFlatYaml(path);
+  auto number = [&](const char* name) { return readNumber(fields, path, name); };
+  TrackGateParams p;
+  p.enabled = number("track_gate_enabled") != 0.0;
+  p.max_speed_mps = number("track_max_speed_mps");
+  p.min_gate_m = number("track_min_gate_m");
+  p.gate_sigmas = number("track_gate_sigmas");
+  p.confirm_frames = static_cast<int>(number("track_confirm_frames"));
+  p.timeout_s = number("track_timeout_s");
   return p;
 }
 

@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/disparity/target_track_gate.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -71,8 +72,12 @@ int maxDisparity(const MatcherSettings& settings);
 cv::Rect matcherValidRegion(const MatcherSettings& settings, cv::Size image_size);
 
 // The detector's parameters from config/disparity_detector.yaml (the node's own file). Throws
-// std::runtime_error naming the file and field when one is missing or not a number.
+// std::runtime_error naming the file and field when one is missing or not a number. The target's
+// shape is not in that file: the default (the shipped mockup) unless the caller sets it from
+// loadTargetShape(config/target.yaml).
 DetectorParams loadDetectorParams(const std::string& path);
+// The track gate's keys of the same file.
+TrackGateParams loadTrackGateParams(const std::string& path);
 
 // A camera in ROS camera_calibration's YAML format (config/cameras/*.yaml).
 struct CameraCalibration {

@@ -2,6 +2,7 @@
 // config/stereo_image_proc.yaml (what perception.launch runs), then the detector with
 // config/disparity_detector.yaml. Known truth: the port centre of the rendered target.
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -20,9 +21,41 @@ struct PipelineResult {
   double stereo_limit_m = 0.0;  // Z^2 * 0.25 px / (f B): the issue's yardstick
 };
 
+// A box standing on the test bed's floor (0.25 m below the cameras), fronto-parallel.
+testing::FrontoParallelRect boxOnTheFloor(double x, double z, double width, double height,
+                                          std::uint32_t seed) {
+  testing::FrontoParallelRect box;
+  box.x_m = x;
+  box.z_m = z;
+  box.width_m = width;
+  box.height_m = height;
+  box.y_m = 0.25 - height / 2.0;
+  box.texture_cell_m = 0.04;
+  box.texture_seed = seed;
+  return box;
+}
+
+Detection detectInScene(const testing::SyntheticScene& scene, const DetectorParams& params) {
+  const auto settings = testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml");
+  cv::Mat left, right;
+  testing::renderStereoPair(scene, &left, &right);
+  auto matcher = testing::createMatcher(settings);
+  const cv::Mat disparity = testing::computeDisparity(*matcher, left, right);
+  const cv::Rect valid = testing::matcherValidRegion(settings, disparity.size());
+  return DisparityDetector(params).detect(disparity, testing::geometryOf(scene),
+                                          settings.min_disparity, testing::maxDisparity(settings),
+                                          valid);
+}
+
+DetectorParams configuredParams() {
+  DetectorParams params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
+  params.target_shape = loadTargetShape(kConfigDir + "/target.yaml");
+  return params;
+}
+
 PipelineResult runPipeline(double x, double y, double z) {
   const auto settings = testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml");
-  const auto params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
+  const auto params = configuredParams();
   const testing::SyntheticScene scene = testing::targetScene(x, y, z, 12.0);
   cv::Mat left, right;
   testing::renderStereoPair(scene, &left, &right);
@@ -61,6 +94,41 @@ INSTANTIATE_TEST_SUITE_P(OnAndOffAxis, FarRangePipeline,
                          ::testing::Values(std::make_tuple(2.0, 0.0), std::make_tuple(3.0, 0.0),
                                            std::make_tuple(3.0, 0.6), std::make_tuple(4.0, -0.5),
                                            std::make_tuple(6.0, 0.0), std::make_tuple(6.0, 1.0)));
+
+// Issue 11: a box of another size at the target's depth 1.5-2 m to the side, or nearer than the
+// target, must not be reported as the target; the target still is.
+struct DistractorCase {
+  double target_z, target_x;
+  double box_x, box_z, box_width, box_height;
+};
+
+class DistractorPipeline : public ::testing::TestWithParam<DistractorCase> {};
+
+TEST_P(DistractorPipeline, TheTargetIsReportedNotTheBox) {
+  const DistractorCase c = GetParam();
+  testing::SyntheticScene scene = testing::targetScene(c.target_x, 0.0, c.target_z, 12.0);
+  scene.rects.push_back(boxOnTheFloor(c.box_x, c.box_z, c.box_width, c.box_height, 31));
+  const Detection d = detectInScene(scene, configuredParams());
+  ASSERT_TRUE(d.found) << d.reason;
+  EXPECT_NEAR(d.position_m.x(), c.target_x, 0.05 + 0.01 * c.target_z);
+  EXPECT_NEAR(d.position_m.z(), c.target_z, 0.25);
+
+  // Without the target, the box alone is never the target.
+  testing::SyntheticScene box_only = scene;
+  box_only.rects.erase(box_only.rects.begin(), box_only.rects.begin() + 3);  // face and panels
+  const Detection alone = detectInScene(box_only, configuredParams());
+  EXPECT_FALSE(alone.found) << "box at (" << alone.position_m.transpose() << ") taken for the target";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    BoxesBesideAndNearer, DistractorPipeline,
+    ::testing::Values(
+        // Same depth, 1.5-2 m to the side: a cabinet (0.6 x 0.9), a crate stack (0.5 x 0.7).
+        DistractorCase{6.0, 0.0, 1.8, 6.05, 0.6, 0.9}, DistractorCase{6.0, 0.0, -2.0, 6.0, 0.5, 0.7},
+        DistractorCase{6.0, 0.8, -1.0, 6.1, 1.2, 0.55}, DistractorCase{4.0, -0.4, 1.4, 4.0, 0.6, 0.9},
+        // Nearer than the target: a box at 4 m in front of a target at 6 m, a workbench at 2.5 m.
+        DistractorCase{6.0, 0.0, 1.5, 4.0, 0.6, 0.8}, DistractorCase{4.0, 0.4, -0.9, 2.5, 0.9, 0.6},
+        DistractorCase{3.0, 0.0, 0.9, 2.0, 0.5, 0.7}, DistractorCase{2.0, 0.2, -0.7, 2.0, 0.4, 0.6}));
 
 TEST(FarRangePipeline, ConfigFilesAreComplete) {
   EXPECT_NO_THROW(testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml"));

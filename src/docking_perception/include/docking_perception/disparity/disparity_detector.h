@@ -10,8 +10,14 @@
 //  4. threshold just below it (a depth band that holds the target's own depth), keep the largest
 //     blob (outer contour); if it is smaller than min_blob_area_px or thinner than
 //     min_blob_thickness_px (mismatches at occlusion edges, speckles), remove everything at that
-//     depth and search again behind it (at most 5 times);
-//  5. reject implausible blobs with a reason (too small, too large, on the border, out of range);
+//     depth and search again behind it (at most 8 times);
+//     With the shape check on, every blob of the band (largest first) is measured: its metric
+//     width, height and fill must be those the mockup of config/target.yaml can show from some yaw
+//     (TargetShape). A band without such a blob is removed and the search looks behind it too, so a
+//     nearer wall, person or box cannot hide the target, and a box beside it cannot be taken for it;
+//     with a SearchHint (the tracked target), a target-shaped blob inside the hint's gate is preferred;
+//  5. reject implausible blobs with a reason (too small, too large, on the border, out of range,
+//     not target-shaped);
 //  6. the target's visible face: the blob's nearest depth layer; its centroid is the centre, the median
 //     of its disparities the robust disparity;
 //  7. reproject with the rectified model and propagate pixel and disparity noise to a 3x3 covariance.
@@ -33,6 +39,31 @@ struct StereoGeometry {
   double cy_px = 0.0;
   double baseline_m = 0.0;  // B > 0; Z = f B / d
 };
+
+// The mockup's physical size (config/target.yaml: face, box behind it, two solar panels), from which
+// the shape check derives what a target blob can measure. Defaults: the shipped mockup.
+struct TargetShape {
+  double face_width_m = 0.30;     // along y (the box is as wide as the face)
+  double face_height_m = 0.24;    // along z (the box is as tall as the face)
+  double body_depth_m = 0.30;     // box, behind the face
+  double panel_span_m = 0.30;     // each panel, beyond the box side
+  double panel_height_m = 0.16;
+};
+
+// Reads target.face.{width_m,height_m}, target.body.depth_m and target.solar_panels.{span_m,height_m}
+// of a target.yaml (the panels are optional: without them span 0). Throws std::runtime_error naming
+// the file and the field.
+TargetShape loadTargetShape(const std::string& target_yaml_path);
+
+// What the mockup can measure from any yaw, seen level (the port at camera height): its width is the
+// extent of the face, box and panels projected on the image's horizontal (box alone edge-on, up to
+// face + both panels face-on); its height that of the box (the panels are lower).
+struct ShapeBounds {
+  double min_width_m = 0.0, max_width_m = 0.0;
+  double min_height_m = 0.0, max_height_m = 0.0;
+  double min_fill = 0.0;  // blob pixels / bounding-box pixels: the lowest the mockup shows
+};
+ShapeBounds shapeBounds(const TargetShape& shape);
 
 // Tuning of the detector. Defaults are only for tests; the node takes every value from
 // config/disparity_detector.yaml.
@@ -75,6 +106,16 @@ struct DetectorParams {
   // Noise model of the covariance.
   double disparity_sigma_px = 0.25;  // 1-sigma error of the robust disparity
   double centre_sigma_px = 1.0;      // 1-sigma error of the face centre in the image
+
+  // Shape check: is the blob the mockup? Off by default here (tests of the search paint any
+  // rectangle); config/disparity_detector.yaml turns it on. The bounds of shapeBounds(target_shape)
+  // are widened by shape_tolerance_fraction of themselves plus shape_tolerance_px at the blob's
+  // range (block matching fattens or trims a blob's edges by up to half its window).
+  bool shape_check_enabled = false;
+  double shape_tolerance_fraction = 0.25;
+  double shape_tolerance_px = 8.0;
+  double min_fill_fraction = 0.45;  // below: not a solid object (chair, table, strip of a wall)
+  TargetShape target_shape;         // from config/target.yaml, not from the detector's file
 };
 
 // Every invalid field, each message naming it ("median_kernel_px must be 0, 1, 3 or 5 (got 4)").
@@ -91,10 +132,30 @@ enum class Outcome {
   kBlobTooLarge,
   kBlobTouchesBorder,
   kDisparityOutOfRange,
+  kNotTargetShaped,      // every blob in reach has a width, height or fill the mockup cannot show
+  kOffTrack,             // target-shaped, but a jump from the tracked target not yet confirmed
+                         // (set by TargetTrackGate, never by detect())
 };
 
 // Short stable name of an outcome ("found", "blob_too_small", ...), for diagnostics keys and counters.
 const char* outcomeName(Outcome outcome);
+
+// The metric shape of a blob, measured at its median raw disparity.
+struct BlobShape {
+  double width_m = 0.0, height_m = 0.0;  // bounding box at the blob's range
+  double depth_extent_m = 0.0;           // 10th to 90th percentile of the depth (reported only: the
+                                         // band target_depth_m already bounds it)
+  double fill = 0.0;                     // blob pixels / bounding-box pixels
+  double range_z_m = 0.0;                // Z at the median disparity
+};
+
+// Where the tracked target is expected (TargetTrackGate::hint): among target-shaped blobs, the first
+// one within radius_m of position_m is taken; the others are looked behind.
+struct SearchHint {
+  bool valid = false;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  double radius_m = 0.0;
+};
 
 struct Detection {
   bool found = false;
@@ -105,8 +166,12 @@ struct Detection {
   int valid_pixels = 0;              // valid disparities in the region of interest
   double closest_disparity_px = 0;   // robust closest disparity of the whole image
   double threshold_disparity_px = 0; // mask = filtered disparity >= this
-  int near_objects_skipped = 0;      // nearer objects too small or thin that were looked behind
+  int near_objects_skipped = 0;      // nearer depth bands looked behind (too small, thin, or no
+                                     // target-shaped blob in them)
   double blob_thickness_px = 0;      // diameter of the largest disc inside the blob
+  int not_target_shaped_skipped = 0; // blobs measured and found not target-shaped
+  BlobShape shape;                   // of the chosen blob (when the shape check ran)
+  bool outside_hint = false;         // chosen although outside the hint's gate (no blob inside it)
 
   // The chosen blob (filled whenever a blob was chosen, also when it was then rejected).
   std::vector<cv::Point> contour;  // outer contour of the blob, image pixels
@@ -138,9 +203,10 @@ class DisparityDetector {
   // `valid_region`: the part of the image where the matcher can produce disparities (the left band of
   // width ~ the search range is blind); empty: the whole image. The border test uses its edges.
   // Never throws on bad input: returns found = false with outcome kBadInput and the reason.
+  // `hint` (optional): the tracked target's predicted position, see SearchHint.
   Detection detect(const cv::Mat& disparity, const StereoGeometry& geometry,
                    double search_min_px = 0.0, double search_max_px = 1e9,
-                   cv::Rect valid_region = cv::Rect()) const;
+                   cv::Rect valid_region = cv::Rect(), const SearchHint& hint = SearchHint()) const;
 
  private:
   DetectorParams params_;

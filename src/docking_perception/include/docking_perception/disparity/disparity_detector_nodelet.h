@@ -26,6 +26,7 @@
 
 #include "docking_perception/DisparityDetectorConfig.h"
 #include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/disparity/target_track_gate.h"
 
 namespace docking_perception {
 
@@ -42,7 +43,8 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   // Reads every key of config/disparity_detector.yaml from the private namespace. Returns false and
   // logs each missing or invalid key by name.
   bool loadConfig(Config* config);
-  static disparity::DetectorParams toDetectorParams(const Config& config);
+  disparity::DetectorParams toDetectorParams(const Config& config) const;  // + target_shape_
+  static disparity::TrackGateParams toTrackGateParams(const Config& config);
   void onReconfigure(Config& config, uint32_t level);
 
   // Subscribes to the inputs while any output has a subscriber, unsubscribes otherwise.
@@ -74,6 +76,8 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   std::mutex state_mutex_;
   Config config_;
   disparity::DisparityDetector detector_;
+  disparity::TargetShape target_shape_;   // from ~target_yaml, read once at start-up
+  disparity::TargetTrackGate track_gate_;
   sensor_msgs::CameraInfoConstPtr camera_info_;
   bool warned_no_camera_info_ = false;
   std::deque<bool> recent_found_;  // detection outcome of the last diagnostic_window_frames frames

@@ -1,0 +1,284 @@
+// Is the blob the target? The shape check against the mockup of config/target.yaml and the track gate
+// (issue 11: at 6 m a background object inside the depth band was reported as the target, valid).
+// Synthetic disparity images with known answers; the rendered-stereo versions are in
+// test_disparity_pipeline.cpp.
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/disparity/target_track_gate.h"
+
+namespace docking_perception {
+namespace disparity {
+namespace {
+
+const std::string kConfigDir = DISPARITY_CONFIG_DIR;
+
+StereoGeometry ourGeometry() {
+  StereoGeometry g;
+  g.focal_px = 550.0;
+  g.cx_px = 319.5;
+  g.cy_px = 239.5;
+  g.baseline_m = 0.10;
+  return g;
+}
+
+// Paints a fronto-parallel rectangle (centre x, y, depth z, size w x h, metres); nearer paint wins
+// only if painted later, so paint far to near.
+void paintRect(cv::Mat* disparity, double x, double y, double z, double w, double h) {
+  const StereoGeometry g = ourGeometry();
+  const int u0 = static_cast<int>(std::lround(g.cx_px + (x - w / 2) * g.focal_px / z));
+  const int u1 = static_cast<int>(std::lround(g.cx_px + (x + w / 2) * g.focal_px / z));
+  const int v0 = static_cast<int>(std::lround(g.cy_px + (y - h / 2) * g.focal_px / z));
+  const int v1 = static_cast<int>(std::lround(g.cy_px + (y + h / 2) * g.focal_px / z));
+  const cv::Rect rect = cv::Rect(cv::Point(u0, v0), cv::Point(u1 + 1, v1 + 1)) &
+                        cv::Rect(0, 0, disparity->cols, disparity->rows);
+  (*disparity)(rect).setTo(cv::Scalar(g.focal_px * g.baseline_m / z));
+}
+
+// The mockup face-on: panels 0.15 m behind the face on both sides, then the face.
+void paintMockup(cv::Mat* disparity, double x, double z) {
+  paintRect(disparity, x - 0.30, 0.0, z + 0.15, 0.30, 0.16);
+  paintRect(disparity, x + 0.30, 0.0, z + 0.15, 0.30, 0.16);
+  paintRect(disparity, x, 0.0, z, 0.30, 0.24);
+}
+
+cv::Mat invalidImage() { return cv::Mat(480, 640, CV_32FC1, cv::Scalar(-1.0f)); }
+
+DetectorParams checkingParams() {
+  DetectorParams params;
+  params.shape_check_enabled = true;
+  params.floor_cut_enabled = false;  // these scenes have no floor; boxes stand anywhere
+  return params;
+}
+
+TEST(ShapeBounds, TheShippedMockupSpansBoxEdgeOnToFaceAndPanels) {
+  const ShapeBounds bounds = shapeBounds(TargetShape{});
+  EXPECT_NEAR(bounds.min_width_m, 0.30, 0.01);  // the box alone, edge-on... its depth 0.30
+  EXPECT_NEAR(bounds.max_width_m, 0.90, 0.01);  // face-on: panel + face + panel
+  EXPECT_NEAR(bounds.min_height_m, 0.24, 1e-9);
+  EXPECT_NEAR(bounds.max_height_m, 0.24, 1e-9);
+  EXPECT_GT(bounds.min_fill, 0.6);
+  EXPECT_LT(bounds.min_fill, 0.8);  // face-on: (0.072 + 0.096) / 0.216 = 0.78 at most
+}
+
+TEST(ShapeBounds, ReadFromTheShippedTargetYaml) {
+  const TargetShape shape = loadTargetShape(kConfigDir + "/target.yaml");
+  EXPECT_DOUBLE_EQ(shape.face_width_m, 0.30);
+  EXPECT_DOUBLE_EQ(shape.face_height_m, 0.24);
+  EXPECT_DOUBLE_EQ(shape.body_depth_m, 0.30);
+  EXPECT_DOUBLE_EQ(shape.panel_span_m, 0.30);
+  EXPECT_DOUBLE_EQ(shape.panel_height_m, 0.16);
+  EXPECT_THROW(loadTargetShape(kConfigDir + "/no_such_target.yaml"), std::runtime_error);
+  EXPECT_THROW(loadTargetShape(kConfigDir + "/disparity_detector.yaml"), std::runtime_error);
+}
+
+TEST(ShapeCheck, ParametersAreValidated) {
+  DetectorParams params = checkingParams();
+  params.min_fill_fraction = 0.95;  // above what the mockup itself shows
+  EXPECT_FALSE(validateParams(params).empty());
+  params = checkingParams();
+  params.shape_tolerance_fraction = -0.1;
+  EXPECT_FALSE(validateParams(params).empty());
+  params = checkingParams();
+  params.target_shape.face_width_m = 0.0;
+  EXPECT_FALSE(validateParams(params).empty());
+  EXPECT_TRUE(validateParams(checkingParams()).empty());
+}
+
+// The issue's scene: the target at 6 m and a box of another size at the same depth to the side.
+class BoxBesideTheTarget : public ::testing::TestWithParam<double> {};
+
+TEST_P(BoxBesideTheTarget, IsNotReportedAndTheTargetIs) {
+  const double side_m = GetParam();
+  cv::Mat disparity = invalidImage();
+  paintRect(&disparity, side_m, -0.1, 6.1, 0.9, 0.7);  // a cabinet, larger than the target
+  paintMockup(&disparity, 0.0, 6.0);
+  // Before: the largest blob of the band is the cabinet.
+  DetectorParams old_params = checkingParams();
+  old_params.shape_check_enabled = false;
+  const Detection before = DisparityDetector{old_params}.detect(disparity, ourGeometry());
+  ASSERT_TRUE(before.found);
+  EXPECT_GT(std::abs(before.position_m.x()), 1.0) << "the unchecked detector took the cabinet";
+
+  const Detection after = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+  ASSERT_TRUE(after.found) << after.reason;
+  EXPECT_NEAR(after.position_m.x(), 0.0, 0.05);
+  // At 6 m the face layer's noise floor (face_min_band_px) takes the panels in: 0.15 m deep.
+  EXPECT_NEAR(after.position_m.z(), 6.0, 0.2);
+  EXPECT_GE(after.not_target_shaped_skipped, 1);
+}
+
+INSTANTIATE_TEST_SUITE_P(SideOffsets, BoxBesideTheTarget, ::testing::Values(-2.0, -1.5, 1.5, 2.0));
+
+TEST(ShapeCheck, OnlyAnotherObjectInViewIsInvalidWithTheReason) {
+  for (const auto& size : {std::make_pair(0.9, 0.7), std::make_pair(0.25, 0.9),
+                           std::make_pair(1.6, 0.24)}) {
+    cv::Mat disparity = invalidImage();
+    paintRect(&disparity, 1.8, 0.0, 6.0, size.first, size.second);
+    const Detection result = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+    EXPECT_FALSE(result.found) << size.first << " x " << size.second;
+    EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+    EXPECT_FALSE(result.reason.empty());
+    EXPECT_FALSE(result.mask.empty()) << "the rejected blob is kept for the debug image";
+  }
+}
+
+TEST(ShapeCheck, HollowObjectFailsTheFill) {
+  // A table-like bar with one leg, as wide and tall as the mockup face-on: no body between.
+  cv::Mat disparity = invalidImage();
+  paintRect(&disparity, 0.0, -0.10, 2.5, 0.86, 0.08);
+  paintRect(&disparity, -0.39, 0.0, 2.5, 0.08, 0.28);
+  const Detection result = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+  EXPECT_FALSE(result.found);
+  EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+}
+
+TEST(ShapeCheck, NearerObjectsOfOtherSizesAreLookedBehind) {
+  // A person walking by at 2.5 m, a box at 4 m, a wall segment at 3 m: the target at 6 m is found.
+  cv::Mat disparity = invalidImage();
+  paintMockup(&disparity, 0.3, 6.0);
+  paintRect(&disparity, -1.5, 0.0, 4.0, 0.7, 0.6);    // box nearer than the target, to the side
+  paintRect(&disparity, 1.2, -0.3, 3.0, 0.4, 0.8);    // wall segment / door frame
+  paintRect(&disparity, -0.9, -0.4, 2.5, 0.45, 1.2);  // a person (cut by the image edge? no)
+  const Detection result = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+  ASSERT_TRUE(result.found) << result.reason;
+  EXPECT_NEAR(result.position_m.x(), 0.3, 0.05);
+  EXPECT_NEAR(result.position_m.z(), 6.0, 0.2);
+  EXPECT_GE(result.near_objects_skipped, 2);
+}
+
+TEST(ShapeCheck, TargetAtAnyRangeAndYawSizePasses) {
+  // Face-on and edge-on outlines at 2-6 m (edge-on: the box side 0.30 deep, panels edge-on).
+  for (double z : {2.0, 3.0, 4.0, 6.0}) {
+    cv::Mat face_on = invalidImage();
+    paintMockup(&face_on, 0.1, z);
+    const Detection a = DisparityDetector{checkingParams()}.detect(face_on, ourGeometry());
+    EXPECT_TRUE(a.found) << z << ": " << a.reason;
+    cv::Mat edge_on = invalidImage();
+    paintRect(&edge_on, 0.1, 0.0, z, 0.30, 0.24);
+    const Detection b = DisparityDetector{checkingParams()}.detect(edge_on, ourGeometry());
+    EXPECT_TRUE(b.found) << z << ": " << b.reason;
+  }
+}
+
+TEST(ShapeCheck, ATargetCutByTheBorderStopsTheSearch) {
+  // The target at 1.0 m reaching out of the image on the left: it is rejected as touching the border,
+  // never looked behind to a mockup-sized box farther away.
+  cv::Mat disparity = invalidImage();
+  paintMockup(&disparity, 1.2, 5.0);    // a box of the mockup's size and shape, behind
+  paintMockup(&disparity, -0.85, 1.0);  // the target, all but its right panel out of view
+  const Detection result = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+  EXPECT_FALSE(result.found);
+  EXPECT_EQ(result.outcome, Outcome::kBlobTouchesBorder) << result.reason;
+  EXPECT_LT(result.position_m.z(), 2.0);
+}
+
+TEST(SearchHint, PrefersTheTargetShapedBlobInsideTheGate) {
+  // Two mockup-sized boxes at the same depth: without a hint the larger/nearer is taken; with the
+  // track's hint on the other one, that one.
+  cv::Mat disparity = invalidImage();
+  paintMockup(&disparity, -1.0, 5.0);
+  paintMockup(&disparity, 1.0, 5.1);
+  const DisparityDetector detector{checkingParams()};
+  SearchHint hint;
+  hint.valid = true;
+  hint.position_m = Eigen::Vector3d(1.0, 0.0, 5.1);
+  hint.radius_m = 0.5;
+  const Detection with_hint = detector.detect(disparity, ourGeometry(), 0.0, 1e9, cv::Rect(), hint);
+  ASSERT_TRUE(with_hint.found) << with_hint.reason;
+  EXPECT_NEAR(with_hint.position_m.x(), 1.0, 0.05);
+  EXPECT_FALSE(with_hint.outside_hint);
+  hint.position_m = Eigen::Vector3d(-1.0, 0.0, 5.0);
+  const Detection other = detector.detect(disparity, ourGeometry(), 0.0, 1e9, cv::Rect(), hint);
+  ASSERT_TRUE(other.found) << other.reason;
+  EXPECT_NEAR(other.position_m.x(), -1.0, 0.05);
+  // A hint where nothing is: the first target-shaped blob, flagged as outside the hint.
+  hint.position_m = Eigen::Vector3d(0.0, 0.0, 3.0);
+  const Detection outside = detector.detect(disparity, ourGeometry(), 0.0, 1e9, cv::Rect(), hint);
+  ASSERT_TRUE(outside.found);
+  EXPECT_TRUE(outside.outside_hint);
+}
+
+// --- Track gate.
+Detection foundAt(double x, double z) {
+  Detection detection;
+  detection.found = true;
+  detection.outcome = Outcome::kFound;
+  detection.position_m = Eigen::Vector3d(x, 0.0, z);
+  detection.covariance_m2 = Eigen::Matrix3d::Identity() * 0.05 * 0.05;
+  return detection;
+}
+
+TEST(TargetTrackGate, AJumpOfMetresIsRejectedUntilConfirmed) {
+  TrackGateParams params;
+  params.confirm_frames = 5;
+  TargetTrackGate gate(params);
+  double t = 100.0;
+  const double dt = 1.0 / 15.0;
+  for (int i = 0; i < 10; ++i, t += dt) {
+    EXPECT_TRUE(gate.apply(t, foundAt(0.0, 6.0)).found);
+  }
+  // A box 2 m to the side: rejected with the reason for confirm_frames - 1 frames, then confirmed.
+  for (int i = 1; i < params.confirm_frames; ++i, t += dt) {
+    const Detection jumped = gate.apply(t, foundAt(2.0, 6.0));
+    EXPECT_FALSE(jumped.found) << i;
+    EXPECT_EQ(jumped.outcome, Outcome::kOffTrack);
+    EXPECT_FALSE(jumped.reason.empty());
+  }
+  EXPECT_TRUE(gate.apply(t, foundAt(2.0, 6.0)).found) << "seen confirm_frames times in a row";
+  EXPECT_NEAR(gate.trackPosition().x(), 2.0, 1e-9);
+}
+
+TEST(TargetTrackGate, AlternatingJumpsAreNeverConfirmed) {
+  TargetTrackGate gate{TrackGateParams{}};
+  double t = 0.0;
+  const double dt = 1.0 / 15.0;
+  gate.apply(t, foundAt(0.0, 6.0));
+  for (int i = 0; i < 20; ++i) {
+    t += dt;
+    EXPECT_TRUE(gate.apply(t, foundAt(0.0, 6.0)).found);
+    t += dt;
+    EXPECT_FALSE(gate.apply(t, foundAt(2.0, 6.0)).found) << "the flicker to the box is never valid";
+  }
+}
+
+TEST(TargetTrackGate, AMovingTargetStaysInsideTheGate) {
+  TargetTrackGate gate{TrackGateParams{}};
+  const double dt = 1.0 / 15.0;
+  for (int i = 0; i < 150; ++i) {  // 10 s at 0.3 m/s towards the cameras
+    const double t = i * dt;
+    EXPECT_TRUE(gate.apply(t, foundAt(0.2, 6.0 - 0.3 * t)).found) << t;
+  }
+}
+
+TEST(TargetTrackGate, TimeoutAndStampsGoingBackwardsStartANewTrack) {
+  TrackGateParams params;
+  params.timeout_s = 2.0;
+  TargetTrackGate gate(params);
+  gate.apply(10.0, foundAt(0.0, 6.0));
+  Detection lost;
+  gate.apply(11.0, lost);  // nothing found
+  EXPECT_TRUE(gate.apply(12.5, foundAt(2.0, 6.0)).found) << "2.5 s without a confirmed detection";
+  EXPECT_TRUE(gate.apply(5.0, foundAt(-1.0, 4.0)).found) << "a bag restarted: a new track";
+  EXPECT_FALSE(gate.hint(100.0).valid) << "no hint from a stale track";
+  EXPECT_TRUE(gate.hint(5.1).valid);
+}
+
+TEST(TargetTrackGate, DisabledPassesEverythingAndBadParamsAreNamed) {
+  TrackGateParams params;
+  params.enabled = false;
+  TargetTrackGate gate(params);
+  gate.apply(0.0, foundAt(0.0, 6.0));
+  EXPECT_TRUE(gate.apply(0.1, foundAt(3.0, 6.0)).found);
+  params.confirm_frames = 0;
+  EXPECT_THROW(gate.setParams(params), std::invalid_argument);
+  EXPECT_FALSE(validateTrackGateParams(params).empty());
+}
+
+}  // namespace
+}  // namespace disparity
+}  // namespace docking_perception
