@@ -260,7 +260,7 @@ class SimNode {
       if (camera_pubs_[i].getNumSubscribers() == 0) continue;  // render only what someone watches
       const cv::Mat& frame = sim_->render(i);
       const auto& t = sim_->renderer(i).lastTiming();
-      render_ms_[i] = 0.9 * render_ms_[i] + 0.1 * (t.rasterize_ms + t.distort_ms + t.effects_ms);
+      render_ms_[i] = 0.9 * render_ms_[i] + 0.1 * (t.rasterize_ms + t.defocus_ms + t.distort_ms + t.effects_ms);
       sensor_msgs::ImagePtr image = boost::make_shared<sensor_msgs::Image>();
       image->header.stamp = stamp;
       image->header.frame_id = mount.image_frame_id;
