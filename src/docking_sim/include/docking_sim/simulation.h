@@ -71,6 +71,7 @@ class Simulation {
   const TargetModel& target() const { return target_; }
   const RobotModel& robot() const { return robot_; }
   const LightingScenario& lighting() const { return lighting_; }
+  const Scene& scene() const { return scene_; }
 
  private:
   Scenario scenario_;       // (before settings_: the settings take its overrides)

@@ -194,6 +194,7 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
     }
   }
   depth_.create(ideal_.size(), CV_32F);
+  depth_.setTo(cv::Scalar(0.0f));  // read before the first frame (projectedMotionPx): "nothing there"
   output_.create(h, w, type);
 
   // Vignetting: cos^4-like fall-off, `vignetting` darker at the corners.
