@@ -91,6 +91,8 @@ class CameraRenderer {
   void applyDefocus();
   /// Auto-exposure: from the frame just rendered (mean `mean`), the next frame's exposure and gain.
   void updateExposure(double mean);
+  /// Whether the next frame's exposure and gain equal the last one's (within kAeTolerance).
+  bool exposureSettled() const;
   template <int kChannels>
   void drawSurface(const Surface& surface, const Eigen::Isometry3d& camera_T_world);
   /// A decal (Surface::decal): area coverage of each pixel's square (exact polygon clipping on the

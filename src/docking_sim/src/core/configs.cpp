@@ -64,7 +64,7 @@ const EffectKey kEffectKeys[] = {
     {"motion_blur.enabled", 0, 0, nullptr, &CameraEffects::motion_blur_enabled, false},
     {"motion_blur.max_subframes", 1.0, 64.0, &CameraEffects::motion_blur_max_subframes, nullptr, false},
     {"specular.strength", 0.0, 100.0, &CameraEffects::specular_strength, nullptr, false},
-    {"specular.shininess", 1.0, 10000.0, &CameraEffects::specular_shininess, nullptr, false},
+    {"specular.shininess", 1.0, 1e6, &CameraEffects::specular_shininess, nullptr, false},
 };
 
 // (YamlField is never re-assigned: YAML::Node's assignment writes into the tree it refers to.)

@@ -217,6 +217,12 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
   std::normal_distribution<double> normal(0.0, kNoiseTableSigma);
   for (auto& n : noise_table_) n = static_cast<int8_t>(std::clamp(std::lround(normal(rng_)), -127L, 127L));
   exposure_time_s_ = effects.exposure_time_s;
+  if (effects.ae_enabled) {
+    // Start inside the camera's range, the lost brightness in gain (as updateExposure would).
+    exposure_time_s_ = std::clamp(effects.exposure_time_s, effects.ae_min_exposure_s, effects.ae_max_exposure_s);
+    gain_ = std::clamp(effects.exposure_time_s / exposure_time_s_, 1.0, effects.ae_max_gain);
+    brightness_ = exposure_time_s_ / effects.exposure_time_s * gain_;
+  }
 
   // Glare: an additive bright spot with a faint horizontal streak (visible cameras only).
   if (band == Band::kVisible && lighting.glare.enabled) {
@@ -248,7 +254,7 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
     exposure_.subframes = 1;
     exposure_.motion_px = 0.0;
     finishFrame(t0, threadCpuMs());
-    if (std::abs(exposure_.brightness - brightness_) <= kAeTolerance * brightness_) break;
+    if (exposureSettled()) break;
   }
   exposure_primed_ = true;
   return output_;
@@ -289,7 +295,7 @@ const cv::Mat& CameraRenderer::render(Scene& scene, const ExposureMotion& motion
     exposure_.subframes = subframes;
     exposure_.motion_px = motion_px;
     finishFrame(t0, threadCpuMs());
-    if (std::abs(exposure_.brightness - brightness_) <= kAeTolerance * brightness_) break;
+    if (exposureSettled()) break;
   }
   exposure_primed_ = true;
   return output_;
@@ -357,6 +363,12 @@ const cv::Mat& CameraRenderer::finishFrame(double t0, double t_raster) {
   const double t_end = threadCpuMs();
   timing_ = RenderTiming{t_raster - t0, t_defocus - t_raster, t_distort - t_defocus, t_end - t_distort};
   return output_;
+}
+
+bool CameraRenderer::exposureSettled() const {
+  // The frame just rendered used (exposure_, gain) of its report; the next one (exposure_time_s_, gain_).
+  return std::abs(exposure_.exposure_time_s - exposure_time_s_) <= kAeTolerance * exposure_time_s_ &&
+         std::abs(exposure_.gain - gain_) <= kAeTolerance * gain_;
 }
 
 void CameraRenderer::updateExposure(double mean) {
