@@ -17,6 +17,12 @@
 
 namespace docking_sim {
 
+/// Motion blur: sub-frames at most this far apart (px of the largest projected displacement over the
+/// exposure). The average of copies s px apart is a comb; the residual blur (sigma 0.6) leaves
+/// exp(-2 pi^2 0.36 / s^2) of its ripple: 4 % at 1.5 px (17 % at 2 px), for 2/3 of the sub-frames
+/// (the cost) of a 1 px step.
+constexpr double kMotionBlurStepPx = 1.5;
+
 /// CPU time of the stages of the last render, ms (thread CPU time; for the benchmark).
 struct RenderTiming {
   double rasterize_ms{0};   ///< all sub-frames, with specular and their accumulation

@@ -27,8 +27,6 @@ constexpr int kDefocusLutPerPx = 64;   // sigma lookup resolution: 1/64 px
 // between its nearest and farthest pixels, defocus is one uniform Gaussian folded into the residual
 // blur (free) instead of the per-pixel blend (~3-5 ms): the C270 default at 0.4-8 m varies by 0.04 px.
 constexpr double kUniformDefocusSpreadPx = 0.1;
-// Motion blur: sub-frames at most this far apart (px of the largest projected displacement).
-constexpr double kMaxSubframeStepPx = 1.0;
 // Auto-exposure: per frame, the brightness moves by (target / mean)^kAeStep (a real camera's loop
 // settles over a few frames); the first frame iterates to within kAeTolerance, at most kAePrimingFrames.
 constexpr double kAeStep = 0.7;
@@ -270,7 +268,7 @@ const cv::Mat& CameraRenderer::render(Scene& scene, const ExposureMotion& motion
     int subframes = 1;
     if (effects_.motion_blur_enabled && options_.effects) {
       motion_px = projectedMotionPx(scene, motion, exposure_s);
-      subframes = static_cast<int>(std::clamp(std::ceil(motion_px / kMaxSubframeStepPx), 1.0,
+      subframes = static_cast<int>(std::clamp(std::ceil(motion_px / kMotionBlurStepPx), 1.0,
                                               effects_.motion_blur_max_subframes));
     }
     led_spots_.clear();
@@ -449,13 +447,6 @@ void CameraRenderer::applyDefocus() {
   }
   int top = 1;
   while (top < kDefocusLevels - 1 && kDefocusSigmas[top] < max_sigma) ++top;
-  defocus_levels_.resize(kDefocusLevels);
-  for (int k = 1; k <= top; ++k) {
-    const double sigma = kDefocusSigmas[k];
-    const int half = std::max(1, static_cast<int>(std::ceil(3.0 * sigma)));
-    cv::GaussianBlur(ideal_, defocus_levels_[static_cast<std::size_t>(k)], cv::Size(2 * half + 1, 2 * half + 1),
-                     sigma, sigma, cv::BORDER_REPLICATE);
-  }
   // Per 1/64 px of sigma: the lower bracketing level and the upper one's weight (of 256).
   const int lut_size = static_cast<int>(kDefocusSigmas[top] * kDefocusLutPerPx) + 1;
   std::vector<uint16_t> lut_level(static_cast<std::size_t>(lut_size));
@@ -469,10 +460,31 @@ void CameraRenderer::applyDefocus() {
     lut_level[static_cast<std::size_t>(i)] = static_cast<uint16_t>(k);
     lut_weight[static_cast<std::size_t>(i)] = static_cast<uint16_t>(std::lround(256.0 * w));
   }
-  defocus_out_.create(ideal_.size(), ideal_.type());
-  const int channels = ideal_.channels();
+  // Blur only the levels some pixel blends (a pass over the z-buffer, ~0.3 ms).
   const float lut_scale = static_cast<float>(scale * kDefocusLutPerPx);
   const float inv_s_f = static_cast<float>(inv_s);
+  bool used[kDefocusLevels] = {};
+  for (int y = 0; y < depth_.rows; ++y) {
+    const float* depth = depth_.ptr<float>(y);
+    for (int x = 0; x < depth_.cols; ++x) {
+      const int i = std::min(lut_size - 1, static_cast<int>(std::abs(inv_s_f - depth[x]) * lut_scale + 0.5f));
+      used[lut_level[static_cast<std::size_t>(i)]] = true;
+      used[lut_level[static_cast<std::size_t>(i)] + 1] = true;
+    }
+  }
+  defocus_levels_.resize(kDefocusLevels);
+  for (int k = 1; k <= top; ++k) {
+    if (!used[k]) {
+      defocus_levels_[static_cast<std::size_t>(k)] = ideal_;  // no pixel blends it (only its row pointer is taken)
+      continue;
+    }
+    const double sigma = kDefocusSigmas[k];
+    const int half = std::max(1, static_cast<int>(std::ceil(3.0 * sigma)));
+    cv::GaussianBlur(ideal_, defocus_levels_[static_cast<std::size_t>(k)], cv::Size(2 * half + 1, 2 * half + 1),
+                     sigma, sigma, cv::BORDER_REPLICATE);
+  }
+  defocus_out_.create(ideal_.size(), ideal_.type());
+  const int channels = ideal_.channels();
   const uchar* level_rows[kDefocusLevels];
   for (int y = 0; y < ideal_.rows; ++y) {
     const float* depth = depth_.ptr<float>(y);
