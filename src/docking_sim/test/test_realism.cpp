@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "docking_sim/config_error.h"
 #include "docking_sim/renderer.h"
@@ -362,4 +363,15 @@ TEST(Realism, CameraOverridesApplyPerBandAndBadValuesAreNamed) {
       EXPECT_NE(what.find(field), std::string::npos) << what << " should name " << field;
     }
   }
+}
+
+TEST(Realism, EveryShippedRealisticScenarioLoads) {
+  int found = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(docking_sim_test::configDir() + "/scenarios")) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("eval_real_", 0) != 0) continue;
+    ++found;
+    EXPECT_NO_THROW(docking_sim::Simulation(files(entry.path().string()))) << name;
+  }
+  EXPECT_GE(found, 10);
 }
