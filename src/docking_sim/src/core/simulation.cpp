@@ -74,6 +74,11 @@ Simulation::Simulation(const SimulationFiles& files, const RenderOptions& render
     renderers_[static_cast<std::size_t>(i)] = std::make_unique<CameraRenderer>(
         cam.calibration, cam.band, effects, lighting_, scenario_.seed * 3 + static_cast<uint64_t>(i), render_options);
   }
+  // Auto-exposure settles on its first frame (up to 10 renders): do it here, before time runs, so the
+  // node's first frames do not fall behind real time and arrive in a burst.
+  for (int i = 0; i < 3; ++i) {
+    if (renderers_[static_cast<std::size_t>(i)]->effects().ae_enabled && render_options.effects) render(i);
+  }
 }
 
 void Simulation::advance(double dt_s) {
