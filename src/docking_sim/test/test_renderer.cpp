@@ -97,7 +97,9 @@ TEST(Renderer, MarkersLandOnThePinholeProjection) {
 }
 
 TEST(Renderer, IrLedsAreBrightAtTheMarkersInTheDark) {
-  const std::string path = writeTempFile("leds", scenarioText(1.15, 0.0, 180.0, 0.0, "dark"));
+  // Fixed exposure on the visible camera (auto-exposure would lift the dark room: test_realism.cpp).
+  const std::string path = writeTempFile("leds", scenarioText(1.15, 0.0, 180.0, 0.0, "dark") +
+                                                     "  camera_overrides: {visible: {auto_exposure: {enabled: false}}}\n");
   docking_sim::RenderOptions options;  // the full pipeline: distortion and effects
   docking_sim::Simulation sim(files(path), options);
   const cv::Mat ir = sim.render(RobotModel::kIr);
@@ -121,7 +123,7 @@ TEST(Renderer, IrLedsAreBrightAtTheMarkersInTheDark) {
     const uchar led = ir.at<uchar>(cvRound(p.y), cvRound(p.x));
     EXPECT_GT(led, 200) << "LED at " << p << " not bright";
   }
-  // The visible camera sees almost nothing.
+  // The visible camera at its nominal exposure sees almost nothing.
   EXPECT_LT(cv::mean(sim.render(RobotModel::kStereoLeft))[0], 15.0);
 }
 

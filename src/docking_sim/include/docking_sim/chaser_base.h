@@ -11,7 +11,12 @@
 
 namespace docking_sim {
 
-enum class CommandResult { kAccepted, kRejectedNonFinite, kRejectedWrongSize };
+enum class CommandResult {
+  kAccepted,
+  kRejectedNonFinite,
+  kRejectedWrongSize,
+  kIgnoredScripted,  ///< the scenario scripts the chaser's motion (Simulation::wheelCommand)
+};
 
 class ChaserBase {
  public:

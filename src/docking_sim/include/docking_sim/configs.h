@@ -40,21 +40,55 @@ struct LightingScenario {
   GlareSpot glare;            ///< visible cameras only
 };
 
-/// Per-band optics and sensor: how the raw image departs from an ideal pinhole render.
+/// Per-band optics and sensor: how the raw image departs from an ideal pinhole render. Every field is
+/// a key of sim.yaml `cameras.<band>` (dotted: nested block), listed with its range in configs.cpp's
+/// kEffectKeys, the one table both sim.yaml and a scenario's `camera_overrides` are read through.
 struct CameraEffects {
-  double exposure{1.0};        ///< multiplies the scene brightness
-  double blur_sigma_px{0.6};   ///< Gaussian optical blur
+  double exposure{1.0};        ///< multiplies the scene brightness (with auto-exposure: the target mean)
+  double blur_sigma_px{0.6};   ///< residual Gaussian blur (aberrations, sensor), after defocus
   double vignetting{0.25};     ///< relative darkening at the image corners
   /// IR only: the LEDs' radiance at led_intensity 1, relative to the sensor's full scale at exposure 1
   /// (> 1: brighter than anything the exposure is set for; the lens spreads it, the sensor clips it).
   double led_radiance{1.0};
+  /// Exposure time at which a lighting scenario's `illumination` holds (auto-exposure off: the time
+  /// used); the window of motion blur. The image stamp is the exposure's middle.
+  double exposure_time_s{0.02};
+  // Thin lens (optics.*): defocus circle of confusion per pixel from the z-buffer.
+  double focal_length_mm{3.0};
+  double f_number{0.0};         ///< 0: a pinhole (no defocus)
+  double focus_distance_m{0.9};
+  double pixel_pitch_um{5.6};
+  // Auto-exposure and gain (auto_exposure.*).
+  bool ae_enabled{false};
+  double ae_target_mean{110.0};   ///< mean grey level it drives the image to (times `exposure`)
+  double ae_min_exposure_s{0.0005};
+  double ae_max_exposure_s{0.0333};
+  double ae_max_gain{8.0};        ///< analog gain after the longest exposure; noise scales with it
+  // Motion blur (motion_blur.*): sub-frames across the exposure.
+  bool motion_blur_enabled{false};
+  double motion_blur_max_subframes{16};
+  // Specular (specular.*): a Blinn-Phong lobe on glossy surfaces (the target's face print).
+  double specular_strength{0.0};
+  double specular_shininess{40.0};
 };
+
+/// Reads `cameras.<band>`-style keys from `block` into `effects`. partial = false (sim.yaml): every key
+/// is required; partial = true (a scenario's camera_overrides): only the keys present are set, and an
+/// unknown key is an error. ir_band: whether IR-only keys (led_radiance) are allowed. Throws ConfigError.
+class YamlField;
+void readCameraEffects(const YamlField& block, bool partial, bool ir_band, CameraEffects* effects);
+
+/// Thin-lens circle of confusion: its diameter in pixels for a point at depth z_m, with the lens
+/// focused at focus_distance_m: A f |z - s| / (z (s - f)) / pitch with A = f / N. 0 for a pinhole.
+double circleOfConfusionPx(const CameraEffects& e, double z_m);
+/// The Gaussian sigma (px) with the second moment of a uniform disc of that diameter: d / 4.
+double defocusSigmaPx(const CameraEffects& e, double z_m);
 
 struct ClutterBox {
   std::string name;
   double x_m{0}, y_m{0}, yaw_rad{0};           ///< centre of the footprint on the floor
   double size_x_m{0}, size_y_m{0}, size_z_m{0};
-  std::string material;                         ///< wood | cardboard | metal | fabric | plastic
+  std::string material;                         ///< wood | cardboard | metal | fabric | plastic | busy | photo
   cv::Vec3b color_bgr{128, 128, 128};
 };
 
@@ -80,6 +114,10 @@ struct SimSettings {
 };
 
 SimSettings loadSimSettings(const std::string& path);
+
+/// One clutter box {name, xy_m, yaw_deg, size_m, material, color_bgr} (sim.yaml room.clutter and a
+/// scenario's extra_clutter). Throws ConfigError.
+ClutterBox readClutterBox(const YamlField& c);
 
 // ---- config/target.yaml ---------------------------------------------------------------------------
 

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <utility>
 #include <random>
 #include <vector>
@@ -16,9 +17,35 @@
 
 namespace docking_sim {
 
+/// Motion blur: sub-frames at most this far apart (px of the largest projected displacement over the
+/// exposure). The average of copies s px apart is a comb; the residual blur (sigma 0.6) leaves
+/// exp(-2 pi^2 0.36 / s^2) of its ripple: 4 % at 1.5 px (17 % at 2 px), for 2/3 of the sub-frames
+/// (the cost) of a 1 px step.
+constexpr double kMotionBlurStepPx = 1.5;
+
 /// CPU time of the stages of the last render, ms (thread CPU time; for the benchmark).
 struct RenderTiming {
-  double rasterize_ms{0}, distort_ms{0}, effects_ms{0};
+  double rasterize_ms{0};   ///< all sub-frames, with specular and their accumulation
+  double defocus_ms{0};     ///< depth-of-field blend
+  double distort_ms{0};
+  double effects_ms{0};     ///< residual blur, glare, vignetting, noise, LED spots, exposure metering
+};
+
+/// What the last frame's camera did (for tools and tests): exposure, gain, blur it rendered with.
+struct ExposureReport {
+  double exposure_time_s{0};   ///< this frame's exposure (auto-exposure's choice, or the fixed one)
+  double gain{1};              ///< analog gain (noise sigma = the lighting's noise_sigma x gain)
+  double brightness{1};        ///< scene brightness factor: exposure_time_s / nominal x gain
+  double measured_mean{0};     ///< mean grey level of the frame (what auto-exposure meters)
+  int subframes{1};            ///< sub-frames averaged for motion blur
+  double motion_px{0};         ///< largest projected displacement over the exposure (the sub-frame count's basis)
+};
+
+/// The poses of the camera and of the target robot at a time offset (s) from the frame's stamp (the
+/// exposure's middle): motion blur renders sub-frames across the exposure from these.
+struct ExposureMotion {
+  std::function<Eigen::Isometry3d(double)> world_T_camera;
+  std::function<Eigen::Isometry3d(double)> world_T_target_robot;
 };
 
 struct RenderOptions {
@@ -32,8 +59,20 @@ class CameraRenderer {
   CameraRenderer(const CameraCalibration& calibration, Band band, const CameraEffects& effects,
                  const LightingScenario& lighting, uint64_t seed, const RenderOptions& options = {});
 
-  /// Renders the scene seen from a camera at world_T_camera (optical frame: z forward, x right, y down).
+  /// Renders the scene seen from a camera at world_T_camera (optical frame: z forward, x right, y down),
+  /// one instant (no motion blur; auto-exposure and defocus as configured).
   const cv::Mat& render(const Scene& scene, const Eigen::Isometry3d& world_T_camera);
+  /// Renders one exposure: sub-frames across it when things move (motion blur), the scene's target
+  /// placed by motion.world_T_target_robot at each (the scene is left at offset 0).
+  const cv::Mat& render(Scene& scene, const ExposureMotion& motion);
+
+  /// The largest displacement (px) of the target's outline and of the static scene (sampled through
+  /// the last depth buffer) between the exposure's start and end, for an exposure of exposure_s.
+  double projectedMotionPx(const Scene& scene, const ExposureMotion& motion, double exposure_s) const;
+  const ExposureReport& lastExposure() const { return exposure_; }
+  const CameraEffects& effects() const { return effects_; }
+  /// The z-buffer of the last frame (CV_32F 1/z, ideal image with its margin; 0 = nothing).
+  const cv::Mat& depthBuffer() const { return depth_; }
 
   /// The undistorted pinhole render of the last frame (with a margin; see idealPrincipalOffset()).
   /// Visible band: CV_8UC4 (b, g, r, 0); IR: CV_8UC1.
@@ -46,6 +85,20 @@ class CameraRenderer {
  private:
   template <int kChannels>
   void rasterize(const Scene& scene, const Eigen::Isometry3d& camera_T_world);
+  /// Rasterises one sub-frame (surfaces, specular, LEDs with weight `led_weight`) into ideal_/depth_.
+  void rasterizeSubframe(const Scene& scene, const Eigen::Isometry3d& world_T_camera, double led_weight);
+  /// The exposure's shared tail: defocus, distortion, effects, metering. t0: CPU ms at the frame start.
+  const cv::Mat& finishFrame(double t0, double t_raster);
+  /// Blinn-Phong highlights of the glossy surfaces, added to ideal_ where the surface is what shows.
+  template <int kChannels>
+  void addSpecular(const Scene& scene, const Surface& surface, const Eigen::Isometry3d& camera_T_world);
+  /// Depth of field: per-pixel Gaussian of the circle of confusion's sigma (from depth_), by blending
+  /// ideal_ blurred at fixed sigma levels, weighted by variance between the two that bracket it.
+  void applyDefocus();
+  /// Auto-exposure: from the frame just rendered (mean `mean`), the next frame's exposure and gain.
+  void updateExposure(double mean);
+  /// Whether the next frame's exposure and gain equal the last one's (within kAeTolerance).
+  bool exposureSettled() const;
   template <int kChannels>
   void drawSurface(const Surface& surface, const Eigen::Isometry3d& camera_T_world);
   /// A decal (Surface::decal): area coverage of each pixel's square (exact polygon clipping on the
@@ -60,7 +113,7 @@ class CameraRenderer {
   void applyEffects();
   /// IR: the scene's LEDs that show (facing the camera, their centre not hidden in the z-buffer),
   /// projected through the lens model into led_spots_ (output pixels).
-  void projectLeds(const Scene& scene, const Eigen::Isometry3d& camera_T_world);
+  void projectLeds(const Scene& scene, const Eigen::Isometry3d& camera_T_world, double weight);
   /// Adds the spots of led_spots_ to `image` (the output's size, CV_8UC1), saturating: each a
   /// Gaussian with the disc's variance plus the lens's (lens_sigma_px) and the pixel's own, darkened
   /// by `vignette` (per pixel, 256 = 1; null: none).
@@ -104,6 +157,16 @@ class CameraRenderer {
   };
   std::vector<LedSpot> led_spots_;
   std::vector<float> spot_row_, spot_col_;  ///< the separable Gaussian's factors along x and y
+  // Exposure state: brightness_ scales every surface's gain and the LEDs (1 = the nominal exposure).
+  double exposure_time_s_{0.02};
+  double gain_{1.0};
+  double brightness_{1.0};
+  bool exposure_primed_{false};  ///< auto-exposure has settled once (the first frame iterates)
+  ExposureReport exposure_;
+  cv::Mat accumulator_;          ///< CV_16U sum of the sub-frames (ideal_'s size and channels)
+  std::vector<cv::Mat> defocus_levels_;  ///< ideal_ blurred at kDefocusSigmas (index 0: unused)
+  cv::Mat defocus_out_;
+  double uniform_defocus_variance_{0.0};  ///< px^2 folded into the residual blur (applyDefocus)
 };
 
 }  // namespace docking_sim

@@ -63,6 +63,9 @@ struct Surface {
   /// order, with area-coverage anti-aliasing (blended over what is there), winning depth ties with
   /// the surface under it by a relative 1/z bias, writing no depth. Flat colour only (no texture).
   bool decal{false};
+  /// A glossy print (the target's face): the renderer adds a Blinn-Phong highlight of the key light
+  /// (cameras.<band>.specular) where the mirror direction meets the camera.
+  bool glossy{false};
   // Filled per frame by Scene::update: the brightness factor in each band.
   double gain_visible{1.0};
   double gain_ir{1.0};
@@ -96,6 +99,8 @@ class Scene {
   void update(const Eigen::Isometry3d& world_T_target_robot);
   const std::vector<Surface>& surfaces() const { return world_; }
   const std::vector<Led>& leds() const { return leds_world_; }
+  /// Direction the key light travels (world, unit): Lambert shading and specular highlights.
+  const Eigen::Vector3d& lightDirection() const { return light_direction_; }
 
   void setLighting(const LightingScenario& lighting, const Eigen::Vector3d& light_direction, double ambient,
                    const CameraEffects& visible, const CameraEffects& ir);

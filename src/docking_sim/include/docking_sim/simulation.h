@@ -41,20 +41,28 @@ class Simulation {
   /// Advances the physics by dt_s (any positive step; the motors and poses integrate exactly).
   void advance(double dt_s);
 
+  /// A wheel command now. Ignored (kIgnoredScripted) while the scenario scripts the chaser's motion.
   CommandResult wheelCommand(bool enable, const std::vector<double>& wheel_rad_s) {
+    if (scenario_.chaser_motion.scripted()) return CommandResult::kIgnoredScripted;
     return chaser_.command(enable, wheel_rad_s, time_s_);
   }
   const ChaserBase& chaser() const { return chaser_; }
 
   Eigen::Isometry3d worldTChaser() const;          ///< base_link, on the floor
-  Eigen::Isometry3d worldTTargetRobot() const;
+  Eigen::Isometry3d worldTTargetRobot() const { return worldTTargetRobotAt(time_s_); }
+  /// The scripted target robot at any sim time (closed form).
+  Eigen::Isometry3d worldTTargetRobotAt(double t_s) const;
+  /// A camera's pose dt_s from now: the chaser moved by its current body twist (exact arc), as over an
+  /// exposure (tens of ms, against the motors' 20 ms lag: the twist barely changes).
+  Eigen::Isometry3d worldTCameraAt(int camera, double dt_s) const;
   Eigen::Isometry3d worldTPort() const;            ///< target_truth
   Eigen::Isometry3d worldTCamera(int camera) const;
   /// Chaser velocity in world: linear (m/s) of base_link's origin and angular (rad/s).
   void chaserVelocityWorld(Eigen::Vector3d* linear, Eigen::Vector3d* angular) const;
   RelativeTruth truthInCamera(int camera) const;
 
-  /// Renders camera RobotModel::kStereoLeft / kStereoRight / kIr at the current time.
+  /// Renders camera RobotModel::kStereoLeft / kStereoRight / kIr for an exposure centred on the current
+  /// time (the stamp): motion blur from both robots' motion across it.
   const cv::Mat& render(int camera);
   const CameraRenderer& renderer(int camera) const { return *renderers_.at(static_cast<std::size_t>(camera)); }
 
@@ -63,15 +71,17 @@ class Simulation {
   const TargetModel& target() const { return target_; }
   const RobotModel& robot() const { return robot_; }
   const LightingScenario& lighting() const { return lighting_; }
+  const Scene& scene() const { return scene_; }
 
  private:
-  SimSettings settings_;
-  Scenario scenario_;
+  Scenario scenario_;       // (before settings_: the settings take its overrides)
+  SimSettings settings_;    ///< sim.yaml with the scenario's overrides applied
   TargetModel target_;
   RobotModel robot_;
   OmniBaseModel base_model_;
   LightingScenario lighting_;
   ChaserBase chaser_;
+  omni_base::OmniKinematics kinematics_;  ///< for the scripted chaser motion's wheel commands
   Scene scene_;
   std::array<std::unique_ptr<CameraRenderer>, 3> renderers_;
   double time_s_{0.0};

@@ -25,14 +25,6 @@ BandLighting readBand(const YamlField& f) {
   return b;
 }
 
-CameraEffects readEffects(const YamlField& f) {
-  CameraEffects e;
-  e.exposure = f["exposure"].asDouble(0.0, 20.0);
-  e.blur_sigma_px = f["blur_sigma_px"].asDouble(0.0, 10.0);
-  e.vignetting = f["vignetting"].asDouble(0.0, 0.95);
-  return e;
-}
-
 Eigen::Isometry3d poseFromXyzRpy(const std::vector<double>& xyz, const std::vector<double>& rpy) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
@@ -44,7 +36,124 @@ Eigen::Isometry3d poseFromXyzRpy(const std::vector<double>& xyz, const std::vect
   return t;
 }
 
+/// Every key of a `cameras.<band>` block: dotted path, range, where it goes. One home for each
+/// camera setting's name and range (defaults and documentation: config/sim.yaml).
+struct EffectKey {
+  const char* path;
+  double min, max;
+  double CameraEffects::*number;  ///< null for a bool key
+  bool CameraEffects::*flag;      ///< null for a number key
+  bool ir_only;
+};
+
+const EffectKey kEffectKeys[] = {
+    {"exposure", 0.0, 20.0, &CameraEffects::exposure, nullptr, false},
+    {"blur_sigma_px", 0.0, 10.0, &CameraEffects::blur_sigma_px, nullptr, false},
+    {"vignetting", 0.0, 0.95, &CameraEffects::vignetting, nullptr, false},
+    {"led_radiance", 0.0, 1000.0, &CameraEffects::led_radiance, nullptr, true},
+    {"exposure_time_s", 1e-5, 1.0, &CameraEffects::exposure_time_s, nullptr, false},
+    {"optics.focal_length_mm", 0.5, 100.0, &CameraEffects::focal_length_mm, nullptr, false},
+    {"optics.f_number", 0.0, 64.0, &CameraEffects::f_number, nullptr, false},
+    {"optics.focus_distance_m", 0.01, 1e6, &CameraEffects::focus_distance_m, nullptr, false},
+    {"optics.pixel_pitch_um", 0.5, 50.0, &CameraEffects::pixel_pitch_um, nullptr, false},
+    {"auto_exposure.enabled", 0, 0, nullptr, &CameraEffects::ae_enabled, false},
+    {"auto_exposure.target_mean", 1.0, 254.0, &CameraEffects::ae_target_mean, nullptr, false},
+    {"auto_exposure.min_exposure_s", 1e-6, 1.0, &CameraEffects::ae_min_exposure_s, nullptr, false},
+    {"auto_exposure.max_exposure_s", 1e-6, 1.0, &CameraEffects::ae_max_exposure_s, nullptr, false},
+    {"auto_exposure.max_gain", 1.0, 64.0, &CameraEffects::ae_max_gain, nullptr, false},
+    {"motion_blur.enabled", 0, 0, nullptr, &CameraEffects::motion_blur_enabled, false},
+    {"motion_blur.max_subframes", 1.0, 64.0, &CameraEffects::motion_blur_max_subframes, nullptr, false},
+    {"specular.strength", 0.0, 100.0, &CameraEffects::specular_strength, nullptr, false},
+    {"specular.shininess", 1.0, 1e6, &CameraEffects::specular_shininess, nullptr, false},
+};
+
+// (YamlField is never re-assigned: YAML::Node's assignment writes into the tree it refers to.)
+
+/// The field at a dotted path below `block` (at most one dot: a key or block.key).
+YamlField fieldAt(const YamlField& block, const std::string& path) {
+  const auto dot = path.find('.');
+  return dot == std::string::npos ? block[path] : block[path.substr(0, dot)][path.substr(dot + 1)];
+}
+
+/// Whether a dotted path exists below `block`.
+bool hasPath(const YamlField& block, const std::string& path) {
+  const auto dot = path.find('.');
+  if (dot == std::string::npos) return block.has(path);
+  const std::string head = path.substr(0, dot);
+  return block.has(head) && block[head].isMap() && block[head].has(path.substr(dot + 1));
+}
+
 }  // namespace
+
+void readCameraEffects(const YamlField& block, bool partial, bool ir_band, CameraEffects* effects) {
+  if (partial) {
+    // Reject what the table does not know (a typo would silently change nothing).
+    if (!block.isMap()) block.fail("must be a map of camera settings");
+    for (const auto& key : block.keys()) {
+      const YamlField sub = block[key];
+      const std::vector<std::string> leaves = sub.isMap() ? sub.keys() : std::vector<std::string>{""};
+      for (const auto& leaf : leaves) {
+        const std::string path = leaf.empty() ? key : key + "." + leaf;
+        bool known = false;
+        for (const auto& k : kEffectKeys) known = known || path == k.path;
+        if (!known) (leaf.empty() ? sub : sub[leaf]).fail("unknown camera setting '" + path + "'");
+      }
+    }
+  }
+  for (const auto& k : kEffectKeys) {
+    if (k.ir_only && !ir_band) {
+      if (hasPath(block, k.path)) fieldAt(block, k.path).fail("an IR camera setting only");
+      continue;
+    }
+    if (partial && !hasPath(block, k.path)) continue;
+    const YamlField f = fieldAt(block, k.path);
+    if (k.flag) {
+      effects->*k.flag = f.asBool();
+    } else {
+      effects->*k.number = f.asDouble(k.min, k.max);
+    }
+  }
+  if (effects->ae_min_exposure_s > effects->ae_max_exposure_s) {
+    block.fail("auto_exposure.min_exposure_s must not exceed max_exposure_s");
+  }
+  if (effects->f_number > 0.0 && effects->focus_distance_m * 1e3 <= effects->focal_length_mm) {
+    block.fail("optics.focus_distance_m must lie beyond the focal length");
+  }
+  effects->motion_blur_max_subframes = std::round(effects->motion_blur_max_subframes);
+}
+
+double circleOfConfusionPx(const CameraEffects& e, double z_m) {
+  if (!(e.f_number > 0.0) || !(z_m > 0.0)) return 0.0;
+  const double f = e.focal_length_mm * 1e-3, s = e.focus_distance_m, aperture = f / e.f_number;
+  const double diameter_m = aperture * f * std::abs(z_m - s) / (z_m * (s - f));
+  return diameter_m / (e.pixel_pitch_um * 1e-6);
+}
+
+double defocusSigmaPx(const CameraEffects& e, double z_m) { return 0.25 * circleOfConfusionPx(e, z_m); }
+
+ClutterBox readClutterBox(const YamlField& c) {
+  static const std::set<std::string> kMaterials{"wood", "cardboard", "metal", "fabric", "plastic", "busy", "photo"};
+  ClutterBox box;
+  box.name = c["name"].asString();
+  const auto xy = c["xy_m"].asVector(2);
+  box.x_m = xy[0];
+  box.y_m = xy[1];
+  box.yaw_rad = c["yaw_deg"].asDouble(-360.0, 360.0) * kDegToRad;
+  const auto size = c["size_m"].asVector(3);
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (!(size[k] > 0.0)) c["size_m"].at(k).fail("must be > 0");
+  }
+  box.size_x_m = size[0];
+  box.size_y_m = size[1];
+  box.size_z_m = size[2];
+  box.material = c["material"].asString();
+  if (!kMaterials.count(box.material)) {
+    c["material"].fail("unknown material '" + box.material +
+                       "' (wood, cardboard, metal, fabric, plastic, busy, photo)");
+  }
+  box.color_bgr = readColor(c["color_bgr"]);
+  return box;
+}
 
 std::string folderOf(const std::string& path) {
   const auto slash = path.find_last_of('/');
@@ -77,9 +186,8 @@ SimSettings loadSimSettings(const std::string& path) {
   s.light_direction.normalize();
   s.ambient = shading["ambient"].asDouble(0.0, 1.0);
 
-  s.visible_effects = readEffects(root["cameras"]["visible"]);
-  s.ir_effects = readEffects(root["cameras"]["ir"]);
-  s.ir_effects.led_radiance = root["cameras"]["ir"]["led_radiance"].asDouble(0.0, 1000.0);
+  readCameraEffects(root["cameras"]["visible"], false, false, &s.visible_effects);
+  readCameraEffects(root["cameras"]["ir"], false, true, &s.ir_effects);
 
   const YamlField lighting = root["lighting"];
   for (const auto& name : lighting.keys()) {
@@ -112,31 +220,9 @@ SimSettings loadSimSettings(const std::string& path) {
   s.room.y_min_m = yr[0];
   s.room.y_max_m = yr[1];
   s.room.height_m = room["height_m"].asDouble(1.0, 20.0);
-  static const std::set<std::string> kMaterials{"wood", "cardboard", "metal", "fabric", "plastic"};
   if (room.has("clutter")) {
     const YamlField clutter = room["clutter"];
-    for (std::size_t i = 0; i < clutter.size(); ++i) {
-      const YamlField c = clutter.at(i);
-      ClutterBox box;
-      box.name = c["name"].asString();
-      const auto xy = c["xy_m"].asVector(2);
-      box.x_m = xy[0];
-      box.y_m = xy[1];
-      box.yaw_rad = c["yaw_deg"].asDouble(-360.0, 360.0) * kDegToRad;
-      const auto size = c["size_m"].asVector(3);
-      for (std::size_t k = 0; k < 3; ++k) {
-        if (!(size[k] > 0.0)) c["size_m"].at(k).fail("must be > 0");
-      }
-      box.size_x_m = size[0];
-      box.size_y_m = size[1];
-      box.size_z_m = size[2];
-      box.material = c["material"].asString();
-      if (!kMaterials.count(box.material)) {
-        c["material"].fail("unknown material '" + box.material + "' (wood, cardboard, metal, fabric, plastic)");
-      }
-      box.color_bgr = readColor(c["color_bgr"]);
-      s.room.clutter.push_back(box);
-    }
+    for (std::size_t i = 0; i < clutter.size(); ++i) s.room.clutter.push_back(readClutterBox(clutter.at(i)));
   }
   return s;
 }

@@ -15,6 +15,26 @@ namespace {
 
 constexpr double kNearPlaneM = 0.02;
 
+// The noise table holds round(kNoiseTableSigma * N(0, 1)); each frame scales it to the lighting's
+// noise_sigma x gain in 8.8 fixed point (so gain changes need no new table).
+constexpr double kNoiseTableSigma = 16.0;
+// Depth of field: ideal_ is blurred at these sigmas (px) and each pixel blends the two that bracket its
+// circle of confusion's sigma, by variance (the blend of two Gaussians has the wanted second moment).
+constexpr double kDefocusSigmas[] = {0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0};
+constexpr int kDefocusLevels = sizeof(kDefocusSigmas) / sizeof(kDefocusSigmas[0]);
+constexpr int kDefocusLutPerPx = 64;   // sigma lookup resolution: 1/64 px
+// When the frame's total blur (defocus with the residual, in quadrature) varies by less than this (px)
+// between its nearest and farthest pixels, defocus is one uniform Gaussian folded into the residual
+// blur (free) instead of the per-pixel blend (~3-5 ms): the C270 default at 0.4-8 m varies by 0.04 px.
+constexpr double kUniformDefocusSpreadPx = 0.1;
+// Auto-exposure: per frame, the brightness moves by (target / mean)^kAeStep (a real camera's loop
+// settles over a few frames); the first frame iterates to within kAeTolerance, at most kAePrimingFrames.
+constexpr double kAeStep = 0.7;
+constexpr double kAeTolerance = 0.03;
+constexpr int kAePrimingFrames = 10;
+// Metering samples every kMeterStride-th pixel of every kMeterStride-th row.
+constexpr int kMeterStride = 4;
+
 // The visible band is rasterised as 32-bit b, g, r, 0 pixels (a CV_8UC4 image) read and written as
 // uint32_t: that byte order holds on little-endian machines only.
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the 32-bit texel layout assumes little-endian");
@@ -172,6 +192,7 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
     }
   }
   depth_.create(ideal_.size(), CV_32F);
+  depth_.setTo(cv::Scalar(0.0f));  // read before the first frame (projectedMotionPx): "nothing there"
   output_.create(h, w, type);
 
   // Vignetting: cos^4-like fall-off, `vignetting` darker at the corners.
@@ -191,8 +212,15 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
   // Noise: a table twice the frame size; each frame reads it from a random offset (no RNG per pixel).
   const std::size_t frame_bytes = static_cast<std::size_t>(w) * h * output_.channels();
   noise_table_.resize(2 * frame_bytes);
-  std::normal_distribution<double> normal(0.0, std::max(noise_sigma_, 1e-9));
+  std::normal_distribution<double> normal(0.0, kNoiseTableSigma);
   for (auto& n : noise_table_) n = static_cast<int8_t>(std::clamp(std::lround(normal(rng_)), -127L, 127L));
+  exposure_time_s_ = effects.exposure_time_s;
+  if (effects.ae_enabled) {
+    // Start inside the camera's range, the lost brightness in gain (as updateExposure would).
+    exposure_time_s_ = std::clamp(effects.exposure_time_s, effects.ae_min_exposure_s, effects.ae_max_exposure_s);
+    gain_ = std::clamp(effects.exposure_time_s / exposure_time_s_, 1.0, effects.ae_max_gain);
+    brightness_ = exposure_time_s_ / effects.exposure_time_s * gain_;
+  }
 
   // Glare: an additive bright spot with a faint horizontal streak (visible cameras only).
   if (band == Band::kVisible && lighting.glare.enabled) {
@@ -216,7 +244,63 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
 }
 
 const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3d& world_T_camera) {
-  const double t0 = threadCpuMs();
+  const int frames = effects_.ae_enabled && options_.effects && !exposure_primed_ ? kAePrimingFrames : 1;
+  for (int i = 0; i < frames; ++i) {
+    const double t0 = threadCpuMs();
+    led_spots_.clear();
+    rasterizeSubframe(scene, world_T_camera, 1.0);
+    exposure_.subframes = 1;
+    exposure_.motion_px = 0.0;
+    finishFrame(t0, threadCpuMs());
+    if (exposureSettled()) break;
+  }
+  exposure_primed_ = true;
+  return output_;
+}
+
+const cv::Mat& CameraRenderer::render(Scene& scene, const ExposureMotion& motion) {
+  const int frames = effects_.ae_enabled && options_.effects && !exposure_primed_ ? kAePrimingFrames : 1;
+  for (int i = 0; i < frames; ++i) {
+    const double t0 = threadCpuMs();
+    scene.update(motion.world_T_target_robot(0.0));
+    const double exposure_s = exposure_time_s_;
+    double motion_px = 0.0;
+    int subframes = 1;
+    if (effects_.motion_blur_enabled && options_.effects) {
+      motion_px = projectedMotionPx(scene, motion, exposure_s);
+      subframes = static_cast<int>(std::clamp(std::ceil(motion_px / kMotionBlurStepPx), 1.0,
+                                              effects_.motion_blur_max_subframes));
+    }
+    led_spots_.clear();
+    if (subframes == 1) {
+      rasterizeSubframe(scene, motion.world_T_camera(0.0), 1.0);
+    } else {
+      // Sub-frame k covers [k, k + 1) / n of the exposure and is rendered at its middle. The middle
+      // sub-frame goes last, so depth_ ends as the exposure's middle (defocus and LED occlusion use it).
+      accumulator_.create(ideal_.size(), CV_MAKETYPE(CV_16U, ideal_.channels()));
+      accumulator_.setTo(cv::Scalar::all(0));
+      const int middle = subframes / 2;
+      for (int k = 0; k < subframes; ++k) {
+        const int index = k == subframes - 1 ? middle : (k < middle ? k : k + 1);
+        const double dt = ((index + 0.5) / subframes - 0.5) * exposure_s;
+        scene.update(motion.world_T_target_robot(dt));
+        rasterizeSubframe(scene, motion.world_T_camera(dt), 1.0 / subframes);
+        cv::add(accumulator_, ideal_, accumulator_, cv::noArray(), accumulator_.type());
+      }
+      accumulator_.convertTo(ideal_, ideal_.type(), 1.0 / subframes);  // rounds to nearest
+      scene.update(motion.world_T_target_robot(0.0));
+    }
+    exposure_.subframes = subframes;
+    exposure_.motion_px = motion_px;
+    finishFrame(t0, threadCpuMs());
+    if (exposureSettled()) break;
+  }
+  exposure_primed_ = true;
+  return output_;
+}
+
+void CameraRenderer::rasterizeSubframe(const Scene& scene, const Eigen::Isometry3d& world_T_camera,
+                                       double led_weight) {
   const Eigen::Isometry3d camera_T_world = world_T_camera.inverse();
   ideal_.setTo(cv::Scalar::all(0));
   depth_.setTo(cv::Scalar(0.0f));
@@ -224,9 +308,23 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
     rasterize<4>(scene, camera_T_world);
   } else {
     rasterize<1>(scene, camera_T_world);
-    projectLeds(scene, camera_T_world);
   }
-  const double t1 = threadCpuMs();
+  if (effects_.specular_strength > 0.0) {
+    for (const Surface& surface : scene.surfaces()) {
+      if (!surface.glossy) continue;
+      if (band_ == Band::kVisible) {
+        addSpecular<4>(scene, surface, camera_T_world);
+      } else {
+        addSpecular<1>(scene, surface, camera_T_world);
+      }
+    }
+  }
+  if (band_ == Band::kInfrared) projectLeds(scene, camera_T_world, led_weight);
+}
+
+const cv::Mat& CameraRenderer::finishFrame(double t0, double t_raster) {
+  if (options_.effects) applyDefocus();
+  const double t_defocus = threadCpuMs();
   if (options_.distortion) {
     applyDistortion();
   } else {
@@ -237,16 +335,184 @@ const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3
       crop.copyTo(distorted_);
     }
   }
-  const double t2 = threadCpuMs();
+  const double t_distort = threadCpuMs();
   if (options_.effects) {
     applyEffects();
   } else {
     distorted_.copyTo(output_);
     addLedSpots(output_, 0.0, nullptr);  // no lens blur, no vignetting: the disc as the pixels sample it
   }
-  const double t3 = threadCpuMs();
-  timing_ = RenderTiming{t1 - t0, t2 - t1, t3 - t2};
+  // Metering: the mean grey level of the frame (a sparse grid is plenty for a mean).
+  double sum = 0.0;
+  long count = 0;
+  const int channels = output_.channels();
+  for (int y = kMeterStride / 2; y < output_.rows; y += kMeterStride) {
+    const uchar* row = output_.ptr<uchar>(y);
+    for (int x = kMeterStride / 2; x < output_.cols; x += kMeterStride) {
+      for (int c = 0; c < channels; ++c) sum += row[x * channels + c];
+      count += channels;
+    }
+  }
+  exposure_.measured_mean = count > 0 ? sum / count : 0.0;
+  exposure_.exposure_time_s = exposure_time_s_;
+  exposure_.gain = gain_;
+  exposure_.brightness = brightness_;
+  if (options_.effects) updateExposure(exposure_.measured_mean);
+  const double t_end = threadCpuMs();
+  timing_ = RenderTiming{t_raster - t0, t_defocus - t_raster, t_distort - t_defocus, t_end - t_distort};
   return output_;
+}
+
+bool CameraRenderer::exposureSettled() const {
+  // The frame just rendered used (exposure_, gain) of its report; the next one (exposure_time_s_, gain_).
+  return std::abs(exposure_.exposure_time_s - exposure_time_s_) <= kAeTolerance * exposure_time_s_ &&
+         std::abs(exposure_.gain - gain_) <= kAeTolerance * gain_;
+}
+
+void CameraRenderer::updateExposure(double mean) {
+  if (!effects_.ae_enabled) return;
+  // `exposure` stays what it was without auto-exposure: a brightness multiplier (here: of the target).
+  const double target = std::clamp(effects_.ae_target_mean * effects_.exposure, 1.0, 254.0);
+  const double wanted = brightness_ * std::pow(target / std::max(mean, 0.5), kAeStep);
+  // Longer exposure first (no noise cost), then analog gain (noise scales with it), as webcams do.
+  const double nominal = effects_.exposure_time_s;
+  exposure_time_s_ = std::clamp(wanted * nominal, effects_.ae_min_exposure_s, effects_.ae_max_exposure_s);
+  gain_ = std::clamp(wanted * nominal / exposure_time_s_, 1.0, effects_.ae_max_gain);
+  brightness_ = exposure_time_s_ / nominal * gain_;
+}
+
+double CameraRenderer::projectedMotionPx(const Scene& scene, const ExposureMotion& motion, double exposure_s) const {
+  const double half = 0.5 * exposure_s;
+  const Eigen::Isometry3d cam_a = motion.world_T_camera(-half).inverse();
+  const Eigen::Isometry3d cam_b = motion.world_T_camera(half).inverse();
+  const Eigen::Isometry3d target_now_inv = motion.world_T_target_robot(0.0).inverse();
+  // Where a point on the target (world, now) is at the exposure's start and end.
+  const Eigen::Isometry3d move_a = motion.world_T_target_robot(-half) * target_now_inv;
+  const Eigen::Isometry3d move_b = motion.world_T_target_robot(half) * target_now_inv;
+  const cv::Matx33d& K = calibration_.K;
+  const double w = output_.cols, h = output_.rows;
+  double worst = 0.0;
+  auto measure = [&](const Eigen::Vector3d& pa, const Eigen::Vector3d& pb) {
+    const Eigen::Vector3d ca = cam_a * pa, cb = cam_b * pb;
+    if (ca.z() < kNearPlaneM || cb.z() < kNearPlaneM) return;
+    const Eigen::Vector2d qa(K(0, 0) * ca.x() / ca.z() + K(0, 2), K(1, 1) * ca.y() / ca.z() + K(1, 2));
+    const Eigen::Vector2d qb(K(0, 0) * cb.x() / cb.z() + K(0, 2), K(1, 1) * cb.y() / cb.z() + K(1, 2));
+    auto inside = [&](const Eigen::Vector2d& q) { return q.x() >= 0 && q.y() >= 0 && q.x() < w && q.y() < h; };
+    if (!inside(qa) && !inside(qb)) return;
+    worst = std::max(worst, (qa - qb).norm());
+  };
+  for (const Surface& s : scene.surfaces()) {
+    if (!s.moves_with_target) continue;
+    for (const auto& st : s.outline) {
+      const Eigen::Vector3d p = s.origin + st.x() * s.edge_u + st.y() * s.edge_v;
+      measure(move_a * p, move_b * p);
+    }
+  }
+  // The static scene through the last depth buffer (a coarse grid; the first frame: rays at 2 m).
+  const Eigen::Isometry3d world_T_camera_now = motion.world_T_camera(0.0);
+  const double fx = ideal_K_(0, 0), fy = ideal_K_(1, 1), cx = ideal_K_(0, 2), cy = ideal_K_(1, 2);
+  constexpr int kGrid = 8;
+  for (int gy = 0; gy <= kGrid; ++gy) {
+    for (int gx = 0; gx <= kGrid; ++gx) {
+      const int x = pad_.x + (output_.cols - 1) * gx / kGrid, y = pad_.y + (output_.rows - 1) * gy / kGrid;
+      const float inv_z = depth_.empty() ? 0.0f : depth_.at<float>(y, x);
+      const double z = inv_z > 0.0f ? 1.0 / inv_z : 2.0;
+      const Eigen::Vector3d p = world_T_camera_now * Eigen::Vector3d((x - cx) / fx * z, (y - cy) / fy * z, z);
+      measure(p, p);
+    }
+  }
+  return worst;
+}
+
+void CameraRenderer::applyDefocus() {
+  uniform_defocus_variance_ = 0.0;
+  if (!(effects_.f_number > 0.0)) return;
+  // sigma = d / 4 with d = A f s / (s - f) |1/s - 1/z| / pitch: affine in the z-buffer's 1/z.
+  const double inv_s = 1.0 / effects_.focus_distance_m;
+  // A point at infinity has |1/s - 1/z| = 1/s: the factor from the one thin-lens formula (configs.cpp).
+  const double scale = defocusSigmaPx(effects_, 1e15) * effects_.focus_distance_m;
+  double min_inv_z, max_inv_z;
+  cv::minMaxLoc(depth_, &min_inv_z, &max_inv_z);
+  const double max_sigma =
+      std::min(kDefocusSigmas[kDefocusLevels - 1],
+               scale * std::max(std::abs(inv_s - min_inv_z), std::abs(inv_s - max_inv_z)));
+  const double min_sigma = scale * (inv_s >= min_inv_z && inv_s <= max_inv_z
+                                        ? 0.0
+                                        : std::min(std::abs(inv_s - min_inv_z), std::abs(inv_s - max_inv_z)));
+  const double residual2 = effects_.blur_sigma_px * effects_.blur_sigma_px;
+  if (std::sqrt(residual2 + max_sigma * max_sigma) - std::sqrt(residual2 + min_sigma * min_sigma) <
+      kUniformDefocusSpreadPx) {
+    uniform_defocus_variance_ = 0.5 * (min_sigma * min_sigma + max_sigma * max_sigma);
+    return;
+  }
+  int top = 1;
+  while (top < kDefocusLevels - 1 && kDefocusSigmas[top] < max_sigma) ++top;
+  // Per 1/64 px of sigma: the lower bracketing level and the upper one's weight (of 256).
+  const int lut_size = static_cast<int>(kDefocusSigmas[top] * kDefocusLutPerPx) + 1;
+  std::vector<uint16_t> lut_level(static_cast<std::size_t>(lut_size));
+  std::vector<uint16_t> lut_weight(static_cast<std::size_t>(lut_size));
+  for (int i = 0; i < lut_size; ++i) {
+    const double sigma = static_cast<double>(i) / kDefocusLutPerPx;
+    int k = 0;
+    while (k + 1 < top && kDefocusSigmas[k + 1] <= sigma) ++k;
+    const double lo = kDefocusSigmas[k], hi = kDefocusSigmas[k + 1];
+    const double w = std::clamp((sigma * sigma - lo * lo) / (hi * hi - lo * lo), 0.0, 1.0);
+    lut_level[static_cast<std::size_t>(i)] = static_cast<uint16_t>(k);
+    lut_weight[static_cast<std::size_t>(i)] = static_cast<uint16_t>(std::lround(256.0 * w));
+  }
+  // Blur only the levels some pixel blends (a pass over the z-buffer, ~0.3 ms).
+  const float lut_scale = static_cast<float>(scale * kDefocusLutPerPx);
+  const float inv_s_f = static_cast<float>(inv_s);
+  bool used[kDefocusLevels] = {};
+  for (int y = 0; y < depth_.rows; ++y) {
+    const float* depth = depth_.ptr<float>(y);
+    for (int x = 0; x < depth_.cols; ++x) {
+      const int i = std::min(lut_size - 1, static_cast<int>(std::abs(inv_s_f - depth[x]) * lut_scale + 0.5f));
+      used[lut_level[static_cast<std::size_t>(i)]] = true;
+      used[lut_level[static_cast<std::size_t>(i)] + 1] = true;
+    }
+  }
+  defocus_levels_.resize(kDefocusLevels);
+  for (int k = 1; k <= top; ++k) {
+    if (!used[k]) {
+      defocus_levels_[static_cast<std::size_t>(k)] = ideal_;  // no pixel blends it (only its row pointer is taken)
+      continue;
+    }
+    const double sigma = kDefocusSigmas[k];
+    const int half = std::max(1, static_cast<int>(std::ceil(3.0 * sigma)));
+    cv::GaussianBlur(ideal_, defocus_levels_[static_cast<std::size_t>(k)], cv::Size(2 * half + 1, 2 * half + 1),
+                     sigma, sigma, cv::BORDER_REPLICATE);
+  }
+  defocus_out_.create(ideal_.size(), ideal_.type());
+  const int channels = ideal_.channels();
+  const uchar* level_rows[kDefocusLevels];
+  for (int y = 0; y < ideal_.rows; ++y) {
+    const float* depth = depth_.ptr<float>(y);
+    level_rows[0] = ideal_.ptr<uchar>(y);
+    for (int k = 1; k <= top; ++k) level_rows[k] = defocus_levels_[static_cast<std::size_t>(k)].ptr<uchar>(y);
+    uchar* out = defocus_out_.ptr<uchar>(y);
+    for (int x = 0; x < ideal_.cols; ++x) {
+      const int i = std::min(lut_size - 1, static_cast<int>(std::abs(inv_s_f - depth[x]) * lut_scale + 0.5f));
+      const int k = lut_level[static_cast<std::size_t>(i)];
+      const int w = lut_weight[static_cast<std::size_t>(i)];
+      const uchar* a = level_rows[k] + x * channels;
+      const uchar* b = level_rows[k + 1] + x * channels;
+      if (channels == 4) {
+        // One pixel's four bytes at once: each product stays inside its 16-bit lane (255 * 256 < 2^16).
+        uint32_t pa, pb;
+        std::memcpy(&pa, a, 4);
+        std::memcpy(&pb, b, 4);
+        const uint32_t wa = static_cast<uint32_t>(256 - w), wb = static_cast<uint32_t>(w);
+        const uint32_t even = (((pa & 0x00ff00ffu) * wa + (pb & 0x00ff00ffu) * wb + 0x00800080u) >> 8) & 0x00ff00ffu;
+        const uint32_t odd = ((((pa >> 8) & 0x00ff00ffu) * wa + ((pb >> 8) & 0x00ff00ffu) * wb + 0x00800080u)) & 0xff00ff00u;
+        const uint32_t merged = even | odd;
+        std::memcpy(out + x * 4, &merged, 4);
+      } else {
+        out[x] = static_cast<uchar>((a[0] * (256 - w) + b[0] * w + 128) >> 8);
+      }
+    }
+  }
+  std::swap(ideal_, defocus_out_);
 }
 
 void CameraRenderer::applyDistortion() {
@@ -262,12 +528,14 @@ void CameraRenderer::applyDistortion() {
 void CameraRenderer::applyEffects() {
   cv::Mat* src = &distorted_;
   double lens_sigma_px = 0.0;
-  if (effects_.blur_sigma_px > 0.05) {
+  // The residual blur, with a frame-wide uniform defocus folded in (applyDefocus).
+  const double sigma = std::sqrt(effects_.blur_sigma_px * effects_.blur_sigma_px + uniform_defocus_variance_);
+  if (sigma > 0.05) {
     // Kernel +-3 sigma, at least 3x3 (OpenCV's fixed-point path for small 8-bit kernels).
-    const int half = std::max(1, static_cast<int>(std::ceil(3.0 * effects_.blur_sigma_px)) - 1);
-    cv::GaussianBlur(distorted_, blurred_, cv::Size(2 * half + 1, 2 * half + 1), effects_.blur_sigma_px);
+    const int half = std::max(1, static_cast<int>(std::ceil(3.0 * sigma)) - 1);
+    cv::GaussianBlur(distorted_, blurred_, cv::Size(2 * half + 1, 2 * half + 1), sigma);
     src = &blurred_;
-    lens_sigma_px = effects_.blur_sigma_px;
+    lens_sigma_px = effects_.blur_sigma_px;  // the LED spots carry their own defocus (projectLeds)
   }
   if (!glare_.empty()) {
     cv::add(*src, glare_, blurred_);  // saturating
@@ -278,13 +546,14 @@ void CameraRenderer::applyEffects() {
   const std::size_t frame_bytes = static_cast<std::size_t>(row_bytes) * output_.rows;
   std::uniform_int_distribution<std::size_t> offset_dist(0, noise_table_.size() - frame_bytes);
   const int8_t* noise = noise_table_.data() + offset_dist(rng_);
+  const int noise_scale = static_cast<int>(std::lround(256.0 * noise_sigma_ * gain_ / kNoiseTableSigma));
   const uint16_t* vig = vignette_.data();
   for (int y = 0; y < output_.rows; ++y) {
     const uchar* in = src->ptr<uchar>(y);
     uchar* out = output_.ptr<uchar>(y);
     const std::size_t base = static_cast<std::size_t>(y) * row_bytes;
     for (int i = 0; i < row_bytes; ++i) {
-      const int value = ((in[i] * vig[base + i]) >> 8) + noise[base + i];
+      const int value = ((in[i] * vig[base + i]) >> 8) + ((noise[base + i] * noise_scale + 128) >> 8);
       out[i] = static_cast<uchar>(std::min(255, std::max(0, value)));
     }
   }
@@ -308,8 +577,7 @@ Eigen::Vector2d distortNormalised(const std::vector<double>& D, const Eigen::Vec
 
 }  // namespace
 
-void CameraRenderer::projectLeds(const Scene& scene, const Eigen::Isometry3d& camera_T_world) {
-  led_spots_.clear();
+void CameraRenderer::projectLeds(const Scene& scene, const Eigen::Isometry3d& camera_T_world, double weight) {
   const double fx = ideal_K_(0, 0), fy = ideal_K_(1, 1), cx = ideal_K_(0, 2), cy = ideal_K_(1, 2);
   // The same depth tie as a decal's: the LED lies in the plane of the face under it.
   constexpr float kDepthBias = 1.0f + 1e-4f;
@@ -356,8 +624,10 @@ void CameraRenderer::projectLeds(const Scene& scene, const Eigen::Isometry3d& ca
     LedSpot spot;
     spot.x = K(0, 0) * centre.x() + K(0, 1) * centre.y() + K(0, 2);
     spot.y = K(1, 1) * centre.y() + K(1, 2);
-    spot.disc_variance = area_px / (4.0 * M_PI);  // a uniform disc of radius r: r^2 / 4 per axis
-    spot.integral = 255.0 * led.radiance_ir * area_px;
+    // A uniform disc of radius r: r^2 / 4 per axis; defocus spreads it by its own circle of confusion.
+    const double defocus = options_.effects ? defocusSigmaPx(effects_, c.z()) : 0.0;
+    spot.disc_variance = area_px / (4.0 * M_PI) + defocus * defocus;
+    spot.integral = 255.0 * led.radiance_ir * area_px * brightness_ * weight;
     led_spots_.push_back(spot);
   }
 }
@@ -564,7 +834,7 @@ void CameraRenderer::drawDecal(const Surface& surface, const Eigen::Isometry3d& 
   const int y_begin = std::max(0, static_cast<int>(std::floor(min_y + 0.5)));
   const int y_end = std::min(ideal_.rows - 1, static_cast<int>(std::ceil(max_y - 0.5)));
 
-  const double gain = band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir;
+  const double gain = (band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir) * brightness_;
   const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
   const uint32_t flat = flatColour<kChannels>(surface, gain_fixed);
   // A pixel square lies wholly inside an edge's half-plane when its centre is more than half the
@@ -610,7 +880,7 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
   // Texture set-up.
   const Texture* tex = surface.texture.get();
   const std::vector<BlockedLevel>* levels = tex ? &tex->blocked : nullptr;
-  const double gain = band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir;
+  const double gain = (band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir) * brightness_;
   const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
   const uint32_t flat = flatColour<kChannels>(surface, gain_fixed);
   const bool saturates = gain_fixed > 256;
@@ -706,6 +976,49 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
       nw = shadeSegment<kChannels>(repeat, saturates, xe - xs, nw, H(2, 0), u, du, v, dv, depth + xs,
                                    row + static_cast<std::size_t>(xs) * kChannels, img, gain_u);
       if (xe <= x1) texel_at(xe, &u_start, &v_start);
+    }
+  }
+}
+
+template <int kChannels>
+void CameraRenderer::addSpecular(const Scene& scene, const Surface& surface, const Eigen::Isometry3d& camera_T_world) {
+  Eigen::Matrix3d H;
+  if (!projectOutline(surface, camera_T_world, &H)) return;
+  // Normal towards the camera (at the origin), and the direction towards the light, camera frame.
+  Eigen::Vector3d normal = (camera_T_world.linear() * surface.edge_u.cross(surface.edge_v)).normalized();
+  if (normal.dot(camera_T_world * surface.origin) > 0.0) normal = -normal;
+  const Eigen::Vector3d to_light = -(camera_T_world.linear() * scene.lightDirection()).normalized();
+  if (normal.dot(to_light) <= 0.0) return;  // the light is behind the surface
+  const BandLighting& light = band_ == Band::kVisible ? lighting_.visible : lighting_.ir;
+  const double peak = 255.0 * effects_.specular_strength * light.illumination * effects_.exposure * brightness_;
+  if (peak < 0.5) return;
+  // Below this n.h the lobe adds less than half a grey level.
+  const double cos_min = std::pow(0.5 / peak, 1.0 / effects_.specular_shininess);
+  double min_x = 1e300, max_x = -1e300, min_y = 1e300, max_y = -1e300;
+  for (const auto& q : projected_) {
+    min_x = std::min(min_x, q.x());
+    max_x = std::max(max_x, q.x());
+    min_y = std::min(min_y, q.y());
+    max_y = std::max(max_y, q.y());
+  }
+  const int x0 = std::max(0, static_cast<int>(std::ceil(min_x))), x1 = std::min(ideal_.cols - 1, static_cast<int>(max_x));
+  const int y0 = std::max(0, static_cast<int>(std::ceil(min_y))), y1 = std::min(ideal_.rows - 1, static_cast<int>(max_y));
+  const double fx = ideal_K_(0, 0), fy = ideal_K_(1, 1), cx = ideal_K_(0, 2), cy = ideal_K_(1, 2);
+  for (int y = y0; y <= y1; ++y) {
+    const float* depth = depth_.ptr<float>(y);
+    uchar* row = ideal_.ptr<uchar>(y);
+    for (int x = x0; x <= x1; ++x) {
+      // Only where this surface is what the pixel shows (the z-buffer holds its own 1/z there).
+      const double inv_z = H(2, 0) * x + H(2, 1) * y + H(2, 2);
+      if (std::abs(depth[x] - inv_z) > 1e-4 * inv_z) continue;
+      const Eigen::Vector3d to_camera = -Eigen::Vector3d((x - cx) / fx, (y - cy) / fy, 1.0).normalized();
+      const double n_dot_h = normal.dot((to_camera + to_light).normalized());
+      if (n_dot_h <= cos_min) continue;
+      const int add = static_cast<int>(peak * std::pow(n_dot_h, effects_.specular_shininess) + 0.5);
+      for (int c = 0; c < (kChannels == 4 ? 3 : 1); ++c) {
+        uchar& px = row[x * kChannels + c];
+        px = static_cast<uchar>(std::min(255, px + add));
+      }
     }
   }
 }

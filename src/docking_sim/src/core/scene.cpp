@@ -84,6 +84,35 @@ cv::Mat materialDetail(const std::string& material, cv::RNG& rng, int size) {
         d.at<float>(y, x) = static_cast<float>(0.95 + weave + 0.08 * fine.at<float>(y, x));
       }
     }
+  } else if (material == "busy") {
+    // A busy print (packaging, a poster of shapes and text): many corners for a keypoint detector.
+    rng.fill(d, cv::RNG::UNIFORM, 0.55, 1.35);
+    cv::blur(d, d, cv::Size(9, 9));
+    for (int i = 0; i < 90; ++i) {
+      const cv::Scalar shade(rng.uniform(0.15, 1.6));
+      const cv::Point a(rng.uniform(0, size), rng.uniform(0, size));
+      const int r = rng.uniform(size / 40, size / 8);
+      switch (i % 4) {
+        case 0: cv::rectangle(d, a, a + cv::Point(r, rng.uniform(size / 40, size / 8)), shade, -1); break;
+        case 1: cv::circle(d, a, r / 2, shade, -1, cv::LINE_AA); break;
+        case 2: {
+          const cv::Point tri[3] = {a, a + cv::Point(r, r / 3), a + cv::Point(r / 4, r)};
+          cv::fillConvexPoly(d, tri, 3, shade, cv::LINE_AA);
+          break;
+        }
+        default: cv::putText(d, i % 8 == 3 ? "A7-X" : "K42", a, cv::FONT_HERSHEY_SIMPLEX, size / 400.0, shade, 2,
+                             cv::LINE_AA);
+      }
+    }
+  } else if (material == "photo") {
+    // Photo-like: noise over many scales (1/f-ish) with a few hard-edged objects.
+    d = 0.35 * smoothNoise(rng, size, 4) + 0.3 * smoothNoise(rng, size, 16) + 0.25 * smoothNoise(rng, size, 64) +
+        0.35 + 0.05 * fine;
+    for (int i = 0; i < 25; ++i) {
+      const cv::Point a(rng.uniform(0, size), rng.uniform(0, size));
+      cv::rectangle(d, a, a + cv::Point(rng.uniform(8, size / 6), rng.uniform(8, size / 6)),
+                    cv::Scalar(rng.uniform(0.2, 1.5)), -1);
+    }
   } else {  // plastic
     cv::Mat blotch = smoothNoise(rng, size, 4);
     d = 0.95 + 0.08 * blotch + 0.015 * fine;
@@ -314,6 +343,7 @@ void Scene::addTargetRobot(const TargetModel& t) {
   face_surface.edge_u = Eigen::Vector3d(0, w, 0);
   face_surface.edge_v = Eigen::Vector3d(0, 0, -h);
   face_surface.texture = face_tex;
+  face_surface.glossy = true;  // a printed, laminated face: specular highlights (cameras.<band>.specular)
   addInPortFrame(face_surface);
 
   // Body: the box behind the face (its front is the face itself), brushed-foil look.
@@ -483,9 +513,10 @@ Scene::Scene(const SimSettings& settings, const TargetModel& target, const Light
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     pose.translation() = Eigen::Vector3d(c.x_m, c.y_m, 0);
     pose.linear() = Eigen::AngleAxisd(c.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const auto tex = makeTexture(tint(materialDetail(c.material, rng, 256), c.color_bgr), true);
-    // Materials repeat every 0.5 m (cardboard: once per face, so the label shows whole).
-    const double scale = c.material == "cardboard" ? std::max(c.size_x_m, c.size_y_m) : 0.5;
+    const bool busy = c.material == "busy" || c.material == "photo";
+    const auto tex = makeTexture(tint(materialDetail(c.material, rng, busy ? 512 : 256), c.color_bgr), true);
+    // Materials repeat every 0.5 m (cardboard and busy prints: once per face, so they show whole).
+    const double scale = c.material == "cardboard" || busy ? std::max(c.size_x_m, c.size_y_m) : 0.5;
     addBox(pose, Eigen::Vector3d(c.size_x_m, c.size_y_m, c.size_z_m), tex, c.color_bgr, scale, false, false);
   }
 

@@ -46,16 +46,26 @@ Eigen::Isometry3d planarPose(double x, double y, double yaw) {
   return t;
 }
 
+/// sim.yaml as this scenario sees it: extra clutter, its light direction, its camera overrides.
+SimSettings scenarioSettings(SimSettings settings, const Scenario& scenario) {
+  for (const auto& box : scenario.extra_clutter) settings.room.clutter.push_back(box);
+  if (scenario.has_light_direction) settings.light_direction = scenario.light_direction;
+  applyCameraOverrides(scenario, Band::kVisible, &settings.visible_effects);
+  applyCameraOverrides(scenario, Band::kInfrared, &settings.ir_effects);
+  return settings;
+}
+
 }  // namespace
 
 Simulation::Simulation(const SimulationFiles& files, const RenderOptions& render_options)
-    : settings_(loadSimSettings(files.sim_config)),
-      scenario_(loadScenario(files.scenario)),
+    : scenario_(loadScenario(files.scenario)),
+      settings_(scenarioSettings(loadSimSettings(files.sim_config), scenario_)),
       target_(loadTargetModel(files.target_config)),
       robot_(loadRobotModel(files.robot_config)),
       base_model_(loadOmniBaseModel(files.omni_base_config)),
       lighting_(pickLighting(settings_, scenario_)),
       chaser_(base_model_, settings_.command_timeout_s, scenario_.chaser_start),
+      kinematics_(base_model_.layout),
       scene_(settings_, target_, lighting_, scenario_.seed) {
   scenario_ = validated(scenario_, settings_, robot_);
   for (int i = 0; i < 3; ++i) {
@@ -64,10 +74,20 @@ Simulation::Simulation(const SimulationFiles& files, const RenderOptions& render
     renderers_[static_cast<std::size_t>(i)] = std::make_unique<CameraRenderer>(
         cam.calibration, cam.band, effects, lighting_, scenario_.seed * 3 + static_cast<uint64_t>(i), render_options);
   }
+  // Auto-exposure settles on its first frame (up to 10 renders): do it here, before time runs, so the
+  // node's first frames do not fall behind real time and arrive in a burst.
+  for (int i = 0; i < 3; ++i) {
+    if (renderers_[static_cast<std::size_t>(i)]->effects().ae_enabled && render_options.effects) render(i);
+  }
 }
 
 void Simulation::advance(double dt_s) {
   if (!(dt_s > 0.0)) return;
+  if (scenario_.chaser_motion.scripted()) {
+    omni_base::Twist2D twist;
+    twist.wz = scenario_.chaser_motion.yawRateAt(time_s_);
+    chaser_.command(true, kinematics_.inverse(twist), time_s_);
+  }
   chaser_.step(time_s_, dt_s);
   time_s_ += dt_s;
 }
@@ -77,11 +97,15 @@ Eigen::Isometry3d Simulation::worldTChaser() const {
   return planarPose(p.x, p.y, p.yaw);
 }
 
-Eigen::Isometry3d Simulation::worldTTargetRobot() const {
+Eigen::Isometry3d Simulation::worldTTargetRobotAt(double t_s) const {
   const auto& s = scenario_.target_start;
   const auto& m = scenario_.target_motion;
-  return planarPose(s.x + m.velocity_x_m_s * time_s_, s.y + m.velocity_y_m_s * time_s_,
-                    s.yaw + m.yaw_rate_rad_s * time_s_);
+  return planarPose(s.x + m.velocity_x_m_s * t_s, s.y + m.velocity_y_m_s * t_s, s.yaw + m.yaw_rate_rad_s * t_s);
+}
+
+Eigen::Isometry3d Simulation::worldTCameraAt(int camera, double dt_s) const {
+  const omni_base::Pose2D p = integrateTwist(chaser_.pose(), chaser_.twist(), dt_s);
+  return planarPose(p.x, p.y, p.yaw) * robot_.cameras.at(static_cast<std::size_t>(camera)).base_T_camera;
 }
 
 Eigen::Isometry3d Simulation::worldTPort() const { return worldTTargetRobot() * target_.robot_T_port; }
@@ -128,7 +152,10 @@ const cv::Mat& Simulation::render(int camera) {
     scene_.update(worldTTargetRobot());
     scene_time_s_ = time_s_;
   }
-  return renderers_.at(static_cast<std::size_t>(camera))->render(scene_, worldTCamera(camera));
+  ExposureMotion motion;
+  motion.world_T_camera = [this, camera](double dt) { return worldTCameraAt(camera, dt); };
+  motion.world_T_target_robot = [this](double dt) { return worldTTargetRobotAt(time_s_ + dt); };
+  return renderers_.at(static_cast<std::size_t>(camera))->render(scene_, motion);
 }
 
 }  // namespace docking_sim

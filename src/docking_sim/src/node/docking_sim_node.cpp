@@ -101,7 +101,9 @@ class SimNode {
         throw docking_sim::ConfigError(mount.calibration_file, "", "camera_calibration_parsers cannot read it");
       }
       infos_[i].header.frame_id = mount.image_frame_id;
-      camera_pubs_[i] = image_transport_.advertiseCamera(image_topics[i], 2);
+      // Queue 5: when rendering falls behind real time (a busy machine, motion-blur sub-frames), the
+      // node catches up in a burst of frames; 2 dropped some of them on their way to slow subscribers.
+      camera_pubs_[i] = image_transport_.advertiseCamera(image_topics[i], kImageQueueSize);
     }
     clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
     encoder_pub_ = nh_.advertise<docking_msgs::WheelEncoders>(names::topics::kWheelEncoders, 10);
@@ -187,6 +189,7 @@ class SimNode {
   }
 
  private:
+  static constexpr uint32_t kImageQueueSize = 5;
   // Sim time 0 would read as "no time yet" to ROS nodes: the published clock starts at this offset.
   static constexpr double kTimeOffsetS = 1.0;
 
@@ -260,7 +263,7 @@ class SimNode {
       if (camera_pubs_[i].getNumSubscribers() == 0) continue;  // render only what someone watches
       const cv::Mat& frame = sim_->render(i);
       const auto& t = sim_->renderer(i).lastTiming();
-      render_ms_[i] = 0.9 * render_ms_[i] + 0.1 * (t.rasterize_ms + t.distort_ms + t.effects_ms);
+      render_ms_[i] = 0.9 * render_ms_[i] + 0.1 * (t.rasterize_ms + t.defocus_ms + t.distort_ms + t.effects_ms);
       sensor_msgs::ImagePtr image = boost::make_shared<sensor_msgs::Image>();
       image->header.stamp = stamp;
       image->header.frame_id = mount.image_frame_id;

@@ -66,6 +66,59 @@ std::string jsonString(const std::string& s) {
   return out + "\"";
 }
 
+/// What blur and exposure the target gets in camera `cam`'s last frame: the port's depth, the
+/// defocus sigma there (thin lens), the residual lens blur, the largest displacement of the face's
+/// corners over the exposure (motion blur length), the exposure, gain and effective noise.
+struct TargetBlur {
+  double depth_m{0}, defocus_sigma_px{0}, residual_sigma_px{0}, motion_px{0};
+  double total_sigma_px{0};   ///< sqrt(defocus^2 + residual^2 + (motion / sqrt 12)^2): the Gaussian-equivalent
+};
+
+TargetBlur targetBlur(const docking_sim::Simulation& sim, int cam) {
+  const auto& renderer = sim.renderer(cam);
+  const auto& e = renderer.effects();
+  const double exposure = renderer.lastExposure().exposure_time_s;
+  const auto& K = sim.robot().cameras[static_cast<std::size_t>(cam)].calibration.K;
+  const auto& target = sim.target();
+  TargetBlur b;
+  b.depth_m = (sim.worldTCamera(cam).inverse() * sim.worldTPort()).translation().z();
+  b.defocus_sigma_px = docking_sim::defocusSigmaPx(e, b.depth_m);
+  b.residual_sigma_px = e.blur_sigma_px;
+  if (e.motion_blur_enabled) {
+    for (int corner = 0; corner < 4; ++corner) {
+      const Eigen::Vector3d local(0.0, (corner & 1 ? 0.5 : -0.5) * target.face_width_m,
+                                  (corner & 2 ? 0.5 : -0.5) * target.face_height_m);
+      Eigen::Vector2d q[2];
+      for (int end = 0; end < 2; ++end) {
+        const double dt = (end - 0.5) * exposure;
+        const Eigen::Vector3d p = sim.worldTCameraAt(cam, dt).inverse() *
+                                  (sim.worldTTargetRobotAt(sim.time() + dt) * target.robot_T_port * local);
+        q[end] = Eigen::Vector2d(K(0, 0) * p.x() / p.z(), K(1, 1) * p.y() / p.z());
+      }
+      b.motion_px = std::max(b.motion_px, (q[1] - q[0]).norm());
+    }
+  }
+  b.total_sigma_px = std::sqrt(b.defocus_sigma_px * b.defocus_sigma_px + b.residual_sigma_px * b.residual_sigma_px +
+                               b.motion_px * b.motion_px / 12.0);
+  return b;
+}
+
+std::string describe(const docking_sim::Simulation& sim, int cam) {
+  const TargetBlur b = targetBlur(sim, cam);
+  const auto& x = sim.renderer(cam).lastExposure();
+  const auto& lighting = sim.renderer(cam).band() == docking_sim::Band::kVisible ? sim.lighting().visible
+                                                                                 : sim.lighting().ir;
+  char buf[400];
+  std::snprintf(buf, sizeof(buf),
+                "target at %.2f m: defocus sigma %.2f px, residual %.2f px, motion %.1f px over the exposure "
+                "(total Gaussian-equivalent %.2f px); exposure %.1f ms, gain %.2f, noise sigma %.1f DN, mean %.0f, "
+                "%d sub-frames (scene motion %.1f px)",
+                b.depth_m, b.defocus_sigma_px, b.residual_sigma_px, b.motion_px, b.total_sigma_px,
+                1e3 * x.exposure_time_s, x.gain, lighting.noise_sigma * x.gain, x.measured_mean, x.subframes,
+                x.motion_px);
+  return buf;
+}
+
 /// The sequence mode: the left camera's frames rectified as image_proc does it on the robot
 /// (image_proc/debayer: bgr8 -> mono8 with cvtColor; image_proc/rectify: cv::remap of the
 /// initUndistortRectifyMap(K, D, R, P) maps, bilinear), with the truth in the rectified frame.
@@ -125,8 +178,12 @@ int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, co
     json << "    {\"index\": " << k << ", \"stamp_s\": " << num(sim.time()) << ", \"image\": \"" << name
          << "\", \"position_m\": " << jsonArray(t, 3) << ", \"rotation\": " << jsonArray(r9, 9)
          << ", \"quaternion_xyzw\": [" << num(q.x()) << ", " << num(q.y()) << ", " << num(q.z()) << ", "
-         << num(q.w()) << "], \"linear_m_s\": " << jsonArray(v, 3) << ", \"angular_rad_s\": " << jsonArray(w, 3)
-         << "}" << (k + 1 < frames ? "," : "") << "\n";
+         << num(q.w()) << "], \"linear_m_s\": " << jsonArray(v, 3) << ", \"angular_rad_s\": " << jsonArray(w, 3);
+    const TargetBlur blur = targetBlur(sim, cam);
+    const auto& exposure = sim.renderer(cam).lastExposure();
+    json << ", \"defocus_sigma_px\": " << num(blur.defocus_sigma_px) << ", \"motion_blur_px\": " << num(blur.motion_px)
+         << ", \"exposure_s\": " << num(exposure.exposure_time_s) << ", \"gain\": " << num(exposure.gain) << "}"
+         << (k + 1 < frames ? "," : "") << "\n";
   }
   json << "  ]\n}\n";
   std::ofstream file(folder + "/sequence.json");
@@ -185,14 +242,16 @@ int main(int argc, char** argv) {
           sim.render(cam);
           const auto& t = sim.renderer(cam).lastTiming();
           stages.rasterize_ms += t.rasterize_ms / bench;
+          stages.defocus_ms += t.defocus_ms / bench;
           stages.distort_ms += t.distort_ms / bench;
           stages.effects_ms += t.effects_ms / bench;
         }
         const double ms = 1e3 * (cpuSeconds() - start) / bench;
         total += ms;
-        std::cout << "  " << names[cam] << ": " << ms << " ms CPU per frame (rasterize " << stages.rasterize_ms
-                  << ", distortion " << stages.distort_ms << ", blur/glare/vignette/noise " << stages.effects_ms
-                  << ")\n";
+        std::cout << "  " << names[cam] << ": " << ms << " ms CPU per frame (rasterize incl. sub-frames "
+                  << stages.rasterize_ms << ", defocus " << stages.defocus_ms << ", distortion " << stages.distort_ms
+                  << ", blur/glare/vignette/noise/metering " << stages.effects_ms << "); last frame "
+                  << sim.renderer(cam).lastExposure().subframes << " sub-frame(s)\n";
       }
       std::cout << "  mean over cameras: " << total / 3 << " ms CPU per frame\n";
       return 0;
@@ -200,7 +259,7 @@ int main(int argc, char** argv) {
     for (int cam = 0; cam < 3; ++cam) {
       const std::string path = out + "_" + names[cam] + ".png";
       cv::imwrite(path, sim.render(cam));
-      std::cout << "wrote " << path << "\n";
+      std::cout << "wrote " << path << ": " << describe(sim, cam) << "\n";
     }
   } catch (const docking_sim::ConfigError& e) {
     std::cerr << "configuration error: " << e.what() << "\n";
