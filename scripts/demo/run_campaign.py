@@ -3,7 +3,9 @@
 
 Each run's scenario (range 1.5-4.5 m, bearing of the target in the chaser's view within +-20 deg,
 port angle off the line of sight within +-60 deg, rotation rate within +-4 deg/s, lighting nominal /
-dark / glare) is drawn from random.Random(seed + i) and written to results/campaign/scenarios/, then run
+dark / glare; the visible cameras' focus, residual blur and exposure, and 0-3 busy boxes near the
+target's depth: see draw_camera and draw_clutter) is drawn from random.Random(seed + i) and written to
+results/campaign/scenarios/, then run
 through scripts/demo/run_demo.py (sim.launch scenario_file:=...). Writes results/campaign/summary.json
 {"runs", "success_rate", error distribution, failures with their causes, per-run rows} and
 results/campaign/errors.png.
@@ -27,6 +29,46 @@ from make_eval_scenarios import robot_centre_for_port, scenario_yaml  # noqa: E4
 LIGHTING = ["nominal"] * 6 + ["dark"] * 2 + ["glare"] * 2
 
 
+# Clutter stays this far from the target robot's centre (its search orbit is 1.3 m) and from the chaser's
+# start, so that no box stands where a robot drives.
+CLUTTER_CLEARANCE_M = 1.8
+ROOM_X_M, ROOM_Y_M = (-2.0, 8.0), (-3.0, 3.0)  # inside sim.yaml's walls, with a margin for the box size
+BUSY_MATERIALS = ("busy", "photo", "wood", "cardboard")
+
+
+def draw_camera(rng):
+    """The visible cameras of this run (sim.yaml camera_overrides): where the fixed-focus lens is focused
+    (0.3-1.5 m; a lens focused at 0.3 m blurs the far range), the lens's residual blur (0.6-1.2 px
+    sigma) and the exposure time at which the room's light holds (10-40 ms: auto-exposure then runs
+    longer and adds gain in a dim room, so a turning robot smears more)."""
+    focus = rng.uniform(0.3, 1.5)
+    residual = rng.uniform(0.6, 1.2)
+    exposure = rng.uniform(0.010, 0.040)
+    block = (f"{{optics: {{focus_distance_m: {focus:.3f}}}, blur_sigma_px: {residual:.2f}, "
+             f"exposure_time_s: {exposure:.4f}}}")
+    return {"visible": block}, {"focus_distance_m": focus, "blur_sigma_px": residual, "exposure_time_s": exposure}
+
+
+def draw_clutter(rng, target_xy, count):
+    """`count` busy boxes around the target's depth, none nearer than CLUTTER_CLEARANCE_M to either
+    robot's start, inside the room."""
+    boxes, attempts = [], 0
+    while len(boxes) < count and attempts < 200:
+        attempts += 1
+        angle = rng.uniform(0.0, 2.0 * math.pi)
+        dist = rng.uniform(CLUTTER_CLEARANCE_M, CLUTTER_CLEARANCE_M + 1.5)
+        x, y = target_xy[0] + dist * math.cos(angle), target_xy[1] + dist * math.sin(angle)
+        if not (ROOM_X_M[0] < x < ROOM_X_M[1] and ROOM_Y_M[0] < y < ROOM_Y_M[1]):
+            continue
+        if math.hypot(x, y) < CLUTTER_CLEARANCE_M:  # the chaser starts at the origin
+            continue
+        size = [round(rng.uniform(0.3, 0.9), 2), round(rng.uniform(0.3, 0.9), 2), round(rng.uniform(0.4, 1.4), 2)]
+        grey = rng.randint(110, 200)
+        boxes.append(dict(name=f"busy_{len(boxes)}", x=x, y=y, yaw=rng.uniform(0.0, 90.0), size=size,
+                          material=rng.choice(BUSY_MATERIALS), color=f"[{grey}, {grey}, {grey}]"))
+    return boxes
+
+
 def make_scenario(rng, index, seed):
     rng_m = rng.uniform(1.5, 4.5)
     bearing = math.radians(rng.uniform(-20.0, 20.0))
@@ -37,11 +79,18 @@ def make_scenario(rng, index, seed):
     # The port faces the chaser (yaw = bearing + 180) turned by port_off.
     yaw = math.degrees(bearing) + 180.0 + port_off
     cx, cy = robot_centre_for_port(px, py, math.radians(yaw))
+    # Drawn after the draws above, so that a seed's geometry and light stay what they were before blur
+    # and clutter were added.
+    overrides, camera = draw_camera(rng)
+    clutter = draw_clutter(rng, (cx, cy), rng.randint(0, 3))
     text = scenario_yaml(f"make campaign run {index} (seed {seed}): range {rng_m:.2f} m, bearing "
                          f"{math.degrees(bearing):.1f} deg,\nport {port_off:.1f} deg off the line of sight, "
-                         f"{rate:.2f} deg/s, {light}.", f"campaign {index}", 900.0, seed, light, cx, cy, yaw, rate)
+                         f"{rate:.2f} deg/s, {light}; visible focus {camera['focus_distance_m']:.2f} m, "
+                         f"blur {camera['blur_sigma_px']:.2f} px,\nexposure {1000 * camera['exposure_time_s']:.0f} ms; "
+                         f"{len(clutter)} busy boxes.", f"campaign {index}", 900.0, seed, light, cx, cy, yaw, rate,
+                         extra={"camera_overrides": overrides, "extra_clutter": clutter})
     params = {"range_m": rng_m, "bearing_deg": math.degrees(bearing), "port_angle_deg": port_off,
-              "yaw_rate_deg_s": rate, "lighting": light, "seed": seed}
+              "yaw_rate_deg_s": rate, "lighting": light, "seed": seed, "clutter_boxes": len(clutter), **camera}
     return text, params
 
 
