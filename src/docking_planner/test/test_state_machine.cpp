@@ -511,7 +511,9 @@ TEST(ContactEstimates, FullPosesNearTheHeldPortAreUsedToContact) {
     t += kDt;
     const TrackUpdate near = planner.addObservation(portAt(t, Pose2D{0.0, 0.008, 0.01}));
     EXPECT_EQ(near.accepted, gate_on) << near.reason;
-    if (!gate_on) EXPECT_NE(near.reason.find("odometry-only"), std::string::npos) << near.reason;
+    if (!gate_on) {
+      EXPECT_NE(near.reason.find("odometry-only"), std::string::npos) << near.reason;
+    }
     const TrackUpdate jump = planner.addObservation(portAt(t + 0.01, Pose2D{0.0, 0.06, 0.0}));
     EXPECT_FALSE(jump.accepted);
     EXPECT_NE(jump.reason.find("odometry-only"), std::string::npos) << jump.reason;

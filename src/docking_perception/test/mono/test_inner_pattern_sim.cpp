@@ -177,8 +177,8 @@ TEST_F(InnerPatternSim, EstimatorKeepsThePoseToContact) {
     ++valid;
     inner += result.solver == mono::kInnerPatternSolverName ? 1 : 0;
     const Errors e = errorsOf(result.pose, r.camera_T_target);
-    std::printf("tip %.2f m: %s, %.2f mm, %.2f deg\n", tip, result.solver.c_str(), e.position_m * 1e3,
-                e.angle_rad * 180 / M_PI);
+    std::printf("tip %.2f m: %s, %.2f mm, %.2f deg, %.1f ms (face + tag)\n", tip, result.solver.c_str(),
+                e.position_m * 1e3, e.angle_rad * 180 / M_PI, result.processing_time_ms);
     EXPECT_LT(e.position_m, 0.03 * (0.08 + tip)) << "tip " << tip << " (" << result.solver << ")";
     if (tip <= 0.04) {
       EXPECT_LT(e.angle_rad * 180.0 / M_PI, 1.0) << "tip " << tip << " (" << result.solver << ")";

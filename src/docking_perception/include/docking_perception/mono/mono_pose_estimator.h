@@ -127,6 +127,8 @@ class MonoPoseEstimator {
   void updateVelocities(MonoPoseResult* result);
   // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
   void applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
+  // Where the inner pattern should appear (empty: not tracking, search the whole image).
+  cv::Rect predictedInnerPatternRegion(double stamp_s) const;
 
   TargetModel model_;
   CameraIntrinsics camera_;
