@@ -7,9 +7,8 @@
 #   pipeline_on_frames          perception.launch's image path (rectify, disparity + detector, both
 #                               mono_pose instances) on raw camera frames (scripts/eval/transport_cost.py)
 #   test_compare                gtests
-# AprilTag 3 is Debian's libapriltag-dev (C library, pkg-config `apriltag`).
-find_package(PkgConfig REQUIRED)
-pkg_check_modules(APRILTAG REQUIRED apriltag)
+# AprilTag 3 is Debian's libapriltag-dev (C library, pkg-config `apriltag`, found in cmake/mono_pose.cmake);
+# the detector itself is the mono core's (mono/apriltag_pose.h).
 
 add_library(docking_perception_compare STATIC
   src/compare/sequence_io.cpp

@@ -14,11 +14,17 @@ set(MONO_CORE_SOURCES
   src/mono/dark_dot_locator.cpp
   src/mono/velocity_estimators.cpp
   src/mono/mono_pose_estimator.cpp
-  src/mono/debug_drawing.cpp)
+  src/mono/debug_drawing.cpp
+  src/mono/apriltag_pose.cpp
+  src/mono/inner_pattern_detector.cpp)
+
+# AprilTag 3 (Debian's libapriltag-dev, pkg-config `apriltag`): the inner pattern and the comparison tools.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(APRILTAG REQUIRED apriltag)
 
 add_library(docking_perception_mono_core ${MONO_CORE_SOURCES})
-target_include_directories(docking_perception_mono_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR})
-target_link_libraries(docking_perception_mono_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES})
+target_include_directories(docking_perception_mono_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR} ${APRILTAG_INCLUDE_DIRS})
+target_link_libraries(docking_perception_mono_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES} ${APRILTAG_LIBRARIES})
 
 # Synthetic targets and views, shared by the tests and the benchmark.
 add_library(docking_perception_mono_synthetic STATIC test/mono/synthetic_scene.cpp)
@@ -37,8 +43,10 @@ if(CATKIN_ENABLE_TESTING)
     test/mono/test_planar_pnp_solver.cpp
     test/mono/test_velocity_estimators.cpp
     test/mono/test_led_pattern_detector.cpp
-    test/mono/test_mono_pose_estimator.cpp)
+    test/mono/test_mono_pose_estimator.cpp
+    test/mono/test_inner_pattern.cpp)
   if(TARGET test_mono_core)
+    target_compile_definitions(test_mono_core PRIVATE CONFIG_DIR="${CMAKE_CURRENT_SOURCE_DIR}/../../config")
     target_link_libraries(test_mono_core docking_perception_mono_synthetic docking_perception_mono_core)
   endif()
 endif()
@@ -60,6 +68,21 @@ install(TARGETS docking_perception_mono_core docking_perception_mono_pose_nodele
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+endif()
+
+# The inner pattern on the simulator's own renders (docking_sim_core, a test dependency), 0.08-0.4 m.
+if(CATKIN_ENABLE_TESTING)
+  find_package(docking_sim QUIET)
+  if(docking_sim_FOUND)
+    catkin_add_gtest(test_inner_pattern_sim test/mono/test_inner_pattern_sim.cpp)
+    if(TARGET test_inner_pattern_sim)
+      target_compile_definitions(test_inner_pattern_sim PRIVATE CONFIG_DIR="${CMAKE_CURRENT_SOURCE_DIR}/../../config")
+      target_include_directories(test_inner_pattern_sim SYSTEM PRIVATE ${docking_sim_INCLUDE_DIRS})
+      target_link_libraries(test_inner_pattern_sim docking_perception_mono_core ${docking_sim_LIBRARIES} gtest_main)
+    endif()
+  else()
+    message(WARNING "docking_sim not found: test_inner_pattern_sim is not built")
+  endif()
 endif()
 
 # Against the simulator's truth (rostest; needs docking_sim, omni_base and docking_description):

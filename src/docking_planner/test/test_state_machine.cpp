@@ -484,3 +484,54 @@ TEST_F(StateMachineTest, PositionOnlyEstimatesDoNotMoveAPortHeldFromPoses) {
   ASSERT_TRUE(out.port.has_value());
   EXPECT_LT(std::abs(out.port->pose.y), 0.002) << "the blob pulled the held port to y = " << out.port->pose.y;
 }
+
+// Inside the odometry-only range, full poses near the held port keep updating it (contact_estimate_gate_m:
+// the inner pattern to contact); a jump, a position-only estimate, or the gate off: not used.
+TEST(ContactEstimates, FullPosesNearTheHeldPortAreUsedToContact) {
+  for (const bool gate_on : {false, true}) {
+    PlannerConfig c;
+    c.contact_estimate_gate_m = gate_on ? 0.03 : 0.0;
+    c.contact_estimate_gate_yaw_rad = gate_on ? 0.05 : 0.0;
+    DockingPlanner planner{c};
+    double t = 100.0;
+    ASSERT_TRUE(planner.start(t, DockingLimits{}, nullptr));
+    const Pose2D port{0.0, 0.0, 0.0};
+    for (const Pose2D& chaser : {kOnCircleOff, kSafePoint}) {
+      t += kDt;
+      planner.addObservation(portAt(t, port));
+      planner.update(t, odomAt(t, chaser));
+    }
+    PlannerOutput out;
+    for (int i = 0; i < 4; ++i) {
+      t += kDt;
+      planner.addObservation(portAt(t, port));
+      out = planner.update(t, odomAt(t, kNearContact));
+    }
+    ASSERT_EQ(out.state, DockingPhase::kFinal) << out.reason;
+    t += kDt;
+    const TrackUpdate near = planner.addObservation(portAt(t, Pose2D{0.0, 0.008, 0.01}));
+    EXPECT_EQ(near.accepted, gate_on) << near.reason;
+    if (!gate_on) {
+      EXPECT_NE(near.reason.find("odometry-only"), std::string::npos) << near.reason;
+    }
+    const TrackUpdate jump = planner.addObservation(portAt(t + 0.01, Pose2D{0.0, 0.06, 0.0}));
+    EXPECT_FALSE(jump.accepted);
+    EXPECT_NE(jump.reason.find("odometry-only"), std::string::npos) << jump.reason;
+    const TrackUpdate turned = planner.addObservation(portAt(t + 0.02, Pose2D{0.0, 0.0, 0.2}));
+    EXPECT_FALSE(turned.accepted) << turned.reason;
+    TargetObservation position_only = portAt(t + 0.03, port);
+    position_only.orientation_valid = false;
+    EXPECT_FALSE(planner.addObservation(position_only).accepted);
+  }
+}
+
+TEST(ContactEstimates, NegativeGateIsRejectedByName) {
+  PlannerConfig c;
+  c.contact_estimate_gate_m = -0.01;
+  try {
+    DockingPlanner p{c};
+    FAIL() << "accepted a negative gate";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("contact_estimate_gate_m"), std::string::npos);
+  }
+}

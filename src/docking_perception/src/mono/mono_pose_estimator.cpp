@@ -94,7 +94,7 @@ std::string validateParams(const MonoPoseParams& p) {
   for (const int width : p.features.model_widths_px) {
     if (width < 32) return "model_widths_px entries must be at least 32";
   }
-  return "";
+  return validateInnerPatternParams(p.inner_pattern);
 }
 
 MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntrinsics& camera,
@@ -116,6 +116,7 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
   if (params.mode == MonoMode::kVisible) {
     if (!model.hasTexture()) throw std::invalid_argument("visible mode needs the target texture");
     if (!matcher_.buildModel(model.textureGray(), &reason)) throw std::invalid_argument(reason);
+    if (model.hasInnerPattern()) inner_pattern_ = std::make_unique<InnerPatternDetector>(model.innerPattern(), params.inner_pattern);
   }
 }
 
@@ -138,6 +139,7 @@ void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
   pnp_solver_.setParams(params.pnp);
   filter_.setParams(params.filter);
   frame_difference_.setMaxGap(params.filter.max_gap_s);
+  if (inner_pattern_) inner_pattern_->setParams(params.inner_pattern);
 }
 
 void MonoPoseEstimator::setCamera(const CameraIntrinsics& camera) {
@@ -148,6 +150,7 @@ void MonoPoseEstimator::setCamera(const CameraIntrinsics& camera) {
 
 void MonoPoseEstimator::reset() {
   tracking_ = false;
+  last_valid_range_m_ = INFINITY;
   filter_.reset();
   frame_difference_.reset();
 }
@@ -392,6 +395,81 @@ void MonoPoseEstimator::updateVelocities(MonoPoseResult* result) {
   }
 }
 
+// ---- The inner pattern (target.yaml `inner_pattern`): close range, to contact. ----------------------
+cv::Rect MonoPoseEstimator::predictedInnerPatternRegion(double stamp_s) const {
+  if (!params_.use_tracking_region || !tracking_) return cv::Rect();
+  PoseWithCovariance predicted = last_pose_;
+  if (stamp_s > last_stamp_s_ && stamp_s - last_stamp_s_ <= params_.filter.max_gap_s) {
+    filter_.predict(stamp_s, &predicted);
+  }
+  const TagSpec& tag = model_.innerPattern();
+  const Eigen::Isometry3d target_T_tag = targetTTag(tag);
+  const double half_print = 0.5 * tag.size_m * 10.0 / 8.0;  // the white ring included
+  double min_x = 1e9, min_y = 1e9, max_x = -1e9, max_y = -1e9;
+  for (const double sx : {-1.0, 1.0}) {
+    for (const double sy : {-1.0, 1.0}) {
+      const Eigen::Vector3d p = predicted.rotation * (target_T_tag * Eigen::Vector3d(sx * half_print, sy * half_print, 0.0)) +
+                                predicted.translation;
+      if (p.z() < 0.02) return cv::Rect();
+      const Eigen::Vector2d pixel = camera_.project(p);
+      min_x = std::min(min_x, pixel.x());
+      min_y = std::min(min_y, pixel.y());
+      max_x = std::max(max_x, pixel.x());
+      max_y = std::max(max_y, pixel.y());
+    }
+  }
+  // Half the print's size again around it, plus the face's tracking margin: the motion between images.
+  const double margin = 0.5 * std::max(max_x - min_x, max_y - min_y) + params_.tracking_margin_px;
+  const cv::Rect region(cv::Point(static_cast<int>(std::floor(min_x - margin)), static_cast<int>(std::floor(min_y - margin))),
+                        cv::Point(static_cast<int>(std::ceil(max_x + margin)), static_cast<int>(std::ceil(max_y + margin))));
+  return region & cv::Rect(0, 0, camera_.width, camera_.height);
+}
+
+void MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result) {
+  if (!inner_pattern_ || !params_.inner_pattern.enabled || params_.mode != MonoMode::kVisible) return;
+  const double near = params_.inner_pattern.use_range_m;
+  const bool face_near = result->valid && result->pose.translation.norm() < near;
+  // Only near the target (the last pose, from any solver, or this image's face pose): the tag is too
+  // small to help farther, and the search costs CPU.
+  if (!face_near && !(last_valid_range_m_ < near)) return;
+  Eigen::Matrix3d previous_storage;
+  const Eigen::Matrix3d* previous = previousRotation(result->stamp_s, &previous_storage);
+  // Where the tracked pose puts the print, then (if not found there) the whole image: the region
+  // saves most of apriltag's CPU time near contact.
+  const cv::Rect region = predictedInnerPatternRegion(result->stamp_s);
+  InnerPatternResult tag = inner_pattern_->detect(gray, camera_, previous, region);
+  if (!tag.valid && region.area() > 0) tag = inner_pattern_->detect(gray, camera_, previous);
+  result->inner_pattern_status = tag.valid ? "" : tag.status;
+  if (tag.valid) result->inner_pattern_corners.assign(tag.corners_px.begin(), tag.corners_px.end());
+  if (!tag.valid) return;  // the face's result stands, valid or not
+  if (result->valid) {
+    // Both valid: they must agree, else one of them is wrong and nothing here says which.
+    // The tolerances widen by 3 sigma of the tag's own pose: 4 cm of tag at 0.3-0.45 m gives the
+    // orientation to a few degrees only, and says so.
+    const double apart_m = (tag.pose.translation - result->pose.translation).norm();
+    const double apart_rad = rotationAngleBetween(tag.pose.rotation, result->pose.rotation);
+    const double tag_position_sigma = std::sqrt(tag.pose.covariance.block<3, 3>(0, 0).trace());
+    const double tag_angle_sigma = std::sqrt(tag.pose.covariance.block<3, 3>(3, 3).trace());
+    if (!(apart_m <= params_.inner_pattern.cross_check_position_m + 3.0 * tag_position_sigma) ||
+        !(apart_rad <= params_.inner_pattern.cross_check_angle_rad + 3.0 * tag_angle_sigma)) {
+      result->valid = false;
+      result->status = "face pose and inner pattern disagree by " + std::to_string(apart_m * 1000.0) + " mm, " +
+                       std::to_string(apart_rad * 180.0 / M_PI) + " deg";
+      return;
+    }
+    return;  // the face's pose (hundreds of points) stands, confirmed
+  }
+  result->valid = true;
+  result->status.clear();
+  result->solver = kInnerPatternSolverName;
+  result->pose = tag.pose;
+  result->pose_points = tag.pose_points;
+  result->feature_matches = tag.candidate_points;  // the arbiter's evidence: grid corners found ...
+  result->feature_inliers = tag.pose_points;       // ... and used by the pose
+  result->reprojection_error_px = tag.reprojection_rms_px;
+  result->pnp_ambiguous = false;
+}
+
 MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) {
   const double start_ms = threadCpuTimeMs();
   MonoPoseResult result;
@@ -416,12 +494,14 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
     const cv::Rect region = predictedRegion(stamp_s, &face_width_px);
     result.valid = params_.mode == MonoMode::kVisible ? estimateVisible(gray, region, face_width_px, &result)
                                                       : estimateIr(gray, region, &result);
+    applyInnerPattern(gray, &result);
   }
   if (result.valid) {
     result.status.clear();
     result.range_m = result.pose.translation.norm();
     updateVelocities(&result);
     tracking_ = true;
+    last_valid_range_m_ = result.range_m;
     last_pose_ = result.pose;
     last_stamp_s_ = stamp_s;
   } else {

@@ -50,6 +50,35 @@ cv::Mat toGray(const cv::Mat& image) {
   return gray.clone();
 }
 
+// target.inner_pattern (optional): an AprilTag on the face near the port (the inner pattern).
+TagSpec readInnerPattern(const YAML::Node& node, const std::string& src, double face_width, double face_height) {
+  const std::string base = "target.inner_pattern";
+  if (!node.IsMap()) fail(src, base, "must be a map");
+  TagSpec tag;
+  try {
+    const std::string type = requireNode(node, "type", src, base + ".type").as<std::string>();
+    if (type != "apriltag") fail(src, base + ".type", "only 'apriltag' is supported, got '" + type + "'");
+    tag.family = requireNode(node, "family", src, base + ".family").as<std::string>();
+    tag.id = requireNode(node, "id", src, base + ".id").as<int>();
+    const YAML::Node c = requireNode(node, "center_m", src, base + ".center_m");
+    if (!c.IsSequence() || c.size() != 3) fail(src, base + ".center_m", "must be [x, y, z]");
+    tag.center_m = {c[0].as<double>(), c[1].as<double>(), c[2].as<double>()};
+  } catch (const YAML::Exception& e) {
+    fail(src, base, e.what());
+  }
+  tag.size_m = requireDouble(node, "size_m", src, base + ".size_m");
+  if (tag.family != "tag36h11") fail(src, base + ".family", "only tag36h11 is supported");
+  if (tag.id < 0 || tag.id > 586) fail(src, base + ".id", "must be in [0, 586] for tag36h11");
+  if (!(tag.size_m >= 0.005 && tag.size_m <= 1.0)) fail(src, base + ".size_m", "must be in [0.005, 1] m");
+  if (std::abs(tag.center_m.x()) > kPlaneTolerance) fail(src, base + ".center_m", "must lie on the face (x = 0)");
+  const double half_print = 0.5 * tag.size_m * 10.0 / 8.0;  // tag36h11: 8 of 10 cells inside the white ring
+  if (std::abs(tag.center_m.y()) + half_print > 0.5 * face_width + 1e-9 ||
+      std::abs(tag.center_m.z()) + half_print > 0.5 * face_height + 1e-9) {
+    fail(src, base + ".center_m", "the tag (with its white ring) does not fit on the face");
+  }
+  return tag;
+}
+
 }  // namespace
 
 void TargetModel::validate(const std::string& source, double width, double height, const MarkerPoints& markers,
@@ -130,6 +159,10 @@ TargetModel TargetModel::loadFromYaml(const std::string& yaml_path, bool load_te
   }
   validate(src, model.face_width_m_, model.face_height_m_, model.markers_m_, model.marker_radius_m_,
            model.led_radius_m_);
+  if (target["inner_pattern"]) {
+    model.inner_pattern_ = readInnerPattern(target["inner_pattern"], src, model.face_width_m_, model.face_height_m_);
+    model.has_inner_pattern_ = true;
+  }
 
   if (load_texture) {
     const YAML::Node texture = requireNode(face, "texture", src, "target.face.texture");

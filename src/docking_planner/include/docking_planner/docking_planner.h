@@ -82,7 +82,12 @@ struct PlannerConfig {
   double final_abort_yaw_rad{0.3};         ///< ...or the heading error exceeds this
   double divergence_margin_m{0.3};         ///< APPROACH/ALIGN -> ABORT when the goal distance grows this much
   double blind_final_range_m{0.35};        ///< FINAL: with the probe tip this near, a lost target is dead-reckoned
-  double odometry_only_range_m{0.12};      ///< FINAL: with the probe tip this near, estimates are ignored
+  double odometry_only_range_m{0.12};      ///< FINAL: with the probe tip this near, estimates are ignored...
+  /// ...unless they are full poses (orientation valid: the visible camera's inner pattern near contact)
+  /// within these of the held port predicted to their stamp: then they keep tracking the port to
+  /// contact. Farther: a jump, not used. 0: no estimates there (the blind finish on odometry).
+  double contact_estimate_gate_m{0.0};
+  double contact_estimate_gate_yaw_rad{0.0};
   double max_blind_s{15.0};                ///< FINAL on odometry for longer than this -> ABORT
   /// Port orientation unknown (position-only source, far away or the face turned away): approach to
   /// this radius around the target only, then orbit it there until a camera sees the face. Must be
@@ -163,6 +168,8 @@ class DockingPlanner {
   PlannerOutput stop(PlannerOutput out, const std::string& reason) const;
   bool targetVisible(double now_s) const;
   std::string lostReason(double now_s) const;
+  /// Why an estimate inside the odometry-only range is not used (empty: it is; see contact_estimate_gate_m).
+  std::string contactEstimateRejection(const TargetObservation& observation) const;
 
   PlannerConfig config_;
   SafeCircleApproach law_;

@@ -119,6 +119,12 @@ void validate(const PlannerConfig& c) {
       c.odometry_only_range_m > c.blind_final_range_m) {
     throw std::invalid_argument("odometry_only_range_m must be in [0, blind_final_range_m]");
   }
+  if (!std::isfinite(c.contact_estimate_gate_m) || c.contact_estimate_gate_m < 0.0) {
+    throw std::invalid_argument("contact_estimate_gate_m must be a number >= 0");
+  }
+  if (!std::isfinite(c.contact_estimate_gate_yaw_rad) || c.contact_estimate_gate_yaw_rad < 0.0) {
+    throw std::invalid_argument("contact_estimate_gate_yaw_rad must be a number >= 0");
+  }
   requirePositive(c.max_blind_s, "max_blind_s");
   if (!std::isfinite(c.search_orbit_radius_m) || c.search_orbit_radius_m < c.law.safe_radius_m) {
     throw std::invalid_argument("search_orbit_radius_m must be a number >= safe_radius_m");
@@ -190,8 +196,10 @@ void DockingPlanner::enter(DockingPhase state, double now_s, const std::string& 
 
 TrackUpdate DockingPlanner::addObservation(const TargetObservation& observation) {
   if (state_ == DockingPhase::kFinal && last_tip_error_m_ < config_.odometry_only_range_m) {
-    // Near contact the cameras see only part of the target: finish on the pose held in odom.
-    return TrackUpdate{false, "inside the odometry-only range: estimate not used"};
+    // Near contact the cameras see only part of the target: finish on the pose held in odom, unless a
+    // full pose (the inner pattern) agrees with it closely enough to be the port and not a partial view.
+    const std::string why_not = contactEstimateRejection(observation);
+    if (!why_not.empty()) return TrackUpdate{false, why_not};
   }
   if (config_.position_only_gate_m > 0.0 && observation.valid && !observation.orientation_valid &&
       track_.hasPosition() && std::isfinite(observation.stamp_s) &&
@@ -224,6 +232,32 @@ TrackUpdate DockingPlanner::addObservation(const TargetObservation& observation)
     if (observation.valid && result.reason.find("NaN") != std::string::npos) nan_estimate_ = true;
   }
   return result;
+}
+
+std::string DockingPlanner::contactEstimateRejection(const TargetObservation& observation) const {
+  if (config_.contact_estimate_gate_m <= 0.0 || config_.contact_estimate_gate_yaw_rad <= 0.0) {
+    return "inside the odometry-only range: estimate not used";
+  }
+  if (!observation.valid || !observation.orientation_valid) {
+    return "inside the odometry-only range: only full poses are used";
+  }
+  if (!track_.hasOrientation() || !std::isfinite(observation.stamp_s) || !std::isfinite(observation.pose.x) ||
+      !std::isfinite(observation.pose.y) || !std::isfinite(observation.pose.yaw)) {
+    return "inside the odometry-only range: no held port pose to check the estimate against";
+  }
+  const Pose2D held = track_.predict(observation.stamp_s).pose;
+  const double off_m = (observation.pose.position() - held.position()).norm();
+  const double off_yaw = std::abs(wrapAngle(observation.pose.yaw - held.yaw));
+  // The gates widen by 3 sigma of the estimate's own uncertainty (when it gives one): a pose that says
+  // it is coarse (the inner pattern's yaw at 0.2-0.3 m, several degrees) is weighted by the track, not
+  // refused; a confident one that is far off is a jump.
+  const double position_gate = config_.contact_estimate_gate_m + 3.0 * std::max(0.0, observation.position_sigma_m);
+  const double yaw_gate = config_.contact_estimate_gate_yaw_rad + 3.0 * std::max(0.0, observation.yaw_sigma_rad);
+  if (!(off_m <= position_gate) || !(off_yaw <= yaw_gate)) {
+    return fmt2("inside the odometry-only range: estimate %.1f mm / %.2f deg from the held port, not used",
+                off_m * 1000.0, off_yaw * 180.0 / M_PI);
+  }
+  return "";
 }
 
 bool DockingPlanner::targetVisible(double now_s) const {

@@ -112,6 +112,8 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   c.divergence_margin_m = requireDouble(p, "divergence_margin_m");
   c.blind_final_range_m = requireDouble(p, "blind_final_range_m");
   c.odometry_only_range_m = requireDouble(p, "odometry_only_range_m");
+  c.contact_estimate_gate_m = requireDouble(p, "contact_estimate_gate_m");
+  c.contact_estimate_gate_yaw_rad = requireDouble(p, "contact_estimate_gate_yaw_rad");
   c.max_blind_s = requireDouble(p, "max_blind_s");
   c.search_orbit_radius_m = requireDouble(p, "search_orbit_radius_m");
   c.orbit_speed_mps = requireDouble(p, "orbit_speed_mps");

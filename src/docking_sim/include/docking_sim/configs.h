@@ -121,6 +121,16 @@ ClutterBox readClutterBox(const YamlField& c);
 
 // ---- config/target.yaml ---------------------------------------------------------------------------
 
+/// target.inner_pattern: a small AprilTag printed near the port so that the visible camera still sees
+/// something it can take a pose from at contact (docking_perception's InnerPatternDetector reads it).
+struct InnerPatternConfig {
+  bool present{false};
+  std::string family{"tag36h11"};
+  int id{0};
+  double size_m{0};                           ///< edge of the tag's black square (apriltag's tagsize)
+  Eigen::Vector3d center_m{Eigen::Vector3d::Zero()};  ///< in frame `target`, on the face (x = 0)
+};
+
 struct TargetModel {
   std::string frame_id;
   double face_width_m{0}, face_height_m{0};
@@ -132,6 +142,7 @@ struct TargetModel {
   double panel_span_m{0}, panel_height_m{0}, panel_offset_x_m{0};
   cv::Vec3b panel_bgr{110, 40, 20};
   Eigen::Isometry3d robot_T_port{Eigen::Isometry3d::Identity()};  ///< the mount
+  InnerPatternConfig inner_pattern;          ///< optional
   std::string file;
 };
 

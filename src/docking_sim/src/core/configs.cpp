@@ -227,6 +227,30 @@ SimSettings loadSimSettings(const std::string& path) {
   return s;
 }
 
+namespace {
+
+// target.inner_pattern (optional): the tag must lie on the face, its white ring included.
+InnerPatternConfig readInnerPattern(const YamlField& f, const TargetModel& m) {
+  InnerPatternConfig p;
+  p.present = true;
+  const std::string type = f["type"].asString();
+  if (type != "apriltag") f["type"].fail("only 'apriltag' is supported, got '" + type + "'");
+  p.family = f["family"].asString();
+  if (p.family != "tag36h11") f["family"].fail("only tag36h11 is supported, got '" + p.family + "'");
+  p.id = static_cast<int>(f["id"].asInteger(0, 586));
+  p.size_m = f["size_m"].asDouble(0.005, 1.0);
+  const auto c = f["center_m"].asVector(3);
+  p.center_m = Eigen::Vector3d(c[0], c[1], c[2]);
+  if (std::abs(c[0]) > 1e-9) f["center_m"].fail("must lie on the face (x = 0)");
+  const double half_print = 0.5 * p.size_m * 10.0 / 8.0;  // tag36h11: 8 black cells of 10 with the ring
+  if (std::abs(c[1]) + half_print > m.face_width_m / 2 || std::abs(c[2]) + half_print > m.face_height_m / 2) {
+    f["center_m"].fail("the tag (with its white ring) does not fit on the face");
+  }
+  return p;
+}
+
+}  // namespace
+
 TargetModel loadTargetModel(const std::string& path) {
   const YamlField root = YamlField::open(path);
   const YamlField t = root["target"];
@@ -258,6 +282,7 @@ TargetModel loadTargetModel(const std::string& path) {
   const double mount_yaw = t["mount"]["yaw_rad"].asDouble(-2 * M_PI, 2 * M_PI);
   m.robot_T_port = poseFromXyzRpy(mount_xyz, {0.0, 0.0, mount_yaw});
   if (mount_xyz[2] - m.face_height_m / 2 < 0.0) t["mount"]["xyz_m"].fail("puts the face below the floor");
+  if (t.has("inner_pattern")) m.inner_pattern = readInnerPattern(t["inner_pattern"], m);
   return m;
 }
 

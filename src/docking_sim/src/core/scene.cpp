@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "docking_sim/config_error.h"
+#include "inner_pattern_print.h"
 
 namespace docking_sim {
 namespace {
@@ -345,6 +346,20 @@ void Scene::addTargetRobot(const TargetModel& t) {
   face_surface.texture = face_tex;
   face_surface.glossy = true;  // a printed, laminated face: specular highlights (cameras.<band>.specular)
   addInPortFrame(face_surface);
+
+  // The inner pattern (target.inner_pattern): a printed tag a hair (kInnerPrintLift_m) in front of the
+  // face, so the depth test puts it over the face texture; both bands see the print.
+  if (t.inner_pattern.present) {
+    constexpr double kInnerPrintLift_m = 2e-4;
+    constexpr int kPxPerCell = 16;
+    const double edge = t.inner_pattern.size_m * kInnerPrintOverTagSize;
+    Surface print;
+    print.origin = t.inner_pattern.center_m + Eigen::Vector3d(kInnerPrintLift_m, -edge / 2, edge / 2);
+    print.edge_u = Eigen::Vector3d(0, edge, 0);
+    print.edge_v = Eigen::Vector3d(0, 0, -edge);
+    print.texture = makeTexture(innerPatternPrint(t.inner_pattern, kPxPerCell), false);
+    addInPortFrame(print);
+  }
 
   // Body: the box behind the face (its front is the face itself), brushed-foil look.
   cv::RNG rng(4242);

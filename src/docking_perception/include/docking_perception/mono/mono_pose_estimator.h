@@ -17,6 +17,7 @@
 #include "docking_perception/mono/collinear_five_point_solver.h"
 #include "docking_perception/mono/dark_dot_locator.h"
 #include "docking_perception/mono/feature_matcher.h"
+#include "docking_perception/mono/inner_pattern_detector.h"
 #include "docking_perception/mono/led_pattern_detector.h"
 #include "docking_perception/mono/planar_pnp_solver.h"
 #include "docking_perception/mono/pose_types.h"
@@ -55,7 +56,11 @@ struct MonoPoseParams {
   DarkDotParams dots;
   PlanarPnpParams pnp;
   ConstantVelocityFilterParams filter;
+  InnerPatternParams inner_pattern;    // visible mode, a target with an inner pattern (target.yaml)
 };
+
+// MonoPoseResult::solver when the pose comes from the inner pattern.
+constexpr const char* kInnerPatternSolverName = "inner_pattern";
 
 // Empty when the parameters are usable, else a message naming the first bad parameter by its name in
 // config/mono_pose_<mode>.yaml (e.g. "feature_ratio must be in (0, 1]").
@@ -86,6 +91,9 @@ struct MonoPoseResult {
   std::vector<cv::Point2f> face_outline;
   std::vector<Eigen::Vector2d> marker_pixels;  // markers / LEDs in model order, when located
   std::vector<Eigen::Vector2d> blob_pixels;    // IR: every LED blob
+  // The inner pattern, when it was looked for: why it gave no pose (empty when it did), its corners.
+  std::string inner_pattern_status;
+  std::vector<Eigen::Vector2d> inner_pattern_corners;
 };
 
 class MonoPoseEstimator {
@@ -117,6 +125,10 @@ class MonoPoseEstimator {
   cv::Rect predictedRegion(double stamp_s, double* face_width_px) const;
   const Eigen::Matrix3d* previousRotation(double stamp_s, Eigen::Matrix3d* storage) const;
   void updateVelocities(MonoPoseResult* result);
+  // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
+  void applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
+  // Where the inner pattern should appear (empty: not tracking, search the whole image).
+  cv::Rect predictedInnerPatternRegion(double stamp_s) const;
 
   TargetModel model_;
   CameraIntrinsics camera_;
@@ -130,6 +142,8 @@ class MonoPoseEstimator {
   FrameDifferenceVelocity frame_difference_;
   bool tracking_ = false;  // the previous image gave a valid pose
   PoseWithCovariance last_pose_;
+  std::unique_ptr<InnerPatternDetector> inner_pattern_;  // null without an inner pattern or in IR mode
+  double last_valid_range_m_ = INFINITY;                 // of the last valid pose (any solver)
   double last_stamp_s_ = 0.0;
 };
 

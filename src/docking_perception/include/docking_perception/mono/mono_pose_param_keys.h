@@ -52,6 +52,16 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("max_gap_s", &p.filter.max_gap_s);
   visit("gate_chi2", &p.filter.gate_chi2);
   visit("max_rejections", &p.filter.max_rejections);
+  visit("inner_pattern_enabled", &p.inner_pattern.enabled);
+  visit("inner_pattern_use_range_m", &p.inner_pattern.use_range_m);
+  visit("inner_pattern_quad_decimate", &p.inner_pattern.quad_decimate);
+  visit("inner_pattern_max_reprojection_px", &p.inner_pattern.max_reprojection_px);
+  visit("inner_pattern_min_pixel_sigma", &p.inner_pattern.min_pixel_sigma);
+  visit("inner_pattern_min_decision_margin", &p.inner_pattern.min_decision_margin);
+  visit("inner_pattern_min_tag_edge_px", &p.inner_pattern.min_tag_edge_px);
+  visit("inner_pattern_min_points", &p.inner_pattern.min_points);
+  visit("inner_pattern_cross_check_position_m", &p.inner_pattern.cross_check_position_m);
+  visit("inner_pattern_cross_check_angle_rad", &p.inner_pattern.cross_check_angle_rad);
 }
 
 }  // namespace mono

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "docking_perception/mono/apriltag_pose.h"
+
 namespace docking_perception {
 namespace mono {
 
@@ -44,6 +46,13 @@ class TargetModel {
   // 8-bit single channel texture (empty when not loaded).
   const cv::Mat& textureGray() const { return texture_gray_; }
   bool hasTexture() const { return !texture_gray_.empty(); }
+  // The optional inner pattern (target.inner_pattern): a tag near the port for close range.
+  bool hasInnerPattern() const { return has_inner_pattern_; }
+  const TagSpec& innerPattern() const { return inner_pattern_; }
+  void setInnerPattern(const TagSpec& tag) {
+    inner_pattern_ = tag;
+    has_inner_pattern_ = true;
+  }
 
   // Texture pixel (OpenCV convention: pixel centres at integer coordinates) -> point on the face, m.
   Eigen::Vector3d texturePixelToPoint(const cv::Point2f& pixel) const;
@@ -66,6 +75,8 @@ class TargetModel {
   double marker_radius_m_ = 0.0;
   double led_radius_m_ = 0.0;
   cv::Mat texture_gray_;
+  bool has_inner_pattern_ = false;
+  TagSpec inner_pattern_;
 };
 
 }  // namespace mono

@@ -1,0 +1,87 @@
+// The inner pattern: a small AprilTag printed near the port (target.yaml `inner_pattern`) that the
+// visible camera still sees, in focus enough, down to contact, where the face no longer fits in the
+// image. InnerPatternDetector finds it (libapriltag through TagDetector), then refines every corner of
+// the tag's cell grid (where the cells around a grid point are not one colour or a straight edge:
+// 30-60 points for tag36h11) to sub-pixel from the tag's homography (cv::cornerSubPix), and takes the
+// pose of frame `target` from them (IPPE + Levenberg-Marquardt, PlanarPnpSolver) with the Gauss-Newton
+// covariance scaled by their residuals (floored). ROS-free.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "docking_perception/mono/apriltag_pose.h"
+#include "docking_perception/mono/planar_pnp_solver.h"
+#include "docking_perception/mono/pose_types.h"
+
+namespace docking_perception {
+namespace mono {
+
+// Parameters (config/mono_pose_<mode>.yaml, keys inner_pattern_*; documented there and in the README).
+struct InnerPatternParams {
+  bool enabled = true;
+  // The tag is looked for when the last pose or this image's face pose is nearer than this (m), or the
+  // face was not found right after a pose nearer than it; inside it a valid tag pose is the result.
+  double use_range_m = 0.45;
+  double quad_decimate = 2.0;          // apriltag's quad_decimate (the tag is >= 50 px wide where used)
+  double max_reprojection_px = 2.0;    // RMS over the 4 corners
+  double min_pixel_sigma = 0.5;        // floor of the corner noise scaling the covariance, px
+  double min_decision_margin = 30.0;   // apriltag's decision margin below this: not trusted
+  double min_tag_edge_px = 24.0;       // a smaller tag image gives too weak a pose
+  int min_points = 10;                 // grid corners that must refine and fit
+  // Cross-check with the face's pose in the same image (both valid): positions farther apart than
+  // this (m) or orientations (rad) mean one of them is wrong: the image gives no valid pose.
+  double cross_check_position_m = 0.02;
+  double cross_check_angle_rad = 0.0873;
+};
+
+// Empty when usable, else a message naming the first bad parameter by its yaml key.
+std::string validateInnerPatternParams(const InnerPatternParams& params);
+
+struct InnerPatternResult {
+  bool valid = false;
+  std::string status;                  // why not valid
+  PoseWithCovariance pose;             // camera <- target (the port)
+  double reprojection_rms_px = 0.0;
+  double decision_margin = 0.0;
+  int hamming = 0;
+  std::array<Eigen::Vector2d, 4> corners_px{};  // the black square's corners (when detected)
+  int candidate_points = 0;            // grid corners of the tag
+  int pose_points = 0;                 // of them, refined and used by the pose
+  double processing_time_ms = 0.0;     // CPU time of detection and pose
+};
+
+class InnerPatternDetector {
+ public:
+  // Throws TagError for an unsupported tag, std::invalid_argument for invalid parameters.
+  InnerPatternDetector(const TagSpec& tag, const InnerPatternParams& params);
+  void setParams(const InnerPatternParams& params);
+  const InnerPatternParams& params() const { return params_; }
+  const TagSpec& tag() const { return tag_; }
+  // The grid corners the pose uses, in frame `target`.
+  const std::vector<Eigen::Vector3d>& gridPoints() const { return grid_target_m_; }
+
+  // gray: 8-bit, rectified, the size of camera. previous_rotation: the last trusted orientation
+  // (camera <- target) to settle IPPE's ambiguity, or nullptr. roi: where to look (empty: everywhere).
+  InnerPatternResult detect(const cv::Mat& gray, const CameraIntrinsics& camera,
+                            const Eigen::Matrix3d* previous_rotation, const cv::Rect& roi = cv::Rect());
+
+ private:
+  // Refines the grid corners predicted by the 4 detected corners; fills model / image points.
+  void refineGrid(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& corners,
+                  std::vector<Eigen::Vector3d>* model, std::vector<Eigen::Vector2d>* image) const;
+
+  TagSpec tag_;
+  InnerPatternParams params_;
+  // Grid corners as (x, y) in apriltag's tag frame (m; x right, y down as printed) and in `target`.
+  std::vector<Eigen::Vector2d> grid_tag_m_;
+  std::vector<Eigen::Vector3d> grid_target_m_;
+  std::unique_ptr<TagDetector> detector_;
+  PlanarPnpSolver pnp_;
+};
+
+}  // namespace mono
+}  // namespace docking_perception
