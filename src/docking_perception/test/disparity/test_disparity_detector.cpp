@@ -8,34 +8,15 @@
 #include <gtest/gtest.h>
 
 #include "docking_perception/disparity/disparity_detector.h"
+#include "painted_disparity.h"
 
 namespace docking_perception {
 namespace disparity {
 namespace {
 
-// Our pair: 640x480, f = 550 px, principal point at the image centre, baseline 0.10 m.
-StereoGeometry ourGeometry() {
-  StereoGeometry g;
-  g.focal_px = 550.0;
-  g.cx_px = 319.5;
-  g.cy_px = 239.5;
-  g.baseline_m = 0.10;
-  return g;
-}
-
-double disparityAt(double z_m) { return 550.0 * 0.10 / z_m; }
-
-// Paints the image rectangle of a fronto-parallel rectangle (centre x, y, depth z, size w x h, metres).
-void paintRect(cv::Mat* disparity, double x, double y, double z, double w, double h) {
-  const StereoGeometry g = ourGeometry();
-  const int u0 = static_cast<int>(std::lround(g.cx_px + (x - w / 2) * g.focal_px / z));
-  const int u1 = static_cast<int>(std::lround(g.cx_px + (x + w / 2) * g.focal_px / z));
-  const int v0 = static_cast<int>(std::lround(g.cy_px + (y - h / 2) * g.focal_px / z));
-  const int v1 = static_cast<int>(std::lround(g.cy_px + (y + h / 2) * g.focal_px / z));
-  const cv::Rect rect = cv::Rect(cv::Point(u0, v0), cv::Point(u1 + 1, v1 + 1)) &
-                        cv::Rect(0, 0, disparity->cols, disparity->rows);
-  (*disparity)(rect).setTo(cv::Scalar(disparityAt(z)));
-}
+using test::disparityAt;
+using test::ourGeometry;
+using test::paintRect;
 
 cv::Mat invalidImage() { return cv::Mat(480, 640, CV_32FC1, cv::Scalar(-1.0f)); }
 

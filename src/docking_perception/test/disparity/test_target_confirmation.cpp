@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "docking_perception/disparity/disparity_detector.h"
+#include "painted_disparity.h"
 #include "docking_perception/disparity/target_track_gate.h"
 
 namespace docking_perception {
@@ -17,27 +18,8 @@ namespace {
 
 const std::string kConfigDir = DISPARITY_CONFIG_DIR;
 
-StereoGeometry ourGeometry() {
-  StereoGeometry g;
-  g.focal_px = 550.0;
-  g.cx_px = 319.5;
-  g.cy_px = 239.5;
-  g.baseline_m = 0.10;
-  return g;
-}
-
-// Paints a fronto-parallel rectangle (centre x, y, depth z, size w x h, metres); nearer paint wins
-// only if painted later, so paint far to near.
-void paintRect(cv::Mat* disparity, double x, double y, double z, double w, double h) {
-  const StereoGeometry g = ourGeometry();
-  const int u0 = static_cast<int>(std::lround(g.cx_px + (x - w / 2) * g.focal_px / z));
-  const int u1 = static_cast<int>(std::lround(g.cx_px + (x + w / 2) * g.focal_px / z));
-  const int v0 = static_cast<int>(std::lround(g.cy_px + (y - h / 2) * g.focal_px / z));
-  const int v1 = static_cast<int>(std::lround(g.cy_px + (y + h / 2) * g.focal_px / z));
-  const cv::Rect rect = cv::Rect(cv::Point(u0, v0), cv::Point(u1 + 1, v1 + 1)) &
-                        cv::Rect(0, 0, disparity->cols, disparity->rows);
-  (*disparity)(rect).setTo(cv::Scalar(g.focal_px * g.baseline_m / z));
-}
+using test::ourGeometry;
+using test::paintRect;
 
 // The mockup face-on: panels 0.15 m behind the face on both sides, then the face.
 void paintMockup(cv::Mat* disparity, double x, double z) {
