@@ -32,4 +32,11 @@ if(CATKIN_ENABLE_TESTING)
     # Debian's catkin links GTest::gtest only; the tests use gtest's own main().
     target_link_libraries(test_arbiter_core ${PROJECT_NAME}_arbiter_core GTest::gtest_main)
   endif()
+
+  # The node on synthetic estimates from two cameras (needs a roscore: rostest).
+  add_rostest_gtest(test_arbiter_node test/arbiter/arbiter_node.test test/arbiter/test_arbiter_node.cpp)
+  if(TARGET test_arbiter_node)
+    target_link_libraries(test_arbiter_node ${catkin_LIBRARIES})
+    add_dependencies(test_arbiter_node arbiter ${catkin_EXPORTED_TARGETS})
+  endif()
 endif()
