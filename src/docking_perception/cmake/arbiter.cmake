@@ -1,8 +1,10 @@
 # arbiter: chooses among the disparity, visible-mono and IR-mono estimates (see README.md, "arbiter").
 # Included by ../CMakeLists.txt after catkin_package().
 
-# ROS-free core: the choice (range regime with hysteresis, quality, staleness, order).
+# ROS-free core: the choice (range regime with hysteresis, quality, staleness, order, consistency
+# across sources).
 add_library(${PROJECT_NAME}_arbiter_core
+  src/arbiter/consistency.cpp
   src/arbiter/frame_change.cpp
   src/arbiter/source_arbiter.cpp
 )
@@ -23,10 +25,18 @@ install(TARGETS arbiter ${PROJECT_NAME}_arbiter_core
 
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_arbiter_core
+    test/arbiter/test_consistency.cpp
     test/arbiter/test_frame_change.cpp
     test/arbiter/test_source_arbiter.cpp)
   if(TARGET test_arbiter_core)
     # Debian's catkin links GTest::gtest only; the tests use gtest's own main().
     target_link_libraries(test_arbiter_core ${PROJECT_NAME}_arbiter_core GTest::gtest_main)
+  endif()
+
+  # The node on synthetic estimates from two cameras (needs a roscore: rostest).
+  add_rostest_gtest(test_arbiter_node test/arbiter/arbiter_node.test test/arbiter/test_arbiter_node.cpp)
+  if(TARGET test_arbiter_node)
+    target_link_libraries(test_arbiter_node ${catkin_LIBRARIES})
+    add_dependencies(test_arbiter_node arbiter ${catkin_EXPORTED_TARGETS})
   endif()
 endif()

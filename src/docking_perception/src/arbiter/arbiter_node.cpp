@@ -7,6 +7,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -55,6 +56,15 @@ ArbiterConfig loadConfig(const ros::NodeHandle& pnh) {
   c.min_ir_inliers = count("min_ir_inliers");
   c.min_disparity_range_m = requireParam<double>(pnh, "min_disparity_range_m");
   c.max_mono_reprojection_error_px = requireParam<double>(pnh, "max_mono_reprojection_error_px");
+  ConsistencyConfig& k = c.consistency;
+  k.enabled = requireParam<bool>(pnh, "consistency_enabled");
+  k.gate_chi2_pose = requireParam<double>(pnh, "consistency_gate_chi2_pose");
+  k.gate_chi2_position = requireParam<double>(pnh, "consistency_gate_chi2_position");
+  k.stamp_tolerance_s = requireParam<double>(pnh, "consistency_stamp_tolerance_s");
+  k.min_speed_mps = requireParam<double>(pnh, "consistency_min_speed_mps");
+  k.min_rate_radps = requireParam<double>(pnh, "consistency_min_rate_radps");
+  k.mount_sigma_m = requireParam<double>(pnh, "consistency_mount_sigma_m");
+  k.mount_sigma_rad = requireParam<double>(pnh, "consistency_mount_sigma_rad");
   try {
     validate(c);
   } catch (const std::invalid_argument& e) {
@@ -75,6 +85,8 @@ void fromMatrix(const Matrix6d& m, boost::array<double, 36>& a) {
     for (int c = 0; c < 6; ++c) a[static_cast<std::size_t>(r * 6 + c)] = m(r, c);
 }
 
+/// `msg` must already be in the output frame: its pose and twist become the summary's common-frame
+/// pose and twist (for the consistency check).
 EstimateSummary summarize(const docking_msgs::TargetEstimate& msg, Source source) {
   EstimateSummary s;
   s.source = source;
@@ -98,6 +110,20 @@ EstimateSummary summarize(const docking_msgs::TargetEstimate& msg, Source source
   s.values_finite = (!msg.position_valid || finite({p.x, p.y, p.z})) &&
                     (!msg.orientation_valid || finite({q.x, q.y, q.z, q.w})) &&
                     (!msg.twist_valid || finite({v.x, v.y, v.z, w.x, w.y, w.z}));
+  if (msg.valid && msg.position_valid) {
+    PoseWithCovariance3 pose;
+    pose.position = Eigen::Vector3d(p.x, p.y, p.z);
+    pose.orientation = Eigen::Quaterniond(q.w, q.x, q.y, q.z);
+    pose.covariance = toMatrix(msg.pose.covariance);
+    s.pose = pose;
+  }
+  if (msg.valid && msg.twist_valid) {
+    TwistWithCovariance3 twist;
+    twist.linear = Eigen::Vector3d(v.x, v.y, v.z);
+    twist.angular = Eigen::Vector3d(w.x, w.y, w.z);
+    twist.covariance = toMatrix(msg.twist.covariance);
+    s.twist = twist;
+  }
   return s;
 }
 
@@ -143,6 +169,14 @@ class ArbiterNode {
     c.min_ir_inliers = static_cast<std::uint32_t>(std::max(0, cfg.min_ir_inliers));
     c.min_disparity_range_m = cfg.min_disparity_range_m;
     c.max_mono_reprojection_error_px = cfg.max_mono_reprojection_error_px;
+    c.consistency.enabled = cfg.consistency_enabled;
+    c.consistency.gate_chi2_pose = cfg.consistency_gate_chi2_pose;
+    c.consistency.gate_chi2_position = cfg.consistency_gate_chi2_position;
+    c.consistency.stamp_tolerance_s = cfg.consistency_stamp_tolerance_s;
+    c.consistency.min_speed_mps = cfg.consistency_min_speed_mps;
+    c.consistency.min_rate_radps = cfg.consistency_min_rate_radps;
+    c.consistency.mount_sigma_m = cfg.consistency_mount_sigma_m;
+    c.consistency.mount_sigma_rad = cfg.consistency_mount_sigma_rad;
     try {
       arbiter_.reconfigure(c);
     } catch (const std::invalid_argument& e) {
@@ -157,6 +191,14 @@ class ArbiterNode {
       cfg.min_ir_inliers = static_cast<int>(kept.min_ir_inliers);
       cfg.min_disparity_range_m = kept.min_disparity_range_m;
       cfg.max_mono_reprojection_error_px = kept.max_mono_reprojection_error_px;
+      cfg.consistency_enabled = kept.consistency.enabled;
+      cfg.consistency_gate_chi2_pose = kept.consistency.gate_chi2_pose;
+      cfg.consistency_gate_chi2_position = kept.consistency.gate_chi2_position;
+      cfg.consistency_stamp_tolerance_s = kept.consistency.stamp_tolerance_s;
+      cfg.consistency_min_speed_mps = kept.consistency.min_speed_mps;
+      cfg.consistency_min_rate_radps = kept.consistency.min_rate_radps;
+      cfg.consistency_mount_sigma_m = kept.consistency.mount_sigma_m;
+      cfg.consistency_mount_sigma_rad = kept.consistency.mount_sigma_rad;
     }
   }
 
@@ -170,12 +212,30 @@ class ArbiterNode {
       ROS_WARN_THROTTLE(5.0, "arbiter: estimate on the %s topic says source %u; treated as %s", sourceName(source),
                         msg->source, sourceName(source));
     }
-    const OfferResult offered = arbiter_.offer(summarize(*msg, source));
+    // Every valid estimate is brought into the output frame on arrival, so that the consistency
+    // check compares the sources in one frame and the chosen one is published without a second look-up.
+    std::optional<docking_msgs::TargetEstimate> in_output_frame;
+    EstimateSummary summary;
+    if (msg->valid) {
+      in_output_frame = toOutputFrame(*msg, source);
+      if (in_output_frame) {
+        summary = summarize(*in_output_frame, source);
+      } else {  // unusable without the mount transform: kept as the source's latest word, invalid
+        summary = summarize(*msg, source);
+        summary.pose.reset();
+        summary.twist.reset();
+        summary.valid = false;
+        summary.status = "no transform into " + output_frame_;
+      }
+    } else {
+      summary = summarize(*msg, source);
+    }
+    const OfferResult offered = arbiter_.offer(summary);
     if (!offered.accepted) {
       ROS_WARN_THROTTLE(2.0, "arbiter: rejected an estimate: %s", offered.reason.c_str());
       return;
     }
-    latest_msgs_[static_cast<std::size_t>(source)] = msg;
+    latest_msgs_[static_cast<std::size_t>(source)] = in_output_frame;
     decideAndPublish(false);
   }
 
@@ -193,13 +253,15 @@ class ArbiterNode {
     last_decision_ = d;
     if (changed || periodic) {
       std_msgs::String status;
-      status.data = d.valid ? std::string(sourceName(d.source)) + ": " + d.reason : "none: " + d.reason;
+      status.data = std::string(d.valid ? sourceName(d.source) : "none") + " (" + decisionCodeName(d.code) +
+                    "): " + d.reason;
       status_pub_.publish(status);
     }
-    if (d.valid && d.is_new) {
-      publishChosen(*latest_msgs_[static_cast<std::size_t>(d.source)], d.source);
+    const auto& chosen = latest_msgs_[static_cast<std::size_t>(d.source)];
+    if (d.valid && d.is_new && chosen) {
+      publishChosen(*chosen, d.source);
     } else if (!d.valid && (periodic || changed)) {
-      publishNothing(d.reason);
+      publishNothing(std::string(decisionCodeName(d.code)) + ": " + d.reason);
     }
   }
 
@@ -214,7 +276,9 @@ class ArbiterNode {
     estimate_pub_.publish(out);
   }
 
-  void publishChosen(const docking_msgs::TargetEstimate& in, Source source) {
+  /// The estimate re-expressed in output_frame_ (pose, twist, covariances, range); nothing when the
+  /// camera's transform is not available.
+  std::optional<docking_msgs::TargetEstimate> toOutputFrame(const docking_msgs::TargetEstimate& in, Source source) {
     Eigen::Isometry3d out_from_in;
     try {
       out_from_in = tf2::transformToEigen(
@@ -224,7 +288,7 @@ class ArbiterNode {
       last_tf_error_ = e.what();
       ROS_WARN_THROTTLE(2.0, "arbiter: cannot bring the %s estimate from '%s' into '%s': %s", sourceName(source),
                         in.header.frame_id.c_str(), output_frame_.c_str(), e.what());
-      return;
+      return std::nullopt;
     }
     PoseWithCovariance3 pose_in;
     pose_in.position = Eigen::Vector3d(in.pose.pose.position.x, in.pose.pose.position.y, in.pose.pose.position.z);
@@ -245,8 +309,6 @@ class ArbiterNode {
 
     docking_msgs::TargetEstimate out = in;
     out.header.frame_id = output_frame_;
-    out.source = docking_msgs::TargetEstimate::SOURCE_FUSED;
-    out.selected_source = static_cast<std::uint8_t>(source);
     out.pose.pose.position = tf2::toMsg(pose_out.position);
     out.pose.pose.orientation = tf2::toMsg(pose_out.orientation);
     fromMatrix(pose_out.covariance, out.pose.covariance);
@@ -254,6 +316,14 @@ class ArbiterNode {
     tf2::toMsg(twist_out.angular, out.twist.twist.angular);
     fromMatrix(twist_out.covariance, out.twist.covariance);
     out.range_m = pose_out.position.norm();  // from the output camera, not the source camera
+    return out;
+  }
+
+  /// Publishes an estimate already in output_frame_ as the FUSED one (estimate, pose, twist, tf).
+  void publishChosen(const docking_msgs::TargetEstimate& in_output_frame, Source source) {
+    docking_msgs::TargetEstimate out = in_output_frame;
+    out.source = docking_msgs::TargetEstimate::SOURCE_FUSED;
+    out.selected_source = static_cast<std::uint8_t>(source);
     out.status.clear();  // TargetEstimate: empty when valid; the choice's reason is on the status topic
     estimate_pub_.publish(out);
     ++published_;
@@ -270,8 +340,10 @@ class ArbiterNode {
     }
     // tf needs a full pose: a position-only estimate (disparity) publishes none rather than a guess.
     if (out.orientation_valid) {
-      geometry_msgs::TransformStamped t = tf2::eigenToTransform(
-          Eigen::Isometry3d(Eigen::Translation3d(pose_out.position) * pose_out.orientation));
+      const auto& p = out.pose.pose.position;
+      const auto& q = out.pose.pose.orientation;
+      geometry_msgs::TransformStamped t = tf2::eigenToTransform(Eigen::Isometry3d(
+          Eigen::Translation3d(p.x, p.y, p.z) * Eigen::Quaterniond(q.w, q.x, q.y, q.z)));
       t.header = out.header;
       t.child_frame_id = docking_msgs::frames::kTarget;
       tf_broadcaster_.sendTransform(t);
@@ -280,11 +352,17 @@ class ArbiterNode {
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     const Decision& d = last_decision_;
-    if (d.valid) {
+    if (d.code == DecisionCode::kChosen) {
       stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "using %s", sourceName(d.source));
+    } else if (d.code == DecisionCode::kChosenOverDisagreement) {
+      stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "using %s; another source contradicted it",
+                    sourceName(d.source));
+    } else if (d.code == DecisionCode::kSourcesDisagree) {
+      stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "sources disagree: nothing published as valid");
     } else {
       stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no usable estimate");
     }
+    stat.add("code", decisionCodeName(d.code));
     stat.add("reason", d.reason);
     stat.add("regime", regimeName(d.regime));
     stat.add("output frame", output_frame_);
@@ -296,6 +374,13 @@ class ArbiterNode {
     stat.add("published", published_);
     stat.add("rejected (out of order / bad stamp)", arbiter_.rejectedCount());
     stat.add("tf failures", tf_failures_);
+    const ConsistencyCounts& k = arbiter_.consistencyCounts();
+    stat.add("consistency check", arbiter_.config().consistency.enabled ? "on" : "off");
+    stat.add("consistency: pairs compared", k.comparisons);
+    stat.add("consistency: disagreements", k.disagreements);
+    stat.add("consistency: decided by a third source", k.resolved_by_third_source);
+    stat.add("consistency: decided by the previous output", k.resolved_by_previous_output);
+    stat.add("consistency: undecided", k.undecided);
     if (tf_failures_ > 0) stat.add("last tf error", last_tf_error_);
   }
 
@@ -310,7 +395,8 @@ class ArbiterNode {
   ros::Publisher estimate_pub_, pose_pub_, twist_pub_, status_pub_;
   std::vector<ros::Subscriber> subscribers_;
   ros::Timer timer_;
-  std::array<docking_msgs::TargetEstimateConstPtr, kSourceCount> latest_msgs_{};
+  /// The latest valid estimate of each source, in output_frame_ (empty: invalid or no transform).
+  std::array<std::optional<docking_msgs::TargetEstimate>, kSourceCount> latest_msgs_{};
   Decision last_decision_;
   std::uint64_t published_{0};
   std::uint64_t tf_failures_{0};

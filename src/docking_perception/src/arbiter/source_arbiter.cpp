@@ -1,9 +1,9 @@
 #include "docking_perception/arbiter/source_arbiter.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
-#include <vector>
 
 namespace docking_perception {
 namespace arbiter {
@@ -29,6 +29,32 @@ const char* sourceName(Source source) {
       return "mono_visible";
     case Source::kMonoIr:
       return "mono_ir";
+  }
+  return "unknown";
+}
+
+const char* decisionCodeName(DecisionCode code) {
+  switch (code) {
+    case DecisionCode::kChosen:
+      return "chosen";
+    case DecisionCode::kChosenOverDisagreement:
+      return "chosen_over_disagreement";
+    case DecisionCode::kNoUsableEstimate:
+      return "no_usable_estimate";
+    case DecisionCode::kSourcesDisagree:
+      return "sources_disagree";
+  }
+  return "unknown";
+}
+
+const char* resolutionName(Resolution resolution) {
+  switch (resolution) {
+    case Resolution::kNone:
+      return "none";
+    case Resolution::kThirdSource:
+      return "third source";
+    case Resolution::kPreviousOutput:
+      return "previous output";
   }
   return "unknown";
 }
@@ -64,6 +90,7 @@ void validate(const ArbiterConfig& c) {
   if (!std::isfinite(c.min_disparity_range_m) || c.min_disparity_range_m < 0.0) {
     throw std::invalid_argument("min_disparity_range_m must be a number >= 0");
   }
+  validate(c.consistency);
 }
 
 SourceArbiter::SourceArbiter(const ArbiterConfig& config) : config_(config) { validate(config_); }
@@ -190,38 +217,221 @@ Decision SourceArbiter::decide(double now_s) {
   if (range) updateRegime(*range);
   decision.regime = regime_;
 
-  const std::vector<Source> preference =
+  const std::array<Source, kSourceCount> preference =
       regime_ == RangeRegime::kNear
-          ? std::vector<Source>{Source::kMonoVisible, Source::kMonoIr, Source::kDisparity}
-          : std::vector<Source>{Source::kDisparity, Source::kMonoVisible, Source::kMonoIr};
+          ? std::array<Source, kSourceCount>{Source::kMonoVisible, Source::kMonoIr, Source::kDisparity}
+          : std::array<Source, kSourceCount>{Source::kDisparity, Source::kMonoVisible, Source::kMonoIr};
 
   std::string reason = regimeName(regime_);
   if (range) reason += " (" + formatDouble("%.2f", *range) + " m)";
-  for (Source s : preference) {
-    if (usable(s)) {
-      decision.valid = true;
-      decision.source = s;
-      decision.stamp_s = latest_[indexOf(s)]->stamp_s;
-      break;
-    }
-    reason += std::string(": ") + sourceName(s) + " " + why_not[indexOf(s)];
-  }
-  if (!decision.valid) {
-    decision.reason = "no usable estimate; " + reason;
-    return decision;
-  }
-  reason += std::string(": using ") + sourceName(decision.source);
-  decision.reason = reason;
+  chooseConsistent(why_not, preference, reason, decision);
+  if (!decision.valid) return decision;
 
   // Publish each estimate once and keep the output in stamp order across sources.
   decision.is_new = !last_output_stamp_s_ || decision.stamp_s > *last_output_stamp_s_;
   if (decision.is_new) {
     last_output_stamp_s_ = decision.stamp_s;
     last_output_source_ = decision.source;
+    recordOutput(decision.source);
   } else if (!last_output_source_ || *last_output_source_ != decision.source) {
     decision.reason += " (waiting for one newer than the last published)";
   }
   return decision;
+}
+
+// ---- Consistency across sources --------------------------------------------------------------
+//
+// Rule (README "arbiter", "Consistency"): the candidates are tried in order of preference. A
+// candidate is tested against every other usable source whose stamp is within the tolerance (mono
+// vs mono: position and orientation; with disparity: position). When one contradicts it, the other
+// evidence decides: first the remaining source(s) (a vote: agrees with one, contradicts the other),
+// then the newest previous output older than both. The candidate is used when it wins every
+// contradiction, skipped when it loses one (the next candidate is tried, with it left out), and
+// nothing is published (kSourcesDisagree) when a contradiction cannot be decided.
+
+std::optional<ComparablePose> SourceArbiter::comparable(Source source) const {
+  const auto& e = latest_[indexOf(source)];
+  if (!e || !e->pose) return std::nullopt;
+  ComparablePose c;
+  c.stamp_s = e->stamp_s;
+  c.pose = *e->pose;
+  c.has_orientation = isMono(source) && e->orientation_valid;
+  if (e->twist) {
+    const double speed = e->twist->linear.norm();
+    const double rate = e->twist->angular.norm();
+    c.speed_mps = std::isfinite(speed) ? speed : 0.0;
+    c.rate_radps = std::isfinite(rate) ? rate : 0.0;
+  }
+  return c;
+}
+
+bool SourceArbiter::firstTimeSeen(Source a, Source b) {
+  if (indexOf(a) > indexOf(b)) std::swap(a, b);
+  const std::size_t pair = indexOf(a) + indexOf(b) - 1;  // (0,1) -> 0, (0,2) -> 1, (1,2) -> 2
+  const std::pair<double, double> stamps{latest_[indexOf(a)]->stamp_s, latest_[indexOf(b)]->stamp_s};
+  if (counted_pairs_[pair] && *counted_pairs_[pair] == stamps) return false;
+  counted_pairs_[pair] = stamps;
+  return true;
+}
+
+std::optional<ConsistencyTest> SourceArbiter::testPair(Source a, Source b, bool* first_time) {
+  const auto pose_a = comparable(a);
+  const auto pose_b = comparable(b);
+  if (!pose_a || !pose_b) return std::nullopt;
+  if (std::abs(pose_a->stamp_s - pose_b->stamp_s) > config_.consistency.stamp_tolerance_s) return std::nullopt;
+  const auto test = compare(*pose_a, *pose_b, config_.consistency);
+  if (!test) return std::nullopt;
+  *first_time = firstTimeSeen(a, b);
+  if (*first_time) {
+    ++counts_.comparisons;
+    if (!test->agree) ++counts_.disagreements;
+  }
+  return test;
+}
+
+SourceArbiter::Verdict SourceArbiter::vote(const ComparablePose& judge, const ComparablePose& first,
+                                           const ComparablePose& second) const {
+  const auto with_first = compare(judge, first, config_.consistency);
+  const auto with_second = compare(judge, second, config_.consistency);
+  if (!with_first || !with_second || with_first->agree == with_second->agree) return Verdict::kUndecided;
+  return with_first->agree ? Verdict::kFirst : Verdict::kSecond;
+}
+
+SourceArbiter::PairOutcome SourceArbiter::arbitrate(Source first, Source second,
+                                                    const std::array<bool, kSourceCount>& candidate,
+                                                    const ConsistencyTest& test) {
+  PairOutcome outcome;
+  outcome.other = second;
+  outcome.test = test;
+  const ComparablePose a = *comparable(first);
+  const ComparablePose b = *comparable(second);
+
+  int for_first = 0;
+  int for_second = 0;
+  for (std::size_t i = 0; i < kSourceCount; ++i) {
+    const Source judge_source = static_cast<Source>(i);
+    if (judge_source == first || judge_source == second || !candidate[i]) continue;
+    const auto judge = comparable(judge_source);
+    const double tolerance = config_.consistency.stamp_tolerance_s;
+    if (!judge || std::abs(judge->stamp_s - a.stamp_s) > tolerance || std::abs(judge->stamp_s - b.stamp_s) > tolerance) {
+      continue;
+    }
+    const Verdict v = vote(*judge, a, b);
+    for_first += v == Verdict::kFirst;
+    for_second += v == Verdict::kSecond;
+  }
+  if (for_first != for_second) {
+    outcome.verdict = for_first > for_second ? Verdict::kFirst : Verdict::kSecond;
+    outcome.resolution = Resolution::kThirdSource;
+    return outcome;
+  }
+  if (const auto previous = previousOutput(std::min(a.stamp_s, b.stamp_s))) {
+    outcome.verdict = vote(*previous, a, b);
+    if (outcome.verdict != Verdict::kUndecided) outcome.resolution = Resolution::kPreviousOutput;
+  }
+  return outcome;
+}
+
+std::optional<ComparablePose> SourceArbiter::previousOutput(double before_s) const {
+  for (auto it = outputs_.rbegin(); it != outputs_.rend(); ++it) {
+    if (it->stamp_s >= before_s) continue;
+    if (before_s - it->stamp_s > config_.timeout_s) break;
+    return *it;
+  }
+  return std::nullopt;
+}
+
+void SourceArbiter::recordOutput(Source source) {
+  const auto output = comparable(source);
+  if (!output) return;
+  outputs_.push_back(*output);
+  while (!outputs_.empty() && output->stamp_s - outputs_.front().stamp_s > config_.timeout_s) outputs_.pop_front();
+}
+
+namespace {
+
+std::string describeTest(const ConsistencyTest& test) {
+  return "chi2 " + formatDouble("%.1f", test.chi2) + " > " + formatDouble("%.1f", test.gate) + ", " +
+         std::to_string(test.dof) + " dof, " + formatDouble("%.3f", test.dt_s) + " s apart";
+}
+
+}  // namespace
+
+SourceArbiter::CandidateCheck SourceArbiter::checkCandidate(Source c, const std::array<bool, kSourceCount>& candidate) {
+  CandidateCheck check;
+  for (std::size_t si = 0; config_.consistency.enabled && si < kSourceCount; ++si) {
+    const Source s = static_cast<Source>(si);
+    if (s == c || !candidate[si]) continue;
+    bool first_time = false;
+    const auto test = testPair(c, s, &first_time);
+    if (!test || test->agree) continue;
+    const PairOutcome outcome = arbitrate(c, s, candidate, *test);
+    if (first_time) {
+      if (outcome.resolution == Resolution::kThirdSource) ++counts_.resolved_by_third_source;
+      if (outcome.resolution == Resolution::kPreviousOutput) ++counts_.resolved_by_previous_output;
+      if (outcome.verdict == Verdict::kUndecided) ++counts_.undecided;
+    }
+    if (outcome.verdict == Verdict::kSecond && !check.lost) check.lost = outcome;
+    if (outcome.verdict == Verdict::kUndecided && !check.undecided) check.undecided = outcome;
+    if (outcome.verdict == Verdict::kFirst) check.outvoted.push_back(outcome);
+  }
+  return check;
+}
+
+void SourceArbiter::chooseConsistent(const std::array<std::string, kSourceCount>& why_not,
+                                     const std::array<Source, kSourceCount>& preference, std::string reason,
+                                     Decision& decision) {
+  std::array<bool, kSourceCount> candidate{};
+  bool any_usable = false;
+  for (std::size_t i = 0; i < kSourceCount; ++i) {
+    candidate[i] = why_not[i].empty();
+    any_usable = any_usable || candidate[i];
+  }
+  for (Source c : preference) {
+    const std::size_t ci = indexOf(c);
+    if (!candidate[ci]) {
+      if (!decision.inconsistent[ci]) reason += std::string(": ") + sourceName(c) + " " + why_not[ci];
+      continue;
+    }
+    const CandidateCheck check = checkCandidate(c, candidate);
+    if (check.lost) {  // another source is better supported: try the next candidate without this one
+      candidate[ci] = false;
+      decision.inconsistent[ci] = true;
+      decision.resolution = check.lost->resolution;
+      reason += std::string(": ") + sourceName(c) + " contradicts " + sourceName(check.lost->other) + " (" +
+                describeTest(check.lost->test) + "), which the " + resolutionName(check.lost->resolution) +
+                " backs";
+      continue;
+    }
+    if (check.undecided) {
+      decision.valid = false;
+      decision.code = DecisionCode::kSourcesDisagree;
+      decision.inconsistent[ci] = true;
+      decision.inconsistent[indexOf(check.undecided->other)] = true;
+      decision.reason = "sources disagree; " + reason + ": " + sourceName(c) + " contradicts " +
+                        sourceName(check.undecided->other) + " (" + describeTest(check.undecided->test) +
+                        ") and nothing decides which is right";
+      return;
+    }
+    std::string outvoted;
+    for (const PairOutcome& o : check.outvoted) {
+      decision.inconsistent[indexOf(o.other)] = true;
+      decision.resolution = o.resolution;
+      outvoted += std::string(", ") + sourceName(o.other) + " outvoted by the " + resolutionName(o.resolution) +
+                  " (" + describeTest(o.test) + ")";
+    }
+    decision.valid = true;
+    decision.source = c;
+    decision.stamp_s = latest_[ci]->stamp_s;
+    const bool any_inconsistent =
+        std::find(decision.inconsistent.begin(), decision.inconsistent.end(), true) != decision.inconsistent.end();
+    decision.code = any_inconsistent ? DecisionCode::kChosenOverDisagreement : DecisionCode::kChosen;
+    decision.reason = reason + ": using " + sourceName(c) + outvoted;
+    return;
+  }
+  decision.valid = false;
+  decision.code = any_usable ? DecisionCode::kSourcesDisagree : DecisionCode::kNoUsableEstimate;
+  decision.reason = "no usable estimate; " + reason;
 }
 
 }  // namespace arbiter

@@ -304,3 +304,199 @@ TEST(SourceArbiter, VisibleAndIrHaveTheirOwnInlierThresholds) {
   EXPECT_FALSE(d.valid);
   EXPECT_NE(d.reason.find("4 inliers < 5"), std::string::npos) << d.reason;
 }
+
+// ---- Consistency across sources ------------------------------------------------------------------
+
+using docking_perception::arbiter::DecisionCode;
+using docking_perception::arbiter::Matrix6d;
+using docking_perception::arbiter::PoseWithCovariance3;
+using docking_perception::arbiter::Resolution;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// The target `range` m ahead of the camera, turned `yaw_deg` about the camera's y axis, `offset_x`
+// to the side, with the given 1-sigma position and orientation uncertainty (common frame).
+EstimateSummary posed(Source source, double stamp, double range, double yaw_deg, double sigma_m, double sigma_deg,
+                      double offset_x = 0.0) {
+  EstimateSummary e = good(source, stamp, range);
+  PoseWithCovariance3 p;
+  p.position = Eigen::Vector3d(offset_x, 0.0, range);
+  p.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI + yaw_deg * kDeg, Eigen::Vector3d::UnitY()));
+  p.covariance = Matrix6d::Zero();
+  p.covariance.diagonal() << Eigen::Vector3d::Constant(sigma_m * sigma_m),
+      Eigen::Vector3d::Constant(std::pow(sigma_deg * kDeg, 2));
+  if (source == Source::kDisparity) p.covariance.bottomRightCorner<3, 3>().diagonal().setConstant(1e6);
+  e.pose = p;
+  return e;
+}
+
+}  // namespace
+
+TEST(SourceArbiterConsistency, AgreeingSourcesPassUnchanged) {
+  ArbiterConfig off;
+  off.consistency.enabled = false;
+  SourceArbiter checked{ArbiterConfig{}};
+  SourceArbiter unchecked{off};
+  double t = 1.0;
+  for (int i = 0; i < 20; ++i, t += 0.033) {
+    // Small differences, well inside the sources' own sigmas (fixed, not random).
+    const double wobble = std::sin(0.9 * i);
+    const double range = 1.0 + 0.05 * i;  // approaching from 2 m to 1 m and beyond: near and far regime
+    for (SourceArbiter* a : {&checked, &unchecked}) {
+      ASSERT_TRUE(a->offer(posed(Source::kMonoVisible, t, range, 0.3 * wobble, 0.004, 0.5)).accepted);
+      ASSERT_TRUE(a->offer(posed(Source::kMonoIr, t + 0.01, range + 0.003 * wobble, -0.4 * wobble, 0.006, 1.0)).accepted);
+      ASSERT_TRUE(a->offer(posed(Source::kDisparity, t, range - 0.02 * wobble, 0.0, 0.03, 0.0)).accepted);
+    }
+    const Decision d = checked.decide(t + 0.02);
+    const Decision reference = unchecked.decide(t + 0.02);
+    ASSERT_TRUE(d.valid) << d.reason;
+    EXPECT_EQ(d.code, DecisionCode::kChosen) << d.reason;
+    EXPECT_EQ(d.source, reference.source) << "i=" << i;
+    EXPECT_EQ(d.reason, reference.reason) << "i=" << i;
+    EXPECT_EQ(d.is_new, reference.is_new);
+  }
+  // Each frame, the chosen source against the two others.
+  EXPECT_EQ(checked.consistencyCounts().comparisons, 40u);
+  EXPECT_EQ(checked.consistencyCounts().disagreements, 0u);
+}
+
+TEST(SourceArbiterConsistency, ConfidentlyWrongVisibleIsRejectedForIrBackedByThePreviousOutput) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  // Frame 1: both mono poses agree; the visible one is published (preferred near).
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoVisible, 1.000, 1.0, 0.0, 0.003, 0.5)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 1.005, 1.0, 0.2, 0.004, 1.0)).accepted);
+  Decision d = arbiter.decide(1.01);
+  ASSERT_TRUE(d.valid);
+  EXPECT_EQ(d.source, Source::kMonoVisible);
+  EXPECT_TRUE(d.is_new);
+  // Frame 2: glare turns the visible pose 15 deg, still with a 0.5 deg sigma; IR stays put.
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoVisible, 1.033, 1.0, 15.0, 0.003, 0.5)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 1.038, 1.0, 0.1, 0.004, 1.0)).accepted);
+  d = arbiter.decide(1.04);
+  ASSERT_TRUE(d.valid) << d.reason;
+  EXPECT_EQ(d.source, Source::kMonoIr) << d.reason;
+  EXPECT_TRUE(d.is_new);
+  EXPECT_EQ(d.code, DecisionCode::kChosenOverDisagreement);
+  EXPECT_EQ(d.resolution, Resolution::kPreviousOutput);
+  EXPECT_TRUE(d.inconsistent[static_cast<std::size_t>(Source::kMonoVisible)]);
+  EXPECT_FALSE(d.inconsistent[static_cast<std::size_t>(Source::kMonoIr)]);
+  EXPECT_EQ(arbiter.consistencyCounts().disagreements, 1u);
+  EXPECT_EQ(arbiter.consistencyCounts().resolved_by_previous_output, 1u);
+  // Deciding again on the same estimates counts nothing new.
+  arbiter.decide(1.05);
+  EXPECT_EQ(arbiter.consistencyCounts().disagreements, 1u);
+  // Frame 3: the glare persists; the previous output is now IR's, which still backs IR.
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoVisible, 1.066, 1.0, 16.0, 0.003, 0.5)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 1.071, 1.0, 0.0, 0.004, 1.0)).accepted);
+  d = arbiter.decide(1.075);
+  ASSERT_TRUE(d.valid);
+  EXPECT_EQ(d.source, Source::kMonoIr);
+  EXPECT_EQ(arbiter.consistencyCounts().resolved_by_previous_output, 2u);
+}
+
+TEST(SourceArbiterConsistency, AThirdSourceOutvotesADisparityBlobBesideTheTarget) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  // Far (4 m): disparity preferred, but its blob is a background object 1.8 m to the side; both mono
+  // poses see the target where it is. No previous output: the third source decides.
+  ASSERT_TRUE(arbiter.offer(posed(Source::kDisparity, 2.0, 4.0, 0.0, 0.05, 0.0, 1.8)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoVisible, 2.0, 4.0, 0.0, 0.02, 2.0)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 2.01, 4.02, 1.0, 0.03, 3.0)).accepted);
+  const Decision d = arbiter.decide(2.02);
+  ASSERT_TRUE(d.valid) << d.reason;
+  EXPECT_EQ(d.regime, RangeRegime::kFar);
+  EXPECT_EQ(d.source, Source::kMonoVisible) << d.reason;
+  EXPECT_EQ(d.code, DecisionCode::kChosenOverDisagreement);
+  EXPECT_EQ(d.resolution, Resolution::kThirdSource);
+  EXPECT_TRUE(d.inconsistent[static_cast<std::size_t>(Source::kDisparity)]);
+  EXPECT_NE(d.reason.find("disparity contradicts mono_visible"), std::string::npos) << d.reason;
+  // Both contradictions of the blob (with mono_visible, and with mono_ir) were decided by the other mono.
+  EXPECT_EQ(arbiter.consistencyCounts().disagreements, 2u);
+  EXPECT_EQ(arbiter.consistencyCounts().resolved_by_third_source, 2u);
+}
+
+TEST(SourceArbiterConsistency, ADisagreementNothingDecidesIsPublishedInvalidWithItsCode) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  // No previous output, no third source.
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoVisible, 1.0, 1.0, 15.0, 0.003, 0.5)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 1.0, 1.0, 0.0, 0.004, 1.0)).accepted);
+  Decision d = arbiter.decide(1.01);
+  EXPECT_FALSE(d.valid);
+  EXPECT_EQ(d.code, DecisionCode::kSourcesDisagree);
+  EXPECT_TRUE(d.inconsistent[static_cast<std::size_t>(Source::kMonoVisible)]);
+  EXPECT_TRUE(d.inconsistent[static_cast<std::size_t>(Source::kMonoIr)]);
+  EXPECT_EQ(arbiter.consistencyCounts().undecided, 1u);
+  // A disparity position cannot decide an orientation disagreement: still invalid.
+  ASSERT_TRUE(arbiter.offer(posed(Source::kDisparity, 1.0, 1.0, 0.0, 0.03, 0.0)).accepted);
+  d = arbiter.decide(1.02);
+  EXPECT_FALSE(d.valid);
+  EXPECT_EQ(d.code, DecisionCode::kSourcesDisagree);
+  // Nothing usable at all has its own code.
+  d = arbiter.decide(5.0);
+  EXPECT_FALSE(d.valid);
+  EXPECT_EQ(d.code, DecisionCode::kNoUsableEstimate);
+}
+
+TEST(SourceArbiterConsistency, APreviousOutputOlderThanTheTimeoutDecidesNothing) {
+  SourceArbiter arbiter{ArbiterConfig{}};  // timeout_s 0.5
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 1.0, 1.0, 0.0, 0.004, 1.0)).accepted);
+  ASSERT_TRUE(arbiter.decide(1.01).valid);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoVisible, 1.6, 1.0, 15.0, 0.003, 0.5)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 1.6, 1.0, 0.0, 0.004, 1.0)).accepted);
+  const Decision d = arbiter.decide(1.61);
+  EXPECT_FALSE(d.valid);
+  EXPECT_EQ(d.code, DecisionCode::kSourcesDisagree);
+}
+
+TEST(SourceArbiterConsistency, EstimatesFurtherApartThanTheStampToleranceAreNotCompared) {
+  ArbiterConfig c;
+  c.consistency.stamp_tolerance_s = 0.05;
+  SourceArbiter arbiter{c};
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 1.0, 1.0, 0.0, 0.004, 1.0)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoVisible, 1.08, 1.0, 15.0, 0.003, 0.5)).accepted);
+  const Decision d = arbiter.decide(1.09);
+  ASSERT_TRUE(d.valid);
+  EXPECT_EQ(d.source, Source::kMonoVisible);
+  EXPECT_EQ(d.code, DecisionCode::kChosen);
+  EXPECT_EQ(arbiter.consistencyCounts().comparisons, 0u);
+  // The same pair within the tolerance is compared (and, with nothing to decide, refused).
+  c.consistency.stamp_tolerance_s = 0.1;
+  arbiter.reconfigure(c);
+  EXPECT_EQ(arbiter.decide(1.09).code, DecisionCode::kSourcesDisagree);
+  EXPECT_EQ(arbiter.consistencyCounts().comparisons, 1u);
+}
+
+TEST(SourceArbiterConsistency, HonestlyLargeCovariancesPass) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  // The same 15 deg difference, but the visible pose says it is uncertain by 8 deg.
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoVisible, 1.0, 1.0, 15.0, 0.003, 8.0)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 1.0, 1.0, 0.0, 0.004, 1.0)).accepted);
+  const Decision d = arbiter.decide(1.01);
+  ASSERT_TRUE(d.valid) << d.reason;
+  EXPECT_EQ(d.source, Source::kMonoVisible);
+  EXPECT_EQ(d.code, DecisionCode::kChosen);
+  EXPECT_EQ(arbiter.consistencyCounts().comparisons, 1u);
+  EXPECT_EQ(arbiter.consistencyCounts().disagreements, 0u);
+}
+
+TEST(SourceArbiterConsistency, DisabledCheckKeepsTheFormerChoice) {
+  ArbiterConfig c;
+  c.consistency.enabled = false;
+  SourceArbiter arbiter{c};
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoVisible, 1.0, 1.0, 15.0, 0.003, 0.5)).accepted);
+  ASSERT_TRUE(arbiter.offer(posed(Source::kMonoIr, 1.0, 1.0, 0.0, 0.004, 1.0)).accepted);
+  const Decision d = arbiter.decide(1.01);
+  ASSERT_TRUE(d.valid);
+  EXPECT_EQ(d.source, Source::kMonoVisible);
+  EXPECT_EQ(arbiter.consistencyCounts().comparisons, 0u);
+}
+
+TEST(SourceArbiterConsistency, InvalidConsistencySettingsAreRefused) {
+  ArbiterConfig c;
+  c.consistency.gate_chi2_position = -1.0;
+  EXPECT_THROW(SourceArbiter{c}, std::invalid_argument);
+  SourceArbiter arbiter{ArbiterConfig{}};
+  EXPECT_THROW(arbiter.reconfigure(c), std::invalid_argument);
+  EXPECT_GT(arbiter.config().consistency.gate_chi2_position, 0.0);
+}

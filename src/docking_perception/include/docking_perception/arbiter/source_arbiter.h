@@ -5,8 +5,14 @@
 
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
+
+#include "docking_perception/arbiter/consistency.h"
+#include "docking_perception/arbiter/frame_change.h"
 
 namespace docking_perception {
 namespace arbiter {
@@ -29,6 +35,11 @@ struct EstimateSummary {
   double reprojection_error_px{0.0};
   bool values_finite{true};        ///< the pose (and twist, if valid) contain no NaN or infinity
   std::string status;              ///< the estimator's own reason when not valid
+  /// The pose in the arbiter's common (output) frame, for the consistency check; absent: the
+  /// estimate is never compared (and never contradicted).
+  std::optional<PoseWithCovariance3> pose;
+  /// The twist in the common frame when the estimator's is valid (how fast it may move between stamps).
+  std::optional<TwistWithCovariance3> twist;
 };
 
 struct ArbiterConfig {
@@ -40,6 +51,7 @@ struct ArbiterConfig {
   std::uint32_t min_ir_inliers{5};             ///< fewer: the IR estimate is poor (an IR pose has 5 LEDs)
   double min_disparity_range_m{0.0};           ///< disparity nearer than this is never used (0: no limit)
   double max_mono_reprojection_error_px{2.5};  ///< larger: the mono estimate is poor
+  ConsistencyConfig consistency;               ///< cross-source check (consistency.h)
 };
 
 /// Throws std::invalid_argument naming the bad field.
@@ -48,8 +60,36 @@ void validate(const ArbiterConfig& config);
 enum class RangeRegime : std::uint8_t { kUnknown, kFar, kNear };
 const char* regimeName(RangeRegime regime);
 
+/// What the decision is, for code (the reason string is for people). Numbered for the status topic.
+enum class DecisionCode : std::uint8_t {
+  kChosen = 0,                 ///< valid: no comparable source contradicts the chosen one
+  kChosenOverDisagreement = 1, ///< valid: a contradicting source was outvoted (see Resolution)
+  kNoUsableEstimate = 2,       ///< invalid: no source is usable
+  kSourcesDisagree = 3,        ///< invalid: usable sources contradict each other and nothing decides
+};
+const char* decisionCodeName(DecisionCode code);
+
+/// What decided a disagreement between two sources.
+enum class Resolution : std::uint8_t { kNone, kThirdSource, kPreviousOutput };
+const char* resolutionName(Resolution resolution);
+
+/// Counts of the consistency check, each comparison of a pair of estimates counted once (decide()
+/// runs again on every input and on the timer, with the same estimates).
+struct ConsistencyCounts {
+  std::uint64_t comparisons{0};        ///< pairs of estimates tested
+  std::uint64_t disagreements{0};      ///< of them, failed the gate
+  std::uint64_t resolved_by_third_source{0};
+  std::uint64_t resolved_by_previous_output{0};
+  std::uint64_t undecided{0};          ///< published invalid (kSourcesDisagree)
+};
+
 struct Decision {
   bool valid{false};               ///< a source was chosen
+  DecisionCode code{DecisionCode::kNoUsableEstimate};
+  Resolution resolution{Resolution::kNone};  ///< kChosenOverDisagreement / a rejected source: by what
+  /// Sources left out because they contradicted a better-supported one (or, with kSourcesDisagree,
+  /// every source in the undecided contradiction).
+  std::array<bool, kSourceCount> inconsistent{};
   Source source{Source::kDisparity};
   bool is_new{false};              ///< the chosen estimate has not been returned before: publish it
   double stamp_s{0.0};             ///< stamp of the chosen estimate
@@ -82,6 +122,7 @@ class SourceArbiter {
   void reconfigure(const ArbiterConfig& config);
   RangeRegime regime() const { return regime_; }
   std::uint64_t rejectedCount() const { return rejected_; }
+  const ConsistencyCounts& consistencyCounts() const { return counts_; }
   /// The latest accepted estimate of a source, if any.
   const std::optional<EstimateSummary>& latest(Source source) const;
 
@@ -92,12 +133,47 @@ class SourceArbiter {
   std::string poorQualityReason(const EstimateSummary& e) const;
   void updateRegime(double range_m);
 
+  // The cross-source consistency check.
+  enum class Verdict : std::uint8_t { kFirst, kSecond, kUndecided };
+  struct PairOutcome {
+    Source other{Source::kDisparity};
+    ConsistencyTest test;
+    Verdict verdict{Verdict::kUndecided};
+    Resolution resolution{Resolution::kNone};
+  };
+  struct CandidateCheck {
+    std::optional<PairOutcome> lost;       ///< a contradiction the other source won
+    std::optional<PairOutcome> undecided;  ///< a contradiction nothing decides
+    std::vector<PairOutcome> outvoted;     ///< contradictions the candidate won
+  };
+  /// Tests candidate `c` against every other candidate and arbitrates each contradiction.
+  CandidateCheck checkCandidate(Source c, const std::array<bool, kSourceCount>& candidate);
+  /// The candidates in order of preference, each checked against the others; fills `decision`.
+  void chooseConsistent(const std::array<std::string, kSourceCount>& why_not,
+                        const std::array<Source, kSourceCount>& preference, std::string reason, Decision& decision);
+  std::optional<ComparablePose> comparable(Source source) const;
+  /// Tests two sources' latest estimates if both have a pose and their stamps are close enough.
+  std::optional<ConsistencyTest> testPair(Source a, Source b, bool* first_time);
+  /// Which of `first` and `second` (which disagree) the other evidence backs.
+  PairOutcome arbitrate(Source first, Source second, const std::array<bool, kSourceCount>& candidate,
+                        const ConsistencyTest& test);
+  Verdict vote(const ComparablePose& judge, const ComparablePose& first, const ComparablePose& second) const;
+  /// The newest published output older than `before_s` and not older than timeout_s before it.
+  std::optional<ComparablePose> previousOutput(double before_s) const;
+  void recordOutput(Source source);
+  /// True the first time a given pair of estimates is seen (for the counts).
+  bool firstTimeSeen(Source a, Source b);
+
   ArbiterConfig config_;
   std::array<std::optional<EstimateSummary>, kSourceCount> latest_{};
   RangeRegime regime_{RangeRegime::kUnknown};
   std::optional<double> last_output_stamp_s_;
   std::optional<Source> last_output_source_;
   std::uint64_t rejected_{0};
+  std::deque<ComparablePose> outputs_;  ///< published outputs with a pose, newest last, within timeout_s
+  /// Per unordered pair of sources: the stamps last counted.
+  std::array<std::optional<std::pair<double, double>>, kSourceCount> counted_pairs_{};
+  ConsistencyCounts counts_;
 };
 
 }  // namespace arbiter

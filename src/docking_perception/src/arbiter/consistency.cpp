@@ -1,0 +1,85 @@
+#include "docking_perception/arbiter/consistency.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Cholesky>
+
+namespace docking_perception {
+namespace arbiter {
+namespace {
+
+void requirePositive(double value, const char* name) {
+  if (!std::isfinite(value) || value <= 0.0) {
+    throw std::invalid_argument(std::string("consistency_") + name + " must be a positive number");
+  }
+}
+
+void requireNonNegative(double value, const char* name) {
+  if (!std::isfinite(value) || value < 0.0) {
+    throw std::invalid_argument(std::string("consistency_") + name + " must be a number >= 0");
+  }
+}
+
+/// Rotation taking `from` to `to`, as a rotation vector in the common frame (the covariances'
+/// convention: a perturbation about the frame's axes, q_to = exp(d) q_from). Shortest way round.
+Eigen::Vector3d rotationDifference(const Eigen::Quaterniond& from, const Eigen::Quaterniond& to) {
+  Eigen::Quaterniond delta = to * from.conjugate();
+  if (delta.w() < 0.0) delta.coeffs() *= -1.0;
+  const Eigen::AngleAxisd axis_angle(delta.normalized());
+  return axis_angle.angle() * axis_angle.axis();
+}
+
+}  // namespace
+
+void validate(const ConsistencyConfig& c) {
+  requirePositive(c.gate_chi2_pose, "gate_chi2_pose");
+  requirePositive(c.gate_chi2_position, "gate_chi2_position");
+  requireNonNegative(c.stamp_tolerance_s, "stamp_tolerance_s");
+  requireNonNegative(c.min_speed_mps, "min_speed_mps");
+  requireNonNegative(c.min_rate_radps, "min_rate_radps");
+  // Positive: the test's covariance stays invertible whatever the sources report.
+  requirePositive(c.mount_sigma_m, "mount_sigma_m");
+  requirePositive(c.mount_sigma_rad, "mount_sigma_rad");
+}
+
+std::optional<ConsistencyTest> compare(const ComparablePose& a, const ComparablePose& b,
+                                       const ConsistencyConfig& config) {
+  ConsistencyTest test;
+  test.dof = a.has_orientation && b.has_orientation ? 6 : 3;
+  test.gate = test.dof == 6 ? config.gate_chi2_pose : config.gate_chi2_position;
+  test.dt_s = std::abs(a.stamp_s - b.stamp_s);
+
+  // How far the target may have moved between the two stamps: the faster of the two estimates'
+  // own velocities, never less than the floors (a still estimate may be wrong about being still).
+  const double speed = std::max({a.speed_mps, b.speed_mps, config.min_speed_mps});
+  const double rate = std::max({a.rate_radps, b.rate_radps, config.min_rate_radps});
+  const double position_var = std::pow(speed * test.dt_s, 2) + std::pow(config.mount_sigma_m, 2);
+  const double rotation_var = std::pow(rate * test.dt_s, 2) + std::pow(config.mount_sigma_rad, 2);
+
+  const int n = test.dof;
+  const Eigen::MatrixXd covariance = a.pose.covariance.topLeftCorner(n, n) + b.pose.covariance.topLeftCorner(n, n);
+  if (!covariance.allFinite()) return std::nullopt;
+  Eigen::MatrixXd s = covariance;
+  s.topLeftCorner<3, 3>().diagonal().array() += position_var;
+  if (n == 6) s.bottomRightCorner<3, 3>().diagonal().array() += rotation_var;
+
+  Eigen::VectorXd difference(n);
+  difference.head<3>() = b.pose.position - a.pose.position;
+  if (n == 6) difference.tail<3>() = rotationDifference(a.pose.orientation, b.pose.orientation);
+  if (!difference.allFinite()) return std::nullopt;
+
+  // A source's covariance may be slightly indefinite (rounding): LDLT still solves it, and the added
+  // floors keep it invertible; a negative result means a broken covariance, not agreement.
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(s);
+  if (ldlt.info() != Eigen::Success) return std::nullopt;
+  test.chi2 = difference.dot(ldlt.solve(difference));
+  if (!std::isfinite(test.chi2) || test.chi2 < 0.0) return std::nullopt;
+  test.agree = test.chi2 <= test.gate;
+  return test;
+}
+
+}  // namespace arbiter
+}  // namespace docking_perception
