@@ -14,7 +14,10 @@ set(MONO_CORE_SOURCES
   src/mono/dark_dot_locator.cpp
   src/mono/velocity_estimators.cpp
   src/mono/mono_pose_estimator.cpp
-  src/mono/debug_drawing.cpp)
+  src/mono/debug_drawing.cpp
+  src/mono/reject_reason.cpp
+  src/mono/pose_consistency.cpp
+  src/mono/face_search.cpp)
 
 add_library(docking_perception_mono_core ${MONO_CORE_SOURCES})
 target_include_directories(docking_perception_mono_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR})

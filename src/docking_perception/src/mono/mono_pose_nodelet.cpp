@@ -230,6 +230,7 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
   if (!camera.isValid(&reason)) {
     camera_error_ = "camera_info on " + image_topic_ + ": " + reason;
     result.status = camera_error_;
+    result.reject_reason = mono::RejectReason::kBadInput;
     NODELET_WARN_THROTTLE(5.0, "mono_pose: %s", camera_error_.c_str());
     publishEstimate(image->header, result);
     return;
@@ -247,6 +248,7 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
   } catch (const std::exception& e) {
     camera_error_ = e.what();
     result.status = camera_error_;
+    result.reject_reason = mono::RejectReason::kBadInput;
     NODELET_ERROR_THROTTLE(5.0, "mono_pose: %s", e.what());
     publishEstimate(image->header, result);
     return;
@@ -260,6 +262,7 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
                                                  : sensor_msgs::image_encodings::BGR8);
   } catch (const cv_bridge::Exception& e) {
     result.status = std::string("cannot convert the image: ") + e.what();
+    result.reject_reason = mono::RejectReason::kBadInput;
     publishEstimate(image->header, result);
     return;
   }
@@ -321,6 +324,12 @@ void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono
   msg.processing_time_ms = result.processing_time_ms;
   msg.solver = result.solver;
   msg.status = result.valid ? std::string() : result.status;
+  // The message's REJECT_* constants mirror mono::RejectReason, in the same order.
+  static_assert(docking_msgs::TargetEstimate::REJECT_APPEARANCE == static_cast<int>(mono::RejectReason::kAppearance) &&
+                    docking_msgs::TargetEstimate::REJECT_DOT_APPEARANCE ==
+                        static_cast<int>(mono::RejectReason::kDotAppearance),
+                "TargetEstimate REJECT_* and mono::RejectReason differ");
+  msg.reject_reason = static_cast<uint8_t>(result.valid ? mono::RejectReason::kNone : result.reject_reason);
   estimate_publisher_.publish(msg);
 }
 
