@@ -16,7 +16,10 @@ set(MONO_CORE_SOURCES
   src/mono/mono_pose_estimator.cpp
   src/mono/debug_drawing.cpp
   src/mono/apriltag_pose.cpp
-  src/mono/inner_pattern_detector.cpp)
+  src/mono/inner_pattern_detector.cpp
+  src/mono/reject_reason.cpp
+  src/mono/pose_consistency.cpp
+  src/mono/face_search.cpp)
 
 # AprilTag 3 (Debian's libapriltag-dev, pkg-config `apriltag`): the inner pattern and the comparison tools.
 find_package(PkgConfig REQUIRED)

@@ -129,7 +129,8 @@ void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
                        params.use_brisk_detector != params_.use_brisk_detector ||
                        params.fast_threshold != params_.fast_threshold ||
                        params.max_model_keypoints_per_level != params_.max_model_keypoints_per_level ||
-                       params.model_widths_px != params_.model_widths_px;
+                       params.model_widths_px != params_.model_widths_px ||
+                       params.blurred_model_sigma_px != params_.blurred_model_sigma_px;
   params_ = params;
   if (rebuild) {
     brisk_ = cv::BRISK::create(params_.brisk_threshold, params_.brisk_octaves);
@@ -144,9 +145,35 @@ void FeatureMatcher::detect(const cv::Mat& image, std::vector<cv::KeyPoint>* key
   } else {
     cv::FAST(image, *keypoints, params_.fast_threshold, true);
   }
-  if (max_keypoints > 0 && static_cast<int>(keypoints->size()) > max_keypoints) {
-    cv::KeyPointsFilter::retainBest(*keypoints, max_keypoints);
+  if (max_keypoints <= 0 || static_cast<int>(keypoints->size()) <= max_keypoints) return;
+  const int grid = params_.keypoint_grid;
+  if (grid > 1) {
+    // The strongest of each cell (an equal share of the budget), then the strongest overall if the
+    // shares of sparse cells left room.
+    std::vector<std::vector<cv::KeyPoint>> cells(static_cast<size_t>(grid * grid));
+    for (const cv::KeyPoint& kp : *keypoints) {
+      const int cx = std::min(grid - 1, static_cast<int>(kp.pt.x * grid / image.cols));
+      const int cy = std::min(grid - 1, static_cast<int>(kp.pt.y * grid / image.rows));
+      cells[static_cast<size_t>(cy * grid + cx)].push_back(kp);
+    }
+    const int share = std::max(1, max_keypoints / (grid * grid));
+    std::vector<cv::KeyPoint> kept;
+    std::vector<cv::KeyPoint> rest;
+    for (std::vector<cv::KeyPoint>& cell : cells) {
+      std::sort(cell.begin(), cell.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
+      const size_t n = std::min(cell.size(), static_cast<size_t>(share));
+      kept.insert(kept.end(), cell.begin(), cell.begin() + static_cast<std::ptrdiff_t>(n));
+      rest.insert(rest.end(), cell.begin() + static_cast<std::ptrdiff_t>(n), cell.end());
+    }
+    const int room = max_keypoints - static_cast<int>(kept.size());
+    if (room > 0 && !rest.empty()) {
+      if (static_cast<int>(rest.size()) > room) cv::KeyPointsFilter::retainBest(rest, room);
+      kept.insert(kept.end(), rest.begin(), rest.end());
+    }
+    *keypoints = kept;
+    return;
   }
+  cv::KeyPointsFilter::retainBest(*keypoints, max_keypoints);
 }
 
 bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason) {
@@ -161,9 +188,14 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
   }
   std::vector<int> widths = params_.model_widths_px;
   std::sort(widths.rbegin(), widths.rend());
+  // The sharp levels, then (blurred_model_sigma_px > 0) the same widths blurred: the descriptors a
+  // defocused or smeared face gives. Each set's rows are contiguous.
+  const int sets = params_.blurred_model_sigma_px > 0.0 ? 2 : 1;
+  for (int set = 0; set < sets; ++set)
   for (const int width : widths) {
     if (width <= 16) continue;
     ModelLevel level;
+    level.blurred = set == 1;
     level.width_px = width;
     level.scale = static_cast<double>(width) / texture_gray.cols;
     if (std::abs(level.scale - 1.0) < 1e-3) {
@@ -171,6 +203,11 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
     } else {
       cv::resize(texture_gray, level.image, cv::Size(), level.scale, level.scale,
                  level.scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+    }
+    if (level.blurred) {
+      cv::Mat blurred;
+      cv::GaussianBlur(level.image, blurred, cv::Size(0, 0), params_.blurred_model_sigma_px);
+      level.image = blurred;
     }
     std::vector<cv::KeyPoint> keypoints;
     cv::Mat descriptors;
@@ -205,6 +242,7 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
                                        cv::norm(match->face_outline[2] - match->face_outline[3]));
   const ModelLevel* nearest = &levels_.front();
   for (const ModelLevel& candidate : levels_) {
+    if (candidate.blurred) continue;
     if (std::abs(std::log(candidate.width_px / apparent_width)) < std::abs(std::log(nearest->width_px / apparent_width))) {
       nearest = &candidate;
     }
@@ -237,6 +275,7 @@ bool FeatureMatcher::refinePass(const cv::Mat& gray, const std::vector<cv::Point
   const double apparent_width = 0.5 * (cv::norm(outline[1] - outline[0]) + cv::norm(outline[2] - outline[3]));
   const ModelLevel* level = &levels_.front();
   for (const ModelLevel& candidate : levels_) {
+    if (candidate.blurred) continue;
     if (std::abs(std::log(candidate.width_px / apparent_width)) < std::abs(std::log(level->width_px / apparent_width))) {
       level = &candidate;
     }
@@ -311,7 +350,8 @@ bool FeatureMatcher::refinePass(const cv::Mat& gray, const std::vector<cv::Point
   return true;
 }
 
-FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, double expected_face_width_px) const {
+FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, double expected_face_width_px,
+                                int pyramid_level, bool blurred_model) const {
   FaceMatch result;
   if (model_descriptors_.empty()) {
     result.status = "no model features";
@@ -330,7 +370,13 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
   std::vector<cv::KeyPoint> keypoints;
   // A continuous copy: BRISK's descriptor code mis-reads sub-matrix views (measured: almost no
   // matches on a region view, normal matches on its copy).
-  const cv::Mat view = roi == full ? gray : gray(roi).clone();
+  cv::Mat view = roi == full ? gray : gray(roi).clone();
+  const bool half = pyramid_level > 0;
+  result.pyramid_level = half ? 1 : 0;
+  if (half) {
+    cv::pyrDown(view, view);
+    expected_face_width_px *= 0.5;
+  }
   detect(view, &keypoints, params_.max_image_keypoints);
   cv::Mat descriptors;
   brisk_->compute(view, keypoints, descriptors);
@@ -340,20 +386,25 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
     return result;
   }
 
-  // Model rows to search: all levels, or those near the expected apparent width.
+  // Model rows to search: the levels of the requested set (sharp / blurred), all of them or those near
+  // the expected apparent width.
+  const bool use_blurred = blurred_model && hasBlurredModel();
+  result.blurred_model = use_blurred;
   int first_row = 0;
-  int row_count = model_descriptors_.rows;
-  if (expected_face_width_px > 0.0) {
+  int row_count = 0;
+  for (const bool by_width : {expected_face_width_px > 0.0, false}) {
     int begin = -1;
     int end = -1;
     for (const ModelLevel& level : levels_) {
-      if (std::abs(std::log(level.width_px / expected_face_width_px)) > std::log(1.6)) continue;
+      if (level.blurred != use_blurred) continue;
+      if (by_width && std::abs(std::log(level.width_px / expected_face_width_px)) > std::log(1.6)) continue;
       if (begin < 0) begin = level.first_row;
       end = level.first_row + level.row_count;
     }
     if (begin >= 0) {
       first_row = begin;
       row_count = end - begin;
+      break;
     }
   }
   const std::vector<HammingPair> pairs = hammingKnn2(descriptors, model_descriptors_, first_row, row_count);
@@ -363,7 +414,8 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
     const HammingPair& pair = pairs[q];
     if (pair.best_index < 0 || pair.second_distance >= (1 << 30)) continue;
     if (pair.best_distance >= params_.ratio * pair.second_distance) continue;
-    const cv::Point2f& p = keypoints[q].pt;
+    // Half resolution: pyrDown's pixel x is its 5-tap kernel centred on full-resolution pixel 2x.
+    const cv::Point2f p = half ? 2.0f * keypoints[q].pt : keypoints[q].pt;
     texture_points.push_back(model_points_[static_cast<size_t>(pair.best_index)]);
     image_points.emplace_back(p.x + roi.x, p.y + roi.y);
   }
@@ -376,7 +428,8 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
   }
   std::vector<unsigned char> inlier_mask;
   const cv::Mat homography = cv::findHomography(texture_points, image_points, cv::RANSAC,
-                                                params_.ransac_threshold_px, inlier_mask, 2000, 0.995);
+                                                params_.ransac_threshold_px * (half ? 2.0 : 1.0), inlier_mask, 2000,
+                                                0.995);
   if (homography.empty()) {
     result.status = "no homography";
     return result;

@@ -30,6 +30,36 @@ LedPatternDetector::LedPatternDetector(const MarkerPoints& markers, const LedDet
   expected_handedness_ = -arm_a.cross(arm_b).dot(Eigen::Vector3d::UnitX()) > 0.0 ? 1.0 : -1.0;
 }
 
+namespace {
+
+// Ratio of the principal axes (square root of the second-moment eigenvalues) of one labelled component;
+// a round LED spot gives ~1, an LED merged with a reflection beside it 2 or more.
+double componentElongation(const cv::Mat& labels, int label, const cv::Rect& box) {
+  double n = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+  for (int y = box.y; y < box.y + box.height; ++y) {
+    const int* row = labels.ptr<int>(y);
+    for (int x = box.x; x < box.x + box.width; ++x) {
+      if (row[x] != label) continue;
+      n += 1.0;
+      sx += x;
+      sy += y;
+      sxx += static_cast<double>(x) * x;
+      syy += static_cast<double>(y) * y;
+      sxy += static_cast<double>(x) * y;
+    }
+  }
+  if (n < 2.0) return 1.0;
+  // Pixel extent (1/12 per axis) keeps a 1-2 pixel blob from reading as a line.
+  const double cxx = sxx / n - (sx / n) * (sx / n) + 1.0 / 12.0;
+  const double cyy = syy / n - (sy / n) * (sy / n) + 1.0 / 12.0;
+  const double cxy = sxy / n - (sx / n) * (sy / n);
+  const double mean = 0.5 * (cxx + cyy);
+  const double spread = std::sqrt(0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy);
+  return std::sqrt((mean + spread) / std::max(1e-9, mean - spread));
+}
+
+}  // namespace
+
 std::vector<LedBlob> LedPatternDetector::detectBlobs(const cv::Mat& gray, const cv::Rect& roi_in) const {
   std::vector<LedBlob> blobs;
   if (gray.empty() || gray.type() != CV_8UC1) return blobs;
@@ -86,6 +116,8 @@ std::vector<LedBlob> LedPatternDetector::detectBlobs(const cv::Mat& gray, const 
     // crosses the threshold is not.
     if (peak - background < params_.min_contrast) continue;
     LedBlob blob;
+    blob.elongation = componentElongation(labels, label, cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT),
+                                                                  stats.at<int>(label, cv::CC_STAT_TOP), w, h));
     blob.centroid = {sum_x / sum_w + roi.x, sum_y / sum_w + roi.y};
     blob.area_px = area;
     blob.peak = peak;

@@ -82,6 +82,8 @@ std::string validateParams(const MonoPoseParams& p) {
       p.features.refine_passes >= 1 && p.features.refine_passes <= 5 ? "" : "refine_passes must be 1..5",
       p.features.fast_threshold > 0 ? "" : "fast_threshold must be positive",
       p.features.max_model_keypoints_per_level >= 10 ? "" : "max_model_keypoints_per_level must be at least 10",
+      p.features.blurred_model_sigma_px >= 0.0 && p.features.blurred_model_sigma_px <= 5.0 ? "" : "blurred_model_sigma_px must be 0..5",
+      p.features.keypoint_grid >= 0 && p.features.keypoint_grid <= 16 ? "" : "keypoint_grid must be 0..16",
       p.features.min_face_area_px >= 0.0 ? "" : "min_face_area_px must not be negative",
       p.features.min_correlation >= -1.0 && p.features.min_correlation <= 1.0 ? "" : "min_correlation must be in [-1, 1]",
       p.leds.min_fill_ratio >= 0.0 && p.leds.min_fill_ratio <= 1.0 ? "" : "led_min_fill_ratio must be in [0, 1]",
@@ -91,6 +93,10 @@ std::string validateParams(const MonoPoseParams& p) {
   for (const std::string& check : checks) {
     if (!check.empty()) return check;
   }
+  if (!(p.region_hint_max_age_s >= 0.0)) return "region_hint_max_age_s must not be negative";
+  if (!(p.region_hint_radius_m > 0.0)) return "region_hint_radius_m must be positive";
+  const std::string consistency = validateConsistencyParams(p.consistency);
+  if (!consistency.empty()) return consistency;
   for (const int width : p.features.model_widths_px) {
     if (width < 32) return "model_widths_px entries must be at least 32";
   }
@@ -118,6 +124,7 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
     if (!matcher_.buildModel(model.textureGray(), &reason)) throw std::invalid_argument(reason);
     if (model.hasInnerPattern()) inner_pattern_ = std::make_unique<InnerPatternDetector>(model.innerPattern(), params.inner_pattern);
   }
+  appearance_ = FaceAppearance(model);
 }
 
 void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
@@ -148,9 +155,30 @@ void MonoPoseEstimator::setCamera(const CameraIntrinsics& camera) {
   camera_ = camera;
 }
 
+void MonoPoseEstimator::setRegionHint(const cv::Rect& region, double stamp_s) {
+  hint_region_ = region & cv::Rect(0, 0, camera_.width, camera_.height);
+  hint_stamp_s_ = stamp_s;
+}
+
+void MonoPoseEstimator::setPositionHint(const Eigen::Vector3d& position_camera, double stamp_s) {
+  const double z = position_camera.z();
+  if (!position_camera.allFinite() || !(z > params_.min_range_m)) {
+    setRegionHint(cv::Rect(), stamp_s);
+    return;
+  }
+  const double u = camera_.cx + camera_.fx * position_camera.x() / z;
+  const double v = camera_.cy + camera_.fy * position_camera.y() / z;
+  const double half_u = camera_.fx * params_.region_hint_radius_m / z + params_.tracking_margin_px;
+  const double half_v = camera_.fy * params_.region_hint_radius_m / z + params_.tracking_margin_px;
+  const cv::Rect region(cv::Point(static_cast<int>(std::floor(u - half_u)), static_cast<int>(std::floor(v - half_v))),
+                        cv::Point(static_cast<int>(std::ceil(u + half_u)), static_cast<int>(std::ceil(v + half_v))));
+  setRegionHint(region, stamp_s);
+}
+
 void MonoPoseEstimator::reset() {
   tracking_ = false;
   last_valid_range_m_ = INFINITY;
+  preferred_level_ = 0;
   filter_.reset();
   frame_difference_.reset();
 }
@@ -201,6 +229,7 @@ cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_p
 }
 
 bool MonoPoseEstimator::checkPose(const PoseWithCovariance& pose, std::string* reason) const {
+  // Every failure here is an implausible pose (RejectReason::kImplausiblePose).
   const double range = pose.translation.norm();
   if (!std::isfinite(range) || range < params_.min_range_m || range > params_.max_range_m) {
     *reason = "range " + std::to_string(range) + " m outside [min_range_m, max_range_m]";
@@ -221,7 +250,8 @@ bool MonoPoseEstimator::checkPose(const PoseWithCovariance& pose, std::string* r
 }
 
 bool MonoPoseEstimator::solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result,
-                                       std::string* reason) const {
+                                       std::string* reason, RejectReason* code) const {
+  *code = RejectReason::kSolverFailed;
   FivePointSolution solution;
   Matrix6d covariance;
   // First the pose (for the residual), then the covariance scaled by the residual variance (5 points,
@@ -232,6 +262,7 @@ bool MonoPoseEstimator::solveFivePoint(const MarkerPixels& pixels, MonoPoseResul
   std::string covariance_note;
   five_point_solver_.solveWithCovariance(camera_, pixels, variance, &solution, &covariance, &covariance_note);
   if (solution.reprojection_rms_px > params_.max_reprojection_px) {
+    *code = RejectReason::kReprojection;
     *reason = "5-point reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large";
     return false;
   }
@@ -239,6 +270,7 @@ bool MonoPoseEstimator::solveFivePoint(const MarkerPixels& pixels, MonoPoseResul
   pose.rotation = solution.rotation;
   pose.translation = solution.translation;
   pose.covariance = covariance;
+  *code = RejectReason::kImplausiblePose;
   if (!checkPose(pose, reason)) return false;
   result->pose = pose;
   result->reprojection_error_px = solution.reprojection_rms_px;
@@ -247,16 +279,15 @@ bool MonoPoseEstimator::solveFivePoint(const MarkerPixels& pixels, MonoPoseResul
 
 bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px,
                                         MonoPoseResult* result) {
-  FaceMatch match;
-  if (region.area() > 0) {
-    match = matcher_.match(gray, region, face_width_px);
-    result->used_tracking_region = match.found;
-    result->search_region = region;
-  }
-  if (!match.found) {
-    match = matcher_.match(gray);
-    result->search_region = cv::Rect(0, 0, gray.cols, gray.rows);
-  }
+  std::vector<SearchRegion> priors = {{region, face_width_px}};
+  const bool hint_fresh = hint_region_.area() > 0 && std::abs(result->stamp_s - hint_stamp_s_) <= params_.region_hint_max_age_s;
+  if (hint_fresh && region.area() <= 0) priors.push_back({hint_region_, 0.0});
+  const FaceSearchOutcome search = searchFace(matcher_, gray, priors, params_.use_half_resolution, &preferred_level_);
+  const FaceMatch& match = search.match;
+  result->used_tracking_region = match.found && search.prior_index == 0;
+  result->used_region_hint = match.found && search.prior_index == 1;
+  result->search_region = search.region;
+  result->pyramid_level = match.pyramid_level;
   result->feature_matches = match.matches;
   result->feature_inliers = match.inliers;
   result->matched_points = match.matched_image_points;
@@ -264,6 +295,7 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
   result->face_outline = match.face_outline;
   if (!match.found) {
     result->status = match.status;
+    result->reject_reason = RejectReason::kNotFound;
     return false;
   }
 
@@ -281,6 +313,7 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
     if (!pnp_solver_.solve(camera_, model_points, image_points, previousRotation(result->stamp_s, &previous_storage),
                            &solution, &reason)) {
       result->status = reason;
+      result->reject_reason = RejectReason::kSolverFailed;
       return false;
     }
     result->pnp_ambiguous = solution.ambiguous;
@@ -288,18 +321,22 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
     result->reprojection_error_px = solution.reprojection_rms_px;
     if (solution.reprojection_rms_px > params_.max_reprojection_px) {
       result->status = "PnP reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large";
+      result->reject_reason = RejectReason::kReprojection;
       return false;
     }
     if (!checkPose(solution.pose, &reason)) {
       result->status = reason;
+      result->reject_reason = RejectReason::kImplausiblePose;
       return false;
     }
     result->pose = solution.pose;
-    return true;
+    return vetVisiblePose(gray, match, model_points, &solution, result);
   }
 
   // paper_5point: the printed dots, where the homography says they are.
   MarkerPixels pixels;
+  MarkerPixels predicted;
+  double dot_radius_px = 0.0;
   for (int i = 0; i < kMarkerCount; ++i) {
     const Eigen::Vector3d& marker = model_.markers()[static_cast<size_t>(i)];
     const cv::Point2d texture_pixel = model_.pointToTexturePixel(marker);
@@ -312,23 +349,37 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
         std::max((applyHomography(match.homography, {texture_edge.x, texture_edge.y}) - centre).norm(),
                  (applyHomography(match.homography, {texture_edge_z.x, texture_edge_z.y}) - centre).norm());
     Eigen::Vector2d located;
+    predicted[static_cast<size_t>(i)] = centre;
+    dot_radius_px = std::max(dot_radius_px, radius_px);
     if (!dot_locator_.locate(gray, centre, radius_px, &located, &reason)) {
       result->status = "marker " + std::to_string(i) + ": " + reason;
+      result->reject_reason = RejectReason::kDotAppearance;
       return false;
     }
     pixels[static_cast<size_t>(i)] = located;
   }
   result->marker_pixels.assign(pixels.begin(), pixels.end());
   result->pose_points = kMarkerCount;
-  if (!solveFivePoint(pixels, result, &reason)) {
+  RejectReason code = RejectReason::kNone;
+  if (!solveFivePoint(pixels, result, &reason, &code)) {
     result->status = reason;
+    result->reject_reason = code;
     return false;
   }
-  return true;
+  std::vector<Eigen::Vector3d> model_points;
+  std::vector<Eigen::Vector2d> image_points;
+  for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
+    model_points.push_back(model_.texturePixelToPoint(match.inlier_texture_points[i]));
+    image_points.emplace_back(match.inlier_image_points[i].x, match.inlier_image_points[i].y);
+  }
+  if (!vetFivePointPose(predicted, pixels, dot_radius_px, model_points, image_points, result)) return false;
+  const std::vector<Eigen::Vector3d> markers(model_.markers().begin(), model_.markers().end());
+  return vetVisiblePose(gray, match, markers, nullptr, result);
 }
 
 bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result) {
   std::string reason;
+  bool blob_rejected = false;
   auto attempt = [&](const cv::Rect& search) -> bool {
     const std::vector<LedBlob> blobs = led_detector_.detectBlobs(gray, search);
     result->feature_matches = static_cast<int>(blobs.size());
@@ -338,9 +389,14 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
     const int tries = std::min(static_cast<int>(candidates.size()), params_.max_pattern_candidates);
     for (int c = 0; c < tries; ++c) {
       const MarkerPixels& pixels = candidates[static_cast<size_t>(c)].pixels;
+      if (!vetLedBlobs(blobs, candidates[static_cast<size_t>(c)], &reason)) {
+        blob_rejected = true;
+        continue;
+      }
       // The 5-point solve also validates the identification (scale consistency, face orientation).
       MonoPoseResult trial = *result;
-      if (!solveFivePoint(pixels, &trial, &reason)) continue;
+      RejectReason code = RejectReason::kNone;
+      if (!solveFivePoint(pixels, &trial, &reason, &code)) continue;
       if (params_.solver == PoseSolverType::kPnp) {
         const std::vector<Eigen::Vector3d> model(model_.markers().begin(), model_.markers().end());
         const std::vector<Eigen::Vector2d> image(pixels.begin(), pixels.end());
@@ -353,6 +409,8 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
         trial.pose = solution.pose;
         trial.reprojection_error_px = solution.reprojection_rms_px;
         trial.pnp_ambiguous = solution.ambiguous;
+        trial.pose.covariance = honestCovariance(camera_, trial.pose, model, trial.reprojection_error_px,
+                                                 params_.pnp.min_pixel_sigma, 0.0, params_.consistency);
       }
       *result = trial;
       result->feature_inliers = kMarkerCount;
@@ -372,6 +430,7 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
   result->search_region = cv::Rect(0, 0, gray.cols, gray.rows);
   if (attempt(cv::Rect())) return true;
   result->status = reason.empty() ? "LED pattern not found" : reason;
+  result->reject_reason = blob_rejected ? RejectReason::kLedBlobShape : RejectReason::kNotFound;
   return false;
 }
 
@@ -453,6 +512,7 @@ void MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* r
     if (!(apart_m <= params_.inner_pattern.cross_check_position_m + 3.0 * tag_position_sigma) ||
         !(apart_rad <= params_.inner_pattern.cross_check_angle_rad + 3.0 * tag_angle_sigma)) {
       result->valid = false;
+      result->reject_reason = RejectReason::kSolverDisagreement;
       result->status = "face pose and inner pattern disagree by " + std::to_string(apart_m * 1000.0) + " mm, " +
                        std::to_string(apart_rad * 180.0 / M_PI) + " deg";
       return;
@@ -489,6 +549,7 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
     result.status = "unsupported image type (need 8-bit gray or BGR)";
   }
 
+  if (gray.empty()) result.reject_reason = RejectReason::kBadInput;
   if (!gray.empty()) {
     double face_width_px = 0.0;
     const cv::Rect region = predictedRegion(stamp_s, &face_width_px);
@@ -498,6 +559,7 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   }
   if (result.valid) {
     result.status.clear();
+    result.reject_reason = RejectReason::kNone;
     result.range_m = result.pose.translation.norm();
     updateVelocities(&result);
     tracking_ = true;
@@ -510,6 +572,116 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   }
   result.processing_time_ms = threadCpuTimeMs() - start_ms;
   return result;
+}
+
+bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& match,
+                                       const std::vector<Eigen::Vector3d>& model_points, const PlanarPnpSolution* pnp,
+                                       MonoPoseResult* result) const {
+  const ConsistencyParams& c = params_.consistency;
+  auto reject = [result](RejectReason code, const std::string& text) {
+    result->reject_reason = code;
+    result->status = text;
+    return false;
+  };
+  result->inlier_spread = inlierSpread(match.inlier_texture_points, model_.textureGray().size());
+  if (result->inlier_spread < c.min_inlier_spread) {
+    return reject(RejectReason::kInlierSpread, "pose points cover only " + std::to_string(result->inlier_spread) +
+                                                   " of the face (min_inlier_spread)");
+  }
+  // IPPE's flag compares raw RMS values; with a hundred refined points an alternative at 0.4 px against
+  // 0.1 px is clearly worse. Ambiguous here: the alternative's extra squared residual, in units of the
+  // pixel variance, is below ambiguity_chi2 (both fit within the noise) and no previous pose decided.
+  double ambiguity_deg = 0.0;
+  if (pnp != nullptr && pnp->has_alternative && !pnp->chosen_by_previous_pose) {
+    const double n = static_cast<double>(model_points.size());
+    const double sigma = std::max(result->reprojection_error_px, params_.pnp.min_pixel_sigma);
+    const double excess = n * (pnp->alternative_rms_px * pnp->alternative_rms_px -
+                               result->reprojection_error_px * result->reprojection_error_px) / (sigma * sigma);
+    if (excess < c.ambiguity_chi2) {
+      ambiguity_deg = rotationAngleBetween(pnp->alternative_rotation, result->pose.rotation) * 180.0 / M_PI;
+    }
+    if (ambiguity_deg > c.max_ambiguity_deg) {
+      return reject(RejectReason::kAmbiguous, "IPPE's two poses fit alike and differ by " +
+                                                  std::to_string(ambiguity_deg) + " deg (max_ambiguity_deg)");
+    }
+  }
+  const AppearanceScore appearance = appearance_.score(gray, camera_, result->pose);
+  result->appearance_ncc = appearance.median_ncc;
+  result->blur_sigma_px = appearance.blur_sigma_px;
+  if (c.min_appearance_ncc >= 0.0 && appearance.median_ncc < c.min_appearance_ncc) {
+    return reject(RejectReason::kAppearance, "the face does not look like the model at this pose (NCC " +
+                                                 std::to_string(appearance.median_ncc) + ", min_appearance_ncc)");
+  }
+  if (pnp != nullptr) {
+    result->pose.covariance = honestCovariance(camera_, result->pose, model_points, result->reprojection_error_px,
+                                               params_.pnp.min_pixel_sigma, appearance.blur_sigma_px, c);
+    if (ambiguity_deg > 0.0) {
+      addAlternative(result->pose, pnp->alternative_rotation, pnp->alternative_translation, &result->pose.covariance);
+    }
+  } else {
+    // The 5-point covariance (its own Jacobian) scaled for blur, plus the floor.
+    const double blur_factor = 1.0 + c.blur_gain * appearance.blur_sigma_px;
+    result->pose.covariance *= blur_factor * blur_factor;
+    const double position_floor = c.position_floor_fraction * result->pose.translation.norm();
+    const double rotation_floor = c.rotation_floor_deg * M_PI / 180.0;
+    for (int i = 0; i < 3; ++i) {
+      result->pose.covariance(i, i) += position_floor * position_floor;
+      result->pose.covariance(3 + i, 3 + i) += rotation_floor * rotation_floor;
+    }
+  }
+  return true;
+}
+
+bool MonoPoseEstimator::vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
+                                         const std::vector<Eigen::Vector3d>& model_points,
+                                         const std::vector<Eigen::Vector2d>& image_points,
+                                         MonoPoseResult* result) const {
+  const ConsistencyParams& c = params_.consistency;
+  // A dot that is not where the face's homography puts it is something else (a card edge, a shadow).
+  const double max_offset = std::max(1.5, c.max_dot_offset_factor * radius_px);
+  for (int i = 0; i < kMarkerCount; ++i) {
+    const double offset = (located[static_cast<size_t>(i)] - predicted[static_cast<size_t>(i)]).norm();
+    if (offset > max_offset) {
+      result->reject_reason = RejectReason::kDotAppearance;
+      result->status = "marker " + std::to_string(i) + " found " + std::to_string(offset) +
+                       " px from where the face puts it (max_dot_offset_factor)";
+      return false;
+    }
+  }
+  PlanarPnpSolution pnp;
+  std::string reason;
+  if (!pnp_solver_.solve(camera_, model_points, image_points, &result->pose.rotation, &pnp, &reason)) return true;
+  const double disagreement_deg = rotationAngleBetween(pnp.pose.rotation, result->pose.rotation) * 180.0 / M_PI;
+  if (disagreement_deg > c.max_solver_disagreement_deg) {
+    result->reject_reason = RejectReason::kSolverDisagreement;
+    result->status = "the 5-point pose and the face's PnP pose differ by " + std::to_string(disagreement_deg) +
+                     " deg (max_solver_disagreement_deg)";
+    return false;
+  }
+  return true;
+}
+
+bool MonoPoseEstimator::vetLedBlobs(const std::vector<LedBlob>& blobs, const LedPatternCandidate& candidate,
+                                    std::string* reason) const {
+  std::vector<double> areas;
+  for (const int index : candidate.blob_indices) areas.push_back(blobs[static_cast<size_t>(index)].area_px);
+  std::vector<double> sorted = areas;
+  std::sort(sorted.begin(), sorted.end());
+  const double median_area = sorted[sorted.size() / 2];
+  for (size_t i = 0; i < candidate.blob_indices.size(); ++i) {
+    const LedBlob& blob = blobs[static_cast<size_t>(candidate.blob_indices[i])];
+    if (blob.area_px > params_.consistency.max_led_area_ratio * median_area) {
+      *reason = "LED " + std::to_string(i) + " blob is " + std::to_string(blob.area_px / median_area) +
+                " times the others' area: merged with a reflection (max_led_area_ratio)";
+      return false;
+    }
+    if (blob.elongation > params_.consistency.max_led_elongation) {
+      *reason = "LED " + std::to_string(i) + " blob is elongated (" + std::to_string(blob.elongation) +
+                "): merged with a reflection (max_led_elongation)";
+      return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace mono

@@ -13,6 +13,7 @@
 
 #include <Eigen/Geometry>
 #include <atomic>
+#include <cmath>
 #include <boost/thread/recursive_mutex.hpp>
 #include <fstream>
 #include <memory>
@@ -43,6 +44,8 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   void reconfigure(MonoPoseConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void publishEstimate(const std_msgs::Header& header, const mono::MonoPoseResult& result);
+  // Visible mode: the disparity detector's estimate (same camera) as the region to search first.
+  void disparityCallback(const docking_msgs::TargetEstimateConstPtr& estimate);
 
   ros::NodeHandle nh_;
   ros::NodeHandle private_nh_;
@@ -50,6 +53,7 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   image_transport::CameraSubscriber camera_subscriber_;
   image_transport::Publisher debug_publisher_;
   ros::Publisher estimate_publisher_;
+  ros::Subscriber disparity_subscriber_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;
   boost::recursive_mutex reconfigure_mutex_;
@@ -75,6 +79,9 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   int found_ = 0;
   double last_processing_ms_ = 0.0;
   int last_inliers_ = 0;
+  // The latest valid disparity estimate (visible mode), applied before the next image.
+  docking_msgs::TargetEstimateConstPtr disparity_hint_;
+  int hints_used_ = 0;
 };
 
 template <typename T>
@@ -155,6 +162,12 @@ void MonoPoseNodelet::onInit() {
         debug_topic, 1, [this](const image_transport::SingleSubscriberPublisher&) { connectionChanged(); },
         [this](const image_transport::SingleSubscriberPublisher&) { connectionChanged(); });
   }
+  if (visible) {
+    // Far from the target the whole-frame search spends its keypoints on the room; the stereo blob
+    // says where to look (issue 11: cold starts over clutter).
+    disparity_subscriber_ = nh_.subscribe(docking_msgs::topics::kDisparityEstimate, 1,
+                                          &MonoPoseNodelet::disparityCallback, this);
+  }
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<MonoPoseConfig>>(reconfigure_mutex_, private_nh_);
   reconfigure_server_->setCallback([this](MonoPoseConfig& config, uint32_t level) { reconfigure(config, level); });
   NODELET_INFO("mono_pose (%s, %s): %s -> %s, debug image on %s", mode_name_.c_str(),
@@ -213,6 +226,14 @@ void MonoPoseNodelet::reconfigure(MonoPoseConfig& config, uint32_t /*level*/) {
   }
 }
 
+void MonoPoseNodelet::disparityCallback(const docking_msgs::TargetEstimateConstPtr& estimate) {
+  if (!estimate->valid || !estimate->position_valid) return;
+  const auto& p = estimate->pose.pose.position;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  disparity_hint_ = estimate;
+}
+
 void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
                                     const sensor_msgs::CameraInfoConstPtr& info) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -230,6 +251,7 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
   if (!camera.isValid(&reason)) {
     camera_error_ = "camera_info on " + image_topic_ + ": " + reason;
     result.status = camera_error_;
+    result.reject_reason = mono::RejectReason::kBadInput;
     NODELET_WARN_THROTTLE(5.0, "mono_pose: %s", camera_error_.c_str());
     publishEstimate(image->header, result);
     return;
@@ -247,6 +269,7 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
   } catch (const std::exception& e) {
     camera_error_ = e.what();
     result.status = camera_error_;
+    result.reject_reason = mono::RejectReason::kBadInput;
     NODELET_ERROR_THROTTLE(5.0, "mono_pose: %s", e.what());
     publishEstimate(image->header, result);
     return;
@@ -260,8 +283,21 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
                                                  : sensor_msgs::image_encodings::BGR8);
   } catch (const cv_bridge::Exception& e) {
     result.status = std::string("cannot convert the image: ") + e.what();
+    result.reject_reason = mono::RejectReason::kBadInput;
     publishEstimate(image->header, result);
     return;
+  }
+  if (disparity_hint_) {
+    if (disparity_hint_->header.frame_id == image->header.frame_id) {
+      const auto& position = disparity_hint_->pose.pose.position;
+      estimator_->setPositionHint(Eigen::Vector3d(position.x, position.y, position.z),
+                                  disparity_hint_->header.stamp.toSec());
+      ++hints_used_;
+    } else {
+      NODELET_WARN_THROTTLE(10.0, "mono_pose: disparity estimate in frame '%s', image in '%s': not used as a search hint",
+                            disparity_hint_->header.frame_id.c_str(), image->header.frame_id.c_str());
+    }
+    disparity_hint_.reset();
   }
   // Time comes from the image: live, simulated and replayed alike.
   result = estimator_->process(cv_image->image, image->header.stamp.toSec());
@@ -321,6 +357,12 @@ void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono
   msg.processing_time_ms = result.processing_time_ms;
   msg.solver = result.solver;
   msg.status = result.valid ? std::string() : result.status;
+  // The message's REJECT_* constants mirror mono::RejectReason, in the same order.
+  static_assert(docking_msgs::TargetEstimate::REJECT_APPEARANCE == static_cast<int>(mono::RejectReason::kAppearance) &&
+                    docking_msgs::TargetEstimate::REJECT_DOT_APPEARANCE ==
+                        static_cast<int>(mono::RejectReason::kDotAppearance),
+                "TargetEstimate REJECT_* and mono::RejectReason differ");
+  msg.reject_reason = static_cast<uint8_t>(result.valid ? mono::RejectReason::kNone : result.reject_reason);
   estimate_publisher_.publish(msg);
 }
 
@@ -344,6 +386,7 @@ void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("last status", last_status_);
   status.add("last processing time ms", last_processing_ms_);
   status.add("last inliers", last_inliers_);
+  status.add("disparity search hints used", hints_used_);
 }
 
 }  // namespace docking_perception

@@ -42,6 +42,13 @@ struct FeatureMatcherParams {
   // one and correlates the points it kept again, so the parabolic peak fit works near zero offset,
   // where it is unbiased (a first pass with offsets up to +-3 px leans toward whole pixels).
   int refine_passes = 1;
+  // Keypoint budget spread over a keypoint_grid x keypoint_grid grid of the search region (0: the
+  // strongest max_image_keypoints of the whole region). Over a busy background the strongest corners
+  // are the background's; a grid keeps a share for every part of the image, the target's included.
+  int keypoint_grid = 0;
+  // > 0: a second model pyramid of the texture blurred by this sigma (px at each level), matched by the
+  // searches for blurred faces (defocus, motion): their corners have the blurred texture's descriptors.
+  double blurred_model_sigma_px = 0.0;
 };
 
 struct FaceMatch {
@@ -50,6 +57,8 @@ struct FaceMatch {
   int keypoints = 0;                // image keypoints with descriptors
   int matches = 0;                  // after the ratio test
   int inliers = 0;                  // ratio-test matches that are inliers of the RANSAC homography
+  int pyramid_level = 0;            // the image level the keypoints came from (0 full, 1 half resolution)
+  bool blurred_model = false;       // matched against the blurred model pyramid
   bool refined = false;             // the correspondences below are the refined ones
   cv::Matx33d homography = cv::Matx33d::eye();  // texture pixel -> image pixel
   std::vector<cv::Point2f> matched_image_points;  // all ratio-test matches (for the debug image)
@@ -74,11 +83,18 @@ class FeatureMatcher {
 
   // Matches in roi (empty: the whole image) of an 8-bit gray image. expected_face_width_px > 0 (from
   // a predicted pose) restricts matching to the model levels within a factor 1.6 of that width.
-  FaceMatch match(const cv::Mat& gray, const cv::Rect& roi = cv::Rect(), double expected_face_width_px = 0.0) const;
+  // pyramid_level 1 detects and describes on the half-resolution image (blurred images keep only coarse
+  // corners; FAST finds them at half resolution); the homography and the refinement are at full
+  // resolution either way.
+  // blurred_model matches against the blurred model pyramid (when built).
+  FaceMatch match(const cv::Mat& gray, const cv::Rect& roi = cv::Rect(), double expected_face_width_px = 0.0,
+                  int pyramid_level = 0, bool blurred_model = false) const;
+  bool hasBlurredModel() const { return params_.blurred_model_sigma_px > 0.0; }
 
  private:
   struct ModelLevel {
     int width_px;
+    bool blurred = false;  // a level of the blurred model
     double scale;      // level pixels per texture pixel
     cv::Mat image;
     int first_row;     // this level's rows in model_descriptors_

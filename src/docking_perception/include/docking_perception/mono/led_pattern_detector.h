@@ -42,6 +42,7 @@ struct LedBlob {
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
   double area_px = 0.0;
   double peak = 0.0;
+  double elongation = 1.0;  // ratio of the thresholded component's principal axes
 };
 
 struct LedPatternCandidate {

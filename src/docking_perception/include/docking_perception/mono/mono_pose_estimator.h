@@ -16,11 +16,14 @@
 
 #include "docking_perception/mono/collinear_five_point_solver.h"
 #include "docking_perception/mono/dark_dot_locator.h"
+#include "docking_perception/mono/face_search.h"
 #include "docking_perception/mono/feature_matcher.h"
 #include "docking_perception/mono/inner_pattern_detector.h"
 #include "docking_perception/mono/led_pattern_detector.h"
 #include "docking_perception/mono/planar_pnp_solver.h"
+#include "docking_perception/mono/pose_consistency.h"
 #include "docking_perception/mono/pose_types.h"
+#include "docking_perception/mono/reject_reason.h"
 #include "docking_perception/mono/target_model.h"
 #include "docking_perception/mono/velocity_estimators.h"
 
@@ -51,12 +54,17 @@ struct MonoPoseParams {
   double min_range_m = 0.1;
   double max_range_m = 5.0;
   int max_pattern_candidates = 6;      // IR: candidate LED patterns tried, best first
+  bool use_half_resolution = false;    // visible: also search the half-resolution image (blur)
+  double region_hint_max_age_s = 0.2;  // an external region hint older than this (image time) is ignored
+  double region_hint_radius_m = 0.6;   // a position hint's search region: this radius around it (the mockup
+                                       // with its panels spans 0.9 m; the disparity centre is the blob's)
   FeatureMatcherParams features;
   LedDetectorParams leds;
   DarkDotParams dots;
   PlanarPnpParams pnp;
   ConstantVelocityFilterParams filter;
   InnerPatternParams inner_pattern;    // visible mode, a target with an inner pattern (target.yaml)
+  ConsistencyParams consistency;
 };
 
 // MonoPoseResult::solver when the pose comes from the inner pattern.
@@ -69,7 +77,8 @@ std::string validateParams(const MonoPoseParams& params);
 struct MonoPoseResult {
   double stamp_s = 0.0;
   bool valid = false;
-  std::string status;                  // empty when valid, else why not
+  std::string status;                  // empty when valid, else why not (for people)
+  RejectReason reject_reason = RejectReason::kNone;  // the same as a code (for programs)
   std::string solver;                  // "paper_5point" or "pnp"
   PoseWithCovariance pose;             // camera <- target
   double range_m = 0.0;
@@ -85,6 +94,11 @@ struct MonoPoseResult {
   bool used_tracking_region = false;   // the predicted region gave the result (no full-frame search)
   cv::Rect search_region;              // where detection ran last (full frame after a fallback)
   bool pnp_ambiguous = false;          // IPPE's two poses were close
+  bool used_region_hint = false;       // the external region hint gave the result
+  int pyramid_level = 0;               // visible: image level of the keypoints (0 full, 1 half resolution)
+  double inlier_spread = 0.0;          // visible: hull of the pose points / face area
+  double appearance_ncc = -1.0;        // visible: the model at the pose vs the image (median cell NCC)
+  double blur_sigma_px = 0.0;          // visible: the image blur that matched the model best
   // For the debug image.
   std::vector<cv::Point2f> matched_points;
   std::vector<cv::Point2f> inlier_points;
@@ -114,11 +128,19 @@ class MonoPoseEstimator {
   MonoPoseResult process(const cv::Mat& image, double stamp_s);
   // Forget the tracking state and velocities.
   void reset();
+  // Where the target should be in the next images (e.g. the disparity detector's estimate projected into
+  // this camera), at an image stamp: searched before the full frame while not tracking, for
+  // region_hint_max_age_s. An empty rect clears it.
+  void setRegionHint(const cv::Rect& region, double stamp_s);
+  // The same from a 3D position of the target in this camera's frame (the disparity detector's estimate,
+  // same optical frame): the square of region_hint_radius_m around it, projected, plus the tracking
+  // margin. A position behind the camera or not finite clears the hint.
+  void setPositionHint(const Eigen::Vector3d& position_camera, double stamp_s);
 
  private:
   bool estimateVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px, MonoPoseResult* result);
   bool estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
-  bool solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason) const;
+  bool solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason, RejectReason* code) const;
   bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
   // The region where the target should appear (empty: search the whole image) and, in visible mode,
   // the face's predicted apparent width.
@@ -129,6 +151,16 @@ class MonoPoseEstimator {
   void applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
   cv::Rect predictedInnerPatternRegion(double stamp_s) const;
+  // The consistency checks and honest covariance of a visible pose (pose_consistency.h); false with the
+  // reason in result when the pose cannot be trusted.
+  bool vetVisiblePose(const cv::Mat& gray, const FaceMatch& match, const std::vector<Eigen::Vector3d>& model_points,
+                      const PlanarPnpSolution* pnp, MonoPoseResult* result) const;
+  // paper_5point: the located dots against the homography, and the 5-point pose against the inlier PnP.
+  bool vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
+                        const std::vector<Eigen::Vector3d>& model_points, const std::vector<Eigen::Vector2d>& image_points,
+                        MonoPoseResult* result) const;
+  // IR: the LED blobs of a pattern must look like single LEDs.
+  bool vetLedBlobs(const std::vector<LedBlob>& blobs, const LedPatternCandidate& candidate, std::string* reason) const;
 
   TargetModel model_;
   CameraIntrinsics camera_;
@@ -145,6 +177,10 @@ class MonoPoseEstimator {
   std::unique_ptr<InnerPatternDetector> inner_pattern_;  // null without an inner pattern or in IR mode
   double last_valid_range_m_ = INFINITY;                 // of the last valid pose (any solver)
   double last_stamp_s_ = 0.0;
+  FaceAppearance appearance_;
+  int preferred_level_ = 0;  // the pyramid level that found the face last
+  cv::Rect hint_region_;
+  double hint_stamp_s_ = 0.0;
 };
 
 }  // namespace mono

@@ -62,6 +62,23 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("inner_pattern_min_points", &p.inner_pattern.min_points);
   visit("inner_pattern_cross_check_position_m", &p.inner_pattern.cross_check_position_m);
   visit("inner_pattern_cross_check_angle_rad", &p.inner_pattern.cross_check_angle_rad);
+  // Issue 11: search under blur and clutter, consistency checks and the covariance model.
+  visit("use_half_resolution", &p.use_half_resolution);
+  visit("keypoint_grid", &p.features.keypoint_grid);
+  visit("blurred_model_sigma_px", &p.features.blurred_model_sigma_px);
+  visit("region_hint_max_age_s", &p.region_hint_max_age_s);
+  visit("region_hint_radius_m", &p.region_hint_radius_m);
+  visit("min_inlier_spread", &p.consistency.min_inlier_spread);
+  visit("min_appearance_ncc", &p.consistency.min_appearance_ncc);
+  visit("max_ambiguity_deg", &p.consistency.max_ambiguity_deg);
+  visit("ambiguity_chi2", &p.consistency.ambiguity_chi2);
+  visit("covariance_blur_gain", &p.consistency.blur_gain);
+  visit("position_floor_fraction", &p.consistency.position_floor_fraction);
+  visit("rotation_floor_deg", &p.consistency.rotation_floor_deg);
+  visit("max_dot_offset_factor", &p.consistency.max_dot_offset_factor);
+  visit("max_solver_disagreement_deg", &p.consistency.max_solver_disagreement_deg);
+  visit("max_led_area_ratio", &p.consistency.max_led_area_ratio);
+  visit("max_led_elongation", &p.consistency.max_led_elongation);
 }
 
 }  // namespace mono

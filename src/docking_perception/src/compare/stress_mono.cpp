@@ -1,0 +1,208 @@
+// stress_mono: the monocular pose under blur, clutter, glare, occlusion and IR reflections (issue 11),
+// rendered by docking_sim's renderer, scored against the truth (detection, errors, covariance coverage,
+// confident wrong estimates). Prints one table row per condition; optionally writes JSON.
+//
+//   stress_mono --target config/target.yaml --visible config/mono_pose_visible.yaml --ir config/mono_pose_ir.yaml
+//               [--seeds FIRST:COUNT] [--frames N] [--solver pnp|paper_5point] [--only NAME,...] [--out OUT.json]
+//               [--baseline] [--set KEY=VALUE ...] [--dump PREFIX] [--verbose]
+//
+// --dump: save the first frame of each condition as PREFIX<condition>.png (to look at).
+//
+// --set: override a key of the mono_pose YAML files (both modes) for experiments.
+//
+// --baseline: the behaviour before issue 11 (no half-resolution search, no keypoint grid, no consistency
+// checks, the solver's own covariance), for the "before" tables.
+//
+// Seeds: 100:40 is the tuning range, 500:40 the report range (never used for tuning).
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "docking_perception/mono/mono_pose_param_keys.h"
+#include "mono_params_yaml.h"
+#include "mono_stress.h"
+
+namespace mono = docking_perception::mono;
+namespace stress = docking_perception::stress;
+
+namespace {
+
+std::string arg(int argc, char** argv, const std::string& name, const std::string& fallback) {
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (argv[i] == name) return argv[i + 1];
+  }
+  return fallback;
+}
+
+bool selected(const std::string& only, const std::string& name) {
+  if (only.empty()) return true;
+  std::stringstream list(only);
+  std::string item;
+  while (std::getline(list, item, ',')) {
+    if (item == name) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cv::setNumThreads(1);
+  const std::string target = arg(argc, argv, "--target", "config/target.yaml");
+  const std::string visible_yaml = arg(argc, argv, "--visible", "config/mono_pose_visible.yaml");
+  const std::string ir_yaml = arg(argc, argv, "--ir", "config/mono_pose_ir.yaml");
+  const std::string seeds = arg(argc, argv, "--seeds", "100:40");
+  const int frames = std::stoi(arg(argc, argv, "--frames", "3"));
+  const std::string solver = arg(argc, argv, "--solver", "pnp");
+  const std::string only = arg(argc, argv, "--only", "");
+  const std::string out_path = arg(argc, argv, "--out", "");
+  const std::string dump = arg(argc, argv, "--dump", "");
+  const size_t colon = seeds.find(':');
+  if (colon == std::string::npos) {
+    std::cerr << "--seeds must be FIRST:COUNT\n";
+    return 2;
+  }
+  const uint64_t first_seed = std::stoull(seeds.substr(0, colon));
+  const int trials = std::stoi(seeds.substr(colon + 1));
+  if (first_seed + static_cast<uint64_t>(trials) > 9000 && first_seed < 10000) {
+    std::cerr << "seeds 9000-9999 are reserved for the campaign's final report\n";
+    return 2;
+  }
+  mono::MonoPoseParams visible_params;
+  mono::MonoPoseParams ir_params;
+  std::string error;
+  if (!docking_perception::compare::loadMonoParams(visible_yaml, &visible_params, &error) ||
+      !docking_perception::compare::loadMonoParams(ir_yaml, &ir_params, &error)) {
+    std::cerr << "stress_mono: " << error << "\n";
+    return 1;
+  }
+  mono::PoseSolverType solver_type;
+  if (!mono::parsePoseSolver(solver, &solver_type)) {
+    std::cerr << "--solver must be pnp or paper_5point\n";
+    return 2;
+  }
+  visible_params.solver = solver_type;
+  ir_params.solver = solver_type;
+  bool baseline = false;
+  bool verbose = false;
+  for (int i = 1; i < argc; ++i) verbose = verbose || std::string(argv[i]) == "--verbose";
+  for (int i = 1; i < argc; ++i) baseline = baseline || std::string(argv[i]) == "--baseline";
+  if (baseline) {
+    for (mono::MonoPoseParams* p : {&visible_params, &ir_params}) {
+      p->use_half_resolution = false;
+      p->features.keypoint_grid = 0;
+      p->features.blurred_model_sigma_px = 0.0;
+      p->consistency.min_inlier_spread = 0.0;
+      p->consistency.min_appearance_ncc = -1.0;
+      p->consistency.max_ambiguity_deg = 360.0;
+      p->consistency.ambiguity_chi2 = 0.0;
+      p->consistency.blur_gain = 0.0;
+      p->consistency.position_floor_fraction = 0.0;
+      p->consistency.rotation_floor_deg = 0.0;
+      p->consistency.max_dot_offset_factor = 1e6;
+      p->consistency.max_solver_disagreement_deg = 360.0;
+      p->consistency.max_led_area_ratio = 1e6;
+      p->consistency.max_led_elongation = 1e6;
+    }
+  }
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) != "--set") continue;
+    const std::string assignment = argv[i + 1];
+    const size_t eq = assignment.find('=');
+    if (eq == std::string::npos) {
+      std::cerr << "--set needs KEY=VALUE\n";
+      return 2;
+    }
+    const std::string key = assignment.substr(0, eq);
+    const std::string value = assignment.substr(eq + 1);
+    bool known = false;
+    for (mono::MonoPoseParams* p : {&visible_params, &ir_params}) {
+      mono::visitMonoPoseParams(*p, [&](const char* name, auto* field) {
+        using Field = std::decay_t<decltype(*field)>;
+        if (key != name) return;
+        known = true;
+        if constexpr (std::is_same_v<Field, bool>) *field = value == "true" || value == "1";
+        else if constexpr (std::is_same_v<Field, int>) *field = std::stoi(value);
+        else if constexpr (std::is_same_v<Field, double>) *field = std::stod(value);
+        else known = false;
+      });
+    }
+    if (!known) {
+      std::cerr << "--set: unknown or unsupported key " << key << "\n";
+      return 2;
+    }
+  }
+  for (const mono::MonoPoseParams* p : {&visible_params, &ir_params}) {
+    const std::string invalid = mono::validateParams(*p);
+    if (!invalid.empty()) {
+      std::cerr << "stress_mono: " << invalid << "\n";
+      return 2;
+    }
+  }
+  const mono::TargetModel model = mono::TargetModel::loadFromYaml(target);
+  const stress::StressRenderer renderer(model);
+
+  std::printf("stress_mono: seeds %s, %d frames per trial, solver %s%s\n", seeds.c_str(), frames, solver.c_str(),
+              baseline ? ", baseline (before issue 11)" : "");
+  std::printf("%-36s %6s %6s %7s %7s  %5s %5s %5s %5s %5s %5s %4s %6s  %s\n", "condition", "detect", "cold",
+              "pos %r", "ang deg", "cx", "cy", "cz", "crx", "cry", "crz", "CW", "cpu ms", "invalid reasons");
+  std::ostringstream json;
+  json << "{\"seeds\": \"" << seeds << "\", \"frames_per_trial\": " << frames << ", \"solver\": \"" << solver
+       << "\", \"conditions\": {";
+  bool first = true;
+  for (const stress::StressCondition& condition : stress::standardConditions()) {
+    if (!selected(only, condition.name)) continue;
+    const mono::MonoPoseParams& params = condition.infrared ? ir_params : visible_params;
+    if (!dump.empty()) {
+      const stress::TrialPose pose = renderer.drawPose(condition, first_seed);
+      cv::imwrite(dump + condition.name + ".png", renderer.render(condition, pose, first_seed, first_seed * 16).gray);
+    }
+    if (verbose) {
+      // One line per frame: what the estimator saw (diagnosis while tuning).
+      mono::MonoPoseEstimator estimator(model, renderer.camera(), params);
+      for (int t = 0; t < trials; ++t) {
+        const uint64_t seed = first_seed + static_cast<uint64_t>(t);
+        const stress::TrialPose pose = renderer.drawPose(condition, seed);
+        estimator.reset();
+        for (int f = 0; f < frames; ++f) {
+          const stress::StressFrame frame = renderer.render(condition, pose, seed, seed * 16 + static_cast<uint64_t>(f));
+          const mono::MonoPoseResult r = estimator.process(frame.gray, f / 30.0);
+          const stress::EstimateScore e = stress::scoreEstimate(r, frame.truth);
+          std::printf("  %s seed %llu frame %d range %.2f: %s matches %d inliers %d level %d ncc %.2f blur %.1f spread %.2f "
+                      "pos %.2f %% ang %.2f deg z [%.1f %.1f %.1f %.1f %.1f %.1f] %s\n",
+                      condition.name.c_str(), static_cast<unsigned long long>(seed), f, e.range_m,
+                      r.valid ? "valid" : mono::toString(r.reject_reason), r.feature_matches, r.feature_inliers,
+                      r.pyramid_level, r.appearance_ncc, r.blur_sigma_px, r.inlier_spread, e.position_error_pct,
+                      e.orientation_error_deg, e.normalized[0], e.normalized[1], e.normalized[2], e.normalized[3],
+                      e.normalized[4], e.normalized[5], r.status.c_str());
+        }
+      }
+    }
+    const stress::ConditionSummary s = stress::runCondition(renderer, condition, params, first_seed, trials, frames);
+    std::ostringstream reasons;
+    for (const auto& [reason, count] : s.reasons) reasons << reason << ":" << count << " ";
+    std::printf("%-36s %6.3f %6.3f %7.3f %7.3f  %5.2f %5.2f %5.2f %5.2f %5.2f %5.2f %4d %6.2f  %s\n", s.name.c_str(),
+                s.frames ? static_cast<double>(s.valid) / s.frames : 0.0,
+                s.cold_frames ? static_cast<double>(s.cold_valid) / s.cold_frames : 0.0, s.median_position_pct,
+                s.median_orientation_deg, s.coverage[0], s.coverage[1], s.coverage[2], s.coverage[3], s.coverage[4],
+                s.coverage[5], s.confident_wrong, s.cpu_ms_median, reasons.str().c_str());
+    std::fflush(stdout);
+    json << (first ? "" : ", ") << "\"" << s.name << "\": {\"frames\": " << s.frames << ", \"valid\": " << s.valid
+         << ", \"cold_frames\": " << s.cold_frames << ", \"cold_valid\": " << s.cold_valid
+         << ", \"median_position_pct\": " << s.median_position_pct
+         << ", \"median_orientation_deg\": " << s.median_orientation_deg << ", \"coverage_3sigma\": [";
+    for (int a = 0; a < 6; ++a) json << (a ? ", " : "") << s.coverage[a];
+    json << "], \"confident_wrong\": " << s.confident_wrong << ", \"cpu_ms_median\": " << s.cpu_ms_median << "}";
+    first = false;
+  }
+  json << "}}\n";
+  if (!out_path.empty()) std::ofstream(out_path) << json.str();
+  return 0;
+}

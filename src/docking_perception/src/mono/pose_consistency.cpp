@@ -1,0 +1,173 @@
+#include "docking_perception/mono/pose_consistency.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace docking_perception {
+namespace mono {
+namespace {
+
+constexpr double kAppearanceWorkWidthPx = 160.0;  // the face is compared at most this wide (cost)
+constexpr int kAppearanceCells = 4;               // cells per side over the face's bounding box
+constexpr double kSaturatedLevel = 250.0;         // image pixels at or above: a glint, left out
+constexpr double kMinCellStdDev = 4.0;            // template cells flatter than this carry no evidence
+const double kTemplateBlurs[] = {0.0, 1.0, 2.0, 3.5};  // px at the working scale
+
+}  // namespace
+
+std::string validateConsistencyParams(const ConsistencyParams& p) {
+  if (!(p.min_inlier_spread >= 0.0 && p.min_inlier_spread < 1.0)) return "min_inlier_spread must be in [0, 1)";
+  if (!(p.min_appearance_ncc <= 1.0)) return "min_appearance_ncc must be at most 1 (negative: off)";
+  if (!(p.max_ambiguity_deg > 0.0)) return "max_ambiguity_deg must be positive";
+  if (!(p.ambiguity_chi2 >= 0.0)) return "ambiguity_chi2 must not be negative";
+  if (!(p.blur_gain >= 0.0)) return "covariance_blur_gain must not be negative";
+  if (!(p.position_floor_fraction >= 0.0)) return "position_floor_fraction must not be negative";
+  if (!(p.rotation_floor_deg >= 0.0)) return "rotation_floor_deg must not be negative";
+  if (!(p.max_dot_offset_factor > 0.0)) return "max_dot_offset_factor must be positive";
+  if (!(p.max_solver_disagreement_deg > 0.0)) return "max_solver_disagreement_deg must be positive";
+  if (!(p.max_led_area_ratio > 1.0)) return "max_led_area_ratio must exceed 1";
+  if (!(p.max_led_elongation >= 1.0)) return "max_led_elongation must be at least 1";
+  return "";
+}
+
+double inlierSpread(const std::vector<cv::Point2f>& texture_points, const cv::Size& texture_size) {
+  if (texture_points.size() < 3 || texture_size.area() <= 0) return 0.0;
+  std::vector<cv::Point2f> hull;
+  cv::convexHull(texture_points, hull);
+  return cv::contourArea(hull) / static_cast<double>(texture_size.area());
+}
+
+FaceAppearance::FaceAppearance(const TargetModel& model) {
+  if (!model.hasTexture()) return;
+  pyramid_.push_back(model.textureGray());
+  while (pyramid_.back().cols > 40) {
+    cv::Mat next;
+    cv::pyrDown(pyramid_.back(), next);
+    pyramid_.push_back(next);
+  }
+  texture_to_face_ = model.textureToFace();
+}
+
+AppearanceScore FaceAppearance::score(const cv::Mat& gray, const CameraIntrinsics& camera,
+                                      const PoseWithCovariance& pose) const {
+  AppearanceScore out;
+  if (pyramid_.empty() || gray.empty()) return out;
+  // Texture pixel -> image pixel at the pose: K [r_y r_z t] textureToFace (the face is the plane x = 0).
+  Eigen::Matrix3d k;
+  k << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
+  Eigen::Matrix3d plane;
+  plane.col(0) = pose.rotation.col(1);
+  plane.col(1) = pose.rotation.col(2);
+  plane.col(2) = pose.translation;
+  const Eigen::Matrix3d h = k * plane * texture_to_face_;
+  const cv::Matx33d texture_to_image(h(0, 0), h(0, 1), h(0, 2), h(1, 0), h(1, 1), h(1, 2), h(2, 0), h(2, 1), h(2, 2));
+  const cv::Size ts = pyramid_.front().size();
+  std::vector<cv::Point2f> corners = {{-0.5f, -0.5f}, {ts.width - 0.5f, -0.5f}, {ts.width - 0.5f, ts.height - 0.5f},
+                                      {-0.5f, ts.height - 0.5f}};
+  std::vector<cv::Point2f> outline;
+  cv::perspectiveTransform(corners, outline, cv::Mat(texture_to_image));
+  const cv::Rect box = cv::boundingRect(outline) & cv::Rect(0, 0, gray.cols, gray.rows);
+  if (box.width < 16 || box.height < 16) return out;
+  const double face_width = 0.5 * (cv::norm(outline[1] - outline[0]) + cv::norm(outline[2] - outline[3]));
+  const double scale = std::min(1.0, kAppearanceWorkWidthPx / std::max(1.0, face_width));
+  cv::Mat image;
+  if (scale < 1.0) {
+    cv::resize(gray(box), image, cv::Size(), scale, scale, cv::INTER_AREA);
+  } else {
+    image = gray(box);
+  }
+  // The pyramid level at least as fine as the working face width, warped into the working image.
+  size_t level = 0;
+  while (level + 1 < pyramid_.size() && pyramid_[level + 1].cols >= face_width * scale) ++level;
+  const double level_scale = static_cast<double>(pyramid_[level].cols) / ts.width;
+  const cv::Matx33d level_to_texture(1.0 / level_scale, 0.0, 0.5 / level_scale - 0.5, 0.0, 1.0 / level_scale,
+                                     0.5 / level_scale - 0.5, 0.0, 0.0, 1.0);
+  const cv::Matx33d to_work(scale, 0.0, (0.5 - box.x) * scale - 0.5, 0.0, scale, (0.5 - box.y) * scale - 0.5, 0.0, 0.0,
+                            1.0);
+  const cv::Matx33d warp = to_work * texture_to_image * level_to_texture;
+  cv::Mat rendered;
+  cv::Mat valid;
+  cv::warpPerspective(pyramid_[level], rendered, warp, image.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::warpPerspective(cv::Mat(pyramid_[level].size(), CV_8U, cv::Scalar(255)), valid, warp, image.size(),
+                      cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::erode(valid, valid, cv::Mat(), cv::Point(-1, -1), 2);
+  valid.setTo(0, image >= kSaturatedLevel);
+  cv::Mat image_f;
+  image.convertTo(image_f, CV_32F);
+  cv::Mat rendered_f;
+  rendered.convertTo(rendered_f, CV_32F);
+  const int cw = std::max(4, image.cols / kAppearanceCells);
+  const int ch = std::max(4, image.rows / kAppearanceCells);
+  double best = -2.0;
+  for (const double blur : kTemplateBlurs) {
+    cv::Mat templ;
+    if (blur > 0.0) {
+      cv::GaussianBlur(rendered_f, templ, cv::Size(0, 0), blur);
+    } else {
+      templ = rendered_f;
+    }
+    std::vector<double> nccs;
+    for (int cy = 0; cy + ch <= image.rows; cy += ch) {
+      for (int cx = 0; cx + cw <= image.cols; cx += cw) {
+        const cv::Rect cell(cx, cy, cw, ch);
+        const cv::Mat m = valid(cell);
+        if (cv::countNonZero(m) < cell.area() / 2) continue;
+        cv::Scalar ti_mean, ti_std, im_mean, im_std;
+        cv::meanStdDev(templ(cell), ti_mean, ti_std, m);
+        if (ti_std[0] < kMinCellStdDev) continue;
+        cv::meanStdDev(image_f(cell), im_mean, im_std, m);
+        if (im_std[0] <= 1e-6) {
+          nccs.push_back(0.0);
+          continue;
+        }
+        cv::Mat a = templ(cell) - ti_mean[0];
+        cv::Mat b = image_f(cell) - im_mean[0];
+        cv::Mat prod = a.mul(b);
+        const double n = cv::countNonZero(m);
+        nccs.push_back(cv::sum(prod.setTo(0, m == 0))[0] / (n * ti_std[0] * im_std[0]));
+      }
+    }
+    if (nccs.empty()) continue;
+    std::nth_element(nccs.begin(), nccs.begin() + static_cast<std::ptrdiff_t>(nccs.size() / 2), nccs.end());
+    const double median = nccs[nccs.size() / 2];
+    if (median > best) {
+      best = median;
+      out.median_ncc = median;
+      out.blur_sigma_px = blur / scale;
+      out.cells = static_cast<int>(nccs.size());
+    }
+  }
+  return out;
+}
+
+Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovariance& pose,
+                          const std::vector<Eigen::Vector3d>& model_points, double residual_rms_px,
+                          double min_pixel_sigma, double blur_sigma_px, const ConsistencyParams& params) {
+  const double dof = std::max(1.0, 2.0 * static_cast<double>(model_points.size()) - 6.0);
+  // residual_rms_px is per point (2D): N rms^2 squared residuals over 2N - 6 degrees of freedom.
+  const double residual_sigma = residual_rms_px * std::sqrt(static_cast<double>(model_points.size()) / dof);
+  const double pixel_sigma = std::max(residual_sigma, min_pixel_sigma) * (1.0 + params.blur_gain * blur_sigma_px);
+  Matrix6d covariance;
+  leastSquaresPoseCovariance(camera, pose.rotation, pose.translation, model_points, pixel_sigma * pixel_sigma,
+                             &covariance);
+  const double range = pose.translation.norm();
+  const double position_floor = params.position_floor_fraction * range;
+  const double rotation_floor = params.rotation_floor_deg * M_PI / 180.0;
+  for (int i = 0; i < 3; ++i) {
+    covariance(i, i) += position_floor * position_floor;
+    covariance(3 + i, 3 + i) += rotation_floor * rotation_floor;
+  }
+  return covariance;
+}
+
+void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,
+                    const Eigen::Vector3d& other_translation, Matrix6d* covariance) {
+  Vector6d d;
+  d.head<3>() = other_translation - chosen.translation;
+  d.tail<3>() = rotationLog(other_rotation * chosen.rotation.transpose());
+  *covariance += d * d.transpose();
+}
+
+}  // namespace mono
+}  // namespace docking_perception

@@ -1,0 +1,215 @@
+// gtests of issue 11's pieces on the stress harness (docking_sim's renderer + degradations), fixed seeds
+// 200-229 (neither the tuning range 100-139 nor the report range 500-539 of stress_mono):
+// region-first search over clutter, detection under blur, invalid-or-honest estimates under glare,
+// occlusion and merged LEDs, covariance coverage; and unit tests of the new checks.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
+
+#include "docking_perception/mono/led_pattern_detector.h"
+#include "docking_perception/mono/pose_consistency.h"
+#include "mono_params_yaml.h"
+#include "mono_stress.h"
+
+namespace mono = docking_perception::mono;
+namespace stress = docking_perception::stress;
+
+namespace {
+
+constexpr uint64_t kFirstSeed = 200;
+
+const mono::TargetModel& model() {
+  static const mono::TargetModel m = mono::TargetModel::loadFromYaml(std::string(CONFIG_DIR) + "/target.yaml");
+  return m;
+}
+
+const stress::StressRenderer& renderer() {
+  static const stress::StressRenderer r(model());
+  return r;
+}
+
+mono::MonoPoseParams params(const std::string& mode) {
+  mono::MonoPoseParams p;
+  std::string error;
+  EXPECT_TRUE(docking_perception::compare::loadMonoParams(std::string(CONFIG_DIR) + "/mono_pose_" + mode + ".yaml", &p,
+                                                           &error))
+      << error;
+  return p;
+}
+
+stress::StressCondition condition(const std::string& name) {
+  for (const stress::StressCondition& c : stress::standardConditions()) {
+    if (c.name == name) return c;
+  }
+  ADD_FAILURE() << "no condition " << name;
+  return {};
+}
+
+// The face's bounding box in the image, grown by a margin: what a hint from the disparity detector gives.
+cv::Rect faceBox(const stress::TrialPose& pose, int margin) {
+  std::vector<cv::Point> outline;
+  for (const Eigen::Vector3d& c : model().faceCorners()) {
+    const Eigen::Vector2d p = renderer().camera().project(pose.rotation * c + pose.translation);
+    outline.emplace_back(static_cast<int>(p.x()), static_cast<int>(p.y()));
+  }
+  cv::Rect box = cv::boundingRect(outline);
+  return cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin);
+}
+
+}  // namespace
+
+// Over a busy background the old whole-frame budget (300 strongest corners) goes to the clutter; the
+// region hint spends it on the target. Far faces (1.4-2 m, small in the frame) are the hard case.
+TEST(MonoStress, RegionHintFindsTheTargetOverClutterThatTheFullFrameMisses) {
+  stress::StressCondition c = condition("clutter_defocus1");
+  c.min_range_m = 1.4;
+  mono::MonoPoseParams old_params = params("visible");
+  old_params.use_half_resolution = false;
+  old_params.features.keypoint_grid = 0;
+  const mono::MonoPoseParams new_params = params("visible");
+  int full_frame_found = 0;
+  int hinted_found = 0;
+  const int trials = 12;
+  for (int t = 0; t < trials; ++t) {
+    const uint64_t seed = kFirstSeed + static_cast<uint64_t>(t);
+    const stress::TrialPose pose = renderer().drawPose(c, seed);
+    const stress::StressFrame frame = renderer().render(c, pose, seed, seed);
+    mono::MonoPoseEstimator old_estimator(model(), renderer().camera(), old_params);
+    full_frame_found += old_estimator.process(frame.gray, 0.0).valid ? 1 : 0;
+    mono::MonoPoseEstimator hinted(model(), renderer().camera(), new_params);
+    hinted.setRegionHint(faceBox(pose, 30), 0.0);
+    const mono::MonoPoseResult result = hinted.process(frame.gray, 0.0);
+    if (result.valid) {
+      ++hinted_found;
+      EXPECT_TRUE(result.used_region_hint);
+      EXPECT_LT(stress::scoreEstimate(result, frame.truth).position_error_pct, 5.0);
+    }
+  }
+  std::printf("clutter, 1.4-2 m: full frame (old) %d of %d, region hint %d of %d\n", full_frame_found, trials,
+              hinted_found, trials);
+  EXPECT_GT(hinted_found, full_frame_found);
+  EXPECT_GE(hinted_found, trials / 2);
+}
+
+// A hint older than region_hint_max_age_s is ignored (the search falls back to the full frame).
+TEST(MonoStress, StaleRegionHintIsIgnored) {
+  const stress::StressCondition c = condition("clean");
+  const stress::TrialPose pose = renderer().drawPose(c, kFirstSeed);
+  const stress::StressFrame frame = renderer().render(c, pose, kFirstSeed, kFirstSeed);
+  mono::MonoPoseEstimator estimator(model(), renderer().camera(), params("visible"));
+  estimator.setRegionHint(faceBox(pose, 30), 0.0);
+  const mono::MonoPoseResult result = estimator.process(frame.gray, 5.0);
+  EXPECT_FALSE(result.used_region_hint);
+}
+
+// Blurred faces: 2 px defocus and 9 px motion blur, 3 images per trial from a cold start (no tracking, no
+// hint; the full frame tries one search configuration per image). The old search (full resolution,
+// sharp model) found 1 % and 12 % of these on the tuning seeds.
+TEST(MonoStress, BlurredTargetIsDetected) {
+  mono::MonoPoseParams old_params = params("visible");
+  old_params.use_half_resolution = false;
+  old_params.features.blurred_model_sigma_px = 0.0;
+  for (const std::string name : {"defocus2", "motion9"}) {
+    const stress::ConditionSummary now = stress::runCondition(renderer(), condition(name), params("visible"), kFirstSeed, 12, 3);
+    const stress::ConditionSummary before = stress::runCondition(renderer(), condition(name), old_params, kFirstSeed, 12, 3);
+    std::printf("%s: %d of %d valid (old search: %d)\n", name.c_str(), now.valid, now.frames, before.valid);
+    EXPECT_GT(now.valid, before.valid) << name;
+    EXPECT_GE(now.valid, now.frames / 5) << name;
+    EXPECT_EQ(now.confident_wrong, 0) << name;
+  }
+}
+
+// Glare, a card over the face (both solvers): every estimate is
+// either invalid or honest (no confident wrong answer; errors within 3 sigma).
+TEST(MonoStress, GlareOcclusionAndReflectionsAreInvalidOrHonest) {
+  struct Case {
+    std::string condition;
+    std::string mode;
+    mono::PoseSolverType solver;
+  };
+  const std::vector<Case> cases = {{"specular_far", "visible", mono::PoseSolverType::kPnp},
+                                   {"occlusion", "visible", mono::PoseSolverType::kPnp},
+                                   {"occlusion", "visible", mono::PoseSolverType::kPaperFivePoint}};
+  // Not here: IR reflections at 1.6-2 m still give an occasional confident wrong pose (README, limits).
+  for (const Case& k : cases) {
+    mono::MonoPoseParams p = params(k.mode);
+    p.solver = k.solver;
+    std::vector<stress::EstimateScore> scores;
+    const stress::ConditionSummary s = stress::runCondition(renderer(), condition(k.condition), p, kFirstSeed, 12, 2, &scores);
+    const std::string label = k.condition + " / " + mono::toString(k.solver);
+    EXPECT_EQ(s.confident_wrong, 0) << label;
+    int outside = 0;
+    for (const stress::EstimateScore& e : scores) {
+      if (!e.valid) {
+        EXPECT_NE(e.reason, mono::RejectReason::kNone) << label << ": an invalid estimate needs its reason code";
+        continue;
+      }
+      for (const double z : e.normalized) outside += std::abs(z) > 3.0 ? 1 : 0;
+    }
+    // 6 axes per valid estimate: allow the 3-sigma tail of a few.
+    EXPECT_LE(outside, std::max(1, s.valid * 6 / 20)) << label << ": " << outside << " axis errors beyond 3 sigma in "
+                                                      << s.valid << " valid estimates";
+  }
+}
+
+// Coverage of the published covariance on a small fixed set of ordinary and blurred frames.
+TEST(MonoStress, CovarianceCoversTheErrors) {
+  for (const std::string name : {"clean", "defocus1", "motion5", "clutter_defocus1_hint"}) {
+    const stress::ConditionSummary s = stress::runCondition(renderer(), condition(name), params("visible"), kFirstSeed, 12, 2);
+    ASSERT_GT(s.valid, 10) << name;
+    for (int a = 0; a < 6; ++a) EXPECT_GE(s.coverage[a], 0.9) << name << " axis " << a;
+  }
+}
+
+TEST(PoseConsistency, InlierSpreadIsTheHullFraction) {
+  const cv::Size texture(600, 480);
+  const std::vector<cv::Point2f> corners = {{0, 0}, {600, 0}, {600, 480}, {0, 480}, {300, 240}};
+  EXPECT_NEAR(mono::inlierSpread(corners, texture), 1.0, 1e-6);
+  const std::vector<cv::Point2f> bunched = {{10, 10}, {70, 10}, {70, 58}, {10, 58}};
+  EXPECT_NEAR(mono::inlierSpread(bunched, texture), 60.0 * 48.0 / (600.0 * 480.0), 1e-6);
+  EXPECT_EQ(mono::inlierSpread({{1, 1}, {2, 2}}, texture), 0.0);
+}
+
+// The model warped at the true pose matches the image; at a pose rolled by 8 deg far less. (A tilt of
+// the same size out of the image plane changes the view too little to see: the check catches gross
+// errors, the covariance has to cover the rest.)
+TEST(PoseConsistency, AppearanceSeparatesTheTruePoseFromAWrongOne) {
+  const stress::StressCondition c = condition("defocus1");
+  const stress::TrialPose pose = renderer().drawPose(c, kFirstSeed + 3);
+  const stress::StressFrame frame = renderer().render(c, pose, kFirstSeed + 3, 1);
+  const mono::FaceAppearance appearance(model());
+  mono::PoseWithCovariance truth;
+  truth.rotation = pose.rotation;
+  truth.translation = pose.translation;
+  const mono::AppearanceScore right = appearance.score(frame.gray, renderer().camera(), truth);
+  mono::PoseWithCovariance wrong = truth;
+  wrong.rotation = mono::rotationExp(Eigen::Vector3d(0.0, 0.0, 8.0 * M_PI / 180.0)) * truth.rotation;
+  const mono::AppearanceScore off = appearance.score(frame.gray, renderer().camera(), wrong);
+  EXPECT_GT(right.median_ncc, 0.7);
+  EXPECT_LT(off.median_ncc, right.median_ncc - 0.25);
+  EXPECT_GT(right.blur_sigma_px, 0.3) << "a 1 px defocus should read as blur";
+}
+
+// A blob made of an LED spot and a reflection beside it reads as elongated; a lone spot does not.
+TEST(PoseConsistency, MergedLedBlobIsElongated) {
+  cv::Mat image(120, 160, CV_8U, cv::Scalar(10));
+  cv::circle(image, cv::Point(40, 60), 4, cv::Scalar(255), cv::FILLED);
+  cv::circle(image, cv::Point(110, 60), 4, cv::Scalar(255), cv::FILLED);
+  cv::circle(image, cv::Point(117, 62), 4, cv::Scalar(255), cv::FILLED);
+  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.0);
+  mono::LedDetectorParams p;
+  p.threshold = 140;
+  p.max_aspect_ratio = 5.0;
+  const mono::LedPatternDetector detector(model().markers(), p);
+  const std::vector<mono::LedBlob> blobs = detector.detectBlobs(image);
+  ASSERT_EQ(blobs.size(), 2u);
+  for (const mono::LedBlob& blob : blobs) {
+    if (blob.centroid.x() < 80) {
+      EXPECT_LT(blob.elongation, 1.2);
+    } else {
+      EXPECT_GT(blob.elongation, 1.8);
+    }
+  }
+}
