@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
+#include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -212,4 +214,45 @@ TEST(PoseConsistency, MergedLedBlobIsElongated) {
       EXPECT_GT(blob.elongation, 1.8);
     }
   }
+}
+
+// The node's hint: the disparity detector's 3D estimate (the blob's centre, a few cm off the port),
+// projected by setPositionHint. Over clutter at 1.4-2 m it must find what the whole frame misses.
+TEST(MonoStress, PositionHintFromTheStereoEstimateFindsTheTargetOverClutter) {
+  stress::StressCondition c = condition("clutter_defocus1");
+  c.min_range_m = 1.4;
+  const mono::MonoPoseParams p = params("visible");
+  int full_frame_found = 0;
+  int hinted_found = 0;
+  const int trials = 12;
+  for (int t = 0; t < trials; ++t) {
+    const uint64_t seed = kFirstSeed + 50 + static_cast<uint64_t>(t);
+    const stress::TrialPose pose = renderer().drawPose(c, seed);
+    const stress::StressFrame frame = renderer().render(c, pose, seed, seed);
+    mono::MonoPoseEstimator unhinted(model(), renderer().camera(), p);
+    full_frame_found += unhinted.process(frame.gray, 0.0).valid ? 1 : 0;
+    mono::MonoPoseEstimator hinted(model(), renderer().camera(), p);
+    // The stereo blob's centre: behind the port (inside the box) and off to a side by a few cm.
+    const Eigen::Vector3d blob_centre = pose.translation + Eigen::Vector3d(0.05, -0.03, 0.12);
+    hinted.setPositionHint(blob_centre, 0.0);
+    const mono::MonoPoseResult result = hinted.process(frame.gray, 0.0);
+    if (result.valid) ++hinted_found;
+  }
+  std::printf("clutter, 1.4-2 m: full frame %d of %d, position hint %d of %d\n", full_frame_found, trials,
+              hinted_found, trials);
+  EXPECT_GT(hinted_found, full_frame_found);
+  EXPECT_GE(hinted_found, trials / 2);
+}
+
+// A position behind the camera (or NaN) gives no region: the search is the plain one.
+TEST(MonoStress, PositionHintBehindTheCameraIsNoHint) {
+  const stress::StressCondition c = condition("clean");
+  const stress::TrialPose pose = renderer().drawPose(c, kFirstSeed);
+  const stress::StressFrame frame = renderer().render(c, pose, kFirstSeed, kFirstSeed);
+  mono::MonoPoseEstimator estimator(model(), renderer().camera(), params("visible"));
+  estimator.setPositionHint(Eigen::Vector3d(0.0, 0.0, -2.0), 0.0);
+  EXPECT_FALSE(estimator.process(frame.gray, 0.0).used_region_hint);
+  mono::MonoPoseEstimator with_nan(model(), renderer().camera(), params("visible"));
+  with_nan.setPositionHint(Eigen::Vector3d(NAN, 0.0, 2.0), 0.0);
+  EXPECT_FALSE(with_nan.process(frame.gray, 0.0).used_region_hint);
 }
