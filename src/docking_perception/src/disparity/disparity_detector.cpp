@@ -320,6 +320,8 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
           "must be > 0", p.disparity_sigma_px);
   require(std::isfinite(p.centre_sigma_px) && p.centre_sigma_px > 0.0, "centre_sigma_px",
           "must be > 0", p.centre_sigma_px);
+  require(std::isfinite(p.port_offset_sigma_m) && p.port_offset_sigma_m >= 0.0 && p.port_offset_sigma_m <= 1.0,
+          "port_offset_sigma_m", "must be in [0, 1]", p.port_offset_sigma_m);
   require(std::isfinite(p.shape_tolerance_fraction) && p.shape_tolerance_fraction >= 0.0 &&
               p.shape_tolerance_fraction < 1.0,
           "shape_tolerance_fraction", "must be in [0, 1)", p.shape_tolerance_fraction);
@@ -669,6 +671,9 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     result.disparity_px = median(&face_disparities);
     reproject(geometry, result.centre_px, result.disparity_px, p.centre_sigma_px,
               p.disparity_sigma_px, &result.position_m, &result.covariance_m2);
+    // The estimate stands for the port, but the blob's centre is where the visible parts of the mockup
+    // are: it moves with the target's yaw (a box side, a panel) by centimetres at any range.
+    result.covariance_m2 += Eigen::Matrix3d::Identity() * (p.port_offset_sigma_m * p.port_offset_sigma_m);
     result.range_m = result.position_m.norm();
   }
 

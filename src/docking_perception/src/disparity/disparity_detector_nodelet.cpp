@@ -155,6 +155,7 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("ceiling_cut_y_m", &Config::ceiling_cut_y_m);
   read("disparity_sigma_px", &Config::disparity_sigma_px);
   read("centre_sigma_px", &Config::centre_sigma_px);
+  read("port_offset_sigma_m", &Config::port_offset_sigma_m);
   read("shape_check_enabled", &Config::shape_check_enabled);
   read("shape_tolerance_fraction", &Config::shape_tolerance_fraction);
   read("shape_tolerance_px", &Config::shape_tolerance_px);
@@ -226,6 +227,7 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.ceiling_cut_y_m = c.ceiling_cut_y_m;
   p.disparity_sigma_px = c.disparity_sigma_px;
   p.centre_sigma_px = c.centre_sigma_px;
+  p.port_offset_sigma_m = c.port_offset_sigma_m;
   p.shape_check_enabled = c.shape_check_enabled;
   p.shape_tolerance_fraction = c.shape_tolerance_fraction;
   p.shape_tolerance_px = c.shape_tolerance_px;

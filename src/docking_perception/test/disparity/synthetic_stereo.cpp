@@ -176,6 +176,7 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.ceiling_cut_y_m = number("ceiling_cut_y_m");
   p.disparity_sigma_px = number("disparity_sigma_px");
   p.centre_sigma_px = number("centre_sigma_px");
+  p.port_offset_sigma_m = number("port_offset_sigma_m");
   p.shape_check_enabled = number("shape_check_enabled") != 0.0;
   p.shape_tolerance_fraction = number("shape_tolerance_fraction");
   p.shape_tolerance_px = number("shape_tolerance_px");

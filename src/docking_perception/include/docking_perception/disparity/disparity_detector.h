@@ -106,6 +106,7 @@ struct DetectorParams {
   // Noise model of the covariance.
   double disparity_sigma_px = 0.25;  // 1-sigma error of the robust disparity
   double centre_sigma_px = 1.0;      // 1-sigma error of the face centre in the image
+  double port_offset_sigma_m = 0.04; // 1-sigma of the blob centre's offset from the port, per axis (m)
 
   // Shape check: is the blob the mockup? Off by default here (tests of the search paint any
   // rectangle); config/disparity_detector.yaml turns it on. The bounds of shapeBounds(target_shape)
