@@ -178,6 +178,15 @@ Eigen::Vector3d candidatePosition(const BlobCandidate& blob, const StereoGeometr
   return {(u - geometry.cx_px) * z / geometry.focal_px, (v - geometry.cy_px) * z / geometry.focal_px, z};
 }
 
+// Empty when the blob's centre (`position`, optical frame: y down) is within max_centre_offset_y_m of
+// the optical axis, where the port of a target on the same floor is; otherwise why not.
+std::string heightMismatch(const Eigen::Vector3d& position, const DetectorParams& p) {
+  if (!(p.max_centre_offset_y_m > 0.0) || std::abs(position.y()) <= p.max_centre_offset_y_m) return "";
+  return "centre " + formatNumber(std::abs(position.y())) + " m " + (position.y() < 0.0 ? "above" : "below") +
+         " the optical axis > max_centre_offset_y_m " + formatNumber(p.max_centre_offset_y_m) +
+         " (blob at " + formatNumber(position.z()) + " m; the port is at camera height)";
+}
+
 // Copies the blob into the detection (contour, box, full-size mask, size figures).
 void adoptBlob(const BlobCandidate& blob, cv::Size image_size, Detection* result) {
   result->contour = blob.contour;
@@ -327,6 +336,8 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
           "shape_tolerance_fraction", "must be in [0, 1)", p.shape_tolerance_fraction);
   require(std::isfinite(p.shape_tolerance_px) && p.shape_tolerance_px >= 0.0, "shape_tolerance_px",
           "must be >= 0", p.shape_tolerance_px);
+  require(std::isfinite(p.max_centre_offset_y_m) && p.max_centre_offset_y_m >= 0.0,
+          "max_centre_offset_y_m", "must be >= 0 (0: off)", p.max_centre_offset_y_m);
   const TargetShape& t = p.target_shape;
   require(std::isfinite(t.face_width_m) && t.face_width_m > 0.0, "target_shape.face_width_m",
           "must be > 0", t.face_width_m);
@@ -517,6 +528,10 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
   cv::Mat mask(disparity.size(), CV_8UC1);
   const ShapeBounds bounds = shapeBounds(p.target_shape);
   BlobCandidate chosen, fallback, first_misfit, largest_small;
+  // A blob of this band failed the shape check only on a lower bound or its fill: it may be the target,
+  // degraded (glare, blur, merged holes), so nothing behind it is trusted (issue 11: at 2 m under
+  // glare the face's fill fell to 0.3 and a box stack 1.4 m behind it was taken).
+  bool stop_here = false;
   int largest_skipped_area = 0;
   for (;;) {
     int collected = 0;
@@ -567,12 +582,26 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
         break;
       }
       candidate.shape = measureBlobShape(candidate, clean, geometry);
-      candidate.misfit =
-          shapeMismatch(candidate.shape, bounds, p, geometry.focal_px,
-                        touchesBorder(candidate.box, region, p.border_margin_px));
+      const bool cut = touchesBorder(candidate.box, region, p.border_margin_px);
+      candidate.misfit = shapeMismatch(candidate.shape, bounds, p, geometry.focal_px, cut);
+      const bool degraded_target_size =
+          !candidate.misfit.empty() && !cut &&
+          shapeMismatch(candidate.shape, bounds, p, geometry.focal_px, /*cut=*/true).empty() &&
+          heightMismatch(candidatePosition(candidate, geometry), p).empty();
+      if (candidate.misfit.empty() && !cut) {
+        candidate.misfit = heightMismatch(candidatePosition(candidate, geometry), p);
+      }
       if (!candidate.misfit.empty()) {
         ++result.not_target_shaped_skipped;
-        if (!first_misfit.valid) first_misfit = std::move(candidate);
+        if (degraded_target_size && p.stop_behind_target_sized) {
+          if (!stop_here) {
+            candidate.misfit += "; within the mockup's size, so not looked behind";
+            first_misfit = std::move(candidate);
+          }
+          stop_here = true;
+        } else if (!first_misfit.valid) {
+          first_misfit = std::move(candidate);
+        }
         continue;
       }
       if (!hint.valid || (candidatePosition(candidate, geometry) - hint.position_m).norm() <=
@@ -582,7 +611,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
       }
       if (!fallback.valid) fallback = std::move(candidate);
     }
-    if (chosen.valid || result.near_objects_skipped >= kMaxNearObjectsSkipped) break;
+    if (chosen.valid || stop_here || result.near_objects_skipped >= kMaxNearObjectsSkipped) break;
 
     // --- Nothing at this depth is the target: mismatches at occlusion edges, speckles, dust, or
     // objects of another size (a wall, a person, furniture). Remove the band and look behind it,

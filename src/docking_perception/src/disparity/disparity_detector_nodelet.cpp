@@ -160,6 +160,8 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("shape_tolerance_fraction", &Config::shape_tolerance_fraction);
   read("shape_tolerance_px", &Config::shape_tolerance_px);
   read("min_fill_fraction", &Config::min_fill_fraction);
+  read("max_centre_offset_y_m", &Config::max_centre_offset_y_m);
+  read("stop_behind_target_sized", &Config::stop_behind_target_sized);
   read("track_gate_enabled", &Config::track_gate_enabled);
   read("track_max_speed_mps", &Config::track_max_speed_mps);
   read("track_min_gate_m", &Config::track_min_gate_m);
@@ -232,6 +234,8 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.shape_tolerance_fraction = c.shape_tolerance_fraction;
   p.shape_tolerance_px = c.shape_tolerance_px;
   p.min_fill_fraction = c.min_fill_fraction;
+  p.max_centre_offset_y_m = c.max_centre_offset_y_m;
+  p.stop_behind_target_sized = c.stop_behind_target_sized;
   p.target_shape = target_shape_;
   return p;
 }

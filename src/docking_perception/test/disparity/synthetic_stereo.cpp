@@ -181,6 +181,8 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.shape_tolerance_fraction = number("shape_tolerance_fraction");
   p.shape_tolerance_px = number("shape_tolerance_px");
   p.min_fill_fraction = number("min_fill_fraction");
+  p.max_centre_offset_y_m = number("max_centre_offset_y_m");
+  p.stop_behind_target_sized = number("stop_behind_target_sized") != 0.0;
   return p;
 }
 

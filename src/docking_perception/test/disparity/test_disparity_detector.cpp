@@ -312,7 +312,10 @@ TEST(Reproject, DepthErrorLiesAlongTheLineOfSight) {
 }
 
 TEST(DisparityDetector, DetectedCovarianceGrowsAsRangeSquared) {
-  const DisparityDetector detector{DetectorParams{}};
+  // The propagated stereo noise alone: the port offset term is the same at every range.
+  DetectorParams params;
+  params.port_offset_sigma_m = 0.0;
+  const DisparityDetector detector{params};
   cv::Mat near_image = invalidImage(), far_image = invalidImage();
   paintRect(&near_image, 0.0, 0.0, 2.0, 0.30, 0.24);
   paintRect(&far_image, 0.0, 0.0, 4.0, 0.30, 0.24);

@@ -128,8 +128,11 @@ TEST_F(DisparityDetectorNode, PublishesThePositionOfTheFaceWithItsStampAndFrame)
   EXPECT_NEAR(estimate.disparity_px, kFocalPx * kBaselineM / 3.0, 1e-3);
   EXPECT_GT(estimate.feature_inliers, 1000u);
   EXPECT_GT(estimate.processing_time_ms, 0.0);
-  // Position block: sigma_Z = Z^2 * 0.25 / (f B); orientation unknown.
-  EXPECT_NEAR(std::sqrt(estimate.pose.covariance[2 * 6 + 2]), 9.0 * 0.25 / 55.0, 0.002);
+  // Position block: sigma_Z = Z^2 * 0.25 / (f B), plus port_offset_sigma_m 0.04 m of the node's
+  // config/disparity_detector.yaml on every axis; orientation unknown.
+  const double sigma_z = 9.0 * 0.25 / 55.0, port_offset_sigma = 0.04;
+  EXPECT_NEAR(std::sqrt(estimate.pose.covariance[2 * 6 + 2]),
+              std::sqrt(sigma_z * sigma_z + port_offset_sigma * port_offset_sigma), 0.002);
   EXPECT_GT(estimate.pose.covariance[0], 0.0);
   for (int i = 3; i < 6; ++i) EXPECT_GE(estimate.pose.covariance[i * 6 + i], 1e6);
 }

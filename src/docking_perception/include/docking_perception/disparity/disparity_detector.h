@@ -116,6 +116,15 @@ struct DetectorParams {
   double shape_tolerance_fraction = 0.25;
   double shape_tolerance_px = 8.0;
   double min_fill_fraction = 0.45;  // below: not a solid object (chair, table, strip of a wall)
+  // With the shape check: a blob whose centre lies farther than this above or below the optical axis
+  // is not the target (on the test bed both robots stand on the floor and the port is at camera
+  // height); 0: off (in orbit). Issue 11: with the target's band merged into a box beside it, the
+  // search looked behind and took target-sized patches 0.7-0.9 m above the axis.
+  double max_centre_offset_y_m = 0.0;
+  // With the shape check: a blob within the mockup's upper size bounds that fails only a lower bound or
+  // the fill may be the target, degraded (glare, blur); the search then stops there (reported not
+  // target-shaped) instead of looking behind it, where only other objects can be found.
+  bool stop_behind_target_sized = true;
   TargetShape target_shape;         // from config/target.yaml, not from the detector's file
 };
 
