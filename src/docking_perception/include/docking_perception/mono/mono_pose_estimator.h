@@ -56,8 +56,8 @@ struct MonoPoseParams {
   int max_pattern_candidates = 6;      // IR: candidate LED patterns tried, best first
   bool use_half_resolution = false;    // visible: also search the half-resolution image (blur)
   double region_hint_max_age_s = 0.2;  // an external region hint older than this (image time) is ignored
-  double region_hint_radius_m = 0.6;   // a position hint's search region: this radius around it (the mockup
-                                       // with its panels spans 0.9 m; the disparity centre is the blob's)
+  double region_hint_radius_m = 0.2;   // a position hint's search region: this radius around it (the face's
+                                       // half-diagonal is 0.19 m; tracking_margin_px covers the blob's offset)
   FeatureMatcherParams features;
   LedDetectorParams leds;
   DarkDotParams dots;
