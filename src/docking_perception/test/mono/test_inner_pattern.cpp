@@ -12,6 +12,7 @@
 
 #include "docking_perception/mono/inner_pattern_detector.h"
 #include "docking_perception/mono/target_model.h"
+#include "synthetic_scene.h"
 
 namespace mono = docking_perception::mono;
 
@@ -42,15 +43,8 @@ std::string loadError(const std::string& inner_block) {
   return error;
 }
 
-mono::CameraIntrinsics camera() {
-  mono::CameraIntrinsics c;
-  c.fx = c.fy = 550.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = 640;
-  c.height = 480;
-  return c;
-}
+// The 640x480, f = 550 px camera of the synthetic scenes (one definition for the mono tests).
+mono::CameraIntrinsics camera() { return mono::synthetic::defaultCamera(); }
 
 mono::TagSpec innerTag() {
   mono::TagSpec tag;
