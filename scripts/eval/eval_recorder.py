@@ -185,18 +185,28 @@ class EvalRecorder:
             "within_3_sigma": {axis: (sum(1 for z in zs if abs(z) <= 3.0) / len(zs)) if zs else None
                                for axis, zs in normalized.items()},
         }
-        raw = [
-            {"t": e.header.stamp.to_sec(), "valid": bool(e.valid), "selected_source": e.selected_source,
-             "true_range": (math.sqrt(sum(v * v for v in (t.pose.pose.position.x, t.pose.pose.position.y,
-                                                          t.pose.pose.position.z))) if t else None),
-             "position_error": (math.dist((e.pose.pose.position.x, e.pose.pose.position.y, e.pose.pose.position.z),
-                                          (t.pose.pose.position.x, t.pose.pose.position.y, t.pose.pose.position.z))
-                                if (t and e.valid and e.position_valid) else None)}
-            for e, t in samples
-        ]
+        raw = [self.raw_row(e, t) for e, t in samples]
         if unmatched:
             rospy.logwarn("eval_recorder: %d %s estimates had no truth at their stamp", unmatched, name)
         return entry, raw
+
+    @staticmethod
+    def raw_row(est, truth):
+        """One estimate for diagnosis: validity, the arbiter's choice, the reject code, the errors and the
+        per-axis errors in units of the estimate's own sigma (None where not claimed)."""
+        row = {"t": est.header.stamp.to_sec(), "valid": bool(est.valid), "selected_source": est.selected_source,
+               "reject_reason": est.reject_reason, "true_range": None, "position_error": None,
+               "orientation_error": None, "z": None}
+        if truth is None:
+            return row
+        pe, pt = est.pose.pose.position, truth.pose.pose.position
+        row["true_range"] = math.sqrt(pt.x ** 2 + pt.y ** 2 + pt.z ** 2)
+        if est.valid and est.position_valid:
+            row["position_error"] = math.dist((pe.x, pe.y, pe.z), (pt.x, pt.y, pt.z))
+            row["z"] = list(normalized_errors(est, truth))
+        if est.valid and est.orientation_valid:
+            row["orientation_error"] = rotation_angle_deg(est.pose.pose.orientation, truth.pose.pose.orientation)
+        return row
 
     def write(self):
         sources, raw = {}, {}

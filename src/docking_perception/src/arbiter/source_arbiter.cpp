@@ -141,7 +141,6 @@ OfferResult SourceArbiter::offer(const EstimateSummary& estimate) {
 std::string SourceArbiter::unusableReason(const EstimateSummary& e, double now_s) const {
   if (!e.valid) return e.status.empty() ? "no target" : "no target (" + e.status + ")";
   if (!e.position_valid) return "no position";
-  if (isMono(e.source) && !e.orientation_valid) return "no orientation";
   if (e.source == Source::kDisparity && e.range_m < config_.min_disparity_range_m) {
     // Near the target the detector sees a blob of the nearest surface (or the background), not the
     // port: its position is then worse than none.
@@ -154,6 +153,18 @@ std::string SourceArbiter::unusableReason(const EstimateSummary& e, double now_s
     return "stamped " + formatDouble("%.2f", -age) + " s in the future";
   }
   return {};
+}
+
+// A mono estimate may withhold its orientation (rotation sigma too large) and still give a position: it
+// then ranks after the other mono source if that one claims an orientation, and before disparity.
+void SourceArbiter::preferClaimedOrientation(std::array<Source, kSourceCount>* preference) const {
+  auto claims = [this](Source s) {
+    const auto& e = latest_[indexOf(s)];
+    return e && e->orientation_valid;
+  };
+  auto first = std::find_if(preference->begin(), preference->end(), [](Source s) { return isMono(s); });
+  auto second = std::find_if(first + 1, preference->end(), [](Source s) { return isMono(s); });
+  if (second != preference->end() && !claims(*first) && claims(*second)) std::iter_swap(first, second);
 }
 
 std::string SourceArbiter::poorQualityReason(const EstimateSummary& e) const {
@@ -217,10 +228,11 @@ Decision SourceArbiter::decide(double now_s) {
   if (range) updateRegime(*range);
   decision.regime = regime_;
 
-  const std::array<Source, kSourceCount> preference =
+  std::array<Source, kSourceCount> preference =
       regime_ == RangeRegime::kNear
           ? std::array<Source, kSourceCount>{Source::kMonoVisible, Source::kMonoIr, Source::kDisparity}
           : std::array<Source, kSourceCount>{Source::kDisparity, Source::kMonoVisible, Source::kMonoIr};
+  preferClaimedOrientation(&preference);
 
   std::string reason = regimeName(regime_);
   if (range) reason += " (" + formatDouble("%.2f", *range) + " m)";

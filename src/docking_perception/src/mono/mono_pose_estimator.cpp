@@ -560,6 +560,7 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   if (result.valid) {
     result.status.clear();
     result.reject_reason = RejectReason::kNone;
+    result.orientation_valid = orientationClaimed(result.pose, params_.consistency, &result.status);
     result.range_m = result.pose.translation.norm();
     updateVelocities(&result);
     tracking_ = true;

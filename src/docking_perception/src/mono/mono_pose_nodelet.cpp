@@ -323,7 +323,7 @@ void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono
   msg.selected_source = source_;
   msg.valid = result.valid;
   msg.position_valid = result.valid;
-  msg.orientation_valid = result.valid;
+  msg.orientation_valid = result.valid && result.orientation_valid;
   msg.twist_valid = result.valid && result.twist.valid;
   const Eigen::Quaterniond q(result.pose.rotation);
   msg.pose.pose.position.x = result.pose.translation.x();
@@ -356,7 +356,7 @@ void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono
   msg.disparity_px = 0.0;
   msg.processing_time_ms = result.processing_time_ms;
   msg.solver = result.solver;
-  msg.status = result.valid ? std::string() : result.status;
+  msg.status = result.status;  // a valid result's status says what part is withheld, if any
   // The message's REJECT_* constants mirror mono::RejectReason, in the same order.
   static_assert(docking_msgs::TargetEstimate::REJECT_APPEARANCE == static_cast<int>(mono::RejectReason::kAppearance) &&
                     docking_msgs::TargetEstimate::REJECT_DOT_APPEARANCE ==

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <Eigen/Eigenvalues>
+#include <string>
 #include <opencv2/imgproc.hpp>
 
 namespace docking_perception {
@@ -24,6 +27,7 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.blur_gain >= 0.0)) return "covariance_blur_gain must not be negative";
   if (!(p.position_floor_fraction >= 0.0)) return "position_floor_fraction must not be negative";
   if (!(p.rotation_floor_deg >= 0.0)) return "rotation_floor_deg must not be negative";
+  if (!(p.max_rotation_sigma_deg > 0.0)) return "max_rotation_sigma_deg must be positive";
   if (!(p.max_dot_offset_factor > 0.0)) return "max_dot_offset_factor must be positive";
   if (!(p.max_solver_disagreement_deg > 0.0)) return "max_solver_disagreement_deg must be positive";
   if (!(p.max_led_area_ratio > 1.0)) return "max_led_area_ratio must exceed 1";
@@ -159,6 +163,19 @@ Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovarian
     covariance(3 + i, 3 + i) += rotation_floor * rotation_floor;
   }
   return covariance;
+}
+
+bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note) {
+  const Eigen::Matrix3d rotation_block = pose.covariance.bottomRightCorner<3, 3>();
+  double sigma_deg = std::numeric_limits<double>::infinity();  // a non-finite block claims nothing
+  if (rotation_block.allFinite()) {
+    const double largest_variance =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(rotation_block).eigenvalues().maxCoeff();
+    sigma_deg = std::sqrt(std::max(0.0, largest_variance)) * 180.0 / M_PI;
+  }
+  if (sigma_deg <= params.max_rotation_sigma_deg) return true;
+  *note = "orientation withheld: rotation sigma " + std::to_string(sigma_deg) + " deg > max_rotation_sigma_deg";
+  return false;
 }
 
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,

@@ -214,17 +214,32 @@ TEST(SourceArbiter, EachEstimateIsNewOnceAndOutputStaysInOrder) {
   EXPECT_DOUBLE_EQ(d.stamp_s, 5.05);
 }
 
-TEST(SourceArbiter, MonoWithoutOrientationOrNonFiniteRangeIsUnusable) {
+TEST(SourceArbiter, NonFiniteRangeIsUnusable) {
   SourceArbiter arbiter{ArbiterConfig{}};
-  EstimateSummary no_orientation = good(Source::kMonoVisible, 1.0, 1.0);
-  no_orientation.orientation_valid = false;
-  ASSERT_TRUE(arbiter.offer(no_orientation).accepted);
   EstimateSummary nan_range = good(Source::kMonoIr, 1.0, NAN);
   ASSERT_TRUE(arbiter.offer(nan_range).accepted);
   const Decision d = arbiter.decide(1.01);
   EXPECT_FALSE(d.valid);
-  EXPECT_NE(d.reason.find("no orientation"), std::string::npos) << d.reason;
   EXPECT_NE(d.reason.find("range is not finite"), std::string::npos) << d.reason;
+}
+
+// A mono pose whose orientation is withheld (rotation sigma too large) still gives a position; the
+// other mono source, claiming an orientation, goes first.
+TEST(SourceArbiter, MonoWithoutOrientationIsPositionOnlyAfterOneWithOrientation) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  EstimateSummary no_orientation = good(Source::kMonoVisible, 1.0, 1.0);
+  no_orientation.orientation_valid = false;
+  ASSERT_TRUE(arbiter.offer(no_orientation).accepted);
+  Decision d = arbiter.decide(1.01);
+  ASSERT_TRUE(d.valid) << d.reason;
+  EXPECT_EQ(d.source, Source::kMonoVisible);
+
+  ASSERT_TRUE(arbiter.offer(good(Source::kMonoIr, 1.02, 1.0)).accepted);
+  no_orientation.stamp_s = 1.02;
+  ASSERT_TRUE(arbiter.offer(no_orientation).accepted);
+  d = arbiter.decide(1.03);
+  ASSERT_TRUE(d.valid) << d.reason;
+  EXPECT_EQ(d.source, Source::kMonoIr);
 }
 
 TEST(SourceArbiter, NanPoseMakesTheSourceUnusable) {

@@ -194,6 +194,29 @@ TEST(PoseConsistency, AppearanceSeparatesTheTruePoseFromAWrongOne) {
   EXPECT_GT(right.blur_sigma_px, 0.3) << "a 1 px defocus should read as blur";
 }
 
+// The largest rotation sigma decides, whichever axis it is on (and a correlated block is judged by its
+// eigenvalue, not its diagonal).
+TEST(PoseConsistency, OrientationIsWithheldAboveTheRotationSigmaLimit) {
+  mono::ConsistencyParams params;
+  params.max_rotation_sigma_deg = 3.3;
+  mono::PoseWithCovariance pose;
+  pose.covariance = mono::Matrix6d::Identity() * 1e-6;
+  const double deg = M_PI / 180.0;
+  std::string note;
+  pose.covariance(4, 4) = std::pow(3.0 * deg, 2);
+  EXPECT_TRUE(mono::orientationClaimed(pose, params, &note)) << note;
+  pose.covariance(4, 4) = std::pow(3.6 * deg, 2);
+  EXPECT_FALSE(mono::orientationClaimed(pose, params, &note));
+  EXPECT_NE(note.find("max_rotation_sigma_deg"), std::string::npos) << note;
+  // Two axes at 2.6 deg, fully correlated: 3.7 deg along their sum.
+  pose.covariance(4, 4) = pose.covariance(3, 3) = pose.covariance(3, 4) = pose.covariance(4, 3) = std::pow(2.6 * deg, 2);
+  EXPECT_FALSE(mono::orientationClaimed(pose, params, &note));
+  pose.covariance(3, 4) = pose.covariance(4, 3) = 0.0;
+  EXPECT_TRUE(mono::orientationClaimed(pose, params, &note)) << note;
+  pose.covariance(5, 5) = NAN;
+  EXPECT_FALSE(mono::orientationClaimed(pose, params, &note));
+}
+
 // A blob made of an LED spot and a reflection beside it reads as elongated; a lone spot does not.
 TEST(PoseConsistency, MergedLedBlobIsElongated) {
   cv::Mat image(120, 160, CV_8U, cv::Scalar(10));

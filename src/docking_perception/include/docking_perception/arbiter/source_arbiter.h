@@ -131,6 +131,7 @@ class SourceArbiter {
   std::string unusableReason(const EstimateSummary& e, double now_s) const;
   /// Empty when a mono estimate's quality is good enough; otherwise why not.
   std::string poorQualityReason(const EstimateSummary& e) const;
+  void preferClaimedOrientation(std::array<Source, kSourceCount>* preference) const;
   void updateRegime(double range_m);
 
   // The cross-source consistency check.

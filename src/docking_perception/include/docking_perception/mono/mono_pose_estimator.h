@@ -77,7 +77,10 @@ std::string validateParams(const MonoPoseParams& params);
 struct MonoPoseResult {
   double stamp_s = 0.0;
   bool valid = false;
-  std::string status;                  // empty when valid, else why not (for people)
+  // The orientation is claimed (valid and its sigma within max_rotation_sigma_deg); when false on a
+  // valid result, only the position (and the velocities) may be used.
+  bool orientation_valid = false;
+  std::string status;                  // why not valid, or what part is withheld (for people); else empty
   RejectReason reject_reason = RejectReason::kNone;  // the same as a code (for programs)
   std::string solver;                  // "paper_5point" or "pnp"
   PoseWithCovariance pose;             // camera <- target

@@ -75,6 +75,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("covariance_blur_gain", &p.consistency.blur_gain);
   visit("position_floor_fraction", &p.consistency.position_floor_fraction);
   visit("rotation_floor_deg", &p.consistency.rotation_floor_deg);
+  visit("max_rotation_sigma_deg", &p.consistency.max_rotation_sigma_deg);
   visit("max_dot_offset_factor", &p.consistency.max_dot_offset_factor);
   visit("max_solver_disagreement_deg", &p.consistency.max_solver_disagreement_deg);
   visit("max_led_area_ratio", &p.consistency.max_led_area_ratio);

@@ -44,6 +44,10 @@ struct ConsistencyParams {
   double max_solver_disagreement_deg = 5.0;  // paper_5point vs homography-inlier PnP orientation
   double max_led_area_ratio = 2.5;       // IR: a pattern blob larger than this times the median of the five
   double max_led_elongation = 1.8;       // IR: ratio of a blob's principal axes (second moments)
+  // An orientation whose largest rotation sigma is above this is not claimed (the position still is):
+  // 3.3 deg puts 3 sigma at 10 deg, the error that makes an estimate wrong. Five LEDs under motion blur
+  // gave 10-28 deg errors with honest sigmas of 4-7 deg (eval_real_motion9px_1m); those are withheld.
+  double max_rotation_sigma_deg = 3.3;
 };
 
 // Empty when usable, else a message naming the parameter (config key).
@@ -76,6 +80,10 @@ class FaceAppearance {
 Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovariance& pose,
                           const std::vector<Eigen::Vector3d>& model_points, double residual_rms_px,
                           double min_pixel_sigma, double blur_sigma_px, const ConsistencyParams& params);
+
+// Whether the pose's orientation may be claimed: the largest rotation sigma (the rotation block's largest
+// eigenvalue) within max_rotation_sigma_deg. If not, *note says so (for people).
+bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note);
 
 // Adds the outer product of the difference to another pose (IPPE's other solution) to a covariance.
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,
