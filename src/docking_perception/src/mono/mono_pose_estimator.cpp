@@ -114,6 +114,7 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
       five_point_solver_(model.markers()),
       pnp_solver_(params.pnp),
       filter_(params.filter),
+      innovation_scale_(params.consistency.innovation_window_frames),
       frame_difference_(params.filter.max_gap_s) {
   const std::string invalid = validateParams(params);
   if (!invalid.empty()) throw std::invalid_argument(invalid);
@@ -146,6 +147,7 @@ void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
   pnp_solver_.setParams(params.pnp);
   filter_.setParams(params.filter);
   frame_difference_.setMaxGap(params.filter.max_gap_s);
+  innovation_scale_.setWindow(params.consistency.innovation_window_frames);
   if (inner_pattern_) inner_pattern_->setParams(params.inner_pattern);
 }
 
@@ -181,6 +183,7 @@ void MonoPoseEstimator::reset() {
   preferred_level_ = 0;
   filter_.reset();
   frame_difference_.reset();
+  innovation_scale_.reset();
 }
 
 const Eigen::Matrix3d* MonoPoseEstimator::previousRotation(double stamp_s, Eigen::Matrix3d* storage) const {
@@ -434,6 +437,18 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
   return false;
 }
 
+void MonoPoseEstimator::scaleByInnovation(MonoPoseResult* result) {
+  // The running mean survives a lost frame or a filter restart: blur that broke tracking is still there.
+  PoseWithCovariance predicted;
+  if (filter_.initialized() && result->stamp_s > filter_.lastStamp() &&
+      result->stamp_s - filter_.lastStamp() <= params_.filter.max_gap_s && filter_.predict(result->stamp_s, &predicted)) {
+    innovation_scale_.update(result->pose, predicted);
+  }
+  innovation_scale_.apply(&result->pose.covariance);
+  result->covariance_scale_position = innovation_scale_.positionScale();
+  result->covariance_scale_rotation = innovation_scale_.rotationScale();
+}
+
 void MonoPoseEstimator::updateVelocities(MonoPoseResult* result) {
   std::string filter_note;
   std::string difference_note;
@@ -560,6 +575,7 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   if (result.valid) {
     result.status.clear();
     result.reject_reason = RejectReason::kNone;
+    scaleByInnovation(&result);
     result.orientation_valid = orientationClaimed(result.pose, params_.consistency, &result.status);
     result.range_m = result.pose.translation.norm();
     updateVelocities(&result);

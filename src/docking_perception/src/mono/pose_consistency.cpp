@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <string>
 #include <opencv2/imgproc.hpp>
@@ -28,6 +29,7 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.position_floor_fraction >= 0.0)) return "position_floor_fraction must not be negative";
   if (!(p.rotation_floor_deg >= 0.0)) return "rotation_floor_deg must not be negative";
   if (!(p.max_rotation_sigma_deg > 0.0)) return "max_rotation_sigma_deg must be positive";
+  if (!(p.innovation_window_frames >= 0.0)) return "innovation_window_frames must not be negative (0: off)";
   if (!(p.max_dot_offset_factor > 0.0)) return "max_dot_offset_factor must be positive";
   if (!(p.max_solver_disagreement_deg > 0.0)) return "max_solver_disagreement_deg must be positive";
   if (!(p.max_led_area_ratio > 1.0)) return "max_led_area_ratio must exceed 1";
@@ -176,6 +178,43 @@ bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams&
   if (sigma_deg <= params.max_rotation_sigma_deg) return true;
   *note = "orientation withheld: rotation sigma " + std::to_string(sigma_deg) + " deg > max_rotation_sigma_deg";
   return false;
+}
+
+void InnovationCovarianceScale::setWindow(double window_frames) {
+  weight_ = window_frames > 0.0 ? 1.0 / std::max(1.0, window_frames) : 0.0;
+  if (weight_ == 0.0) reset();
+}
+
+namespace {
+// d^T S^-1 d / 3 for one 3-dof block, S the sum of both covariances' blocks; NaN when S is singular.
+double normalizedChi2(const Eigen::Vector3d& d, const Eigen::Matrix3d& s) {
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(s);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::numeric_limits<double>::quiet_NaN();
+  return d.dot(ldlt.solve(d)) / 3.0;
+}
+}  // namespace
+
+void InnovationCovarianceScale::update(const PoseWithCovariance& measured, const PoseWithCovariance& predicted) {
+  if (weight_ == 0.0) return;
+  const Matrix6d s = measured.covariance + predicted.covariance;
+  const double position = normalizedChi2(measured.translation - predicted.translation, s.topLeftCorner<3, 3>());
+  const double rotation = normalizedChi2(rotationLog(measured.rotation * predicted.rotation.transpose()),
+                                         s.bottomRightCorner<3, 3>());
+  if (std::isfinite(position)) position_mean_ += weight_ * (position - position_mean_);
+  if (std::isfinite(rotation)) rotation_mean_ += weight_ * (rotation - rotation_mean_);
+}
+
+void InnovationCovarianceScale::apply(Matrix6d* covariance) const {
+  const double p = std::sqrt(positionScale());
+  const double r = std::sqrt(rotationScale());
+  Vector6d scale;
+  scale << p, p, p, r, r, r;
+  *covariance = scale.asDiagonal() * (*covariance) * scale.asDiagonal();
+}
+
+void InnovationCovarianceScale::reset() {
+  position_mean_ = 1.0;
+  rotation_mean_ = 1.0;
 }
 
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,

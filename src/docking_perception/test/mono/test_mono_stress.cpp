@@ -12,6 +12,7 @@
 
 #include "docking_perception/mono/led_pattern_detector.h"
 #include "docking_perception/mono/pose_consistency.h"
+#include <random>
 #include "mono_params_yaml.h"
 #include "mono_stress.h"
 
@@ -215,6 +216,44 @@ TEST(PoseConsistency, OrientationIsWithheldAboveTheRotationSigmaLimit) {
   EXPECT_TRUE(mono::orientationClaimed(pose, params, &note)) << note;
   pose.covariance(5, 5) = NAN;
   EXPECT_FALSE(mono::orientationClaimed(pose, params, &note));
+}
+
+// Poses that scatter about the prediction by 3 times their claimed sigma get their covariance scaled by
+// ~9 (variance); poses that scatter as claimed keep theirs. Fixed seed.
+TEST(PoseConsistency, InnovationScaleFollowsTheScatterAboutThePrediction) {
+  const double sigma_m = 0.002;
+  const double sigma_rad = 0.01;
+  auto run = [&](double position_factor, double rotation_factor) {
+    mono::InnovationCovarianceScale scale(10.0);
+    std::mt19937 rng(7);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    mono::PoseWithCovariance predicted;
+    predicted.translation = Eigen::Vector3d(0.1, 0.0, 1.0);
+    predicted.covariance = mono::Matrix6d::Zero();  // a settled filter: its own uncertainty negligible
+    predicted.covariance.diagonal() << 1e-12, 1e-12, 1e-12, 1e-12, 1e-12, 1e-12;
+    for (int i = 0; i < 400; ++i) {
+      mono::PoseWithCovariance measured = predicted;
+      measured.covariance.diagonal() << sigma_m * sigma_m, sigma_m * sigma_m, sigma_m * sigma_m,
+          sigma_rad * sigma_rad, sigma_rad * sigma_rad, sigma_rad * sigma_rad;
+      const Eigen::Vector3d dp(unit(rng), unit(rng), unit(rng));
+      const Eigen::Vector3d dr(unit(rng), unit(rng), unit(rng));
+      measured.translation += position_factor * sigma_m * dp;
+      measured.rotation = mono::rotationExp(rotation_factor * sigma_rad * dr) * predicted.rotation;
+      scale.update(measured, predicted);
+    }
+    return std::make_pair(scale.positionScale(), scale.rotationScale());
+  };
+  const auto honest = run(1.0, 1.0);
+  EXPECT_LT(honest.first, 2.0);
+  EXPECT_LT(honest.second, 2.0);
+  const auto jittery = run(1.0, 3.0);
+  EXPECT_LT(jittery.first, 2.0);
+  EXPECT_GT(jittery.second, 4.0);
+  EXPECT_LT(jittery.second, 20.0);
+  mono::Matrix6d covariance = mono::Matrix6d::Identity();
+  mono::InnovationCovarianceScale off(0.0);
+  off.apply(&covariance);
+  EXPECT_TRUE(covariance.isApprox(mono::Matrix6d::Identity()));
 }
 
 // A blob made of an LED spot and a reflection beside it reads as elongated; a lone spot does not.

@@ -102,6 +102,9 @@ struct MonoPoseResult {
   double inlier_spread = 0.0;          // visible: hull of the pose points / face area
   double appearance_ncc = -1.0;        // visible: the model at the pose vs the image (median cell NCC)
   double blur_sigma_px = 0.0;          // visible: the image blur that matched the model best
+  // The covariance's scale (variance) from the poses' scatter about the filter (InnovationCovarianceScale).
+  double covariance_scale_position = 1.0;
+  double covariance_scale_rotation = 1.0;
   // For the debug image.
   std::vector<cv::Point2f> matched_points;
   std::vector<cv::Point2f> inlier_points;
@@ -150,6 +153,7 @@ class MonoPoseEstimator {
   cv::Rect predictedRegion(double stamp_s, double* face_width_px) const;
   const Eigen::Matrix3d* previousRotation(double stamp_s, Eigen::Matrix3d* storage) const;
   void updateVelocities(MonoPoseResult* result);
+  void scaleByInnovation(MonoPoseResult* result);
   // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
   void applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
@@ -174,6 +178,7 @@ class MonoPoseEstimator {
   CollinearFivePointSolver five_point_solver_;
   PlanarPnpSolver pnp_solver_;
   ConstantVelocityFilter filter_;
+  InnovationCovarianceScale innovation_scale_;
   FrameDifferenceVelocity frame_difference_;
   bool tracking_ = false;  // the previous image gave a valid pose
   PoseWithCovariance last_pose_;

@@ -20,6 +20,7 @@
 //   reflection or a second source merged with an LED; their centroid is pulled off the LED.
 #pragma once
 
+#include <algorithm>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -48,6 +49,9 @@ struct ConsistencyParams {
   // 3.3 deg puts 3 sigma at 10 deg, the error that makes an estimate wrong. Five LEDs under motion blur
   // gave 10-28 deg errors with honest sigmas of 4-7 deg (eval_real_motion9px_1m); those are withheld.
   double max_rotation_sigma_deg = 3.3;
+  // Frames over which the scatter of the poses about the velocity filter's prediction is averaged to
+  // scale the covariance (InnovationCovarianceScale); 0 turns the scaling off.
+  double innovation_window_frames = 10.0;
 };
 
 // Empty when usable, else a message naming the parameter (config key).
@@ -84,6 +88,30 @@ Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovarian
 // Whether the pose's orientation may be claimed: the largest rotation sigma (the rotation block's largest
 // eigenvalue) within max_rotation_sigma_deg. If not, *note says so (for people).
 bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note);
+
+// The covariance model predicts the pixel noise from the residuals and the blur; it cannot see noise that
+// all the points share (a blurred face's points move together, so their residuals stay small while the
+// pose jitters by degrees). The poses' scatter about the constant-velocity filter's prediction can: the
+// normalized innovation chi^2 (measurement and prediction covariances added) has expectation 1 per
+// degree of freedom. This keeps its running mean over ~window frames, for the position and the rotation
+// block separately, and scales the covariance by it where it is above 1 (never below the model).
+class InnovationCovarianceScale {
+ public:
+  explicit InnovationCovarianceScale(double window_frames = 10.0) { setWindow(window_frames); }
+  void setWindow(double window_frames);
+  // The measured pose (its covariance from the model, before scaling) against the prediction for its stamp.
+  void update(const PoseWithCovariance& measured, const PoseWithCovariance& predicted);
+  // Scales the position block by positionScale(), the rotation block by rotationScale() (variances).
+  void apply(Matrix6d* covariance) const;
+  double positionScale() const { return std::max(1.0, position_mean_); }
+  double rotationScale() const { return std::max(1.0, rotation_mean_); }
+  void reset();
+
+ private:
+  double weight_ = 0.0;  // of the newest frame in the running mean; 0: off
+  double position_mean_ = 1.0;
+  double rotation_mean_ = 1.0;
+};
 
 // Adds the outer product of the difference to another pose (IPPE's other solution) to a covariance.
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,
