@@ -19,7 +19,8 @@ set(MONO_CORE_SOURCES
   src/mono/inner_pattern_detector.cpp
   src/mono/reject_reason.cpp
   src/mono/pose_consistency.cpp
-  src/mono/face_search.cpp)
+  src/mono/face_search.cpp
+  src/mono/face_alignment.cpp)
 
 # AprilTag 3 (Debian's libapriltag-dev, pkg-config `apriltag`): the inner pattern and the comparison tools.
 find_package(PkgConfig REQUIRED)

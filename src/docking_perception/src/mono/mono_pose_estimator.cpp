@@ -95,6 +95,10 @@ std::string validateParams(const MonoPoseParams& p) {
   }
   if (!(p.region_hint_max_age_s >= 0.0)) return "region_hint_max_age_s must not be negative";
   if (!(p.region_hint_radius_m > 0.0)) return "region_hint_radius_m must be positive";
+  if (p.direct_yaw_hypotheses < 1 || p.direct_yaw_hypotheses > 15) return "direct_yaw_hypotheses must be 1..15";
+  if (!(p.direct_max_yaw_deg >= 0.0 && p.direct_max_yaw_deg <= 60.0)) return "direct_max_yaw_deg must be 0..60";
+  const std::string direct = validateDirectAlignmentParams(p.direct);
+  if (!direct.empty()) return direct;
   const std::string consistency = validateConsistencyParams(p.consistency);
   if (!consistency.empty()) return consistency;
   for (const int width : p.features.model_widths_px) {
@@ -126,6 +130,7 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
     if (model.hasInnerPattern()) inner_pattern_ = std::make_unique<InnerPatternDetector>(model.innerPattern(), params.inner_pattern);
   }
   appearance_ = FaceAppearance(model);
+  if (model.hasTexture()) direct_aligner_ = DirectFaceAligner(model, params.direct);
 }
 
 void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
@@ -141,6 +146,7 @@ void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
     reset();
   }
   params_ = params;
+  if (model_.hasTexture()) direct_aligner_ = DirectFaceAligner(model_, params.direct);
   matcher_.setParams(params.features);
   led_detector_.setParams(params.leds);
   dot_locator_.setParams(params.dots);
@@ -160,6 +166,7 @@ void MonoPoseEstimator::setCamera(const CameraIntrinsics& camera) {
 void MonoPoseEstimator::setRegionHint(const cv::Rect& region, double stamp_s) {
   hint_region_ = region & cv::Rect(0, 0, camera_.width, camera_.height);
   hint_stamp_s_ = stamp_s;
+  hint_has_position_ = false;
 }
 
 void MonoPoseEstimator::setPositionHint(const Eigen::Vector3d& position_camera, double stamp_s) {
@@ -175,6 +182,8 @@ void MonoPoseEstimator::setPositionHint(const Eigen::Vector3d& position_camera, 
   const cv::Rect region(cv::Point(static_cast<int>(std::floor(u - half_u)), static_cast<int>(std::floor(v - half_v))),
                         cv::Point(static_cast<int>(std::ceil(u + half_u)), static_cast<int>(std::ceil(v + half_v))));
   setRegionHint(region, stamp_s);
+  hint_has_position_ = true;
+  hint_position_ = position_camera;
 }
 
 void MonoPoseEstimator::reset() {
@@ -286,7 +295,7 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
   const bool hint_fresh = hint_region_.area() > 0 && std::abs(result->stamp_s - hint_stamp_s_) <= params_.region_hint_max_age_s;
   if (hint_fresh && region.area() <= 0) priors.push_back({hint_region_, 0.0});
   const FaceSearchOutcome search = searchFace(matcher_, gray, priors, params_.use_half_resolution, &preferred_level_);
-  const FaceMatch& match = search.match;
+  FaceMatch match = search.match;
   result->used_tracking_region = match.found && search.prior_index == 0;
   result->used_region_hint = match.found && search.prior_index == 1;
   result->search_region = search.region;
@@ -296,12 +305,79 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
   result->matched_points = match.matched_image_points;
   result->inlier_points = match.inlier_image_points;
   result->face_outline = match.face_outline;
+  double direct_sigma_px = 0.0;
+  if (!match.found && params_.use_direct_alignment) {
+    const DirectAlignment direct = alignDirect(gray, tracking_, hint_fresh, result->stamp_s);
+    result->direct_correlation = direct.correlation;
+    if (direct.found) {
+      match.found = true;
+      match.homography = direct.homography;
+      match.inlier_texture_points = direct.texture_points;
+      match.inlier_image_points = direct.image_points;
+      match.face_outline = direct.face_outline;
+      match.inliers = static_cast<int>(direct.image_points.size());
+      result->used_direct_alignment = true;
+      result->used_tracking_region = tracking_;
+      result->used_region_hint = !tracking_;
+      result->inlier_points = direct.image_points;
+      result->face_outline = direct.face_outline;
+      direct_sigma_px = direct.pixel_sigma_px;
+    } else if (!direct.status.empty()) {
+      match.status += "; direct alignment: " + direct.status;
+    }
+  }
   if (!match.found) {
     result->status = match.status;
     result->reject_reason = RejectReason::kNotFound;
     return false;
   }
+  return poseFromMatch(gray, match, direct_sigma_px, result);
+}
 
+Eigen::Vector3d MonoPoseEstimator::hintPosition() const {
+  if (hint_has_position_) return hint_position_;
+  // A region hint is a detector's box around the face, grown by about a third: the face's height (which
+  // yaw does not shorten) is about this fraction of the box's.
+  constexpr double kRegionHintFaceFraction = 0.77;
+  const Eigen::Vector2d centre(hint_region_.x + 0.5 * hint_region_.width, hint_region_.y + 0.5 * hint_region_.height);
+  const double range_z = camera_.fy * model_.faceHeight() / (kRegionHintFaceFraction * hint_region_.height);
+  return camera_.ray(centre) * range_z;
+}
+
+DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool tracking_prior, bool hint_fresh,
+                                              double stamp_s) const {
+  if (tracking_prior) {
+    PoseWithCovariance predicted = last_pose_;
+    if (stamp_s > last_stamp_s_ && stamp_s - last_stamp_s_ <= params_.filter.max_gap_s) filter_.predict(stamp_s, &predicted);
+    return direct_aligner_.align(gray, camera_, predicted);
+  }
+  DirectAlignment best;
+  if (!hint_fresh) {
+    best.status = "no prior (tracking or hint)";
+    return best;
+  }
+  // The hint gives a position only: the face looking along the optical axis (the upright texture), turned
+  // by each yaw about its vertical axis; the coarse levels score the hypotheses, the best is refined.
+  PoseWithCovariance hypothesis;
+  hypothesis.translation = hintPosition();
+  Eigen::Matrix3d facing;
+  facing.col(0) = Eigen::Vector3d(0, 0, -1);  // face normal (target x) towards the camera
+  facing.col(1) = Eigen::Vector3d(1, 0, 0);   // target y (viewer's right) -> image right
+  facing.col(2) = Eigen::Vector3d(0, -1, 0);  // target z (up) -> image up
+  const int count = params_.direct_yaw_hypotheses;
+  for (int i = 0; i < count; ++i) {
+    const double yaw_deg = count == 1 ? 0.0 : params_.direct_max_yaw_deg * (2.0 * i / (count - 1) - 1.0);
+    hypothesis.rotation = facing * Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const DirectAlignment coarse =
+        direct_aligner_.align(gray, faceHomography(model_, camera_, hypothesis), /*coarse_only=*/true);
+    if (coarse.correlation > best.correlation) best = coarse;
+  }
+  if (best.face_outline.empty()) return best;  // no hypothesis converged
+  return direct_aligner_.align(gray, best.homography);
+}
+
+bool MonoPoseEstimator::poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px,
+                                      MonoPoseResult* result) {
   std::string reason;
   if (params_.solver == PoseSolverType::kPnp) {
     std::vector<Eigen::Vector3d> model_points;
@@ -333,7 +409,8 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
       return false;
     }
     result->pose = solution.pose;
-    return vetVisiblePose(gray, match, model_points, &solution, result);
+    const double pixel_sigma = result->used_direct_alignment ? direct_sigma_px : solution.reprojection_rms_px;
+    return vetVisiblePose(gray, match, model_points, &solution, pixel_sigma, result);
   }
 
   // paper_5point: the printed dots, where the homography says they are.
@@ -377,7 +454,7 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
   }
   if (!vetFivePointPose(predicted, pixels, dot_radius_px, model_points, image_points, result)) return false;
   const std::vector<Eigen::Vector3d> markers(model_.markers().begin(), model_.markers().end());
-  return vetVisiblePose(gray, match, markers, nullptr, result);
+  return vetVisiblePose(gray, match, markers, nullptr, result->reprojection_error_px, result);
 }
 
 bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result) {
@@ -593,7 +670,7 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
 
 bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& match,
                                        const std::vector<Eigen::Vector3d>& model_points, const PlanarPnpSolution* pnp,
-                                       MonoPoseResult* result) const {
+                                       double pixel_sigma_px, MonoPoseResult* result) const {
   const ConsistencyParams& c = params_.consistency;
   auto reject = [result](RejectReason code, const std::string& text) {
     result->reject_reason = code;
@@ -611,7 +688,7 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
   double ambiguity_deg = 0.0;
   if (pnp != nullptr && pnp->has_alternative && !pnp->chosen_by_previous_pose) {
     const double n = static_cast<double>(model_points.size());
-    const double sigma = std::max(result->reprojection_error_px, params_.pnp.min_pixel_sigma);
+    const double sigma = std::max(pixel_sigma_px, params_.pnp.min_pixel_sigma);
     const double excess = n * (pnp->alternative_rms_px * pnp->alternative_rms_px -
                                result->reprojection_error_px * result->reprojection_error_px) / (sigma * sigma);
     if (excess < c.ambiguity_chi2) {
@@ -630,7 +707,7 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
                                                  std::to_string(appearance.median_ncc) + ", min_appearance_ncc)");
   }
   if (pnp != nullptr) {
-    result->pose.covariance = honestCovariance(camera_, result->pose, model_points, result->reprojection_error_px,
+    result->pose.covariance = honestCovariance(camera_, result->pose, model_points, pixel_sigma_px,
                                                params_.pnp.min_pixel_sigma, appearance.blur_sigma_px, c);
     if (ambiguity_deg > 0.0) {
       addAlternative(result->pose, pnp->alternative_rotation, pnp->alternative_translation, &result->pose.covariance);

@@ -209,6 +209,8 @@ void MonoPoseNodelet::reconfigure(MonoPoseConfig& config, uint32_t /*level*/) {
   next.features.min_inliers = config.min_inliers;
   next.features.ransac_threshold_px = config.ransac_threshold_px;
   next.features.refine = config.refine_matches;
+  next.use_direct_alignment = config.use_direct_alignment;
+  next.direct.min_correlation = config.direct_min_correlation;
   next.leds.threshold = config.led_threshold;
   next.filter.accel_noise = config.accel_noise;
   next.filter.angular_accel_noise = config.angular_accel_noise;

@@ -16,6 +16,7 @@
 
 #include "docking_perception/mono/collinear_five_point_solver.h"
 #include "docking_perception/mono/dark_dot_locator.h"
+#include "docking_perception/mono/face_alignment.h"
 #include "docking_perception/mono/face_search.h"
 #include "docking_perception/mono/feature_matcher.h"
 #include "docking_perception/mono/inner_pattern_detector.h"
@@ -58,6 +59,12 @@ struct MonoPoseParams {
   double region_hint_max_age_s = 0.2;  // an external region hint older than this (image time) is ignored
   double region_hint_radius_m = 0.2;   // a position hint's search region: this radius around it (the face's
                                        // half-diagonal is 0.19 m; tracking_margin_px covers the blob's offset)
+  // Visible: when the features find no face and a prior exists (the tracked pose, or a region/position
+  // hint), align the texture with the image directly (face_alignment.h).
+  bool use_direct_alignment = true;
+  int direct_yaw_hypotheses = 5;       // a hint gives no orientation: face yaws tried, evenly over +-max
+  double direct_max_yaw_deg = 30.0;    // the largest yaw tried from a hint (the ECC basin covers ~10 deg more)
+  DirectAlignmentParams direct;
   FeatureMatcherParams features;
   LedDetectorParams leds;
   DarkDotParams dots;
@@ -105,6 +112,8 @@ struct MonoPoseResult {
   // The covariance's scale (variance) from the poses' scatter about the filter (InnovationCovarianceScale).
   double covariance_scale_position = 1.0;
   double covariance_scale_rotation = 1.0;
+  bool used_direct_alignment = false;  // visible: the pose rests on the direct (ECC) alignment, not features
+  double direct_correlation = -1.0;    // visible: the direct alignment's final correlation (-1: not tried)
   // For the debug image.
   std::vector<cv::Point2f> matched_points;
   std::vector<cv::Point2f> inlier_points;
@@ -160,8 +169,16 @@ class MonoPoseEstimator {
   cv::Rect predictedInnerPatternRegion(double stamp_s) const;
   // The consistency checks and honest covariance of a visible pose (pose_consistency.h); false with the
   // reason in result when the pose cannot be trusted.
+  // pixel_sigma_px: the noise of the pose points (the PnP residual for features, the fit's own for the
+  // direct alignment).
   bool vetVisiblePose(const cv::Mat& gray, const FaceMatch& match, const std::vector<Eigen::Vector3d>& model_points,
-                      const PlanarPnpSolution* pnp, MonoPoseResult* result) const;
+                      const PlanarPnpSolution* pnp, double pixel_sigma_px, MonoPoseResult* result) const;
+  // The pose from a face match (features or direct alignment): PnP or the 5 dots, then the checks.
+  bool poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px, MonoPoseResult* result);
+  // The direct alignment from the tracked pose or the hint; found == false when no prior or no match.
+  DirectAlignment alignDirect(const cv::Mat& gray, bool tracking_prior, bool hint_fresh, double stamp_s) const;
+  // A hint's position: the position hint's, or one from the region hint's box.
+  Eigen::Vector3d hintPosition() const;
   // paper_5point: the located dots against the homography, and the 5-point pose against the inlier PnP.
   bool vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
                         const std::vector<Eigen::Vector3d>& model_points, const std::vector<Eigen::Vector2d>& image_points,
@@ -189,6 +206,9 @@ class MonoPoseEstimator {
   int preferred_level_ = 0;  // the pyramid level that found the face last
   cv::Rect hint_region_;
   double hint_stamp_s_ = 0.0;
+  bool hint_has_position_ = false;  // the hint came from setPositionHint (else only the region is known)
+  Eigen::Vector3d hint_position_ = Eigen::Vector3d::Zero();
+  DirectFaceAligner direct_aligner_;
 };
 
 }  // namespace mono

@@ -81,6 +81,16 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("max_solver_disagreement_deg", &p.consistency.max_solver_disagreement_deg);
   visit("max_led_area_ratio", &p.consistency.max_led_area_ratio);
   visit("max_led_elongation", &p.consistency.max_led_elongation);
+  // Issue 11: direct (ECC) alignment of the face when the features fail (face_alignment.h).
+  visit("use_direct_alignment", &p.use_direct_alignment);
+  visit("direct_yaw_hypotheses", &p.direct_yaw_hypotheses);
+  visit("direct_max_yaw_deg", &p.direct_max_yaw_deg);
+  visit("direct_min_correlation", &p.direct.min_correlation);
+  visit("direct_working_face_width_px", &p.direct.working_face_width_px);
+  visit("direct_pyramid_levels", &p.direct.pyramid_levels);
+  visit("direct_max_iterations", &p.direct.max_iterations);
+  visit("direct_grid_columns", &p.direct.grid_columns);
+  visit("direct_grid_rows", &p.direct.grid_rows);
 }
 
 }  // namespace mono

@@ -1,0 +1,80 @@
+// Direct (intensity-based) alignment of the textured face (issue 11): when blur leaves too few corners
+// for the feature matcher, the face's pixels still carry its position. Given a prior (the tracked pose
+// predicted to this image, or an external position hint with a few yaw hypotheses), the model texture is
+// aligned with the image by ECC (enhanced correlation coefficient, cv::findTransformECC) over a
+// homography, coarse to fine on Gaussian pyramids of the image and of the texture resampled to the face's
+// apparent size. ECC maximises a zero-mean normalised correlation, so gain and offset (auto exposure) do
+// not matter; it only needs the prior within its basin (about a quarter of the face at the coarsest
+// level). The result is a grid of face points mapped through the homography, i.e. correspondences that
+// the estimator's PnP and consistency checks use like the feature matcher's.
+//
+// Honesty: the final correlation must reach min_correlation, the homography must keep the face convex
+// and in view, and the pixel sigma of the grid points comes from the fit itself (residual over the
+// template's gradient energy, per independent pixel), so the covariance grows with noise and blur.
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "docking_perception/mono/pose_types.h"
+#include "docking_perception/mono/target_model.h"
+
+namespace docking_perception {
+namespace mono {
+
+struct DirectAlignmentParams {
+  double min_correlation = 0.8;         // final ECC correlation needed (1: perfect match up to gain/offset)
+  double working_face_width_px = 128.0; // the image is shrunk until the face is at most this wide (CPU)
+  int pyramid_levels = 3;               // ECC levels (each half the previous), coarse to fine
+  int max_iterations = 25;              // ECC iterations per level
+  int grid_columns = 8;                 // correspondences handed to PnP: a grid over the face
+  int grid_rows = 6;
+};
+
+// Empty when usable, else a message naming the parameter (config key).
+std::string validateDirectAlignmentParams(const DirectAlignmentParams& params);
+
+struct DirectAlignment {
+  bool found = false;
+  std::string status;                            // why not found
+  double correlation = -1.0;                     // final ECC correlation
+  cv::Matx33d homography = cv::Matx33d::eye();   // texture pixel -> image pixel
+  std::vector<cv::Point2f> texture_points;       // the grid, texture pixels
+  std::vector<cv::Point2f> image_points;         // the grid through the homography, image pixels
+  std::vector<cv::Point2f> face_outline;         // texture corners through the homography
+  double pixel_sigma_px = 0.0;                   // 1-sigma of each grid point implied by the fit (image px)
+  double image_scale = 1.0;                      // image pixels per working pixel
+};
+
+// Texture pixel -> image pixel for a pose (camera <- target) of the face plane.
+cv::Matx33d faceHomography(const TargetModel& model, const CameraIntrinsics& camera, const PoseWithCovariance& pose);
+
+class DirectFaceAligner {
+ public:
+  DirectFaceAligner() = default;
+  DirectFaceAligner(const TargetModel& model, const DirectAlignmentParams& params);
+  void setParams(const DirectAlignmentParams& params) { params_ = params; }
+  const DirectAlignmentParams& params() const { return params_; }
+  bool ready() const { return !texture_.empty(); }
+
+  // Aligns from an initial homography (texture pixel -> image pixel). coarse_only: stop one level above
+  // the finest (cheap scoring of hypotheses; the correlation is that level's).
+  DirectAlignment align(const cv::Mat& gray, const cv::Matx33d& initial, bool coarse_only = false) const;
+  // The same from a pose (camera <- target).
+  DirectAlignment align(const cv::Mat& gray, const CameraIntrinsics& camera, const PoseWithCovariance& initial) const;
+
+ private:
+  struct Frames;
+  bool makeFrames(const cv::Mat& gray, const cv::Matx33d& initial, Frames* frames, std::string* why) const;
+  // Checks the aligned face (in view, convex, size, correlation) and adds the grid and its pixel sigma.
+  DirectAlignment finish(const cv::Matx33d& initial, const Frames& frames, const cv::Mat& templ, const cv::Mat& image,
+                         const cv::Matx33f& warp, DirectAlignment result) const;
+
+  DirectAlignmentParams params_;
+  cv::Mat texture_;  // 8-bit gray
+  TargetModel model_;
+};
+
+}  // namespace mono
+}  // namespace docking_perception

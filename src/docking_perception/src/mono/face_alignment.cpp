@@ -1,0 +1,273 @@
+#include "docking_perception/mono/face_alignment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+namespace docking_perception {
+namespace mono {
+namespace {
+
+// Below this apparent width (px) the face has too few pixels for a homography of 8 parameters.
+constexpr double kMinFaceWidthPx = 24.0;
+// The coarsest pyramid level keeps the template at least this wide (narrower ones align on nothing).
+constexpr double kMinTemplateWidthPx = 24.0;
+// Around the predicted face the search window adds this fraction of its size: the prior's error.
+constexpr double kWindowMarginFraction = 0.25;
+// Less than this fraction of the predicted face inside the image: nothing reliable to align.
+constexpr double kMinVisibleFraction = 0.6;
+// The aligned face's area may differ from the prior's by this factor at most (else ECC ran away).
+constexpr double kMaxAreaChange = 3.0;
+// ECC smooths both images with a 5x5 Gaussian (the OpenCV default): neighbouring residuals are
+// correlated over about this many pixels, so the independent samples are N / this.
+constexpr double kResidualCorrelationPixels = 4.0;
+constexpr int kEccGaussianSize = 5;
+constexpr double kEccEpsilon = 1e-4;
+
+cv::Point2d apply(const cv::Matx33d& h, const cv::Point2d& p) {
+  const cv::Vec3d q = h * cv::Vec3d(p.x, p.y, 1.0);
+  return {q[0] / q[2], q[1] / q[2]};
+}
+
+// Pixel-centre-exact map of a resize by (scale_x, scale_y) new pixels per old pixel.
+cv::Matx33d resizeMap(double scale_x, double scale_y) {
+  return cv::Matx33d(scale_x, 0.0, 0.5 * scale_x - 0.5, 0.0, scale_y, 0.5 * scale_y - 0.5, 0.0, 0.0, 1.0);
+}
+
+std::vector<cv::Point2d> textureCorners(const cv::Size& size) {
+  const double w = size.width, h = size.height;
+  return {{0.0, 0.0}, {w, 0.0}, {w, h}, {0.0, h}};
+}
+
+// The quadrilateral of the face in the image, or empty when a corner is behind the camera.
+std::vector<cv::Point2d> mapCorners(const cv::Matx33d& h, const cv::Size& texture_size) {
+  std::vector<cv::Point2d> out;
+  for (const cv::Point2d& c : textureCorners(texture_size)) {
+    const cv::Vec3d q = h * cv::Vec3d(c.x, c.y, 1.0);
+    if (!(q[2] > 0.0) || !std::isfinite(q[0]) || !std::isfinite(q[1])) return {};
+    out.emplace_back(q[0] / q[2], q[1] / q[2]);
+  }
+  return out;
+}
+
+double quadArea(const std::vector<cv::Point2d>& q) {
+  std::vector<cv::Point2f> f(q.begin(), q.end());
+  return std::abs(cv::contourArea(f));
+}
+
+bool convex(const std::vector<cv::Point2d>& q) {
+  std::vector<cv::Point2f> f(q.begin(), q.end());
+  return cv::isContourConvex(f);
+}
+
+// One-sigma position error of a grid point (template px) implied by the final fit: the residual after a
+// gain/offset fit over the template's gradient energy, spread over the grid's points as the fit spreads
+// its information over the independent pixels.
+double fitPixelSigma(const cv::Mat& template_f, const cv::Mat& image_f, const cv::Matx33f& warp, int grid_points) {
+  cv::Mat warped, valid;
+  cv::warpPerspective(image_f, warped, warp, template_f.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP);
+  cv::warpPerspective(cv::Mat(image_f.size(), CV_8U, cv::Scalar(255)), valid, warp, template_f.size(),
+                      cv::INTER_NEAREST | cv::WARP_INVERSE_MAP);
+  cv::erode(valid, valid, cv::Mat());
+  cv::Mat gx, gy;
+  cv::Sobel(template_f, gx, CV_32F, 1, 0, 3, 0.125);
+  cv::Sobel(template_f, gy, CV_32F, 0, 1, 3, 0.125);
+  double st = 0, si = 0, stt = 0, sti = 0, sii = 0, sg = 0;
+  int n = 0;
+  for (int y = 1; y + 1 < template_f.rows; ++y) {
+    const float* t = template_f.ptr<float>(y);
+    const float* i = warped.ptr<float>(y);
+    const uchar* m = valid.ptr<uchar>(y);
+    const float* dx = gx.ptr<float>(y);
+    const float* dy = gy.ptr<float>(y);
+    for (int x = 1; x + 1 < template_f.cols; ++x) {
+      if (!m[x]) continue;
+      st += t[x];
+      si += i[x];
+      stt += double(t[x]) * t[x];
+      sti += double(t[x]) * i[x];
+      sii += double(i[x]) * i[x];
+      sg += double(dx[x]) * dx[x] + double(dy[x]) * dy[x];
+      ++n;
+    }
+  }
+  if (n < 16) return INFINITY;
+  const double var_t = stt / n - (st / n) * (st / n);
+  const double cov = sti / n - (st / n) * (si / n);
+  const double var_i = sii / n - (si / n) * (si / n);
+  if (!(var_t > 0.0)) return INFINITY;
+  const double gain = cov / var_t;
+  const double residual_var = std::max(var_i - gain * cov, 1e-12);
+  const double gradient_energy = gain * gain * sg / n;  // the image's gradients: the template's times the gain
+  if (!(gradient_energy > 0.0)) return INFINITY;
+  const double independent = n / kResidualCorrelationPixels;
+  return std::sqrt(residual_var / gradient_energy * grid_points / independent);
+}
+
+}  // namespace
+
+std::string validateDirectAlignmentParams(const DirectAlignmentParams& p) {
+  if (!(p.min_correlation > 0.0 && p.min_correlation < 1.0)) return "direct_min_correlation must be in (0, 1)";
+  if (!(p.working_face_width_px >= 48.0 && p.working_face_width_px <= 1024.0)) return "direct_working_face_width_px must be 48..1024";
+  if (p.pyramid_levels < 1 || p.pyramid_levels > 5) return "direct_pyramid_levels must be 1..5";
+  if (p.max_iterations < 1 || p.max_iterations > 200) return "direct_max_iterations must be 1..200";
+  if (p.grid_columns < 3 || p.grid_rows < 3 || p.grid_columns > 32 || p.grid_rows > 32) return "direct_grid_columns and direct_grid_rows must be 3..32";
+  return "";
+}
+
+cv::Matx33d faceHomography(const TargetModel& model, const CameraIntrinsics& camera, const PoseWithCovariance& pose) {
+  // A face point (0, y, z) lands at K (y r1 + z r2 + t); textureToFace gives (y, z, 1) from (u, v, 1).
+  Eigen::Matrix3d k;
+  k << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
+  Eigen::Matrix3d plane;
+  plane.col(0) = pose.rotation.col(1);
+  plane.col(1) = pose.rotation.col(2);
+  plane.col(2) = pose.translation;
+  const Eigen::Matrix3d h = k * plane * model.textureToFace();
+  cv::Matx33d out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out(r, c) = h(r, c);
+  }
+  return out;
+}
+
+DirectFaceAligner::DirectFaceAligner(const TargetModel& model, const DirectAlignmentParams& params)
+    : params_(params), texture_(model.textureGray()), model_(model) {}
+
+DirectAlignment DirectFaceAligner::align(const cv::Mat& gray, const CameraIntrinsics& camera,
+                                         const PoseWithCovariance& initial) const {
+  return align(gray, faceHomography(model_, camera, initial));
+}
+
+// The working frames of one alignment: the image window around the prior, shrunk until the face is at
+// most working_face_width_px wide, and the texture resampled to the face's size there.
+struct DirectFaceAligner::Frames {
+  cv::Mat image;                 // CV_32F
+  cv::Mat templ;                 // CV_32F
+  cv::Matx33d image_to_work;     // full image px -> working image px
+  cv::Matx33d texture_to_templ;  // texture px -> template px
+  double scale = 1.0;            // image px per working px
+};
+
+bool DirectFaceAligner::makeFrames(const cv::Mat& gray, const cv::Matx33d& initial, Frames* frames,
+                                   std::string* why) const {
+  const std::vector<cv::Point2d> quad = mapCorners(initial, texture_.size());
+  if (quad.empty()) {
+    *why = "prior puts the face behind the camera";
+    return false;
+  }
+  const double face_width = 0.5 * (cv::norm(quad[1] - quad[0]) + cv::norm(quad[2] - quad[3]));
+  if (!(face_width >= kMinFaceWidthPx)) {
+    *why = "face too small at the prior";
+    return false;
+  }
+  std::vector<cv::Point2f> quad_f(quad.begin(), quad.end());
+  const cv::Rect face_box = cv::boundingRect(quad_f);
+  const int margin = static_cast<int>(kWindowMarginFraction * std::max(face_box.width, face_box.height)) + 4;
+  const cv::Rect window = cv::Rect(face_box.x - margin, face_box.y - margin, face_box.width + 2 * margin,
+                                   face_box.height + 2 * margin) & cv::Rect(0, 0, gray.cols, gray.rows);
+  if ((face_box & window).area() < kMinVisibleFraction * face_box.area()) {
+    *why = "face mostly outside the image at the prior";
+    return false;
+  }
+  frames->scale = std::max(1.0, face_width / params_.working_face_width_px);
+  const cv::Size work_size(std::max(1, static_cast<int>(std::lround(window.width / frames->scale))),
+                           std::max(1, static_cast<int>(std::lround(window.height / frames->scale))));
+  cv::Mat work;
+  cv::resize(gray(window), work, work_size, 0.0, 0.0, cv::INTER_AREA);
+  work.convertTo(frames->image, CV_32F);
+  const cv::Matx33d shift(1.0, 0.0, -window.x, 0.0, 1.0, -window.y, 0.0, 0.0, 1.0);
+  frames->image_to_work = resizeMap(double(work_size.width) / window.width, double(work_size.height) / window.height) * shift;
+  // The template as wide as the face in the working image (never enlarged beyond the texture).
+  const double templ_scale = std::min(1.0, face_width / frames->scale / texture_.cols);
+  const cv::Size templ_size(std::max(8, static_cast<int>(std::lround(texture_.cols * templ_scale))),
+                            std::max(8, static_cast<int>(std::lround(texture_.rows * templ_scale))));
+  cv::Mat templ;
+  cv::resize(texture_, templ, templ_size, 0.0, 0.0, cv::INTER_AREA);
+  templ.convertTo(frames->templ, CV_32F);
+  frames->texture_to_templ = resizeMap(double(templ_size.width) / texture_.cols, double(templ_size.height) / texture_.rows);
+  return true;
+}
+
+DirectAlignment DirectFaceAligner::align(const cv::Mat& gray, const cv::Matx33d& initial, bool coarse_only) const {
+  DirectAlignment result;
+  Frames frames;
+  if (!makeFrames(gray, initial, &frames, &result.status)) return result;
+  result.image_scale = frames.scale;
+  // Levels: as many as asked while the template stays wide enough to align on.
+  int levels = params_.pyramid_levels;
+  while (levels > 1 && frames.templ.cols / std::pow(2.0, levels - 1) < kMinTemplateWidthPx) --levels;
+  const int finest = coarse_only && levels > 1 ? 1 : 0;
+  std::vector<cv::Mat> templ_pyramid, image_pyramid;
+  cv::buildPyramid(frames.templ, templ_pyramid, levels - 1);
+  cv::buildPyramid(frames.image, image_pyramid, levels - 1);
+  // pyrDown keeps pixel 2i as pixel i: a level's coordinates are exactly half the finer level's.
+  const double coarsest = std::pow(2.0, levels - 1);
+  const cv::Matx33d down(1.0 / coarsest, 0.0, 0.0, 0.0, 1.0 / coarsest, 0.0, 0.0, 0.0, 1.0);
+  const cv::Matx33d up(coarsest, 0.0, 0.0, 0.0, coarsest, 0.0, 0.0, 0.0, 1.0);
+  cv::Matx33d warp = down * frames.image_to_work * initial * frames.texture_to_templ.inv() * up;
+  const cv::Matx33d finer(2.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 1.0);
+  cv::Mat warp_f;
+  for (int level = levels - 1; level >= finest; --level) {
+    cv::Mat(cv::Matx33f(warp)).copyTo(warp_f);
+    try {
+      result.correlation = cv::findTransformECC(templ_pyramid[level], image_pyramid[level], warp_f, cv::MOTION_HOMOGRAPHY,
+                                                cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
+                                                                 params_.max_iterations, kEccEpsilon),
+                                                cv::noArray(), kEccGaussianSize);
+    } catch (const cv::Exception&) {
+      result.status = "direct alignment did not converge";
+      return result;
+    }
+    warp = cv::Matx33d(cv::Matx33f(warp_f));
+    if (level > finest) warp = finer * warp * finer.inv();
+  }
+  const double back = std::pow(2.0, finest);
+  const cv::Matx33d to_level0(back, 0.0, 0.0, 0.0, back, 0.0, 0.0, 0.0, 1.0);
+  result.homography = frames.image_to_work.inv() * to_level0 * warp * to_level0.inv() * frames.texture_to_templ;
+  result.homography *= 1.0 / result.homography(2, 2);
+  return finish(initial, frames, templ_pyramid[finest], image_pyramid[finest], cv::Matx33f(warp), result);
+}
+
+DirectAlignment DirectFaceAligner::finish(const cv::Matx33d& initial, const Frames& frames, const cv::Mat& templ,
+                                          const cv::Mat& image, const cv::Matx33f& warp, DirectAlignment result) const {
+  const std::vector<cv::Point2d> prior = mapCorners(initial, texture_.size());
+  const std::vector<cv::Point2d> quad = mapCorners(result.homography, texture_.size());
+  if (quad.empty() || !convex(quad)) {
+    result.status = "direct alignment folded the face";
+    return result;
+  }
+  const double area_change = quadArea(quad) / std::max(quadArea(prior), 1.0);
+  if (!(area_change < kMaxAreaChange && area_change > 1.0 / kMaxAreaChange)) {
+    result.status = "direct alignment changed the face's size by " + std::to_string(area_change);
+    return result;
+  }
+  for (const cv::Point2d& c : quad) result.face_outline.emplace_back(c);
+  if (result.correlation < params_.min_correlation) {
+    result.status = "direct alignment correlation " + std::to_string(result.correlation) + " below direct_min_correlation";
+    return result;
+  }
+  const int grid_points = params_.grid_columns * params_.grid_rows;
+  const double sigma_work = fitPixelSigma(templ, image, warp, grid_points);
+  // Template pixels are working pixels at the face's scale; working pixels are `scale` image pixels.
+  const double level_scale = double(frames.templ.cols) / templ.cols;
+  result.pixel_sigma_px = sigma_work * level_scale * frames.scale;
+  if (!std::isfinite(result.pixel_sigma_px)) {
+    result.status = "direct alignment: no texture where the face is";
+    return result;
+  }
+  for (int r = 0; r < params_.grid_rows; ++r) {
+    for (int c = 0; c < params_.grid_columns; ++c) {
+      const cv::Point2d t((c + 0.5) * texture_.cols / params_.grid_columns - 0.5,
+                          (r + 0.5) * texture_.rows / params_.grid_rows - 0.5);
+      result.texture_points.emplace_back(t);
+      result.image_points.emplace_back(apply(result.homography, t));
+    }
+  }
+  result.found = true;
+  return result;
+}
+
+}  // namespace mono
+}  // namespace docking_perception

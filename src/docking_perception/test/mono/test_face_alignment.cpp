@@ -1,0 +1,146 @@
+// gtests of the direct (ECC) face alignment (face_alignment.h) on docking_sim's renders with the stress
+// harness's blur and noise. Fixed seeds 300-311 (neither the tuning range 100-139 nor the report ranges).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "docking_perception/mono/face_alignment.h"
+#include "mono_params_yaml.h"
+#include "mono_stress.h"
+
+namespace mono = docking_perception::mono;
+namespace stress = docking_perception::stress;
+
+namespace {
+
+constexpr uint64_t kFirstSeed = 300;
+constexpr int kTrials = 6;
+
+const mono::TargetModel& model() {
+  static const mono::TargetModel m = mono::TargetModel::loadFromYaml(std::string(CONFIG_DIR) + "/target.yaml");
+  return m;
+}
+
+const stress::StressRenderer& renderer() {
+  static const stress::StressRenderer r(model());
+  return r;
+}
+
+mono::MonoPoseParams visibleParams() {
+  mono::MonoPoseParams p;
+  std::string error;
+  EXPECT_TRUE(docking_perception::compare::loadMonoParams(std::string(CONFIG_DIR) + "/mono_pose_visible.yaml", &p, &error))
+      << error;
+  return p;
+}
+
+stress::StressCondition condition(const std::string& name) {
+  for (const stress::StressCondition& c : stress::standardConditions()) {
+    if (c.name == name) return c;
+  }
+  ADD_FAILURE() << "no condition " << name;
+  return {};
+}
+
+mono::PoseWithCovariance toPose(const stress::TrialPose& trial) {
+  mono::PoseWithCovariance pose;
+  pose.rotation = trial.rotation;
+  pose.translation = trial.translation;
+  return pose;
+}
+
+// The truth moved the way a one-frame prediction misses: 2 deg about a random axis, 1.5 % of the range.
+mono::PoseWithCovariance perturbed(const stress::TrialPose& truth, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const Eigen::Vector3d axis = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+  const Eigen::Vector3d shift = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+  mono::PoseWithCovariance pose = toPose(truth);
+  pose.rotation = Eigen::AngleAxisd(2.0 * M_PI / 180.0, axis).toRotationMatrix() * pose.rotation;
+  pose.translation += 0.015 * truth.translation.norm() * shift;
+  return pose;
+}
+
+// Largest distance (image px) between the face corners through the homography and the true ones.
+double cornerError(const cv::Matx33d& homography, const stress::TrialPose& truth) {
+  const cv::Matx33d true_homography = mono::faceHomography(model(), renderer().camera(), toPose(truth));
+  const cv::Size size = model().textureGray().size();
+  double worst = 0.0;
+  for (const cv::Point2d& c : {cv::Point2d(0, 0), cv::Point2d(size.width, 0), cv::Point2d(size.width, size.height),
+                               cv::Point2d(0, size.height)}) {
+    const cv::Vec3d a = homography * cv::Vec3d(c.x, c.y, 1.0);
+    const cv::Vec3d b = true_homography * cv::Vec3d(c.x, c.y, 1.0);
+    worst = std::max(worst, std::hypot(a[0] / a[2] - b[0] / b[2], a[1] / a[2] - b[1] / b[2]));
+  }
+  return worst;
+}
+
+// Measured on these seeds: 5 of 6 align (one ECC run diverges: the estimator then reports not found),
+// corners within 2 % of the face's width at 0.8 m under 2 px defocus / 9 px motion.
+void expectRecovered(const std::string& name) {
+  const stress::StressCondition c = condition(name);
+  const mono::DirectFaceAligner aligner(model(), visibleParams().direct);
+  int found = 0;
+  for (int t = 0; t < kTrials; ++t) {
+    const uint64_t seed = kFirstSeed + static_cast<uint64_t>(t);
+    const stress::TrialPose truth = renderer().drawPose(c, seed);
+    const stress::StressFrame frame = renderer().render(c, truth, seed, seed * 16);
+    const mono::PoseWithCovariance prior = perturbed(truth, seed);
+    const double prior_error = cornerError(mono::faceHomography(model(), renderer().camera(), prior), truth);
+    const mono::DirectAlignment result = aligner.align(frame.gray, renderer().camera(), prior);
+    if (!result.found) continue;
+    ++found;
+    EXPECT_GE(result.correlation, visibleParams().direct.min_correlation);
+    // The prior's corners are off by many pixels; the aligned ones within 2.5 % of the face's width.
+    const double face_width_px = renderer().camera().fx * model().faceWidth() / truth.translation.z();
+    EXPECT_GT(prior_error, 4.0) << "seed " << seed;
+    EXPECT_LT(cornerError(result.homography, truth), 0.025 * face_width_px)
+        << name << " seed " << seed << " range " << truth.translation.norm() << " prior error " << prior_error;
+    EXPECT_EQ(result.image_points.size(), result.texture_points.size());
+    EXPECT_GT(result.pixel_sigma_px, 0.0);
+  }
+  EXPECT_GE(found, kTrials - 2) << name;
+}
+
+}  // namespace
+
+TEST(DirectFaceAlignment, RecoversTheFaceUnderDefocusFromAPerturbedPrior) { expectRecovered("clutter_defocus2_noise8"); }
+
+TEST(DirectFaceAlignment, RecoversTheFaceUnderMotionBlurFromAPerturbedPrior) { expectRecovered("motion9"); }
+
+// Where the prior puts the face there is only clutter (the target is out of view): no alignment may
+// reach the correlation threshold.
+TEST(DirectFaceAlignment, RefusesAnImageWithoutTheFace) {
+  const stress::StressCondition c = condition("clutter_defocus2_noise8");
+  const mono::DirectFaceAligner aligner(model(), visibleParams().direct);
+  for (int t = 0; t < kTrials; ++t) {
+    const uint64_t seed = kFirstSeed + static_cast<uint64_t>(t);
+    const stress::TrialPose truth = renderer().drawPose(c, seed);
+    stress::TrialPose away = truth;
+    away.translation.x() += 20.0;  // far outside the view: the image is the room only
+    const stress::StressFrame frame = renderer().render(c, away, seed, seed * 16);
+    const mono::DirectAlignment result = aligner.align(frame.gray, renderer().camera(), toPose(truth));
+    EXPECT_FALSE(result.found) << "seed " << seed << " correlation " << result.correlation;
+  }
+  const mono::DirectAlignment flat =
+      aligner.align(cv::Mat(480, 640, CV_8U, cv::Scalar(128)), renderer().camera(),
+                    toPose(renderer().drawPose(c, kFirstSeed)));
+  EXPECT_FALSE(flat.found);
+}
+
+// A prior that puts the face behind the camera or too small is refused before any alignment.
+TEST(DirectFaceAlignment, RefusesUnusablePriors) {
+  const mono::DirectFaceAligner aligner(model(), visibleParams().direct);
+  mono::PoseWithCovariance behind = toPose(renderer().drawPose(condition("clean"), kFirstSeed));
+  behind.translation.z() = -1.0;
+  const cv::Mat image(480, 640, CV_8U, cv::Scalar(128));
+  EXPECT_FALSE(aligner.align(image, renderer().camera(), behind).found);
+  mono::PoseWithCovariance far = behind;
+  far.translation = Eigen::Vector3d(0.0, 0.0, 30.0);
+  const mono::DirectAlignment tiny = aligner.align(image, renderer().camera(), far);
+  EXPECT_FALSE(tiny.found);
+  EXPECT_NE(tiny.status.find("too small"), std::string::npos) << tiny.status;
+}
