@@ -421,8 +421,11 @@ EstimateScore scoreEstimate(const mono::MonoPoseResult& result, const TrialPose&
     const double variance = result.pose.covariance(i, i);
     score.normalized[i] = variance > 0.0 ? e / std::sqrt(variance) : 1e9;
   }
+  // A withheld orientation (MonoPoseResult::orientation_valid) is not a claim: as in make eval, it
+  // counts neither for the orientation error nor for its coverage.
+  score.orientation_claimed = result.orientation_valid;
   score.confident_wrong = score.position_error_pct > 100.0 * kConfidentWrongRangeFraction ||
-                          score.orientation_error_deg > kConfidentWrongDeg;
+                          (score.orientation_claimed && score.orientation_error_deg > kConfidentWrongDeg);
   return score;
 }
 
@@ -434,6 +437,7 @@ ConditionSummary summarize(const std::string& name, const std::vector<EstimateSc
   std::vector<double> orientation;
   std::vector<double> cpu;
   int within[6] = {0, 0, 0, 0, 0, 0};
+  int claimed = 0;  // valid estimates that claim their orientation
   for (size_t i = 0; i < scores.size(); ++i) {
     const EstimateScore& e = scores[i];
     ++s.frames;
@@ -448,14 +452,22 @@ ConditionSummary summarize(const std::string& name, const std::vector<EstimateSc
     }
     ++s.valid;
     position.push_back(e.position_error_pct);
-    orientation.push_back(e.orientation_error_deg);
-    for (int a = 0; a < 6; ++a) within[a] += std::abs(e.normalized[a]) <= 3.0 ? 1 : 0;
+    for (int a = 0; a < 3; ++a) within[a] += std::abs(e.normalized[a]) <= 3.0 ? 1 : 0;
+    if (e.orientation_claimed) {
+      ++claimed;
+      orientation.push_back(e.orientation_error_deg);
+      for (int a = 3; a < 6; ++a) within[a] += std::abs(e.normalized[a]) <= 3.0 ? 1 : 0;
+    }
     s.confident_wrong += e.confident_wrong ? 1 : 0;
   }
   s.median_position_pct = median(position);
   s.median_orientation_deg = median(orientation);
   s.cpu_ms_median = median(cpu);
-  for (int a = 0; a < 6; ++a) s.coverage[a] = s.valid > 0 ? static_cast<double>(within[a]) / s.valid : 1.0;
+  for (int a = 0; a < 6; ++a) {
+    const int count = a < 3 ? s.valid : claimed;
+    s.coverage[a] = count > 0 ? static_cast<double>(within[a]) / count : 1.0;
+  }
+  s.orientation_withheld = s.valid - claimed;
   return s;
 }
 

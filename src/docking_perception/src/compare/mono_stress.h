@@ -83,7 +83,8 @@ struct EstimateScore {
   double position_error_pct = 0.0;     // of the true range
   double orientation_error_deg = 0.0;
   double normalized[6] = {0, 0, 0, 0, 0, 0};  // error / sigma: x, y, z, rot x, rot y, rot z (camera frame)
-  bool confident_wrong = false;        // valid and > 5 % of range or > 10 deg off
+  bool orientation_claimed = false;    // valid with its orientation (not withheld)
+  bool confident_wrong = false;        // valid and > 5 % of range or (claimed and) > 10 deg off
   double cpu_ms = 0.0;
 };
 EstimateScore scoreEstimate(const mono::MonoPoseResult& result, const TrialPose& truth);
@@ -97,8 +98,9 @@ struct ConditionSummary {
   int cold_valid = 0;
   double median_position_pct = 0.0;
   double median_orientation_deg = 0.0;
-  double coverage[6] = {0, 0, 0, 0, 0, 0};  // fraction of valid estimates within 3 sigma per axis
+  double coverage[6] = {0, 0, 0, 0, 0, 0};  // within 3 sigma per axis: of the valid (position) / claimed (rotation)
   int confident_wrong = 0;
+  int orientation_withheld = 0;        // valid estimates without a claimed orientation
   std::map<std::string, int> reasons;  // invalid estimates by reason code name
   double cpu_ms_median = 0.0;
 };

@@ -194,6 +194,7 @@ int main(int argc, char** argv) {
     const stress::ConditionSummary s = stress::runCondition(renderer, condition, params, first_seed, trials, frames);
     std::ostringstream reasons;
     for (const auto& [reason, count] : s.reasons) reasons << reason << ":" << count << " ";
+    if (s.orientation_withheld > 0) reasons << "(valid, orientation withheld:" << s.orientation_withheld << ")";
     std::printf("%-36s %6.3f %6.3f %7.3f %7.3f  %5.2f %5.2f %5.2f %5.2f %5.2f %5.2f %4d %6.2f  %s\n", s.name.c_str(),
                 s.frames ? static_cast<double>(s.valid) / s.frames : 0.0,
                 s.cold_frames ? static_cast<double>(s.cold_valid) / s.cold_frames : 0.0, s.median_position_pct,
@@ -205,7 +206,8 @@ int main(int argc, char** argv) {
          << ", \"median_position_pct\": " << s.median_position_pct
          << ", \"median_orientation_deg\": " << s.median_orientation_deg << ", \"coverage_3sigma\": [";
     for (int a = 0; a < 6; ++a) json << (a ? ", " : "") << s.coverage[a];
-    json << "], \"confident_wrong\": " << s.confident_wrong << ", \"cpu_ms_median\": " << s.cpu_ms_median << "}";
+    json << "], \"confident_wrong\": " << s.confident_wrong << ", \"orientation_withheld\": " << s.orientation_withheld
+         << ", \"cpu_ms_median\": " << s.cpu_ms_median << "}";
     first = false;
   }
   json << "}}\n";
