@@ -196,7 +196,9 @@ void MonoPoseEstimator::reset() {
 }
 
 const Eigen::Matrix3d* MonoPoseEstimator::previousRotation(double stamp_s, Eigen::Matrix3d* storage) const {
-  if (!tracking_) return nullptr;
+  // A withheld orientation must not pick the next frame's IPPE solution: that would turn a coin flip
+  // into a claimed orientation.
+  if (!tracking_ || !last_orientation_claimed_) return nullptr;
   PoseWithCovariance predicted;
   *storage = filter_.predict(stamp_s, &predicted) ? predicted.rotation : last_pose_.rotation;
   return storage;
@@ -514,6 +516,15 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
   return false;
 }
 
+bool MonoPoseEstimator::claimOrientation(MonoPoseResult& result) const {
+  if (result.ambiguity_deg > params_.consistency.max_ambiguity_deg) {
+    result.status = "orientation withheld: IPPE's two poses fit alike and differ by " +
+                    std::to_string(result.ambiguity_deg) + " deg (max_ambiguity_deg)";
+    return false;
+  }
+  return orientationClaimed(result.pose, params_.consistency, &result.status);
+}
+
 void MonoPoseEstimator::scaleByInnovation(MonoPoseResult* result) {
   // The running mean survives a lost frame or a filter restart: blur that broke tracking is still there.
   PoseWithCovariance predicted;
@@ -653,10 +664,11 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
     result.status.clear();
     result.reject_reason = RejectReason::kNone;
     scaleByInnovation(&result);
-    result.orientation_valid = orientationClaimed(result.pose, params_.consistency, &result.status);
+    result.orientation_valid = claimOrientation(result);
     result.range_m = result.pose.translation.norm();
     updateVelocities(&result);
     tracking_ = true;
+    last_orientation_claimed_ = result.orientation_valid;
     last_valid_range_m_ = result.range_m;
     last_pose_ = result.pose;
     last_stamp_s_ = stamp_s;
@@ -694,10 +706,9 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
     if (excess < c.ambiguity_chi2) {
       ambiguity_deg = rotationAngleBetween(pnp->alternative_rotation, result->pose.rotation) * 180.0 / M_PI;
     }
-    if (ambiguity_deg > c.max_ambiguity_deg) {
-      return reject(RejectReason::kAmbiguous, "IPPE's two poses fit alike and differ by " +
-                                                  std::to_string(ambiguity_deg) + " deg (max_ambiguity_deg)");
-    }
+    // Both solutions share nearly one position: beyond max_ambiguity_deg the orientation is withheld
+    // (process()), the position stays; the covariance below covers both solutions either way.
+    result->ambiguity_deg = ambiguity_deg;
   }
   const AppearanceScore appearance = appearance_.score(gray, camera_, result->pose);
   result->appearance_ncc = appearance.median_ncc;

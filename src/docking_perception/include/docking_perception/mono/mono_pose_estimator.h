@@ -104,6 +104,7 @@ struct MonoPoseResult {
   bool used_tracking_region = false;   // the predicted region gave the result (no full-frame search)
   cv::Rect search_region;              // where detection ran last (full frame after a fallback)
   bool pnp_ambiguous = false;          // IPPE's two poses were close
+  double ambiguity_deg = 0.0;          // visible: the undecided IPPE alternative's angle (0: decided)
   bool used_region_hint = false;       // the external region hint gave the result
   int pyramid_level = 0;               // visible: image level of the keypoints (0 full, 1 half resolution)
   double inlier_spread = 0.0;          // visible: hull of the pose points / face area
@@ -163,6 +164,7 @@ class MonoPoseEstimator {
   const Eigen::Matrix3d* previousRotation(double stamp_s, Eigen::Matrix3d* storage) const;
   void updateVelocities(MonoPoseResult* result);
   void scaleByInnovation(MonoPoseResult* result);
+  bool claimOrientation(MonoPoseResult& result) const;
   // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
   void applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
@@ -198,6 +200,7 @@ class MonoPoseEstimator {
   InnovationCovarianceScale innovation_scale_;
   FrameDifferenceVelocity frame_difference_;
   bool tracking_ = false;  // the previous image gave a valid pose
+  bool last_orientation_claimed_ = false;  // ... and claimed its orientation
   PoseWithCovariance last_pose_;
   std::unique_ptr<InnerPatternDetector> inner_pattern_;  // null without an inner pattern or in IR mode
   double last_valid_range_m_ = INFINITY;                 // of the last valid pose (any solver)

@@ -18,7 +18,7 @@ enum class RejectReason {
   kAppearance,             // the face does not look like the model at the estimated pose (NCC)
   kSolverDisagreement,     // two poses of one image disagree beyond their sigmas: the 5-point pose and the
                            // homography / PnP pose, or the face's pose and the inner pattern's
-  kAmbiguous,              // IPPE's two poses both fit and nothing decides between them
+  kAmbiguous,              // (no longer given: an undecided IPPE pose keeps its position, orientation withheld)
   kLedBlobShape,           // IR: an LED blob merged / elongated / the wrong size for its range
   kDotAppearance,          // paper_5point: a located dot does not look like a printed dot
 };
