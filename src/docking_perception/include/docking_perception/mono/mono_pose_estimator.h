@@ -165,6 +165,8 @@ class MonoPoseEstimator {
   void updateVelocities(MonoPoseResult* result);
   void scaleByInnovation(MonoPoseResult* result);
   bool claimOrientation(MonoPoseResult& result) const;
+  bool directSearchDue();
+  void noteDirectSearch(bool from_hint, bool found);
   // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
   void applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
@@ -201,6 +203,8 @@ class MonoPoseEstimator {
   FrameDifferenceVelocity frame_difference_;
   bool tracking_ = false;  // the previous image gave a valid pose
   bool last_orientation_claimed_ = false;  // ... and claimed its orientation
+  int direct_failures_ = 0;                // hint-based direct searches failed in a row (capped)
+  int direct_backoff_left_ = 0;            // frames to skip before the next hint-based direct search
   PoseWithCovariance last_pose_;
   std::unique_ptr<InnerPatternDetector> inner_pattern_;  // null without an inner pattern or in IR mode
   double last_valid_range_m_ = INFINITY;                 // of the last valid pose (any solver)
