@@ -215,10 +215,11 @@ cv::Rect componentAround(const BlobCandidate& blob, const cv::Mat& filtered, dou
 
 // Inside a blob larger than the mockup (the target merged with a box beside or behind it through
 // block matching's smeared depth edges), the nearer parts at each threshold level above the band's:
-// the first (deepest level, so the most of the target) that has the mockup's shape, at its height,
-// and is isolated - the component holding it split_depth_step_m deeper is still within the mockup's
-// upper bounds, so a bump of a box's surface (which grows into the whole box) is not taken. Invalid
-// candidate when there is none.
+// the largest over all levels that has the mockup's shape, at its height, and is isolated - the
+// component holding it split_depth_step_m deeper is still within the mockup's upper bounds, so a bump
+// of a box's surface (which grows into the whole box) is not taken. Largest, not first: a mismatched
+// sliver at an occlusion edge can pass at a deep level where the face has not separated yet.
+// Invalid candidate when there is none.
 BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filtered,
                               const cv::Mat& clean, const StereoGeometry& geometry,
                               const ShapeBounds& bounds, const DetectorParams& p,
@@ -227,6 +228,7 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
   cv::minMaxLoc(filtered(merged.box), nullptr, &top_px, nullptr, nullptr, merged.local_mask);
   cv::Mat level_mask(filtered.size(), CV_8UC1, cv::Scalar(0));
   const double focal_baseline = geometry.focal_px * geometry.baseline_m;
+  BlobCandidate best;
   for (double level = band_threshold_px + kSplitLevelStepPx; level < top_px; level += kSplitLevelStepPx) {
     cv::Mat level_box = level_mask(merged.box);
     cv::compare(filtered(merged.box), level, level_box, cv::CMP_GE);
@@ -235,7 +237,10 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
     cv::findContours(level_box.clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE,
                      merged.box.tl());
     for (const auto& contour : contours) {
-      if (cv::contourArea(contour) < p.min_blob_area_px / 2.0) continue;  // crumbs, cheaply
+      const double contour_area = cv::contourArea(contour);
+      if (contour_area < p.min_blob_area_px / 2.0 || (best.valid && contour_area < best.area / 2.0)) {
+        continue;  // crumbs, or too small to beat the best, cheaply
+      }
       BlobCandidate part = makeCandidate(contour, level_mask);
       if (part.area < p.min_blob_area_px || part.thickness_px < p.min_blob_thickness_px ||
           touchesBorder(part.box, region, p.border_margin_px)) {
@@ -253,10 +258,13 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
       const cv::Rect parent_box = componentAround(merged, filtered, parent_level, contour.front());
       parent.width_m = parent_box.width * parent.range_z_m / geometry.focal_px;
       parent.height_m = parent_box.height * parent.range_z_m / geometry.focal_px;
-      if (shapeMismatch(parent, bounds, p, geometry.focal_px, /*cut=*/true).empty()) return part;
+      if (shapeMismatch(parent, bounds, p, geometry.focal_px, /*cut=*/true).empty() &&
+          (!best.valid || part.area > best.area)) {
+        best = std::move(part);
+      }
     }
   }
-  return BlobCandidate();
+  return best;
 }
 
 // Extent of the mockup's outline across the line of sight at `yaw` (0: face-on): the box's columns at
