@@ -29,8 +29,10 @@ constexpr std::size_t kMaxBlobsPerBand = 6;
 constexpr int kYawSteps = 90;
 // Columns sampled across the mockup's outline for its fill.
 constexpr int kFillSamples = 200;
-// Threshold levels tried inside a blob larger than the mockup, this far apart (2 histogram bins).
+// Threshold levels tried inside a blob larger than the mockup: at least this far apart (2 histogram
+// bins), and at most this many (at 2 m the band is 6 px deep: 48 levels cost 50 ms a frame).
 constexpr double kSplitLevelStepPx = 2.0 / kHistogramBinsPerPx;
+constexpr int kMaxSplitLevels = 16;
 
 std::string joinErrors(const std::vector<std::string>& errors) {
   std::string joined;
@@ -229,7 +231,9 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
   cv::Mat level_mask(filtered.size(), CV_8UC1, cv::Scalar(0));
   const double focal_baseline = geometry.focal_px * geometry.baseline_m;
   BlobCandidate best;
-  for (double level = band_threshold_px + kSplitLevelStepPx; level < top_px; level += kSplitLevelStepPx) {
+  const double step_px =
+      std::max(kSplitLevelStepPx, (top_px - band_threshold_px) / (kMaxSplitLevels + 1));
+  for (double level = band_threshold_px + step_px; level < top_px; level += step_px) {
     cv::Mat level_box = level_mask(merged.box);
     cv::compare(filtered(merged.box), level, level_box, cv::CMP_GE);
     cv::bitwise_and(level_box, merged.local_mask, level_box);
@@ -241,6 +245,12 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
       if (contour_area < p.min_blob_area_px / 2.0 || (best.valid && contour_area < best.area / 2.0)) {
         continue;  // crumbs, or too small to beat the best, cheaply
       }
+      BlobShape outline;  // the part's bounding box at the level's depth: most parts are too large
+      outline.range_z_m = focal_baseline / level;
+      const cv::Rect outline_box = cv::boundingRect(contour);
+      outline.width_m = outline_box.width * outline.range_z_m / geometry.focal_px;
+      outline.height_m = outline_box.height * outline.range_z_m / geometry.focal_px;
+      if (!shapeMismatch(outline, bounds, p, geometry.focal_px, /*cut=*/true).empty()) continue;
       BlobCandidate part = makeCandidate(contour, level_mask);
       if (part.area < p.min_blob_area_px || part.thickness_px < p.min_blob_thickness_px ||
           touchesBorder(part.box, region, p.border_margin_px)) {
