@@ -3,6 +3,7 @@
 //
 //   bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]
 //                   [--left RAW.png --right RAW.png] [--debug-image OUT.png]
+//                   [--disparity-out OUT.tiff]
 //
 // Without --left/--right the pair is rendered here (test/disparity/synthetic_stereo.h: the target
 // face-on at 3 m, its panels, a floor and a wall) and distorted with the calibration, so the
@@ -45,7 +46,7 @@ namespace testing = docking_perception::disparity::testing;
 
 const char* const kUsage =
     "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR] [--left RAW.png --right "
-    "RAW.png] [--debug-image OUT.png]\n";
+    "RAW.png] [--debug-image OUT.png] [--disparity-out OUT.tiff]\n";
 
 double medianOf(std::vector<double> values) {
   std::sort(values.begin(), values.end());
@@ -86,7 +87,7 @@ void rectifyMaps(const testing::CameraCalibration& calibration, cv::Mat* map1, c
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string output_path, left_path, right_path, debug_path;
+  std::string output_path, left_path, right_path, debug_path, disparity_path;
   std::string config_dir = DISPARITY_CONFIG_DIR;
   int frames = 100;
   for (int i = 1; i < argc; ++i) {
@@ -101,6 +102,8 @@ int main(int argc, char** argv) {
       right_path = argv[++i];
     } else if (arg == "--debug-image" && i + 1 < argc) {
       debug_path = argv[++i];
+    } else if (arg == "--disparity-out" && i + 1 < argc) {
+      disparity_path = argv[++i];  // float disparity of the last frame, px, for offline analysis
     } else if (!arg.empty() && arg[0] != '-' && output_path.empty()) {
       output_path = arg;
     } else {
@@ -230,7 +233,7 @@ int main(int argc, char** argv) {
     std::cout << std::setprecision(2) << "  (thread CPU time; wall time per frame " << wall_ms
               << " ms against " << cpu_total_ms / frames
               << " ms CPU: the difference is other load on the machine)\n";
-    if (!debug_path.empty()) {
+    if (!debug_path.empty() || !disparity_path.empty()) {
       cv::Mat left_mono = left_raw, right_mono = right_raw, left_rect, right_rect;
       if (left_raw.channels() == 3) {
         cv::cvtColor(left_raw, left_mono, cv::COLOR_BGR2GRAY);
@@ -239,7 +242,11 @@ int main(int argc, char** argv) {
       cv::remap(left_mono, left_rect, left_map1, left_map2, cv::INTER_LINEAR);
       cv::remap(right_mono, right_rect, right_map1, right_map2, cv::INTER_LINEAR);
       const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
-      cv::imwrite(debug_path, docking_perception::disparity::renderDebugImage(disparity, detection, 64.0));
+      if (!debug_path.empty()) {
+        cv::imwrite(debug_path,
+                    docking_perception::disparity::renderDebugImage(disparity, detection, 64.0));
+      }
+      if (!disparity_path.empty()) cv::imwrite(disparity_path, disparity);
     }
     if (!left_path.empty()) {
       std::cout << std::setprecision(3) << "  detection on " << left_path << ": "

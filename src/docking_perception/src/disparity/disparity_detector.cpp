@@ -29,6 +29,10 @@ constexpr std::size_t kMaxBlobsPerBand = 6;
 constexpr int kYawSteps = 90;
 // Columns sampled across the mockup's outline for its fill.
 constexpr int kFillSamples = 200;
+// Threshold levels tried inside a blob larger than the mockup: at least this far apart (2 histogram
+// bins), and at most this many (at 2 m the band is 6 px deep: 48 levels cost 50 ms a frame).
+constexpr double kSplitLevelStepPx = 2.0 / kHistogramBinsPerPx;
+constexpr int kMaxSplitLevels = 16;
 
 std::string joinErrors(const std::vector<std::string>& errors) {
   std::string joined;
@@ -197,6 +201,82 @@ void adoptBlob(const BlobCandidate& blob, cv::Size image_size, Detection* result
   result->shape = blob.shape;
 }
 
+// The component of the pixels of `blob` at or above `level_px` that contains `inside` (a pixel of
+// `blob`), within blob.box: its bounding box, empty when `inside` is below the level.
+cv::Rect componentAround(const BlobCandidate& blob, const cv::Mat& filtered, double level_px,
+                         cv::Point inside) {
+  cv::Mat level_mask;
+  cv::compare(filtered(blob.box), level_px, level_mask, cv::CMP_GE);
+  cv::bitwise_and(level_mask, blob.local_mask, level_mask);
+  const cv::Point seed = inside - blob.box.tl();
+  if (level_mask.at<std::uint8_t>(seed) == 0) return cv::Rect();
+  cv::Rect component;
+  cv::floodFill(level_mask, seed, cv::Scalar(128), &component, cv::Scalar(0), cv::Scalar(0), 8);
+  return component + blob.box.tl();
+}
+
+// Inside a blob larger than the mockup (the target merged with a box beside or behind it through
+// block matching's smeared depth edges), the nearer parts at each threshold level above the band's:
+// the largest over all levels that has the mockup's shape, at its height, and is isolated - the
+// component holding it split_depth_step_m deeper is still within the mockup's upper bounds, so a bump
+// of a box's surface (which grows into the whole box) is not taken. Largest, not first: a mismatched
+// sliver at an occlusion edge can pass at a deep level where the face has not separated yet.
+// Invalid candidate when there is none.
+BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filtered,
+                              const cv::Mat& clean, const StereoGeometry& geometry,
+                              const ShapeBounds& bounds, const DetectorParams& p,
+                              const cv::Rect& region, double band_threshold_px) {
+  double top_px = 0.0;
+  cv::minMaxLoc(filtered(merged.box), nullptr, &top_px, nullptr, nullptr, merged.local_mask);
+  cv::Mat level_mask(filtered.size(), CV_8UC1, cv::Scalar(0));
+  const double focal_baseline = geometry.focal_px * geometry.baseline_m;
+  BlobCandidate best;
+  const double step_px =
+      std::max(kSplitLevelStepPx, (top_px - band_threshold_px) / (kMaxSplitLevels + 1));
+  for (double level = band_threshold_px + step_px; level < top_px; level += step_px) {
+    cv::Mat level_box = level_mask(merged.box);
+    cv::compare(filtered(merged.box), level, level_box, cv::CMP_GE);
+    cv::bitwise_and(level_box, merged.local_mask, level_box);
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(level_box.clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE,
+                     merged.box.tl());
+    for (const auto& contour : contours) {
+      const double contour_area = cv::contourArea(contour);
+      if (contour_area < p.min_blob_area_px / 2.0 || (best.valid && contour_area < best.area / 2.0)) {
+        continue;  // crumbs, or too small to beat the best, cheaply
+      }
+      BlobShape outline;  // the part's bounding box at the level's depth: most parts are too large
+      outline.range_z_m = focal_baseline / level;
+      const cv::Rect outline_box = cv::boundingRect(contour);
+      outline.width_m = outline_box.width * outline.range_z_m / geometry.focal_px;
+      outline.height_m = outline_box.height * outline.range_z_m / geometry.focal_px;
+      if (!shapeMismatch(outline, bounds, p, geometry.focal_px, /*cut=*/true).empty()) continue;
+      BlobCandidate part = makeCandidate(contour, level_mask);
+      if (part.area < p.min_blob_area_px || part.thickness_px < p.min_blob_thickness_px ||
+          touchesBorder(part.box, region, p.border_margin_px)) {
+        continue;
+      }
+      part.shape = measureBlobShape(part, clean, geometry);
+      if (!shapeMismatch(part.shape, bounds, p, geometry.focal_px, /*cut=*/false).empty() ||
+          !heightMismatch(candidatePosition(part, geometry), p).empty()) {
+        continue;
+      }
+      const double part_disparity = focal_baseline / part.shape.range_z_m;
+      const double parent_level = std::max(
+          band_threshold_px, disparityBehind(geometry, part_disparity, p.split_depth_step_m));
+      BlobShape parent = part.shape;
+      const cv::Rect parent_box = componentAround(merged, filtered, parent_level, contour.front());
+      parent.width_m = parent_box.width * parent.range_z_m / geometry.focal_px;
+      parent.height_m = parent_box.height * parent.range_z_m / geometry.focal_px;
+      if (shapeMismatch(parent, bounds, p, geometry.focal_px, /*cut=*/true).empty() &&
+          (!best.valid || part.area > best.area)) {
+        best = std::move(part);
+      }
+    }
+  }
+  return best;
+}
+
 // Extent of the mockup's outline across the line of sight at `yaw` (0: face-on): the box's columns at
 // full height, the panels' at theirs. Returns width and fill (mean column height / box height).
 void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill) {
@@ -336,6 +416,8 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
           "shape_tolerance_fraction", "must be in [0, 1)", p.shape_tolerance_fraction);
   require(std::isfinite(p.shape_tolerance_px) && p.shape_tolerance_px >= 0.0, "shape_tolerance_px",
           "must be >= 0", p.shape_tolerance_px);
+  require(std::isfinite(p.split_depth_step_m) && p.split_depth_step_m >= 0.0 && p.split_depth_step_m <= 2.0,
+          "split_depth_step_m", "must be in [0, 2] (0: off)", p.split_depth_step_m);
   require(std::isfinite(p.max_centre_offset_y_m) && p.max_centre_offset_y_m >= 0.0,
           "max_centre_offset_y_m", "must be >= 0 (0: off)", p.max_centre_offset_y_m);
   const TargetShape& t = p.target_shape;
@@ -590,6 +672,16 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
           heightMismatch(candidatePosition(candidate, geometry), p).empty();
       if (candidate.misfit.empty() && !cut) {
         candidate.misfit = heightMismatch(candidatePosition(candidate, geometry), p);
+      }
+      // Larger than the mockup: maybe the target merged with its neighbours; look for it inside.
+      if (p.split_depth_step_m > 0.0 && !cut && !candidate.misfit.empty() &&
+          !shapeMismatch(candidate.shape, bounds, p, geometry.focal_px, /*cut=*/true).empty()) {
+        BlobCandidate part = splitMergedBlob(candidate, filtered, clean, geometry, bounds, p,
+                                             region, threshold);
+        if (part.valid) {
+          candidate = std::move(part);
+          ++result.merged_blobs_split;
+        }
       }
       if (!candidate.misfit.empty()) {
         ++result.not_target_shaped_skipped;

@@ -162,6 +162,7 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("min_fill_fraction", &Config::min_fill_fraction);
   read("max_centre_offset_y_m", &Config::max_centre_offset_y_m);
   read("stop_behind_target_sized", &Config::stop_behind_target_sized);
+  read("split_depth_step_m", &Config::split_depth_step_m);
   read("track_gate_enabled", &Config::track_gate_enabled);
   read("track_max_speed_mps", &Config::track_max_speed_mps);
   read("track_min_gate_m", &Config::track_min_gate_m);
@@ -236,6 +237,7 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.min_fill_fraction = c.min_fill_fraction;
   p.max_centre_offset_y_m = c.max_centre_offset_y_m;
   p.stop_behind_target_sized = c.stop_behind_target_sized;
+  p.split_depth_step_m = c.split_depth_step_m;
   p.target_shape = target_shape_;
   return p;
 }

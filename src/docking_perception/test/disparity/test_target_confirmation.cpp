@@ -336,6 +336,76 @@ TEST(DegradedTarget, LargerNearerObjectsAreStillLookedBehind) {
   EXPECT_NEAR(result.position_m.x(), 0.3, 0.05);
 }
 
+// Issue 11, eval_real_clutter_far_4m: the target at 4 m in front of a box 0.35 m behind it, and a box
+// 0.1 m nearer beside it standing against that box: all three in one depth band, one blob of
+// 1.6 x 1.2 m that the mockup cannot be. The target stands 0.35 m in front of everything around it:
+// split out at its own depth, it is the mockup.
+void paintTargetAmongBoxes(cv::Mat* disparity) {
+  paintRect(disparity, -0.25, -0.35, 4.35, 0.8, 1.2);  // the box behind, up to 0.95 m above the axis
+  paintRect(disparity, -0.8, -0.25, 3.9, 0.4, 1.0);    // the box beside, nearer, against it
+  paintMockup(disparity, 0.0, 4.0);
+}
+
+TEST(MergedBlob, WithoutTheSplitTheTargetIsNotFound) {
+  cv::Mat disparity = invalidImage();
+  paintTargetAmongBoxes(&disparity);
+  DetectorParams params = checkingParams();
+  params.split_depth_step_m = 0.0;  // before
+  const Detection before = DisparityDetector{params}.detect(disparity, ourGeometry());
+  EXPECT_FALSE(before.found) << "the scene no longer reproduces the merge: found at ("
+                             << before.position_m.transpose() << ")";
+  EXPECT_EQ(before.merged_blobs_split, 0);
+}
+
+TEST(MergedBlob, TheTargetIsSplitFromTheBoxesAroundIt) {
+  cv::Mat disparity = invalidImage();
+  paintTargetAmongBoxes(&disparity);
+  DetectorParams params = checkingParams();
+  params.split_depth_step_m = 0.15;
+  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  ASSERT_TRUE(result.found) << result.reason;
+  EXPECT_EQ(result.merged_blobs_split, 1);
+  EXPECT_NEAR(result.position_m.x(), 0.0, 0.03);
+  EXPECT_NEAR(result.position_m.y(), 0.0, 0.03);
+  EXPECT_NEAR(result.position_m.z(), 4.0, 0.05);
+  EXPECT_LT(result.shape.width_m, 1.0) << "the reported blob is the mockup, not the merged one";
+}
+
+// A target-sized bump 5 cm proud of a box's face (block-matching noise on a busy texture): at its own
+// level it has the mockup's shape, but 0.15 m deeper it is the whole box, so it is not split out.
+TEST(MergedBlob, ABumpOnABoxIsNotSplitOut) {
+  cv::Mat disparity = invalidImage();
+  paintRect(&disparity, 0.0, -0.2, 4.0, 1.2, 0.9);
+  paintRect(&disparity, 0.1, -0.05, 3.95, 0.35, 0.24);
+  DetectorParams params = checkingParams();
+  params.split_depth_step_m = 0.15;
+  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  EXPECT_FALSE(result.found) << "bump taken at (" << result.position_m.transpose() << ")";
+  EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+  EXPECT_EQ(result.merged_blobs_split, 0);
+}
+
+// The target against a box at its own depth (no depth step between them) cannot be told apart: the
+// blob stays merged and is reported not target-shaped, never a guess.
+TEST(MergedBlob, ATargetFlushWithABoxStaysInvalid) {
+  cv::Mat disparity = invalidImage();
+  paintRect(&disparity, 0.65, -0.25, 4.05, 0.5, 1.0);  // against the right panel, same depth
+  paintMockup(&disparity, 0.0, 4.0);
+  DetectorParams params = checkingParams();
+  params.split_depth_step_m = 0.15;
+  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  EXPECT_FALSE(result.found) << "taken at (" << result.position_m.transpose() << ")";
+  EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+}
+
+TEST(MergedBlob, TheSplitStepIsValidated) {
+  DetectorParams params = checkingParams();
+  params.split_depth_step_m = -0.1;
+  EXPECT_FALSE(validateParams(params).empty());
+  params.split_depth_step_m = 0.15;
+  EXPECT_TRUE(validateParams(params).empty());
+}
+
 }  // namespace
 }  // namespace disparity
 }  // namespace docking_perception

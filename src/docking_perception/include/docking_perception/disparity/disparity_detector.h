@@ -125,6 +125,10 @@ struct DetectorParams {
   // the fill may be the target, degraded (glare, blur); the search then stops there (reported not
   // target-shaped) instead of looking behind it, where only other objects can be found.
   bool stop_behind_target_sized = true;
+  // With the shape check: a blob larger than the mockup is searched for a nearer part that has the
+  // mockup's shape and stands at least this far in front of what surrounds it (the target merged with
+  // a box beside or behind it through block matching's smeared depth edges, issue 11); 0: off.
+  double split_depth_step_m = 0.0;
   TargetShape target_shape;         // from config/target.yaml, not from the detector's file
 };
 
@@ -182,6 +186,8 @@ struct Detection {
   int not_target_shaped_skipped = 0; // blobs measured and found not target-shaped
   BlobShape shape;                   // of the chosen blob (when the shape check ran)
   bool outside_hint = false;         // chosen although outside the hint's gate (no blob inside it)
+  int merged_blobs_split = 0;        // blobs larger than the mockup in which a target-shaped part was
+                                     // found (split_depth_step_m)
 
   // The chosen blob (filled whenever a blob was chosen, also when it was then rejected).
   std::vector<cv::Point> contour;  // outer contour of the blob, image pixels
