@@ -545,6 +545,12 @@ bool MonoPoseEstimator::claimOrientation(MonoPoseResult& result) const {
                     std::to_string(result.ambiguity_deg) + " deg (max_ambiguity_deg)";
     return false;
   }
+  const double gate = params_.consistency.max_rotation_innovation_chi2;
+  if (gate > 0.0 && result.rotation_innovation_chi2 > gate) {
+    result.status = "orientation withheld: it jumps from the tracked orientation (chi2 " +
+                    std::to_string(result.rotation_innovation_chi2) + " > max_rotation_innovation_chi2)";
+    return false;
+  }
   return orientationClaimed(result.pose, params_.consistency, &result.status);
 }
 
@@ -553,7 +559,7 @@ void MonoPoseEstimator::scaleByInnovation(MonoPoseResult* result) {
   PoseWithCovariance predicted;
   if (filter_.initialized() && result->stamp_s > filter_.lastStamp() &&
       result->stamp_s - filter_.lastStamp() <= params_.filter.max_gap_s && filter_.predict(result->stamp_s, &predicted)) {
-    innovation_scale_.update(result->pose, predicted);
+    result->rotation_innovation_chi2 = innovation_scale_.update(result->pose, predicted);
   }
   innovation_scale_.apply(&result->pose.covariance);
   result->covariance_scale_position = innovation_scale_.positionScale();

@@ -30,6 +30,7 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.rotation_floor_deg >= 0.0)) return "rotation_floor_deg must not be negative";
   if (!(p.max_rotation_sigma_deg > 0.0)) return "max_rotation_sigma_deg must be positive";
   if (!(p.innovation_window_frames >= 0.0)) return "innovation_window_frames must not be negative (0: off)";
+  if (!(p.max_rotation_innovation_chi2 >= 0.0)) return "max_rotation_innovation_chi2 must not be negative (0: off)";
   if (!(p.max_dot_offset_factor > 0.0)) return "max_dot_offset_factor must be positive";
   if (!(p.max_solver_disagreement_deg > 0.0)) return "max_solver_disagreement_deg must be positive";
   if (!(p.max_led_area_ratio > 1.0)) return "max_led_area_ratio must exceed 1";
@@ -194,14 +195,14 @@ double normalizedChi2(const Eigen::Vector3d& d, const Eigen::Matrix3d& s) {
 }
 }  // namespace
 
-void InnovationCovarianceScale::update(const PoseWithCovariance& measured, const PoseWithCovariance& predicted) {
-  if (weight_ == 0.0) return;
+double InnovationCovarianceScale::update(const PoseWithCovariance& measured, const PoseWithCovariance& predicted) {
   const Matrix6d s = measured.covariance + predicted.covariance;
   const double position = normalizedChi2(measured.translation - predicted.translation, s.topLeftCorner<3, 3>());
   const double rotation = normalizedChi2(rotationLog(measured.rotation * predicted.rotation.transpose()),
                                          s.bottomRightCorner<3, 3>());
-  if (std::isfinite(position)) position_mean_ += weight_ * (position - position_mean_);
-  if (std::isfinite(rotation)) rotation_mean_ += weight_ * (rotation - rotation_mean_);
+  if (weight_ > 0.0 && std::isfinite(position)) position_mean_ += weight_ * (position - position_mean_);
+  if (weight_ > 0.0 && std::isfinite(rotation)) rotation_mean_ += weight_ * (rotation - rotation_mean_);
+  return 3.0 * rotation;
 }
 
 void InnovationCovarianceScale::apply(Matrix6d* covariance) const {

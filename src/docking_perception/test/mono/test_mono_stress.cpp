@@ -250,6 +250,17 @@ TEST(PoseConsistency, InnovationScaleFollowsTheScatterAboutThePrediction) {
   EXPECT_LT(jittery.first, 2.0);
   EXPECT_GT(jittery.second, 4.0);
   EXPECT_LT(jittery.second, 20.0);
+  // One frame's rotation chi^2 (3 dof): a 5-sigma jump about one axis reads ~25, far above the 99.9 %
+  // gate (16.27) that withholds its orientation; a 1-sigma one ~1.
+  mono::InnovationCovarianceScale single(10.0);
+  mono::PoseWithCovariance predicted;
+  predicted.covariance = mono::Matrix6d::Identity() * 1e-12;
+  mono::PoseWithCovariance jump = predicted;
+  jump.covariance.diagonal() << 1e-6, 1e-6, 1e-6, sigma_rad * sigma_rad, sigma_rad * sigma_rad, sigma_rad * sigma_rad;
+  jump.rotation = mono::rotationExp(Eigen::Vector3d(5.0 * sigma_rad, 0.0, 0.0));
+  EXPECT_NEAR(single.update(jump, predicted), 25.0, 0.5);
+  jump.rotation = mono::rotationExp(Eigen::Vector3d(0.0, sigma_rad, 0.0));
+  EXPECT_NEAR(single.update(jump, predicted), 1.0, 0.05);
   mono::Matrix6d covariance = mono::Matrix6d::Identity();
   mono::InnovationCovarianceScale off(0.0);
   off.apply(&covariance);

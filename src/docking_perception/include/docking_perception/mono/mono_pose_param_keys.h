@@ -77,6 +77,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("rotation_floor_deg", &p.consistency.rotation_floor_deg);
   visit("max_rotation_sigma_deg", &p.consistency.max_rotation_sigma_deg);
   visit("innovation_window_frames", &p.consistency.innovation_window_frames);
+  visit("max_rotation_innovation_chi2", &p.consistency.max_rotation_innovation_chi2);
   visit("max_dot_offset_factor", &p.consistency.max_dot_offset_factor);
   visit("max_solver_disagreement_deg", &p.consistency.max_solver_disagreement_deg);
   visit("max_led_area_ratio", &p.consistency.max_led_area_ratio);

@@ -52,6 +52,10 @@ struct ConsistencyParams {
   // Frames over which the scatter of the poses about the velocity filter's prediction is averaged to
   // scale the covariance (InnovationCovarianceScale); 0 turns the scaling off.
   double innovation_window_frames = 10.0;
+  // A single frame whose orientation jumps from the filter's prediction by more than this normalized
+  // chi^2 (3 dof, both covariances; 16.27 = 99.9 %) has its orientation withheld: a one-frame outlier
+  // moves a running mean too little to cover it. 0 turns the check off.
+  double max_rotation_innovation_chi2 = 16.27;
 };
 
 // Empty when usable, else a message naming the parameter (config key).
@@ -100,7 +104,8 @@ class InnovationCovarianceScale {
   explicit InnovationCovarianceScale(double window_frames = 10.0) { setWindow(window_frames); }
   void setWindow(double window_frames);
   // The measured pose (its covariance from the model, before scaling) against the prediction for its stamp.
-  void update(const PoseWithCovariance& measured, const PoseWithCovariance& predicted);
+  // Returns this frame's rotation chi^2 (3 dof, not divided; NaN when it cannot be formed).
+  double update(const PoseWithCovariance& measured, const PoseWithCovariance& predicted);
   // Scales the position block by positionScale(), the rotation block by rotationScale() (variances).
   void apply(Matrix6d* covariance) const;
   double positionScale() const { return std::max(1.0, position_mean_); }
