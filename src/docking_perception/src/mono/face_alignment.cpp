@@ -116,7 +116,8 @@ std::string validateDirectAlignmentParams(const DirectAlignmentParams& p) {
   return "";
 }
 
-cv::Matx33d faceHomography(const TargetModel& model, const CameraIntrinsics& camera, const PoseWithCovariance& pose) {
+cv::Matx33d faceHomography(const Eigen::Matrix3d& texture_to_face, const CameraIntrinsics& camera,
+                           const PoseWithCovariance& pose) {
   // A face point (0, y, z) lands at K (y r1 + z r2 + t); textureToFace gives (y, z, 1) from (u, v, 1).
   Eigen::Matrix3d k;
   k << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
@@ -124,7 +125,7 @@ cv::Matx33d faceHomography(const TargetModel& model, const CameraIntrinsics& cam
   plane.col(0) = pose.rotation.col(1);
   plane.col(1) = pose.rotation.col(2);
   plane.col(2) = pose.translation;
-  const Eigen::Matrix3d h = k * plane * model.textureToFace();
+  const Eigen::Matrix3d h = k * plane * texture_to_face;
   cv::Matx33d out;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) out(r, c) = h(r, c);

@@ -1,5 +1,7 @@
 #include "docking_perception/mono/pose_consistency.h"
 
+#include "docking_perception/mono/face_alignment.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -60,15 +62,7 @@ AppearanceScore FaceAppearance::score(const cv::Mat& gray, const CameraIntrinsic
                                       const PoseWithCovariance& pose) const {
   AppearanceScore out;
   if (pyramid_.empty() || gray.empty()) return out;
-  // Texture pixel -> image pixel at the pose: K [r_y r_z t] textureToFace (the face is the plane x = 0).
-  Eigen::Matrix3d k;
-  k << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
-  Eigen::Matrix3d plane;
-  plane.col(0) = pose.rotation.col(1);
-  plane.col(1) = pose.rotation.col(2);
-  plane.col(2) = pose.translation;
-  const Eigen::Matrix3d h = k * plane * texture_to_face_;
-  const cv::Matx33d texture_to_image(h(0, 0), h(0, 1), h(0, 2), h(1, 0), h(1, 1), h(1, 2), h(2, 0), h(2, 1), h(2, 2));
+  const cv::Matx33d texture_to_image = faceHomography(texture_to_face_, camera, pose);
   const cv::Size ts = pyramid_.front().size();
   std::vector<cv::Point2f> corners = {{-0.5f, -0.5f}, {ts.width - 0.5f, -0.5f}, {ts.width - 0.5f, ts.height - 0.5f},
                                       {-0.5f, ts.height - 0.5f}};

@@ -47,8 +47,14 @@ struct DirectAlignment {
   double image_scale = 1.0;                      // image pixels per working pixel
 };
 
-// Texture pixel -> image pixel for a pose (camera <- target) of the face plane.
-cv::Matx33d faceHomography(const TargetModel& model, const CameraIntrinsics& camera, const PoseWithCovariance& pose);
+// Texture pixel -> image pixel for a pose (camera <- target) of the face plane (texture_to_face: the
+// model's TargetModel::textureToFace()).
+cv::Matx33d faceHomography(const Eigen::Matrix3d& texture_to_face, const CameraIntrinsics& camera,
+                           const PoseWithCovariance& pose);
+inline cv::Matx33d faceHomography(const TargetModel& model, const CameraIntrinsics& camera,
+                                  const PoseWithCovariance& pose) {
+  return faceHomography(model.textureToFace(), camera, pose);
+}
 
 class DirectFaceAligner {
  public:
