@@ -8,8 +8,8 @@
 #include <string>
 
 #include "docking_perception/mono/face_alignment.h"
-#include "mono_params_yaml.h"
 #include "mono_stress.h"
+#include "stress_fixtures.h"
 
 namespace mono = docking_perception::mono;
 namespace stress = docking_perception::stress;
@@ -19,31 +19,11 @@ namespace {
 constexpr uint64_t kFirstSeed = 300;
 constexpr int kTrials = 6;
 
-const mono::TargetModel& model() {
-  static const mono::TargetModel m = mono::TargetModel::loadFromYaml(std::string(CONFIG_DIR) + "/target.yaml");
-  return m;
-}
+using docking_perception::stress_test::condition;
+using docking_perception::stress_test::model;
+using docking_perception::stress_test::renderer;
 
-const stress::StressRenderer& renderer() {
-  static const stress::StressRenderer r(model());
-  return r;
-}
-
-mono::MonoPoseParams visibleParams() {
-  mono::MonoPoseParams p;
-  std::string error;
-  EXPECT_TRUE(docking_perception::compare::loadMonoParams(std::string(CONFIG_DIR) + "/mono_pose_visible.yaml", &p, &error))
-      << error;
-  return p;
-}
-
-stress::StressCondition condition(const std::string& name) {
-  for (const stress::StressCondition& c : stress::standardConditions()) {
-    if (c.name == name) return c;
-  }
-  ADD_FAILURE() << "no condition " << name;
-  return {};
-}
+mono::MonoPoseParams visibleParams() { return docking_perception::stress_test::params("visible"); }
 
 mono::PoseWithCovariance toPose(const stress::TrialPose& trial) {
   mono::PoseWithCovariance pose;

@@ -7,14 +7,14 @@
 #include <opencv2/imgproc.hpp>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "docking_perception/mono/led_pattern_detector.h"
 #include "docking_perception/mono/pose_consistency.h"
-#include <random>
-#include "mono_params_yaml.h"
 #include "mono_stress.h"
+#include "stress_fixtures.h"
 
 namespace mono = docking_perception::mono;
 namespace stress = docking_perception::stress;
@@ -23,32 +23,10 @@ namespace {
 
 constexpr uint64_t kFirstSeed = 200;
 
-const mono::TargetModel& model() {
-  static const mono::TargetModel m = mono::TargetModel::loadFromYaml(std::string(CONFIG_DIR) + "/target.yaml");
-  return m;
-}
-
-const stress::StressRenderer& renderer() {
-  static const stress::StressRenderer r(model());
-  return r;
-}
-
-mono::MonoPoseParams params(const std::string& mode) {
-  mono::MonoPoseParams p;
-  std::string error;
-  EXPECT_TRUE(docking_perception::compare::loadMonoParams(std::string(CONFIG_DIR) + "/mono_pose_" + mode + ".yaml", &p,
-                                                           &error))
-      << error;
-  return p;
-}
-
-stress::StressCondition condition(const std::string& name) {
-  for (const stress::StressCondition& c : stress::standardConditions()) {
-    if (c.name == name) return c;
-  }
-  ADD_FAILURE() << "no condition " << name;
-  return {};
-}
+using docking_perception::stress_test::condition;
+using docking_perception::stress_test::model;
+using docking_perception::stress_test::params;
+using docking_perception::stress_test::renderer;
 
 // The face's bounding box in the image, grown by a margin: what a hint from the disparity detector gives.
 cv::Rect faceBox(const stress::TrialPose& pose, int margin) {
