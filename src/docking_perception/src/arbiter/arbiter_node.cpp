@@ -25,6 +25,7 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "docking_perception/arbiter/input_silence.h"
 #include "docking_perception/arbiter/frame_change.h"
 #include "docking_perception/arbiter/source_arbiter.h"
 
@@ -138,6 +139,7 @@ class ArbiterNode {
     const double tf_timeout_s = requireParam<double>(pnh, "tf_timeout_s");
     if (!(tf_timeout_s >= 0.0)) throw std::invalid_argument("parameter 'tf_timeout_s' must be >= 0");
     tf_timeout_ = ros::Duration(tf_timeout_s);
+    silence_ = std::make_unique<InputSilence>(requireParam<double>(pnh, "sources_silent_timeout_s"));
 
     estimate_pub_ = nh.advertise<docking_msgs::TargetEstimate>(docking_msgs::topics::kTargetEstimate, 10);
     pose_pub_ = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>(docking_msgs::topics::kTargetPose, 10);
@@ -208,6 +210,7 @@ class ArbiterNode {
   }
 
   void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg, Source source) {
+    silence_->noteArrival(ros::Time::now().toSec());
     if (msg->source != static_cast<std::uint8_t>(source)) {
       ROS_WARN_THROTTLE(5.0, "arbiter: estimate on the %s topic says source %u; treated as %s", sourceName(source),
                         msg->source, sourceName(source));
@@ -247,7 +250,13 @@ class ArbiterNode {
   // Called on every estimate and on the timer; `periodic` re-publishes "nothing valid" at the timer's
   // rate so that subscribers see the loss even when no estimator publishes at all.
   void decideAndPublish(bool periodic) {
-    const Decision d = arbiter_.decide(ros::Time::now().toSec());
+    const double now_s = ros::Time::now().toSec();
+    if (silence_->silent(now_s)) {
+      publishSilence(now_s, periodic);
+      return;
+    }
+    was_silent_ = false;
+    const Decision d = arbiter_.decide(now_s);
     const bool changed = d.valid != last_decision_.valid || d.source != last_decision_.source ||
                          d.reason != last_decision_.reason;
     last_decision_ = d;
@@ -265,7 +274,24 @@ class ArbiterNode {
     }
   }
 
-  void publishNothing(const std::string& reason) {
+  /// No estimator talks (perception stalled or gone): "nothing valid" with its own code, so that the
+  /// planner stops and waits instead of searching.
+  void publishSilence(double now_s, bool periodic) {
+    if (!was_silent_) {
+      ROS_ERROR("arbiter: no estimator has published for %.2f s (perception stalled or gone)",
+                std::min(silence_->silentFor(now_s), 1e9));
+    }
+    const bool changed = !was_silent_;
+    was_silent_ = true;
+    if (!(changed || periodic)) return;
+    std_msgs::String status;
+    status.data = "none (sources_silent): no estimator has published";
+    status_pub_.publish(status);
+    publishNothing("sources_silent: no estimator has published", docking_msgs::TargetEstimate::REJECT_SOURCES_SILENT);
+  }
+
+  void publishNothing(const std::string& reason,
+                      std::uint8_t reject_reason = docking_msgs::TargetEstimate::REJECT_NONE) {
     docking_msgs::TargetEstimate out;
     out.header.stamp = ros::Time::now();
     out.header.frame_id = output_frame_;
@@ -273,6 +299,7 @@ class ArbiterNode {
     out.selected_source = docking_msgs::TargetEstimate::SOURCE_FUSED;
     out.valid = false;
     out.status = reason;
+    out.reject_reason = reject_reason;
     estimate_pub_.publish(out);
   }
 
@@ -352,7 +379,11 @@ class ArbiterNode {
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     const Decision& d = last_decision_;
-    if (d.code == DecisionCode::kChosen) {
+    const double now = ros::Time::now().toSec();
+    if (was_silent_) {
+      stat.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "no estimator has published for %.1f s",
+                    std::min(silence_->silentFor(now), 1e9));
+    } else if (d.code == DecisionCode::kChosen) {
       stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "using %s", sourceName(d.source));
     } else if (d.code == DecisionCode::kChosenOverDisagreement) {
       stat.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "using %s; another source contradicted it",
@@ -366,7 +397,6 @@ class ArbiterNode {
     stat.add("reason", d.reason);
     stat.add("regime", regimeName(d.regime));
     stat.add("output frame", output_frame_);
-    const double now = ros::Time::now().toSec();
     for (Source s : {Source::kDisparity, Source::kMonoVisible, Source::kMonoIr}) {
       const auto& latest = arbiter_.latest(s);
       stat.add(std::string(sourceName(s)) + " age (s)", latest ? std::to_string(now - latest->stamp_s) : "never");
@@ -398,6 +428,8 @@ class ArbiterNode {
   /// The latest valid estimate of each source, in output_frame_ (empty: invalid or no transform).
   std::array<std::optional<docking_msgs::TargetEstimate>, kSourceCount> latest_msgs_{};
   Decision last_decision_;
+  std::unique_ptr<InputSilence> silence_;
+  bool was_silent_{false};  // the last decision was "no estimator talks"
   std::uint64_t published_{0};
   std::uint64_t tf_failures_{0};
   std::string last_tf_error_;
