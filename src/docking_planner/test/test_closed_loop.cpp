@@ -127,6 +127,7 @@ Result run(const Scenario& s) {
     ChaserOdometry odom;
     odom.stamp_s = t;
     odom.pose = w.chaser;
+    planner.notePerception(t, false);
     const PlannerOutput out = planner.update(t, odom);
     if (r.states.empty() || r.states.back() != out.state) r.states.push_back(out.state);
     r.last_reason = out.reason;

@@ -45,6 +45,14 @@ class StateMachineTest : public ::testing::Test {
   PlannerOutput step(const Pose2D& chaser, bool see_target) {
     t_ += kDt;
     if (see_target) planner_.addObservation(portAt(t_, port_));
+    planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
+    return planner_.update(t_, odomAt(t_, chaser));
+  }
+  // One cycle in which no estimate message arrives at all (perception gone), or in which the arbiter
+  // says that no estimator talks (sources_silent).
+  PlannerOutput stepPerceptionGone(const Pose2D& chaser, bool sources_silent) {
+    t_ += kDt;
+    if (sources_silent) planner_.notePerception(t_, true);
     return planner_.update(t_, odomAt(t_, chaser));
   }
   // Steps until the docking ends by itself (an output with an outcome), at most max_cycles.
@@ -80,6 +88,9 @@ TEST(DockingPlannerConfig, RejectsInvalidValuesWithTheirName) {
   }
   c = PlannerConfig{};
   c.law.safe_radius_m = NAN;
+  EXPECT_THROW(DockingPlanner{c}, std::invalid_argument);
+  c = PlannerConfig{};
+  c.perception_timeout_s = 1e9;  // the chaser would drive on a dead perception
   EXPECT_THROW(DockingPlanner{c}, std::invalid_argument);
 }
 
@@ -188,6 +199,53 @@ TEST_F(StateMachineTest, LostTooLongInsideTheCircleAbortsBacksOffThenSearches) {
   EXPECT_TRUE(isZero(out.command));
 }
 
+TEST_F(StateMachineTest, PerceptionGoneHoldsStillWithoutTimeoutThenResumes) {
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  const PlannerConfig& c = planner_.config();
+  // No estimate message at all: within perception_timeout_s the planner stops and holds...
+  PlannerOutput out;
+  double stopped_after_s = -1.0;
+  for (double waited = kDt; waited < c.perception_timeout_s + 0.2; waited += kDt) {
+    out = stepPerceptionGone(kFar, false);
+    if (stopped_after_s < 0.0 && isZero(out.command)) stopped_after_s = waited;
+  }
+  EXPECT_EQ(out.state, DockingPhase::kHold);
+  EXPECT_GT(stopped_after_s, 0.0);
+  EXPECT_LE(stopped_after_s, c.perception_timeout_s + 2 * kDt);
+  // ...for as long as perception is gone, long past the hold's timeout: no SEARCH turning, no ABORT.
+  for (double waited = 0.0; waited < 3.0 * c.hold_timeout_s; waited += kDt) {
+    out = stepPerceptionGone(kFar, false);
+    ASSERT_EQ(out.state, DockingPhase::kHold) << out.reason;
+    ASSERT_TRUE(isZero(out.command));
+  }
+  // Perception back with the target: the approach resumes.
+  out = step(kFar, true);
+  EXPECT_EQ(out.state, DockingPhase::kApproach) << out.reason;
+  EXPECT_FALSE(isZero(out.command));
+}
+
+TEST_F(StateMachineTest, ArbiterSayingNoEstimatorTalksStopsAtOnce) {
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  const PlannerOutput out = stepPerceptionGone(kFar, true);
+  EXPECT_EQ(out.state, DockingPhase::kHold);
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_NE(planner_.perceptionProblem(t_), "");
+}
+
+TEST_F(StateMachineTest, PerceptionBackWithoutTheTargetHoldsTheUsualTimeFromThen) {
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  const PlannerConfig& c = planner_.config();
+  for (double waited = 0.0; waited < 2.0 * c.hold_timeout_s; waited += kDt) stepPerceptionGone(kFar, false);
+  // Estimates arrive again but none is valid: still HOLD (the timeout restarted), then SEARCH.
+  PlannerOutput out = runFor(c.hold_timeout_s - 0.5, kFar, false);
+  EXPECT_EQ(out.state, DockingPhase::kHold) << out.reason;
+  out = runFor(1.0, kFar, false);
+  EXPECT_EQ(out.state, DockingPhase::kSearch) << out.reason;
+}
+
 TEST_F(StateMachineTest, NanEstimateStopsAndSaysWhy) {
   step(kFar, true);
   ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
@@ -195,6 +253,7 @@ TEST_F(StateMachineTest, NanEstimateStopsAndSaysWhy) {
   TargetObservation bad = portAt(t_, port_);
   bad.pose.y = NAN;
   EXPECT_FALSE(planner_.addObservation(bad).accepted);
+  planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
   const PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
   EXPECT_EQ(out.state, DockingPhase::kHold);
   EXPECT_TRUE(isZero(out.command));
@@ -210,6 +269,7 @@ TEST_F(StateMachineTest, BadOdometryStopsAndSaysWhy) {
   planner_.addObservation(portAt(t_, port_));
   ChaserOdometry nan_odom = odomAt(t_, kFar);
   nan_odom.twist.wz = NAN;
+  planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
   PlannerOutput out = planner_.update(t_, nan_odom);
   EXPECT_TRUE(isZero(out.command));
   EXPECT_EQ(out.state, DockingPhase::kHold);
@@ -217,10 +277,12 @@ TEST_F(StateMachineTest, BadOdometryStopsAndSaysWhy) {
 
   t_ += kDt;
   planner_.addObservation(portAt(t_, port_));
+  planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
   out = planner_.update(t_, odomAt(t_ - 1.0, kFar));  // a second old
   EXPECT_TRUE(isZero(out.command));
   EXPECT_NE(out.reason.find("stale"), std::string::npos) << out.reason;
 
+  planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
   out = planner_.update(t_, std::nullopt);
   EXPECT_TRUE(isZero(out.command));
   EXPECT_NE(out.reason.find("no odometry"), std::string::npos) << out.reason;
@@ -311,12 +373,14 @@ TEST(DockingOnCommand, StartsIdleAndNeverMovesWithoutAGoal) {
   double t = 10.0;
   for (int i = 0; i < 400; ++i, t += kDt) {  // 20 s with the target in plain view
     planner.addObservation(portAt(t, port));
+    planner.notePerception(t, false);
     const PlannerOutput out = planner.update(t, odomAt(t, kFar));
     ASSERT_EQ(out.state, DockingPhase::kIdle);
     ASSERT_TRUE(isZero(out.command)) << "moved at " << t;
     ASSERT_FALSE(out.outcome.has_value());
   }
   // The target was tracked meanwhile: the errors are there for a user to see.
+  planner.notePerception(t, false);
   EXPECT_TRUE(planner.update(t, odomAt(t, kFar)).has_target);
   EXPECT_FALSE(planner.active());
 }
@@ -408,9 +472,11 @@ TEST_F(StateMachineTest, PositionOnlyApproachesToTheSearchOrbitThenOrbitsFacingT
   // Far: towards the target, and the goal is on the search orbit, not on the safe circle.
   t_ += kDt;
   planner_.addObservation(positionOnly(t_));
+  planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
   PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
   t_ += kDt;
   planner_.addObservation(positionOnly(t_));
+  planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
   out = planner_.update(t_, odomAt(t_, kFar));
   EXPECT_EQ(out.state, DockingPhase::kApproach);
   EXPECT_NE(out.reason.find("position only"), std::string::npos) << out.reason;
@@ -424,6 +490,7 @@ TEST_F(StateMachineTest, PositionOnlyApproachesToTheSearchOrbitThenOrbitsFacingT
   const Pose2D on_orbit{r, 0.0, M_PI + 0.3};
   t_ += kDt;
   planner_.addObservation(positionOnly(t_));
+  planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
   out = planner_.update(t_, odomAt(t_, on_orbit));
   EXPECT_EQ(out.state, DockingPhase::kApproach);
   EXPECT_NE(out.reason.find("orbiting"), std::string::npos) << out.reason;
@@ -458,8 +525,10 @@ TEST_F(StateMachineTest, PositionOnlyEstimateFarFromTheHeldTargetIsNotUsed) {
     TargetObservation o = portAt(t_ + 2 * kDt, Pose2D{2.0, 2.0, 0.0});
     o.orientation_valid = false;
     EXPECT_FALSE(planner_.addObservation(o).accepted);
+    planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
     planner_.update(t_, odomAt(t_, kFar));
   }
+  planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
   const PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
   EXPECT_EQ(out.state, DockingPhase::kHold);
   EXPECT_TRUE(isZero(out.command));
@@ -477,9 +546,11 @@ TEST_F(StateMachineTest, PositionOnlyEstimatesDoNotMoveAPortHeldFromPoses) {
     blob.orientation_valid = false;
     blob.position_sigma_m = 0.01;
     EXPECT_TRUE(planner_.addObservation(blob).accepted);
+    planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
     const PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
     EXPECT_NE(out.state, DockingPhase::kHold);
   }
+  planner_.notePerception(t_, false);  // perception alive (see PerceptionGone*)
   const PlannerOutput out = planner_.update(t_, odomAt(t_, kFar));
   ASSERT_TRUE(out.port.has_value());
   EXPECT_LT(std::abs(out.port->pose.y), 0.002) << "the blob pulled the held port to y = " << out.port->pose.y;
@@ -499,12 +570,14 @@ TEST(ContactEstimates, FullPosesNearTheHeldPortAreUsedToContact) {
     for (const Pose2D& chaser : {kOnCircleOff, kSafePoint}) {
       t += kDt;
       planner.addObservation(portAt(t, port));
+      planner.notePerception(t, false);
       planner.update(t, odomAt(t, chaser));
     }
     PlannerOutput out;
     for (int i = 0; i < 4; ++i) {
       t += kDt;
       planner.addObservation(portAt(t, port));
+      planner.notePerception(t, false);
       out = planner.update(t, odomAt(t, kNearContact));
     }
     ASSERT_EQ(out.state, DockingPhase::kFinal) << out.reason;

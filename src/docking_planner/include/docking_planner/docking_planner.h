@@ -9,7 +9,9 @@
 //   FINAL    along the port axis to contact; near contact, on odometry (the target pose held in odom)
 //   DOCKED   within the docked tolerances: zero velocity for that cycle, then IDLE
 //   HOLD     target lost (or odometry bad): zero velocity; back to where it was when the target
-//            returns; after hold_timeout_s ABORT (inside the safe circle) or SEARCH
+//            returns; after hold_timeout_s ABORT (inside the safe circle) or SEARCH. Perception gone
+//            (no estimate message, or the arbiter says no estimator talks): HOLD for as long as it
+//            lasts, with no timeout, then the usual hold from the moment it returns
 //   ABORT    lost too long near the target, or errors growing: back off to the safe circle on the held
 //            target pose, then SEARCH
 // A docking runs from start() until it ends: DOCKED, cancel(), its time budget spent, or no target for
@@ -65,6 +67,9 @@ struct PlannerConfig {
   ApproachConfig law;
   TrackConfig track;
   double estimate_timeout_s{0.6};          ///< the target is visible while its last estimate is younger
+  /// No message on the estimate topic for this long (arbiter dead or stalled; it re-publishes at its
+  /// status rate even when nothing is seen): perception is gone, HOLD still.
+  double perception_timeout_s{0.3};
   double odom_timeout_s{0.3};              ///< older odometry: zero velocity (HOLD)
   double orientation_timeout_s{20.0};      ///< a held port axis older than this is forgotten (>= max_blind_s)
   double search_wait_s{2.0};               ///< SEARCH: stand still this long before turning
@@ -142,6 +147,13 @@ class DockingPlanner {
   /// reason says why (and shows up in the next update's reason while the target is not visible).
   TrackUpdate addObservation(const TargetObservation& observation);
 
+  /// A message arrived on the estimate topic at `now_s` (receipt time: its stamp may be anything).
+  /// sources_silent: it says that no estimator has published (perception stalled or gone).
+  void notePerception(double now_s, bool sources_silent);
+
+  /// Why perception counts as gone at `now_s` (empty: it is there).
+  std::string perceptionProblem(double now_s) const;
+
   /// One planner cycle at time `now_s` with the latest odometry (absent: none received yet).
   PlannerOutput update(double now_s, const std::optional<ChaserOdometry>& odometry);
 
@@ -188,6 +200,9 @@ class DockingPlanner {
   std::string last_rejection_;
   bool nan_estimate_{false};  // the latest estimate offered had a NaN: treated as no target
   double last_seen_s_{-1e300};  // stamp of the last estimate taken, into the track or as "seen"
+  double last_perception_s_{-1e300};  // receipt time of the last estimate message, valid or not
+  bool sources_silent_{false};        // the last one said that no estimator talks
+  bool perception_down_{false};       // the last update() found perception gone
 };
 
 }  // namespace docking_planner

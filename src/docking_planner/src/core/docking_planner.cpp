@@ -32,6 +32,9 @@ bool finite(const ChaserOdometry& o) {
 }
 
 constexpr double kRadToDeg = 180.0 / M_PI;
+// Perception may be gone this long at most before the chaser stops (the 0.6 s stop budget
+// includes the arbiter's own silence timeout and the base's deceleration).
+constexpr double kMaxPerceptionTimeoutS = 1.0;
 // Orbit without a known port axis: the axis is placed this far ahead, so the ALIGN law moves the chaser
 // along the circle (counter-clockwise seen from above) at its speed limit.
 constexpr double kOrbitLeadRad = 0.5;
@@ -100,6 +103,11 @@ void validate(const PlannerConfig& c) {
   }
   requirePositive(c.search_timeout_s, "search_timeout_s");
   requirePositive(c.hold_timeout_s, "hold_timeout_s");
+  requirePositive(c.perception_timeout_s, "perception_timeout_s");
+  if (c.perception_timeout_s > kMaxPerceptionTimeoutS) {
+    throw std::invalid_argument(fmt("perception_timeout_s must be <= %.1f s: longer, the chaser drives on a dead perception",
+                                    kMaxPerceptionTimeoutS));
+  }
   requirePositive(c.abort_timeout_s, "abort_timeout_s");
   requirePositive(c.approach_goal_tolerance_m, "approach_goal_tolerance_m");
   requirePositive(c.circle_tolerance_m, "circle_tolerance_m");
@@ -274,6 +282,21 @@ std::string DockingPlanner::lostReason(double now_s) const {
   return reason;
 }
 
+void DockingPlanner::notePerception(double now_s, bool sources_silent) {
+  if (!std::isfinite(now_s)) return;
+  last_perception_s_ = now_s;
+  sources_silent_ = sources_silent;
+}
+
+std::string DockingPlanner::perceptionProblem(double now_s) const {
+  if (sources_silent_) return "perception silent: no estimator publishes (stalled or gone)";
+  const double age = now_s - last_perception_s_;
+  if (age >= 0.0 && age <= config_.perception_timeout_s) return "";
+  if (last_perception_s_ < -1e299) return "perception silent: no target estimate message yet";
+  if (age < 0.0) return "";  // the clock went back (a bag looped): the next message decides
+  return fmt("perception silent: no target estimate message for %.1f s", age);
+}
+
 PlannerOutput DockingPlanner::stop(PlannerOutput out, const std::string& reason) const {
   out.command = BodyTwist{};
   out.reason = reason;
@@ -349,6 +372,21 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
       enter(DockingPhase::kHold, now_s, odom_problem);
     }
     return finish(stop(out, odom_problem));
+  }
+  const std::string perception_problem = perceptionProblem(now_s);
+  if (!perception_problem.empty()) {
+    // Stop and wait, without the hold's timeout: searching or backing off needs eyes.
+    if (state_ != DockingPhase::kHold && state_ != DockingPhase::kDocked) {
+      resume_state_ = state_;
+      enter(DockingPhase::kHold, now_s, perception_problem);
+    }
+    perception_down_ = true;
+    return finish(stop(out, "holding: " + perception_problem));
+  }
+  if (perception_down_) {
+    perception_down_ = false;
+    // The hold's timeout runs from the moment perception is back.
+    if (state_ == DockingPhase::kHold) enter(DockingPhase::kHold, now_s, "perception back: holding for the target");
   }
   if (nan_estimate_ && moving(state_)) {
     resume_state_ = state_;

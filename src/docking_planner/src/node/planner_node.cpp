@@ -94,6 +94,7 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   }
   t.outlier_reset_count = static_cast<int>(reset_count);
   c.estimate_timeout_s = requireDouble(p, "estimate_timeout_s");
+  c.perception_timeout_s = requireDouble(p, "perception_timeout_s");
   c.odom_timeout_s = requireDouble(p, "odom_timeout_s");
   c.orientation_timeout_s = requireDouble(p, "orientation_timeout_s");
   c.search_wait_s = requireDouble(p, "search_wait_s");
@@ -335,6 +336,9 @@ class PlannerNode {
   }
 
   void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg) {
+    // Any message shows that the arbiter is alive; it also says whether the estimators are.
+    planner_.notePerception(ros::Time::now().toSec(),
+                            !msg->valid && msg->reject_reason == docking_msgs::TargetEstimate::REJECT_SOURCES_SILENT);
     if (msg->source != docking_msgs::TargetEstimate::SOURCE_FUSED) {
       ROS_WARN_ONCE("planner: estimates on %s are not SOURCE_FUSED; using them anyway",
                     docking_msgs::topics::kTargetEstimate);
@@ -538,9 +542,15 @@ class PlannerNode {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
     const bool failing = last_.state == DockingPhase::kHold || last_.state == DockingPhase::kAbort;
+    const std::string perception_problem = planner_.perceptionProblem(ros::Time::now().toSec());
     stat.add("docking goal active", dock_server_.isActive());
-    stat.summaryf(failing ? DiagnosticStatus::WARN : DiagnosticStatus::OK, "%s: %s", stateName(last_.state),
-                  last_.reason.c_str());
+    if (!perception_problem.empty() && dock_server_.isActive()) {
+      stat.summaryf(DiagnosticStatus::ERROR, "%s: %s", stateName(last_.state), perception_problem.c_str());
+    } else {
+      stat.summaryf(failing ? DiagnosticStatus::WARN : DiagnosticStatus::OK, "%s: %s", stateName(last_.state),
+                    last_.reason.c_str());
+    }
+    stat.add("perception", perception_problem.empty() ? std::string("alive") : perception_problem);
     stat.add("state", stateName(last_.state));
     stat.add("time in state (s)", last_.time_in_state_s);
     stat.add("target visible", last_.target_visible);

@@ -10,8 +10,9 @@ mode "dock": the planner must reach DOCKED within ~timeout_s (sim); at that mome
   port origin (tf world -> target_truth) in the floor plane, and the chaser's x axis within
   max_yaw_error_deg of the reversed port axis.
 mode "lost": this node relays the arbiter's target/estimate to the planner (remapped onto
-  ~relay_topic) and stops relaying lose_after_s (sim) after the planner entered APPROACH, as if the
-  target had vanished. The planner must go to HOLD, then SEARCH, within hold_to_search_max_s, and every
+  ~relay_topic) and, lose_after_s (sim) after the planner entered APPROACH, relays every estimate as
+  "nothing found" (valid false), as if the target had vanished while perception kept running (silence
+  on the topic would mean perception gone, which the planner answers with a HOLD without timeout). The planner must go to HOLD, then SEARCH, within hold_to_search_max_s, and every
   cmd_vel from HOLD until SEARCH (and SEARCH's standing wait) must be zero; the chaser must not move
   (truth) while it holds.
 """
@@ -72,6 +73,11 @@ class ClosedLoopCheck(unittest.TestCase):
         if self.relaying:
             self.relay_pub.publish(msg)
             self.last_relayed = (rospy.get_time(), msg.header.stamp.to_sec())
+        else:  # the target is hidden, perception still runs
+            hidden = TargetEstimate(header=msg.header, source=msg.source, selected_source=msg.selected_source,
+                                    valid=False, status="test: target hidden",
+                                    reject_reason=TargetEstimate.REJECT_NOT_FOUND)
+            self.relay_pub.publish(hidden)
 
     def timeline(self, n0, t_ref):
         out, prev = [], None
