@@ -6,6 +6,10 @@ export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 export ROS_HOME := $(CURDIR)/build/ros_home
 export ROSCONSOLE_FORMAT := [$${severity}] [$${time}] [$${node}]: $${message}
 export PYTHONDONTWRITEBYTECODE := 1
+# Loopback only (README "Network"): the master and the python nodes bind 127.0.0.1, the C++ nodes refuse
+# connections from other hosts. On a robot's private network set ROS_IP to the robot's address instead.
+export ROS_IP := 127.0.0.1
+unexport ROS_HOSTNAME
 
 BUILD_TYPE ?= Release
 JOBS ?= 2

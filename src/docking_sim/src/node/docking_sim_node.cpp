@@ -40,6 +40,18 @@ std::string requireString(const ros::NodeHandle& nh, const std::string& name) {
   return value;
 }
 
+/// A parameter that may be absent (then `fallback`), but if present must have type T: `camera_rate_hz:=fast`
+/// must stop the node, not run it at the default rate.
+template <typename T>
+T optionalTyped(const ros::NodeHandle& nh, const std::string& name, const T& fallback, const char* type_name) {
+  if (!nh.hasParam(name)) return fallback;
+  T value;
+  if (!nh.getParam(name, value)) {
+    throw std::runtime_error("parameter ~" + name + " must be " + type_name);
+  }
+  return value;
+}
+
 geometry_msgs::Transform toTransform(const Eigen::Isometry3d& t) {
   geometry_msgs::Transform out;
   out.translation.x = t.translation().x();
@@ -80,16 +92,16 @@ class SimNode {
     sim_ = std::make_unique<docking_sim::Simulation>(files);
 
     const auto& settings = sim_->settings();
-    real_time_factor_ = pnh.param("real_time_factor", settings.real_time_factor);
-    camera_rate_hz_ = pnh.param("camera_rate_hz", settings.camera_rate_hz);
+    real_time_factor_ = optionalTyped(pnh, "real_time_factor", settings.real_time_factor, "a number");
+    camera_rate_hz_ = optionalTyped(pnh, "camera_rate_hz", settings.camera_rate_hz, "a number");
     if (!std::isfinite(real_time_factor_) || real_time_factor_ < 0.0) {
       throw std::runtime_error("parameter ~real_time_factor must be >= 0 (0 = as fast as possible)");
     }
     if (!std::isfinite(camera_rate_hz_) || camera_rate_hz_ <= 0.0 || camera_rate_hz_ > 200.0) {
       throw std::runtime_error("parameter ~camera_rate_hz must be within (0, 200]");
     }
-    exit_at_end_ = pnh.param("exit_at_end", true);
-    publish_world_to_odom_ = pnh.param("publish_world_to_odom", true);
+    exit_at_end_ = optionalTyped(pnh, "exit_at_end", true, "true or false");
+    publish_world_to_odom_ = optionalTyped(pnh, "publish_world_to_odom", true, "true or false");
 
     // Camera info straight from the calibration files the robot uses (camera_calibration_parsers).
     const char* image_topics[3] = {names::topics::kStereoLeftImageRaw, names::topics::kStereoRightImageRaw,
