@@ -17,6 +17,7 @@
 #include <memory>
 
 #include "omni_base/base_controller.h"
+#include "omni_base/board_session.h"
 #include "omni_base/encoder_tracker.h"
 #include "omni_base/odometry.h"
 #include "param_loader.h"
@@ -165,10 +166,9 @@ class OmniBaseNode {
 
   void onControlCycle(const ros::TimerEvent&) {
     const ros::Time now = ros::Time::now();
-    const bool was_up = backend_->linkUp();
+    // No reset on reconnect: the tracker tells a board that kept counting from one that rebooted.
     const auto reading = backend_->poll(now);
-    if (backend_->linkUp() && !was_up) encoders_.reset();  // the board may have restarted its counters
-    if (reading) processEncoders(*reading);
+    if (reading) processEncoders(*reading, now);
 
     const auto out = controller_.update(now.toSec(), backend_->linkUp());
     if (out.stop_reason != last_stop_reason_) {
@@ -182,22 +182,37 @@ class OmniBaseNode {
     diagnostics_.update();
   }
 
-  void processEncoders(const EncoderReading& reading) {
+  void processEncoders(const EncoderReading& reading, const ros::Time& now) {
     if (reading.fault) {
       ROS_ERROR_THROTTLE(2.0, "omni_base: motor fault reported: %s", reading.fault_text.c_str());
     }
-    const auto sample = encoders_.update(reading.counts, reading.dt_s);
-    if (!sample.accepted) {
-      last_encoder_problem_ = sample.reason;
-      ROS_WARN_THROTTLE(1.0, "omni_base: encoder sample rejected: %s", sample.reason.c_str());
-      return;
+    const auto sample = encoders_.update(EncoderFrame{reading.counts, reading.source_time_ms, now.toSec()});
+    recovery_.onSample(sample.event);
+    if (!sample.reason.empty()) last_encoder_problem_ = sample.reason;
+    switch (sample.event) {
+      case EncoderEvent::kBoardRebooted:
+        ROS_ERROR("omni_base: %s; re-sending ENABLE", sample.reason.c_str());
+        backend_->forceEnable();
+        break;
+      case EncoderEvent::kRebaselined:
+        ROS_ERROR("omni_base: encoder samples rejected repeatedly: %s", sample.reason.c_str());
+        break;
+      case EncoderEvent::kAccepted:
+      case EncoderEvent::kBaseline:
+        break;
+      case EncoderEvent::kWrongWheelCount:
+      case EncoderEvent::kImplausibleJump:
+      case EncoderEvent::kClockJumped:
+      case EncoderEvent::kClockBackwards:
+        ROS_WARN_THROTTLE(1.0, "omni_base: encoder sample rejected: %s", sample.reason.c_str());
+        return;
     }
+    // Motion is measured on the board's clock between accepted samples, so it is exact through bursts.
     std::vector<double> wheel_velocity(sample.delta_rad.size(), 0.0);
     Twist2D body_velocity;
-    if (reading.dt_s > 0.0) {
-      for (std::size_t i = 0; i < wheel_velocity.size(); ++i) wheel_velocity[i] = sample.delta_rad[i] / reading.dt_s;
-      const Twist2D displacement = kinematics_.forward(sample.delta_rad);
-      odometry_.integrateDisplacement(displacement);
+    odometry_.integrateDisplacement(kinematics_.forward(sample.delta_rad));
+    if (sample.dt_s > 0.0) {
+      for (std::size_t i = 0; i < wheel_velocity.size(); ++i) wheel_velocity[i] = sample.delta_rad[i] / sample.dt_s;
       body_velocity = kinematics_.forward(wheel_velocity);
     }
     publishOdometry(reading, body_velocity);
@@ -276,7 +291,9 @@ class OmniBaseNode {
 
   void diagnoseEncoders(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
-    if (encoders_.rejectedSamples() > reported_rejections_) {
+    if (recovery_.recovering()) {
+      stat.summaryf(DiagnosticStatus::ERROR, "recovering: %s", last_encoder_problem_.c_str());
+    } else if (encoders_.rejectedSamples() > reported_rejections_) {
       stat.summaryf(DiagnosticStatus::WARN, "implausible encoder samples rejected: %s", last_encoder_problem_.c_str());
     } else {
       stat.summary(DiagnosticStatus::OK, "encoders plausible");
@@ -284,12 +301,14 @@ class OmniBaseNode {
     reported_rejections_ = encoders_.rejectedSamples();
     stat.add("rejected samples", encoders_.rejectedSamples());
     stat.add("re-baselines", encoders_.rebaselines());
+    stat.add("board reboots", encoders_.reboots());
   }
 
   NodeConfig config_;
   OmniKinematics kinematics_;
   BaseController controller_;
   EncoderTracker encoders_;
+  RebootRecovery recovery_;
   OdometryIntegrator odometry_;
   std::unique_ptr<MotorBackend> backend_;
   std::vector<double> last_setpoints_;
