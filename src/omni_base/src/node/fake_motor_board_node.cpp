@@ -73,10 +73,10 @@ class FakeMotorBoardNode {
     const omni_base::ParamLoader p(pnh);
     omni_base::FakeMotorBoardConfig c;
     c.wheel_count = p.require<std::vector<std::string>>("wheels/names").size();
-    c.drive.volts_per_rad_s = p.requirePositive("motor/volts_per_rad_s");
-    c.drive.supply_volts = p.requirePositive("motor/supply_volts");
-    c.motor_time_constant_s = p.requirePositive("motor/time_constant_s");
-    c.counts_per_rev = p.requirePositive("wheels/encoder_counts_per_rev");
+    c.drive.volts_per_rad_s = p.requireInRange("motor/volts_per_rad_s");
+    c.drive.supply_volts = p.requireInRange("motor/supply_volts");
+    c.motor_time_constant_s = p.requireInRange("motor/time_constant_s");
+    c.counts_per_rev = p.requireInRange("wheels/encoder_counts_per_rev");
     c.random_seed = static_cast<uint32_t>(p.optional<int>("random_seed", 42));
     return c;
   }

@@ -50,36 +50,38 @@ NodeConfig loadConfig(const ros::NodeHandle& pnh) {
   if (c.backend != "serial" && c.backend != "sim") {
     throw std::runtime_error("parameter " + p.name("backend") + " must be 'serial' or 'sim', got '" + c.backend + "'");
   }
-  c.control_rate_hz = p.requirePositive("control_rate_hz");
+  c.control_rate_hz = p.requireInRange("control_rate_hz");
   c.wheel_names = p.require<std::vector<std::string>>("wheels/names");
-  const auto angles_deg = p.requireVector("wheels/drive_angles_deg", c.wheel_names.size(), false);
+  const auto angles_deg = p.requireVectorInRange("wheels/drive_angles_deg", c.wheel_names.size());
   for (double a : angles_deg) c.layout.drive_angles_rad.push_back(a * M_PI / 180.0);
-  c.layout.center_distance_m = p.requirePositive("wheels/center_distance_m");
-  c.layout.wheel_radius_m = p.requirePositive("wheels/radius_m");
+  c.layout.center_distance_m = p.requireInRange("wheels/center_distance_m");
+  c.layout.wheel_radius_m = p.requireInRange("wheels/radius_m");
 
-  c.drive.volts_per_rad_s = p.requirePositive("motor/volts_per_rad_s");
-  c.drive.supply_volts = p.requirePositive("motor/supply_volts");
+  c.drive.volts_per_rad_s = p.requireInRange("motor/volts_per_rad_s");
+  c.drive.supply_volts = p.requireInRange("motor/supply_volts");
 
   c.encoders.wheel_count = c.wheel_names.size();
-  c.encoders.counts_per_rev = p.requirePositive("wheels/encoder_counts_per_rev");
-  c.encoders.counter_bits = p.require<int>("wheels/encoder_bits");
-  if (c.encoders.counter_bits < 8 || c.encoders.counter_bits > 32) {
-    throw std::runtime_error("parameter " + p.name("wheels/encoder_bits") + " must be 8..32");
-  }
-  c.encoders.max_plausible_rad_s = p.requirePositive("encoders/max_plausible_speed_factor") * c.drive.maxSpeed();
+  c.encoders.counts_per_rev = p.requireInRange("wheels/encoder_counts_per_rev");
+  c.encoders.counter_bits = p.requireIntInRange("wheels/encoder_bits");
+  c.encoders.max_plausible_rad_s = p.requireInRange("encoders/max_plausible_speed_factor") * c.drive.maxSpeed();
 
   auto toArray = [](const std::vector<double>& v) { return std::array<double, 3>{v[0], v[1], v[2]}; };
-  c.controller.limits.max_velocity = toArray(p.requireVector("limits/max_velocity", 3, true));
-  c.controller.limits.max_acceleration = toArray(p.requireVector("limits/max_acceleration", 3, true));
-  c.controller.stop_deceleration = toArray(p.requireVector("limits/stop_deceleration", 3, true));
-  c.controller.cmd_timeout_s = p.requirePositive("watchdog/cmd_vel_timeout_s");
+  c.controller.limits.max_velocity = toArray(p.requireVectorInRange("limits/max_velocity", 3));
+  c.controller.limits.max_acceleration = toArray(p.requireVectorInRange("limits/max_acceleration", 3));
+  c.controller.stop_deceleration = toArray(p.requireVectorInRange("limits/stop_deceleration", 3));
+  c.controller.cmd_timeout_s = p.requireInRange("watchdog/cmd_vel_timeout_s");
   c.controller.max_wheel_speed_rad_s = c.drive.maxSpeed();
 
   c.serial.device = p.require<std::string>("serial/device");
-  c.serial.baud = p.require<int>("serial/baud");
-  c.serial.link_timeout_s = p.requirePositive("serial/link_timeout_s");
-  c.serial.backoff_min_s = p.requirePositive("serial/reconnect_backoff_min_s");
-  c.serial.backoff_max_s = p.requirePositive("serial/reconnect_backoff_max_s");
+  c.serial.baud = p.requireIntInRange("serial/baud");
+  c.serial.link_timeout_s = p.requireInRange("serial/link_timeout_s");
+  c.serial.backoff_min_s = p.requireInRange("serial/reconnect_backoff_min_s");
+  c.serial.backoff_max_s = p.requireInRange("serial/reconnect_backoff_max_s");
+  if (c.serial.backoff_max_s < c.serial.backoff_min_s) {
+    throw std::runtime_error("parameter " + p.name("serial/reconnect_backoff_max_s") + " = " +
+                             std::to_string(c.serial.backoff_max_s) + " is below " +
+                             p.name("serial/reconnect_backoff_min_s") + " = " + std::to_string(c.serial.backoff_min_s));
+  }
   c.serial.wheel_count = c.wheel_names.size();
   c.serial.drive = c.drive;
 
