@@ -293,7 +293,8 @@ class OmniBaseNode {
 
   void diagnoseEncoders(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
-    if (recovery_.recovering()) {
+    // A reboot shorter than the diagnostics period is still reported once.
+    if (recovery_.recovering() || encoders_.reboots() > reported_reboots_) {
       stat.summaryf(DiagnosticStatus::ERROR, "recovering: %s", last_encoder_problem_.c_str());
     } else if (encoders_.rejectedSamples() > reported_rejections_) {
       stat.summaryf(DiagnosticStatus::WARN, "implausible encoder samples rejected: %s", last_encoder_problem_.c_str());
@@ -301,6 +302,7 @@ class OmniBaseNode {
       stat.summary(DiagnosticStatus::OK, "encoders plausible");
     }
     reported_rejections_ = encoders_.rejectedSamples();
+    reported_reboots_ = encoders_.reboots();
     stat.add("rejected samples", encoders_.rejectedSamples());
     stat.add("re-baselines", encoders_.rebaselines());
     stat.add("board reboots", encoders_.reboots());
@@ -317,6 +319,7 @@ class OmniBaseNode {
   StopReason last_stop_reason_{StopReason::kNoCommand};
   std::string last_encoder_problem_;
   std::uint64_t reported_rejections_{0};
+  std::uint64_t reported_reboots_{0};
   ros::Time last_tf_stamp_;
 
   ros::Publisher odom_pub_;
