@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "omni_base/encoder_tracker.h"
 #include "omni_base/kinematics.h"
@@ -131,6 +132,8 @@ TEST(EncoderTracker, OdometryUnderAStallPatternMatchesTheBoard) {
   for (int32_t c : last_counts) board_angles.push_back(c * 2.0 * M_PI / 1320.0);
   const double board_distance = kinematics.forward(board_angles).vx;
   const double odom_distance = std::hypot(odometry.pose().x, odometry.pose().y);
+  std::printf("measured: stall pattern, odometry %.9f m, board %.9f m, error %.3g %%\n", odom_distance,
+              board_distance, 100.0 * std::abs(odom_distance - board_distance) / board_distance);
   EXPECT_NEAR(board_distance, 0.3 * 59.98, 0.3 * 59.98 * 1e-3);
   EXPECT_LE(std::abs(odom_distance - board_distance), 1e-3 * board_distance)
       << "odometry " << odom_distance << " m, board " << board_distance << " m";

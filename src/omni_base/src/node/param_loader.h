@@ -32,14 +32,6 @@ class ParamLoader {
     return nh_.getParam(name, value) ? value : fallback;
   }
 
-  double requirePositive(const std::string& name) const {
-    const double v = require<double>(name);
-    if (!(v > 0.0) || !std::isfinite(v)) {
-      throw std::runtime_error("parameter " + nh_.resolveName(name) + " must be a positive number, got " + std::to_string(v));
-    }
-    return v;
-  }
-
   std::vector<double> requireVector(const std::string& name, std::size_t size, bool positive) const {
     const auto v = require<std::vector<double>>(name);
     if (size != 0 && v.size() != size) {
