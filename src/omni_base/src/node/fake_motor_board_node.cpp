@@ -7,7 +7,7 @@
 //   "drop P"          drop each reply with probability P (0..1)
 //   "garbage"         random bytes and false start sequences between replies
 //   "disconnect S"    close the pty (an unplugged cable) for S seconds, then come back
-//   "reboot"          counters and set-points back to zero, motors disabled
+//   "reboot"          counters, set-points and the board clock back to zero, motors disabled
 // The true wheel speeds and angles are published on ~wheels (sensor_msgs/JointState) at 200 Hz.
 #include <poll.h>
 #include <ros/ros.h>
