@@ -17,7 +17,7 @@ CATKIN_MAKE_SERIAL := catkin_make -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCATKIN_WHIT
 CATKIN_MAKE := $(CATKIN_MAKE_SERIAL) -j$(JOBS)
 SETUP := source $(CURDIR)/devel/setup.bash
 
-.PHONY: deps build test demo campaign bench eval lint clean
+.PHONY: deps build test demo campaign bench eval lint clean fuzz-serial
 
 deps:
 	@scripts/install-deps.sh
@@ -49,6 +49,18 @@ bench: build
 
 eval: build
 	@$(SETUP) && scripts/run_eval.sh
+
+# Seeded fuzz of omni_base's serial stream decoder (src/omni_base/README.md, "Serial fuzz harness"):
+# 1 M random streams checked for its invariants, 2 M corrupted zero-duty frames that must never decode
+# to a non-zero duty. About 40 s; exits non-zero on any violation. Builds only omni_base (and the
+# messages it needs), on one core: the program is ROS-free.
+FUZZ_INPUTS ?= 1000000
+FUZZ_CORRUPTIONS ?= 2000000
+FUZZ_SEED ?= 12
+fuzz-serial: deps
+	@mkdir -p devel/lib/python3/dist-packages build
+	@$(CATKIN_MAKE_SERIAL) -DCATKIN_WHITELIST_PACKAGES="docking_msgs;omni_base" -j1 fuzz_serial_decoder > build/build_fuzz_serial.log 2>&1 || { tail -40 build/build_fuzz_serial.log; exit 1; }
+	devel/lib/omni_base/fuzz_serial_decoder --inputs $(FUZZ_INPUTS) --corruptions $(FUZZ_CORRUPTIONS) --seed $(FUZZ_SEED)
 
 lint: deps
 	@$(SETUP) && catkin_lint -W1 --strict src

@@ -34,11 +34,12 @@ class FakeMotorBoard {
   void setStalled(bool stalled) { stalled_ = stalled; }
   void setReplyDropProbability(double p) { drop_probability_ = p; }
   void setGarbageBetweenFrames(bool on) { garbage_ = on; }
-  void resetCounters();  ///< like a board reboot: counters and set-points back to zero
+  void resetCounters();  ///< like a board reboot: counters, set-points and the board clock back to zero, disabled
 
   const std::vector<double>& wheelSpeeds() const { return speed_rad_s_; }
   const std::vector<double>& wheelAngles() const { return angle_rad_; }
   bool enabled() const { return enabled_; }
+  uint32_t boardTimeMs() const;  ///< ms since the last (re)boot, wrapping like the real board's u32
   bool watchdogStopped() const { return watchdog_stopped_; }
   std::uint64_t framesReceived() const { return frames_received_; }
   const protocol::StreamDecoder& decoder() const { return decoder_; }
@@ -58,6 +59,7 @@ class FakeMotorBoard {
   bool garbage_{false};
   double drop_probability_{0.0};
   double now_s_{0.0};
+  double boot_s_{0.0};            ///< host time of the last (re)boot: the board clock counts from it
   double last_advance_s_{-1.0};
   double last_command_s_{-1.0};
   std::uint64_t frames_received_{0};

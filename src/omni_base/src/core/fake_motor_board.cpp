@@ -24,7 +24,15 @@ void FakeMotorBoard::resetCounters() {
   for (auto& m : motors_) m.reset();
   for (auto& s : speed_rad_s_) s = 0.0;
   enabled_ = false;
+  watchdog_stopped_ = false;
+  last_command_s_ = -1.0;
+  boot_s_ = now_s_;
   decoder_.reset();
+}
+
+uint32_t FakeMotorBoard::boardTimeMs() const {
+  const auto ms = static_cast<uint64_t>(std::llround(std::max(0.0, now_s_ - boot_s_) * 1000.0));
+  return static_cast<uint32_t>(ms & 0xFFFFFFFFu);
 }
 
 std::vector<uint8_t> FakeMotorBoard::receive(const uint8_t* data, std::size_t size, double now_s) {
@@ -88,7 +96,7 @@ std::vector<uint8_t> FakeMotorBoard::stateReply(uint8_t sequence) {
                                       (stalled_ ? protocol::kStatusFault : 0));
   state.faults = stalled_ ? protocol::kFaultStall : 0;
   for (double a : angle_rad_) state.encoder_counts.push_back(encoderCountsFromAngle(a, config_.counts_per_rev));
-  state.board_time_ms = static_cast<uint32_t>(static_cast<uint64_t>(std::llround(now_s_ * 1000.0)) & 0xFFFFFFFFu);
+  state.board_time_ms = boardTimeMs();
   return protocol::encodeFrame(protocol::makeStateFrame(state));
 }
 

@@ -25,15 +25,15 @@ uint32_t getU32(const uint8_t* p) {
 
 }  // namespace
 
-uint16_t crc16(const uint8_t* data, std::size_t size) {
-  uint16_t crc = 0xFFFF;
+uint32_t crc32c(const uint8_t* data, std::size_t size) {
+  // Bitwise, reflected: frames are at most 70 bytes, and the board firmware can use the same loop.
+  constexpr uint32_t kReflectedPolynomial = 0x82F63B78u;
+  uint32_t crc = 0xFFFFFFFFu;
   for (std::size_t i = 0; i < size; ++i) {
-    crc ^= static_cast<uint16_t>(data[i]) << 8;
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc & 0x8000) ? static_cast<uint16_t>((crc << 1) ^ 0x1021) : static_cast<uint16_t>(crc << 1);
-    }
+    crc ^= data[i];
+    for (int bit = 0; bit < 8; ++bit) crc = (crc & 1u) ? (crc >> 1) ^ kReflectedPolynomial : crc >> 1;
   }
-  return crc;
+  return crc ^ 0xFFFFFFFFu;
 }
 
 std::vector<uint8_t> encodeFrame(const Frame& frame) {
@@ -48,7 +48,7 @@ std::vector<uint8_t> encodeFrame(const Frame& frame) {
   out.push_back(frame.type);
   out.push_back(static_cast<uint8_t>(frame.payload.size()));
   out.insert(out.end(), frame.payload.begin(), frame.payload.end());
-  putU16(out, crc16(out.data() + 2, out.size() - 2));
+  putU32(out, crc32c(out.data() + 2, out.size() - 2));
   return out;
 }
 
@@ -81,7 +81,9 @@ std::optional<DutyCommand> parseDutyFrame(const Frame& frame) {
   DutyCommand c;
   c.sequence = frame.payload[0];
   for (std::size_t i = 0; i < n; ++i) {
-    c.duty.push_back(static_cast<int16_t>(getU16(&frame.payload[2 + 2 * i])));
+    const auto duty = static_cast<int16_t>(getU16(&frame.payload[2 + 2 * i]));
+    if (duty > kDutyFullScale || duty < -kDutyFullScale) return std::nullopt;  // corrupt, not a command
+    c.duty.push_back(duty);
   }
   return c;
 }
@@ -105,6 +107,36 @@ std::optional<BoardState> parseStateFrame(const Frame& frame) {
   return s;
 }
 
+std::optional<std::size_t> StreamDecoder::frameLengthAt(std::size_t pos) const {
+  if (buffer_.size() - pos < kHeaderSize || buffer_[pos] != kStart1 || buffer_[pos + 1] != kStart2) return std::nullopt;
+  const std::size_t length = buffer_[pos + 3];
+  if (length > kMaxPayload) return std::nullopt;
+  return kHeaderSize + length + kCrcSize;
+}
+
+bool StreamDecoder::crcValidAt(std::size_t pos, std::size_t total) const {
+  const std::size_t covered = total - 2 - kCrcSize;  // type, length and payload
+  return crc32c(&buffer_[pos + 2], covered) == getU32(&buffer_[pos + total - kCrcSize]);
+}
+
+std::optional<std::size_t> StreamDecoder::findValidFrame(std::size_t from, std::size_t to) const {
+  for (std::size_t q = from; q < to; ++q) {
+    const auto total = frameLengthAt(q);
+    if (total && buffer_.size() - q >= *total && crcValidAt(q, *total)) return q;
+  }
+  return std::nullopt;
+}
+
+bool StreamDecoder::incompleteFrameStarts(std::size_t from, std::size_t to) const {
+  // Only a whole, sane header counts: a start sequence in the last bytes of a good frame must not hold
+  // it back until more bytes arrive (the board may have nothing more to send).
+  for (std::size_t q = from; q < to; ++q) {
+    const auto total = frameLengthAt(q);
+    if (total && buffer_.size() - q < *total) return true;
+  }
+  return false;
+}
+
 std::vector<Frame> StreamDecoder::feed(const uint8_t* data, std::size_t size) {
   buffer_.insert(buffer_.end(), data, data + size);
   std::vector<Frame> frames;
@@ -123,30 +155,39 @@ std::vector<Frame> StreamDecoder::feed(const uint8_t* data, std::size_t size) {
     garbage_bytes_ += start - pos;
     pos = start;
     if (buffer_.size() - pos < kHeaderSize) break;  // wait for the header
-    const std::size_t length = buffer_[pos + 3];
-    if (length > kMaxPayload) {
+    const auto total = frameLengthAt(pos);
+    if (!total) {
       ++length_errors_;
       ++garbage_bytes_;
       pos += 1;  // a false start: search again from the next byte
       continue;
     }
-    const std::size_t total = kHeaderSize + length + kCrcSize;
-    if (buffer_.size() - pos < total) break;  // wait for the rest
-    const uint16_t expected = crc16(&buffer_[pos + 2], 2 + length);
-    const uint16_t received = getU16(&buffer_[pos + kHeaderSize + length]);
-    if (expected != received) {
+    const std::size_t span_end = std::min(pos + *total, buffer_.size());
+    // A complete valid frame inside this candidate's span means the candidate is a false start (valid
+    // by chance, or announcing more bytes than will come before the next frame).
+    if (const auto inner = findValidFrame(pos + 1, span_end)) {
+      ++false_starts_;
+      garbage_bytes_ += *inner - pos;
+      pos = *inner;
+      continue;
+    }
+    if (buffer_.size() - pos < *total) break;  // wait for the rest
+    if (!crcValidAt(pos, *total)) {
       ++crc_errors_;
       ++garbage_bytes_;
       pos += 1;
       continue;
     }
+    // Valid, but a frame starting inside it is still arriving: it could overrule this one, so wait.
+    if (incompleteFrameStarts(pos + 1, pos + *total)) break;
+    const std::size_t length = *total - kHeaderSize - kCrcSize;
     Frame f;
     f.type = buffer_[pos + 2];
     f.payload.assign(buffer_.begin() + static_cast<std::ptrdiff_t>(pos + kHeaderSize),
                      buffer_.begin() + static_cast<std::ptrdiff_t>(pos + kHeaderSize + length));
     frames.push_back(std::move(f));
     ++frames_decoded_;
-    pos += total;
+    pos += *total;
   }
   buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(pos));
   return frames;

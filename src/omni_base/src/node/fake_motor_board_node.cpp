@@ -7,7 +7,7 @@
 //   "drop P"          drop each reply with probability P (0..1)
 //   "garbage"         random bytes and false start sequences between replies
 //   "disconnect S"    close the pty (an unplugged cable) for S seconds, then come back
-//   "reboot"          counters and set-points back to zero, motors disabled
+//   "reboot"          counters, set-points and the board clock back to zero, motors disabled
 // The true wheel speeds and angles are published on ~wheels (sensor_msgs/JointState) at 200 Hz.
 #include <poll.h>
 #include <ros/ros.h>
@@ -73,10 +73,10 @@ class FakeMotorBoardNode {
     const omni_base::ParamLoader p(pnh);
     omni_base::FakeMotorBoardConfig c;
     c.wheel_count = p.require<std::vector<std::string>>("wheels/names").size();
-    c.drive.volts_per_rad_s = p.requirePositive("motor/volts_per_rad_s");
-    c.drive.supply_volts = p.requirePositive("motor/supply_volts");
-    c.motor_time_constant_s = p.requirePositive("motor/time_constant_s");
-    c.counts_per_rev = p.requirePositive("wheels/encoder_counts_per_rev");
+    c.drive.volts_per_rad_s = p.requireInRange("motor/volts_per_rad_s");
+    c.drive.supply_volts = p.requireInRange("motor/supply_volts");
+    c.motor_time_constant_s = p.requireInRange("motor/time_constant_s");
+    c.counts_per_rev = p.requireInRange("wheels/encoder_counts_per_rev");
     c.random_seed = static_cast<uint32_t>(p.optional<int>("random_seed", 42));
     return c;
   }

@@ -15,7 +15,7 @@ namespace omni_base {
 struct EncoderReading {
   ros::Time stamp;              ///< when the host received (sim: when the simulator latched) the counts
   std::vector<int32_t> counts;
-  double dt_s{0.0};             ///< time the counts span since the previous reading (0 for the first)
+  uint32_t source_time_ms{0};   ///< when the counts were latched, on the source's clock (board: ms since boot)
   bool fault{false};            ///< the backend reports a motor fault
   std::string fault_text;
 };
@@ -27,6 +27,8 @@ class MotorBackend {
   virtual void send(const std::vector<double>& wheel_rad_s, bool enable, const ros::Time& now) = 0;
   /// The newest encoder reading since the last call, if any.
   virtual std::optional<EncoderReading> poll(const ros::Time& now) = 0;
+  /// The board restarted (the encoder tracker saw it): send ENABLE again on the next cycle.
+  virtual void forceEnable() {}
   /// The backend is answering.
   virtual bool linkUp() const = 0;
   virtual std::string describe() const = 0;

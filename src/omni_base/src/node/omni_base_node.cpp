@@ -17,6 +17,7 @@
 #include <memory>
 
 #include "omni_base/base_controller.h"
+#include "omni_base/board_session.h"
 #include "omni_base/encoder_tracker.h"
 #include "omni_base/odometry.h"
 #include "param_loader.h"
@@ -49,36 +50,38 @@ NodeConfig loadConfig(const ros::NodeHandle& pnh) {
   if (c.backend != "serial" && c.backend != "sim") {
     throw std::runtime_error("parameter " + p.name("backend") + " must be 'serial' or 'sim', got '" + c.backend + "'");
   }
-  c.control_rate_hz = p.requirePositive("control_rate_hz");
+  c.control_rate_hz = p.requireInRange("control_rate_hz");
   c.wheel_names = p.require<std::vector<std::string>>("wheels/names");
-  const auto angles_deg = p.requireVector("wheels/drive_angles_deg", c.wheel_names.size(), false);
+  const auto angles_deg = p.requireVectorInRange("wheels/drive_angles_deg", c.wheel_names.size());
   for (double a : angles_deg) c.layout.drive_angles_rad.push_back(a * M_PI / 180.0);
-  c.layout.center_distance_m = p.requirePositive("wheels/center_distance_m");
-  c.layout.wheel_radius_m = p.requirePositive("wheels/radius_m");
+  c.layout.center_distance_m = p.requireInRange("wheels/center_distance_m");
+  c.layout.wheel_radius_m = p.requireInRange("wheels/radius_m");
 
-  c.drive.volts_per_rad_s = p.requirePositive("motor/volts_per_rad_s");
-  c.drive.supply_volts = p.requirePositive("motor/supply_volts");
+  c.drive.volts_per_rad_s = p.requireInRange("motor/volts_per_rad_s");
+  c.drive.supply_volts = p.requireInRange("motor/supply_volts");
 
   c.encoders.wheel_count = c.wheel_names.size();
-  c.encoders.counts_per_rev = p.requirePositive("wheels/encoder_counts_per_rev");
-  c.encoders.counter_bits = p.require<int>("wheels/encoder_bits");
-  if (c.encoders.counter_bits < 8 || c.encoders.counter_bits > 32) {
-    throw std::runtime_error("parameter " + p.name("wheels/encoder_bits") + " must be 8..32");
-  }
-  c.encoders.max_plausible_rad_s = p.requirePositive("encoders/max_plausible_speed_factor") * c.drive.maxSpeed();
+  c.encoders.counts_per_rev = p.requireInRange("wheels/encoder_counts_per_rev");
+  c.encoders.counter_bits = p.requireIntInRange("wheels/encoder_bits");
+  c.encoders.max_plausible_rad_s = p.requireInRange("encoders/max_plausible_speed_factor") * c.drive.maxSpeed();
 
   auto toArray = [](const std::vector<double>& v) { return std::array<double, 3>{v[0], v[1], v[2]}; };
-  c.controller.limits.max_velocity = toArray(p.requireVector("limits/max_velocity", 3, true));
-  c.controller.limits.max_acceleration = toArray(p.requireVector("limits/max_acceleration", 3, true));
-  c.controller.stop_deceleration = toArray(p.requireVector("limits/stop_deceleration", 3, true));
-  c.controller.cmd_timeout_s = p.requirePositive("watchdog/cmd_vel_timeout_s");
+  c.controller.limits.max_velocity = toArray(p.requireVectorInRange("limits/max_velocity", 3));
+  c.controller.limits.max_acceleration = toArray(p.requireVectorInRange("limits/max_acceleration", 3));
+  c.controller.stop_deceleration = toArray(p.requireVectorInRange("limits/stop_deceleration", 3));
+  c.controller.cmd_timeout_s = p.requireInRange("watchdog/cmd_vel_timeout_s");
   c.controller.max_wheel_speed_rad_s = c.drive.maxSpeed();
 
   c.serial.device = p.require<std::string>("serial/device");
-  c.serial.baud = p.require<int>("serial/baud");
-  c.serial.link_timeout_s = p.requirePositive("serial/link_timeout_s");
-  c.serial.backoff_min_s = p.requirePositive("serial/reconnect_backoff_min_s");
-  c.serial.backoff_max_s = p.requirePositive("serial/reconnect_backoff_max_s");
+  c.serial.baud = p.requireIntInRange("serial/baud");
+  c.serial.link_timeout_s = p.requireInRange("serial/link_timeout_s");
+  c.serial.backoff_min_s = p.requireInRange("serial/reconnect_backoff_min_s");
+  c.serial.backoff_max_s = p.requireInRange("serial/reconnect_backoff_max_s");
+  if (c.serial.backoff_max_s < c.serial.backoff_min_s) {
+    throw std::runtime_error("parameter " + p.name("serial/reconnect_backoff_max_s") + " = " +
+                             std::to_string(c.serial.backoff_max_s) + " is below " +
+                             p.name("serial/reconnect_backoff_min_s") + " = " + std::to_string(c.serial.backoff_min_s));
+  }
   c.serial.wheel_count = c.wheel_names.size();
   c.serial.drive = c.drive;
 
@@ -165,10 +168,9 @@ class OmniBaseNode {
 
   void onControlCycle(const ros::TimerEvent&) {
     const ros::Time now = ros::Time::now();
-    const bool was_up = backend_->linkUp();
+    // No reset on reconnect: the tracker tells a board that kept counting from one that rebooted.
     const auto reading = backend_->poll(now);
-    if (backend_->linkUp() && !was_up) encoders_.reset();  // the board may have restarted its counters
-    if (reading) processEncoders(*reading);
+    if (reading) processEncoders(*reading, now);
 
     const auto out = controller_.update(now.toSec(), backend_->linkUp());
     if (out.stop_reason != last_stop_reason_) {
@@ -182,22 +184,37 @@ class OmniBaseNode {
     diagnostics_.update();
   }
 
-  void processEncoders(const EncoderReading& reading) {
+  void processEncoders(const EncoderReading& reading, const ros::Time& now) {
     if (reading.fault) {
       ROS_ERROR_THROTTLE(2.0, "omni_base: motor fault reported: %s", reading.fault_text.c_str());
     }
-    const auto sample = encoders_.update(reading.counts, reading.dt_s);
-    if (!sample.accepted) {
-      last_encoder_problem_ = sample.reason;
-      ROS_WARN_THROTTLE(1.0, "omni_base: encoder sample rejected: %s", sample.reason.c_str());
-      return;
+    const auto sample = encoders_.update(EncoderFrame{reading.counts, reading.source_time_ms, now.toSec()});
+    recovery_.onSample(sample.event);
+    if (!sample.reason.empty()) last_encoder_problem_ = sample.reason;
+    switch (sample.event) {
+      case EncoderEvent::kBoardRebooted:
+        ROS_ERROR("omni_base: %s; re-sending ENABLE", sample.reason.c_str());
+        backend_->forceEnable();
+        break;
+      case EncoderEvent::kRebaselined:
+        ROS_ERROR("omni_base: encoder samples rejected repeatedly: %s", sample.reason.c_str());
+        break;
+      case EncoderEvent::kAccepted:
+      case EncoderEvent::kBaseline:
+        break;
+      case EncoderEvent::kWrongWheelCount:
+      case EncoderEvent::kImplausibleJump:
+      case EncoderEvent::kClockJumped:
+      case EncoderEvent::kClockBackwards:
+        ROS_WARN_THROTTLE(1.0, "omni_base: encoder sample rejected: %s", sample.reason.c_str());
+        return;
     }
+    // Motion is measured on the board's clock between accepted samples, so it is exact through bursts.
     std::vector<double> wheel_velocity(sample.delta_rad.size(), 0.0);
     Twist2D body_velocity;
-    if (reading.dt_s > 0.0) {
-      for (std::size_t i = 0; i < wheel_velocity.size(); ++i) wheel_velocity[i] = sample.delta_rad[i] / reading.dt_s;
-      const Twist2D displacement = kinematics_.forward(sample.delta_rad);
-      odometry_.integrateDisplacement(displacement);
+    odometry_.integrateDisplacement(kinematics_.forward(sample.delta_rad));
+    if (sample.dt_s > 0.0) {
+      for (std::size_t i = 0; i < wheel_velocity.size(); ++i) wheel_velocity[i] = sample.delta_rad[i] / sample.dt_s;
       body_velocity = kinematics_.forward(wheel_velocity);
     }
     publishOdometry(reading, body_velocity);
@@ -276,26 +293,33 @@ class OmniBaseNode {
 
   void diagnoseEncoders(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
-    if (encoders_.rejectedSamples() > reported_rejections_) {
+    // A reboot shorter than the diagnostics period is still reported once.
+    if (recovery_.recovering() || encoders_.reboots() > reported_reboots_) {
+      stat.summaryf(DiagnosticStatus::ERROR, "recovering: %s", last_encoder_problem_.c_str());
+    } else if (encoders_.rejectedSamples() > reported_rejections_) {
       stat.summaryf(DiagnosticStatus::WARN, "implausible encoder samples rejected: %s", last_encoder_problem_.c_str());
     } else {
       stat.summary(DiagnosticStatus::OK, "encoders plausible");
     }
     reported_rejections_ = encoders_.rejectedSamples();
+    reported_reboots_ = encoders_.reboots();
     stat.add("rejected samples", encoders_.rejectedSamples());
     stat.add("re-baselines", encoders_.rebaselines());
+    stat.add("board reboots", encoders_.reboots());
   }
 
   NodeConfig config_;
   OmniKinematics kinematics_;
   BaseController controller_;
   EncoderTracker encoders_;
+  RebootRecovery recovery_;
   OdometryIntegrator odometry_;
   std::unique_ptr<MotorBackend> backend_;
   std::vector<double> last_setpoints_;
   StopReason last_stop_reason_{StopReason::kNoCommand};
   std::string last_encoder_problem_;
   std::uint64_t reported_rejections_{0};
+  std::uint64_t reported_reboots_{0};
   ros::Time last_tf_stamp_;
 
   ros::Publisher odom_pub_;

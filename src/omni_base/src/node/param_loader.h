@@ -4,9 +4,12 @@
 
 #include <ros/ros.h>
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "omni_base/parameter_ranges.h"
 
 namespace omni_base {
 
@@ -29,14 +32,6 @@ class ParamLoader {
     return nh_.getParam(name, value) ? value : fallback;
   }
 
-  double requirePositive(const std::string& name) const {
-    const double v = require<double>(name);
-    if (!(v > 0.0) || !std::isfinite(v)) {
-      throw std::runtime_error("parameter " + nh_.resolveName(name) + " must be a positive number, got " + std::to_string(v));
-    }
-    return v;
-  }
-
   std::vector<double> requireVector(const std::string& name, std::size_t size, bool positive) const {
     const auto v = require<std::vector<double>>(name);
     if (size != 0 && v.size() != size) {
@@ -51,9 +46,35 @@ class ParamLoader {
     return v;
   }
 
+  /// A number within its range in parameterRanges() (the one home of the bounds).
+  double requireInRange(const std::string& name) const {
+    const double v = require<double>(name);
+    throwIfOutOfRange(name, v);
+    return v;
+  }
+
+  int requireIntInRange(const std::string& name) const {
+    const int v = require<int>(name);
+    throwIfOutOfRange(name, v);
+    return v;
+  }
+
+  /// A list whose every entry is within the range of `name`.
+  std::vector<double> requireVectorInRange(const std::string& name, std::size_t size) const {
+    const auto v = requireVector(name, size, false);
+    for (std::size_t i = 0; i < v.size(); ++i) throwIfOutOfRange(name, v[i], "[" + std::to_string(i) + "]");
+    return v;
+  }
+
   std::string name(const std::string& param) const { return nh_.resolveName(param); }
 
  private:
+  void throwIfOutOfRange(const std::string& name, double value, const std::string& index = "") const {
+    if (const auto error = checkParameterRange(name, value, nh_.resolveName(name) + index)) {
+      throw std::runtime_error(*error);
+    }
+  }
+
   ros::NodeHandle nh_;
 };
 

@@ -28,8 +28,7 @@ void SerialMotorBackend::tryConnect(const ros::Time& now) {
   decoder_.reset();
   connected_at_ = now;
   last_frame_at_ = now;  // the board gets link_timeout_s to answer the first command
-  enabled_sent_ = false;
-  last_board_time_ms_.reset();
+  enable_.forceResend();
 }
 
 void SerialMotorBackend::dropConnection(const ros::Time& now, const std::string& why) {
@@ -56,10 +55,10 @@ bool SerialMotorBackend::writeFrame(const protocol::Frame& frame, const ros::Tim
 void SerialMotorBackend::send(const std::vector<double>& wheel_rad_s, bool enable, const ros::Time& now) {
   if (!port_.isOpen()) tryConnect(now);
   if (!port_.isOpen()) return;
-  if (!enabled_sent_ || enable != last_enable_) {
-    if (!writeFrame(protocol::makeEnableFrame({sequence_++, enable}), now)) return;
-    enabled_sent_ = true;
-    last_enable_ = enable;
+  if (enable_.shouldSend(enable)) {
+    const uint8_t sequence = sequence_++;
+    if (!writeFrame(protocol::makeEnableFrame({sequence, enable}), now)) return;
+    enable_.sent(enable, sequence);
   }
   protocol::DutyCommand cmd;
   cmd.sequence = sequence_++;
@@ -95,11 +94,8 @@ std::optional<EncoderReading> SerialMotorBackend::poll(const ros::Time& now) {
     EncoderReading reading;
     reading.stamp = now;
     reading.counts = state->encoder_counts;
-    if (last_board_time_ms_) {
-      // Board time wraps after 49 days; unsigned subtraction handles it.
-      reading.dt_s = static_cast<uint32_t>(state->board_time_ms - *last_board_time_ms_) * 1e-3;
-    }
-    last_board_time_ms_ = state->board_time_ms;
+    reading.source_time_ms = state->board_time_ms;
+    enable_.onBoardState(state->sequence, (state->status & protocol::kStatusEnabled) != 0);
     reading.fault = (state->status & protocol::kStatusFault) != 0;
     if (reading.fault) {
       reading.fault_text = std::string((state->faults & protocol::kFaultStall) ? "stall " : "") +
@@ -120,6 +116,8 @@ void SerialMotorBackend::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   using diagnostic_msgs::DiagnosticStatus;
   if (!link_up_) {
     stat.summaryf(DiagnosticStatus::ERROR, "motor board not answering: %s", last_error_.c_str());
+  } else if (!enable_.confirmed()) {
+    stat.summary(DiagnosticStatus::ERROR, "motor board not in the commanded enable state (rebooted?): re-sending ENABLE");
   } else if (last_status_ & protocol::kStatusFault) {
     stat.summary(DiagnosticStatus::ERROR, "motor board reports a fault");
   } else if (last_status_ & protocol::kStatusWatchdogStopped) {
@@ -137,6 +135,8 @@ void SerialMotorBackend::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   stat.add("link losses", link_losses_);
   stat.add("board status bits", static_cast<int>(last_status_));
   stat.add("board fault bits", static_cast<int>(last_faults_));
+  stat.add("false starts", decoder_.falseStarts());
+  stat.add("enable lost (board reboots)", enable_.enableLosses());
   stat.add("last error", last_error_);
 }
 

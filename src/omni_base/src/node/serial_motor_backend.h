@@ -4,6 +4,7 @@
 #include <string>
 
 #include "motor_backend.h"
+#include "omni_base/board_session.h"
 #include "omni_base/motor.h"
 #include "omni_base/motor_protocol.h"
 #include "omni_base/reconnect_backoff.h"
@@ -29,6 +30,7 @@ class SerialMotorBackend : public MotorBackend {
   explicit SerialMotorBackend(const SerialBackendConfig& config);
   void send(const std::vector<double>& wheel_rad_s, bool enable, const ros::Time& now) override;
   std::optional<EncoderReading> poll(const ros::Time& now) override;
+  void forceEnable() override { enable_.forceResend(); }
   bool linkUp() const override { return link_up_; }
   std::string describe() const override { return "serial " + config_.device; }
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) const override;
@@ -44,13 +46,11 @@ class SerialMotorBackend : public MotorBackend {
   ReconnectBackoff backoff_;
   std::vector<uint8_t> rx_;
   bool link_up_{false};
-  bool enabled_sent_{false};
-  bool last_enable_{false};
+  EnableHandshake enable_;
   uint8_t sequence_{0};
   ros::Time connected_at_;
   ros::Time last_frame_at_;
   ros::Time next_attempt_;
-  std::optional<uint32_t> last_board_time_ms_;
   uint8_t last_status_{0};
   uint8_t last_faults_{0};
   std::uint64_t link_losses_{0};

@@ -44,15 +44,14 @@ std::optional<EncoderReading> SimMotorBackend::poll(const ros::Time& now) {
     EncoderReading r;
     r.stamp = msg->header.stamp.isZero() ? now : msg->header.stamp;
     r.counts.assign(msg->counts.begin(), msg->counts.end());
-    r.dt_s = last_stamp_.isZero() || r.stamp < last_stamp_ ? 0.0 : (r.stamp - last_stamp_).toSec();
+    // Milliseconds of the simulator's clock, wrapping like the board's u32 clock.
+    r.source_time_ms = static_cast<uint32_t>(static_cast<uint64_t>(r.stamp.toNSec() / 1000000u) & 0xFFFFFFFFu);
     r.fault = msg->fault;
     if (msg->fault) r.fault_text = "simulator reports a motor fault";
-    last_stamp_ = r.stamp;
     reading = r;
   } else if (link_up_ && (now - last_received_).toSec() > link_timeout_s_) {
     link_up_ = false;
     ++link_losses_;
-    last_stamp_ = ros::Time();
     ROS_ERROR("omni_base: no wheels/encoders for %.2f s: simulator link lost, wheels commanded to zero",
               (now - last_received_).toSec());
   } else if (now < last_received_) {

@@ -29,7 +29,6 @@ class SimMotorBackend : public MotorBackend {
   ros::Publisher command_pub_;
   ros::Subscriber encoder_sub_;
   docking_msgs::WheelEncoders::ConstPtr pending_;
-  ros::Time last_stamp_;
   ros::Time last_received_;
   bool link_up_{false};
   std::uint64_t received_{0};
