@@ -63,6 +63,21 @@ geometry_msgs::Pose toPose(const Eigen::Isometry3d& t) {
   return p;
 }
 
+
+// An optional number: absent -> the fallback; present but not a number (camera_rate_hz:=fast) -> an
+// error naming it. NodeHandle::param() returns the fallback for a wrongly typed value, which ran the
+// cameras at the config file's 30 Hz without a word.
+double optionalNumber(const ros::NodeHandle& nh, const std::string& name, double fallback) {
+  if (!nh.hasParam(name)) return fallback;
+  double value = 0.0;
+  if (!nh.getParam(name, value)) {
+    std::string text;
+    nh.getParam(name, text);
+    throw std::runtime_error("parameter " + nh.resolveName(name) + " must be a number, got '" + text + "'");
+  }
+  return value;
+}
+
 class SimNode {
  public:
   SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), image_transport_(nh), diagnostics_(nh, pnh) {
@@ -80,8 +95,8 @@ class SimNode {
     sim_ = std::make_unique<docking_sim::Simulation>(files);
 
     const auto& settings = sim_->settings();
-    real_time_factor_ = pnh.param("real_time_factor", settings.real_time_factor);
-    camera_rate_hz_ = pnh.param("camera_rate_hz", settings.camera_rate_hz);
+    real_time_factor_ = optionalNumber(pnh, "real_time_factor", settings.real_time_factor);
+    camera_rate_hz_ = optionalNumber(pnh, "camera_rate_hz", settings.camera_rate_hz);
     if (!std::isfinite(real_time_factor_) || real_time_factor_ < 0.0) {
       throw std::runtime_error("parameter ~real_time_factor must be >= 0 (0 = as fast as possible)");
     }
