@@ -34,8 +34,6 @@ void CompressedSubscriber::internalCallback(const sensor_msgs::CompressedImageCo
   image->is_bigendian = 0;
   image->step = static_cast<std::uint32_t>(decoded.image.step);
   image->data = std::move(decoded.image.data);
-  // The sender, for whoever checks the image next (docking_perception's image guard names it).
-  image->__connection_header = message->__connection_header;
   user_cb(image);
 }
 

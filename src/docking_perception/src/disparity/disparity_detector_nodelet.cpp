@@ -444,10 +444,10 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
     if (detection.found) last_range_m_ = detection.range_m;
   }
   // What the arbiter would refuse (a NaN, a bad covariance) leaves here as not valid, with the code.
-  const auto problem = docking_msgs::checks::withdrawIfMalformed(&estimate);
-  if (problem != docking_msgs::checks::EstimateProblem::kNone) {
+  const auto own_problem = docking_msgs::checks::withdrawIfMalformed(&estimate);
+  if (own_problem != docking_msgs::checks::EstimateProblem::kNone) {
     NODELET_ERROR_THROTTLE(5.0, "disparity_detector: estimate withdrawn: %s",
-                           docking_msgs::checks::estimateProblemName(problem));
+                           docking_msgs::checks::estimateProblemName(own_problem));
   }
   estimate_publisher_.publish(estimate);
 }

@@ -2,7 +2,8 @@
 // `image_raw` through image_transport (~image_transport: raw, or the compressed plugin of
 // docking_image_transport, as the debayer nodelets did), republishes every valid image unchanged on
 // `image_checked` (the same shared pointer: no copy in the manager) and drops a malformed one with a
-// throttled warning and a diagnostic naming its publisher and the problem (image_check.h).
+// throttled warning and a diagnostic naming its publisher (raw transport: the MessageEvent's publisher;
+// another transport: its topic) and the problem (image_check.h).
 // Parameters (config/image_guard.yaml, all required): max_image_side_px, max_future_stamp_s.
 #include <array>
 #include <map>
@@ -23,28 +24,22 @@
 namespace docking_perception {
 namespace image_guard {
 
-/// Who sent a message: the connection header's callerid (set by roscpp for messages from another
-/// process, and forwarded by the compressed plugin); an in-process publisher leaves none.
-std::string publisherOf(const sensor_msgs::Image& image) {
-  if (image.__connection_header) {
-    const auto it = image.__connection_header->find("callerid");
-    if (it != image.__connection_header->end()) return it->second;
-  }
-  return "(in-process publisher)";
-}
-
 class ImageGuardNodelet : public nodelet::Nodelet {
  public:
   void onInit() override;
 
  private:
   void readParameters();
-  void onImage(const sensor_msgs::ImageConstPtr& image);
+  void onImage(const sensor_msgs::ImageConstPtr& image, const std::string& publisher);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ImageLimits limits_;
   std::unique_ptr<image_transport::ImageTransport> image_transport_;
-  image_transport::Subscriber subscriber_;
+  // raw: a plain subscriber, whose MessageEvent names the publisher; other transports (compressed):
+  // image_transport, whose callback does not, so the drops name the transport topic instead.
+  ros::Subscriber raw_subscriber_;
+  image_transport::Subscriber transport_subscriber_;
+  std::string input_topic_;
   ros::Publisher checked_publisher_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;
@@ -86,13 +81,27 @@ void ImageGuardNodelet::onInit() {
   diagnostics_->add("image guard " + nh.resolveName("image_raw"), this, &ImageGuardNodelet::diagnose);
   diagnostics_timer_ = nh.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
   // ~image_transport chooses the transport (default raw), as image_proc's nodelets read it.
-  subscriber_ = image_transport_->subscribe("image_raw", 2, &ImageGuardNodelet::onImage, this,
-                                            image_transport::TransportHints("raw", ros::TransportHints(), pnh));
-  NODELET_INFO("image_guard: %s (%s) -> %s", subscriber_.getTopic().c_str(), subscriber_.getTransport().c_str(),
-               checked_publisher_.getTopic().c_str());
+  const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
+  if (hints.getTransport() == "raw") {
+    raw_subscriber_ = nh.subscribe<sensor_msgs::Image>(
+        "image_raw", 2, [this](const ros::MessageEvent<sensor_msgs::Image const>& event) {
+          onImage(event.getConstMessage(), event.getPublisherName());
+        });
+    input_topic_ = raw_subscriber_.getTopic();
+  } else {
+    transport_subscriber_ = image_transport_->subscribe(
+        "image_raw", 2,
+        [this](const sensor_msgs::ImageConstPtr& image) {
+          onImage(image, "(a publisher of " + transport_subscriber_.getTopic() + ", " +
+                             transport_subscriber_.getTransport() + " transport)");
+        },
+        ros::VoidPtr(), hints);
+    input_topic_ = transport_subscriber_.getTopic() + " (" + transport_subscriber_.getTransport() + ")";
+  }
+  NODELET_INFO("image_guard: %s -> %s", input_topic_.c_str(), checked_publisher_.getTopic().c_str());
 }
 
-void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image) {
+void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image, const std::string& publisher) {
   ImageProblem problem = ImageProblem::kNone;
   try {
     ImageFacts facts;
@@ -115,12 +124,11 @@ void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image) {
     NODELET_ERROR_THROTTLE(5.0, "image_guard: %s", e.what());
     return;
   }
-  const std::string publisher = publisherOf(*image);
   const std::string details = std::string(imageProblemName(problem)) + ": '" + image->encoding + "' " +
                               std::to_string(image->width) + "x" + std::to_string(image->height) + ", step " +
                               std::to_string(image->step) + ", " + std::to_string(image->data.size()) +
                               " bytes, frame '" + image->header.frame_id + "'";
-  NODELET_WARN_THROTTLE(2.0, "image_guard: dropped an image on %s from %s: %s", subscriber_.getTopic().c_str(),
+  NODELET_WARN_THROTTLE(2.0, "image_guard: dropped an image on %s from %s: %s", input_topic_.c_str(),
                         publisher.c_str(), details.c_str());
   std::lock_guard<std::mutex> lock(mutex_);
   ++dropped_[static_cast<std::size_t>(problem)];
