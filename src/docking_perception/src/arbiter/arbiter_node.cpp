@@ -211,10 +211,13 @@ class ArbiterNode {
   }
 
   void subscribe(ros::NodeHandle& nh, const char* topic, Source source) {
-    subscribers_.push_back(nh.subscribe<docking_msgs::TargetEstimate>(
-        topic, 10, [this, source](const ros::MessageEvent<docking_msgs::TargetEstimate const>& event) {
+    // A boost::function of the event type: a lambda given to subscribe<M>() is wrapped as a callback of
+    // the message pointer, and the event built from that pointer names no publisher.
+    const boost::function<void(const ros::MessageEvent<docking_msgs::TargetEstimate const>&)> callback =
+        [this, source](const ros::MessageEvent<docking_msgs::TargetEstimate const>& event) {
           onEstimateEvent(event, source);
-        }));
+        };
+    subscribers_.push_back(nh.subscribe<docking_msgs::TargetEstimate>(topic, 10, callback));
   }
 
   // Nothing an estimate contains may end the node: whatever the algorithm code throws drops that

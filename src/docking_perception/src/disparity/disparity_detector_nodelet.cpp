@@ -61,8 +61,12 @@ void DisparityDetectorNodelet::onInit() {
     // Thrown, not ros::requestShutdown(): the nodelet loader catches it and refuses this nodelet (see
     // mono_pose_nodelet.cpp); its `nodelet load` process exits non-zero, and the launch, where the
     // detector is required, ends cleanly.
-    throw std::runtime_error("disparity_detector: invalid or missing parameters in " + private_nh_.getNamespace() +
-                             " (see errors above; all keys of config/disparity_detector.yaml are required)");
+    // nodelet::Loader logs the exception's message at DEBUG only: said here first.
+    const std::string message = "disparity_detector: invalid or missing parameters in " +
+                                private_nh_.getNamespace() +
+                                " (see errors above; all keys of config/disparity_detector.yaml are required)";
+    NODELET_FATAL("%s", message.c_str());
+    throw std::runtime_error(message);
   }
   {
     std::lock_guard<std::mutex> lock(state_mutex_);

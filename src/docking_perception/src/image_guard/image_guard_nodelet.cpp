@@ -69,9 +69,15 @@ void ImageGuardNodelet::readParameters() {
 }
 
 void ImageGuardNodelet::onInit() {
-  // A bad parameter throws out of onInit: the manager refuses this nodelet with the message (its
-  // loader exits non-zero) and carries on; nothing is subscribed or advertised yet.
-  readParameters();
+  // A bad parameter throws out of onInit: the manager refuses this nodelet (its `nodelet load` exits
+  // non-zero) and carries on; nothing is subscribed or advertised yet. Said here first: Debian's
+  // nodelet::Loader logs the exception's message at DEBUG only.
+  try {
+    readParameters();
+  } catch (const std::exception& e) {
+    NODELET_FATAL("image_guard: %s: not starting", e.what());
+    throw;
+  }
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
@@ -83,10 +89,13 @@ void ImageGuardNodelet::onInit() {
   // ~image_transport chooses the transport (default raw), as image_proc's nodelets read it.
   const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
   if (hints.getTransport() == "raw") {
-    raw_subscriber_ = nh.subscribe<sensor_msgs::Image>(
-        "image_raw", 2, [this](const ros::MessageEvent<sensor_msgs::Image const>& event) {
+    // A boost::function of the event type: a lambda given to subscribe<M>() is wrapped as a callback of
+    // the message pointer, and the event built from that pointer names no publisher.
+    const boost::function<void(const ros::MessageEvent<sensor_msgs::Image const>&)> callback =
+        [this](const ros::MessageEvent<sensor_msgs::Image const>& event) {
           onImage(event.getConstMessage(), event.getPublisherName());
-        });
+        };
+    raw_subscriber_ = nh.subscribe<sensor_msgs::Image>("image_raw", 2, callback);
     input_topic_ = raw_subscriber_.getTopic();
   } else {
     transport_subscriber_ = image_transport_->subscribe(

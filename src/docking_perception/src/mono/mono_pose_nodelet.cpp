@@ -141,8 +141,11 @@ void MonoPoseNodelet::onInit() {
     // says so (its `nodelet load` process exits non-zero), while the manager keeps running. A shutdown
     // requested from inside the loader's service call tore the manager down with the loader's mutex
     // still locked (boost::lock_error on the way out).
-    throw std::runtime_error(
-        "mono_pose: invalid or missing parameters (see above; all are listed in config/mono_pose_<mode>.yaml)");
+    // nodelet::Loader logs the exception's message at DEBUG only: said here first.
+    const std::string message =
+        "mono_pose: invalid or missing parameters (see above; all are listed in config/mono_pose_<mode>.yaml)";
+    NODELET_FATAL("%s", message.c_str());
+    throw std::runtime_error(message);
   }
   const bool visible = params_.mode == mono::MonoMode::kVisible;
   source_ = visible ? docking_msgs::TargetEstimate::SOURCE_MONO_VISIBLE : docking_msgs::TargetEstimate::SOURCE_MONO_IR;

@@ -117,13 +117,13 @@ class BadInputs(unittest.TestCase):
         with self.lock:
             return [m for t, m in self.fused if t >= wall_start and m.valid]
 
-    def wait_for(self, condition, timeout_s, what):
+    def wait_for(self, condition, timeout_s, what, seen=lambda: ""):
         deadline = time.time() + timeout_s
         while time.time() < deadline and not rospy.is_shutdown():
             if condition():
                 return
             time.sleep(0.2)
-        self.fail("timed out after %.0f s (wall) waiting for %s" % (timeout_s, what))
+        self.fail("timed out after %.0f s (wall) waiting for %s %s" % (timeout_s, what, seen()))
 
     def assert_alive(self):
         for node in ["/perception_manager", "/arbiter", "/planner"]:
@@ -184,7 +184,10 @@ class BadInputs(unittest.TestCase):
             return (len(guards) >= 3 and all(self.me in v.get("last dropped", "") for v in guards) and
                     arbiter and self.me in arbiter[0].get("last dropped", "") and
                     planner and self.me in planner[0].get("last dropped", ""))
-        self.wait_for(named_everywhere, 30.0, "diagnostics naming %s as the publisher" % self.me)
+        def seen():
+            with self.lock:
+                return "; seen: %s" % {name: values.get("last dropped") for name, values in self.diagnostics.items()}
+        self.wait_for(named_everywhere, 30.0, "diagnostics naming %s as the publisher" % self.me, seen)
         for values in self.diagnostic_values("image guard"):
             for code, _ in malformed_images("f", rospy.Time.now()):
                 self.assertGreater(int(values.get("dropped: " + code, "0")), 0, "guard did not count " + code)
