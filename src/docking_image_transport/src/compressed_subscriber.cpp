@@ -4,6 +4,7 @@
 #include <sensor_msgs/Image.h>
 
 #include <boost/make_shared.hpp>
+#include <exception>
 
 #include "docking_image_transport/codec.h"
 
@@ -11,7 +12,14 @@ namespace docking_image_transport {
 
 void CompressedSubscriber::internalCallback(const sensor_msgs::CompressedImageConstPtr& message,
                                             const Callback& user_cb) {
-  DecodeResult decoded = decode(message->format, message->data.data(), message->data.size());
+  DecodeResult decoded;
+  try {
+    decoded = decode(message->format, message->data.data(), message->data.size());
+  } catch (const std::exception& e) {  // decode() reports what it knows; anything else (bad_alloc, OpenCV) too
+    ROS_ERROR_THROTTLE(5.0, "%s: dropped a frame of %zu bytes, format '%s': %s", getTopic().c_str(),
+                       message->data.size(), message->format.c_str(), e.what());
+    return;
+  }
   if (!decoded.ok()) {
     ROS_ERROR_THROTTLE(5.0, "%s: dropped a frame of %zu bytes, format '%s': %s (%s)", getTopic().c_str(),
                        message->data.size(), message->format.c_str(), decoded.reason.c_str(),

@@ -8,6 +8,8 @@ add_library(${PROJECT_NAME}_arbiter_core
   src/arbiter/frame_change.cpp
   src/arbiter/source_arbiter.cpp
 )
+# The stamp checks and clock-jump detection shared with the planner (docking_msgs/estimate_check.h).
+target_link_libraries(${PROJECT_NAME}_arbiter_core ${docking_msgs_LIBRARIES})
 
 # Node: tf2 into one output frame, publishes the FUSED estimate, pose, twist, tf, status, diagnostics.
 add_executable(arbiter src/arbiter/arbiter_node.cpp)

@@ -56,4 +56,6 @@ if(CATKIN_ENABLE_TESTING)
                      ${PROJECT_NAME}_camera_nodelets)
     endforeach()
   endif()
+  # Issue 12: a rate_hz that is not a number or out of range stops the camera naming the parameter.
+  add_rostest(test/camera/bad_rate.test DEPENDENCIES ir_camera ${PROJECT_NAME}_camera_nodelets)
 endif()

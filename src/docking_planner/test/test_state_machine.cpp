@@ -608,3 +608,27 @@ TEST(ContactEstimates, NegativeGateIsRejectedByName) {
     EXPECT_NE(std::string(e.what()).find("contact_estimate_gate_m"), std::string::npos);
   }
 }
+
+// Issue 12: after the clock jumps back (sim reset, bag loop), the held stamps would refuse every new
+// estimate as out of order; forgetTarget() starts the track afresh and keeps the docking running.
+TEST_F(StateMachineTest, ForgetTargetAcceptsEstimatesOfTheNewTimeline) {
+  runFor(1.0, kFar, true);
+  EXPECT_FALSE(planner_.addObservation(portAt(5.0, port_)).accepted);  // an old stamp: out of order
+  planner_.forgetTarget(5.0);
+  EXPECT_TRUE(planner_.active());
+  const TrackUpdate update = planner_.addObservation(portAt(5.0, port_));
+  EXPECT_TRUE(update.accepted) << update.reason;
+  const PlannerOutput out = planner_.update(5.01, odomAt(5.01, kFar));
+  EXPECT_TRUE(out.target_visible) << out.reason;
+}
+
+TEST(DockingPlannerConfig, RejectsInvalidStampLimitsWithTheirName) {
+  PlannerConfig c;
+  c.stamp_limits.max_future_s = -0.1;
+  try {
+    DockingPlanner p{c};
+    FAIL() << "accepted a negative max_future_stamp_s";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("max_future_stamp_s"), std::string::npos);
+  }
+}

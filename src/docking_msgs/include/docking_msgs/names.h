@@ -18,6 +18,10 @@ constexpr const char kJointStates[] = "joint_states";
 // Cameras (image_transport bases; camera_info beside each)
 constexpr const char kStereoLeftImageRaw[] = "stereo/left/image_raw";
 constexpr const char kStereoRightImageRaw[] = "stereo/right/image_raw";
+// image_raw that passed docking_perception's image guard (launch/perception.launch): what image_proc reads.
+constexpr const char kStereoLeftImageChecked[] = "stereo/left/image_checked";
+constexpr const char kStereoRightImageChecked[] = "stereo/right/image_checked";
+constexpr const char kIrImageChecked[] = "ir/image_checked";
 constexpr const char kStereoLeftImageRect[] = "stereo/left/image_rect";
 constexpr const char kStereoDisparity[] = "stereo/disparity";  // stereo_msgs/DisparityImage
 constexpr const char kIrImageRaw[] = "ir/image_raw";

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <initializer_list>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -15,6 +16,7 @@
 #include <docking_perception/ArbiterConfig.h>
 #include <dynamic_reconfigure/server.h>
 #include <docking_msgs/TargetEstimate.h>
+#include <docking_msgs/estimate_check_msg.h>
 #include <docking_msgs/names.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/TwistWithCovarianceStamped.h>
@@ -48,6 +50,8 @@ ArbiterConfig loadConfig(const ros::NodeHandle& pnh) {
   c.hysteresis_m = requireParam<double>(pnh, "hysteresis_m");
   c.timeout_s = requireParam<double>(pnh, "timeout_s");
   c.future_tolerance_s = requireParam<double>(pnh, "future_tolerance_s");
+  c.stamp_limits.max_future_s = requireParam<double>(pnh, "max_future_stamp_s");
+  c.stamp_limits.max_age_s = requireParam<double>(pnh, "max_stamp_age_s");
   const auto count = [&pnh](const char* name) {
     const int value = requireParam<int>(pnh, name);
     if (value < 0) throw std::invalid_argument(std::string("parameter '") + name + "' must be >= 0");
@@ -167,6 +171,8 @@ class ArbiterNode {
     c.hysteresis_m = cfg.hysteresis_m;
     c.timeout_s = cfg.timeout_s;
     c.future_tolerance_s = cfg.future_tolerance_s;
+    c.stamp_limits.max_future_s = cfg.max_future_stamp_s;
+    c.stamp_limits.max_age_s = cfg.max_stamp_age_s;
     c.min_visible_inliers = static_cast<std::uint32_t>(std::max(0, cfg.min_visible_inliers));
     c.min_ir_inliers = static_cast<std::uint32_t>(std::max(0, cfg.min_ir_inliers));
     c.min_disparity_range_m = cfg.min_disparity_range_m;
@@ -189,6 +195,8 @@ class ArbiterNode {
       cfg.hysteresis_m = kept.hysteresis_m;
       cfg.timeout_s = kept.timeout_s;
       cfg.future_tolerance_s = kept.future_tolerance_s;
+      cfg.max_future_stamp_s = kept.stamp_limits.max_future_s;
+      cfg.max_stamp_age_s = kept.stamp_limits.max_age_s;
       cfg.min_visible_inliers = static_cast<int>(kept.min_visible_inliers);
       cfg.min_ir_inliers = static_cast<int>(kept.min_ir_inliers);
       cfg.min_disparity_range_m = kept.min_disparity_range_m;
@@ -205,16 +213,55 @@ class ArbiterNode {
   }
 
   void subscribe(ros::NodeHandle& nh, const char* topic, Source source) {
-    subscribers_.push_back(nh.subscribe<docking_msgs::TargetEstimate>(
-        topic, 10, [this, source](const docking_msgs::TargetEstimateConstPtr& msg) { onEstimate(msg, source); }));
+    // A boost::function of the event type: a lambda given to subscribe<M>() is wrapped as a callback of
+    // the message pointer, and the event built from that pointer names no publisher.
+    const boost::function<void(const ros::MessageEvent<docking_msgs::TargetEstimate const>&)> callback =
+        [this, source](const ros::MessageEvent<docking_msgs::TargetEstimate const>& event) {
+          onEstimateEvent(event, source);
+        };
+    subscribers_.push_back(nh.subscribe<docking_msgs::TargetEstimate>(topic, 10, callback));
   }
 
-  void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg, Source source) {
-    silence_->noteArrival(ros::Time::now().toSec());
+  // Nothing an estimate contains may end the node: whatever the algorithm code throws drops that
+  // estimate, with a diagnostic, and the node goes on.
+  void onEstimateEvent(const ros::MessageEvent<docking_msgs::TargetEstimate const>& event, Source source) {
+    try {
+      onEstimate(event.getConstMessage(), source, event.getPublisherName());
+    } catch (const std::exception& e) {
+      recordRejection(event.getPublisherName(), source, "exception", e.what());
+    }
+  }
+
+  /// Counts a refused estimate by its code, keeps who sent it and why for the diagnostics, and warns
+  /// (throttled). No other state changes.
+  void recordRejection(const std::string& publisher, Source source, const std::string& code, const std::string& why) {
+    ++rejections_by_code_[code];
+    last_rejection_ = std::string(sourceName(source)) + " estimate from " + publisher + ": " + code + " (" + why + ")";
+    ROS_WARN_THROTTLE(2.0, "arbiter: dropped a %s estimate from %s: %s: %s", sourceName(source), publisher.c_str(),
+                      code.c_str(), why.c_str());
+  }
+
+  void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg, Source source, const std::string& publisher) {
     if (msg->source != static_cast<std::uint8_t>(source)) {
       ROS_WARN_THROTTLE(5.0, "arbiter: estimate on the %s topic says source %u; treated as %s", sourceName(source),
                         msg->source, sourceName(source));
     }
+    // Numbers first (a zero quaternion, a NaN): refused whole, before any state or tf look-up.
+    const auto problem = docking_msgs::checks::checkEstimate(*msg);
+    if (problem != docking_msgs::checks::EstimateProblem::kNone) {
+      recordRejection(publisher, source, docking_msgs::checks::estimateProblemName(problem), "numbers refused");
+      return;
+    }
+    const double now_s = ros::Time::now().toSec();
+    // The stamp against now before the tf look-up, which would wait tf_timeout_s for a future one.
+    const auto stamp_problem =
+        docking_msgs::checks::checkStamp(msg->header.stamp.toSec(), now_s, arbiter_.config().stamp_limits);
+    if (stamp_problem != docking_msgs::checks::StampProblem::kNone) {
+      const OfferResult refused = arbiter_.offer(summarize(*msg, source), now_s);  // counted, state untouched
+      recordRejection(publisher, source, offerProblemName(refused.problem), refused.reason);
+      return;
+    }
+    silence_->noteArrival(now_s);  // a well-formed message: its estimator is alive, whatever it says
     // Every valid estimate is brought into the output frame on arrival, so that the consistency
     // check compares the sources in one frame and the chosen one is published without a second look-up.
     std::optional<docking_msgs::TargetEstimate> in_output_frame;
@@ -233,9 +280,9 @@ class ArbiterNode {
     } else {
       summary = summarize(*msg, source);
     }
-    const OfferResult offered = arbiter_.offer(summary);
+    const OfferResult offered = arbiter_.offer(summary, now_s);
     if (!offered.accepted) {
-      ROS_WARN_THROTTLE(2.0, "arbiter: rejected an estimate: %s", offered.reason.c_str());
+      recordRejection(publisher, source, offerProblemName(offered.problem), offered.reason);
       return;
     }
     latest_msgs_[static_cast<std::size_t>(source)] = in_output_frame;
@@ -243,7 +290,11 @@ class ArbiterNode {
   }
 
   void onTimer(const ros::TimerEvent&) {
-    decideAndPublish(true);
+    try {
+      decideAndPublish(true);
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(5.0, "arbiter: decision failed: %s", e.what());
+    }
     diagnostics_.update();
   }
 
@@ -321,9 +372,9 @@ class ArbiterNode {
     pose_in.position = Eigen::Vector3d(in.pose.pose.position.x, in.pose.pose.position.y, in.pose.pose.position.z);
     const auto& q = in.pose.pose.orientation;
     pose_in.orientation = Eigen::Quaterniond(q.w, q.x, q.y, q.z);
-    if (!in.orientation_valid || pose_in.orientation.norm() < 1e-6) {
-      pose_in.orientation = Eigen::Quaterniond::Identity();  // undefined: keep the message well-formed
-    }
+    // A claimed orientation is a unit quaternion (checked on arrival); an unclaimed one is undefined:
+    // identity keeps the message well-formed, and orientation_valid stays false.
+    if (!in.orientation_valid) pose_in.orientation = Eigen::Quaterniond::Identity();
     pose_in.orientation.normalize();
     pose_in.covariance = toMatrix(in.pose.covariance);
     TwistWithCovariance3 twist_in;
@@ -403,6 +454,9 @@ class ArbiterNode {
     }
     stat.add("published", published_);
     stat.add("rejected (out of order / bad stamp)", arbiter_.rejectedCount());
+    stat.add("clock jumps back (ordering reset)", arbiter_.clockJumpsBack());
+    for (const auto& [code, count] : rejections_by_code_) stat.add("dropped: " + code, count);
+    if (!last_rejection_.empty()) stat.add("last dropped", last_rejection_);
     stat.add("tf failures", tf_failures_);
     const ConsistencyCounts& k = arbiter_.consistencyCounts();
     stat.add("consistency check", arbiter_.config().consistency.enabled ? "on" : "off");
@@ -433,6 +487,8 @@ class ArbiterNode {
   std::uint64_t published_{0};
   std::uint64_t tf_failures_{0};
   std::string last_tf_error_;
+  std::map<std::string, std::uint64_t> rejections_by_code_;  ///< dropped estimates by problem code
+  std::string last_rejection_;                               ///< source, publisher, code and reason
 };
 
 }  // namespace

@@ -59,6 +59,24 @@ const char* resolutionName(Resolution resolution) {
   return "unknown";
 }
 
+const char* offerProblemName(OfferProblem problem) {
+  switch (problem) {
+    case OfferProblem::kNone:
+      return "none";
+    case OfferProblem::kUnknownSource:
+      return "unknown_source";
+    case OfferProblem::kStampNotFinite:
+      return "stamp_not_finite";
+    case OfferProblem::kStampInFuture:
+      return "stamp_in_future";
+    case OfferProblem::kStampTooOld:
+      return "stamp_too_old";
+    case OfferProblem::kOutOfOrder:
+      return "out_of_order";
+  }
+  return "unknown";
+}
+
 const char* regimeName(RangeRegime regime) {
   switch (regime) {
     case RangeRegime::kUnknown:
@@ -90,6 +108,7 @@ void validate(const ArbiterConfig& c) {
   if (!std::isfinite(c.min_disparity_range_m) || c.min_disparity_range_m < 0.0) {
     throw std::invalid_argument("min_disparity_range_m must be a number >= 0");
   }
+  docking_msgs::checks::validate(c.stamp_limits);
   validate(c.consistency);
 }
 
@@ -104,21 +123,61 @@ const std::optional<EstimateSummary>& SourceArbiter::latest(Source source) const
   return latest_.at(indexOf(source));
 }
 
+void SourceArbiter::followClock(double now_s) {
+  if (!clock_.jumpedBack(now_s)) return;
+  ++clock_jumps_back_;
+  resetOrdering();
+}
+
+void SourceArbiter::resetOrdering() {
+  latest_ = {};
+  last_output_stamp_s_.reset();
+  last_output_source_.reset();
+  outputs_.clear();
+  counted_pairs_ = {};
+}
+
+OfferResult SourceArbiter::offer(const EstimateSummary& estimate, double now_s) {
+  followClock(now_s);
+  using docking_msgs::checks::StampProblem;
+  const StampProblem stamp = docking_msgs::checks::checkStamp(estimate.stamp_s, now_s, config_.stamp_limits);
+  if (stamp == StampProblem::kNone) return offer(estimate);
+  OfferResult result;
+  ++rejected_;
+  const double ahead = estimate.stamp_s - now_s;
+  if (stamp == StampProblem::kNotFinite) {
+    result.problem = OfferProblem::kStampNotFinite;
+    result.reason = std::string(sourceName(estimate.source)) + ": stamp is not finite";
+  } else if (stamp == StampProblem::kFuture) {
+    result.problem = OfferProblem::kStampInFuture;
+    result.reason = std::string(sourceName(estimate.source)) + ": stamped " + formatDouble("%.3f", ahead) +
+                    " s in the future (limit " + formatDouble("%.3f", config_.stamp_limits.max_future_s) + " s)";
+  } else {
+    result.problem = OfferProblem::kStampTooOld;
+    result.reason = std::string(sourceName(estimate.source)) + ": stamped " + formatDouble("%.3f", -ahead) +
+                    " s in the past (limit " + formatDouble("%.3f", config_.stamp_limits.max_age_s) + " s)";
+  }
+  return result;
+}
+
 OfferResult SourceArbiter::offer(const EstimateSummary& estimate) {
   OfferResult result;
   if (indexOf(estimate.source) >= kSourceCount) {
     ++rejected_;
+    result.problem = OfferProblem::kUnknownSource;
     result.reason = "unknown source";
     return result;
   }
   if (!std::isfinite(estimate.stamp_s)) {
     ++rejected_;
+    result.problem = OfferProblem::kStampNotFinite;
     result.reason = std::string(sourceName(estimate.source)) + ": stamp is not finite";
     return result;
   }
   auto& slot = latest_[indexOf(estimate.source)];
   if (slot && estimate.stamp_s <= slot->stamp_s) {
     ++rejected_;
+    result.problem = OfferProblem::kOutOfOrder;
     result.reason = std::string(sourceName(estimate.source)) + ": out of order (stamp " +
                     formatDouble("%.3f", estimate.stamp_s) + " s not after the last one, " +
                     formatDouble("%.3f", slot->stamp_s) + " s)";
@@ -199,6 +258,7 @@ void SourceArbiter::updateRegime(double range_m) {
 }
 
 Decision SourceArbiter::decide(double now_s) {
+  followClock(now_s);
   Decision decision;
   std::array<std::string, kSourceCount> why_not{};
   for (std::size_t i = 0; i < kSourceCount; ++i) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <cv_bridge/cv_bridge.h>
+#include <docking_msgs/estimate_check_msg.h>
 #include <docking_msgs/names.h>
 #include <image_geometry/pinhole_camera_model.h>
 #include <image_transport/camera_common.h>
@@ -57,11 +58,15 @@ void DisparityDetectorNodelet::onInit() {
 
   Config config;
   if (!loadConfig(&config)) {
-    NODELET_FATAL("disparity_detector: invalid or missing parameters in %s (see errors above; all "
-                  "keys of config/disparity_detector.yaml are required). Shutting down.",
-                  private_nh_.getNamespace().c_str());
-    ros::requestShutdown();
-    return;
+    // Thrown, not ros::requestShutdown(): the nodelet loader catches it and refuses this nodelet (see
+    // mono_pose_nodelet.cpp); its `nodelet load` process exits non-zero, and the launch, where the
+    // detector is required, ends cleanly.
+    // nodelet::Loader logs the exception's message at DEBUG only: said here first.
+    const std::string message = "disparity_detector: invalid or missing parameters in " +
+                                private_nh_.getNamespace() +
+                                " (see errors above; all keys of config/disparity_detector.yaml are required)";
+    NODELET_FATAL("%s", message.c_str());
+    throw std::runtime_error(message);
   }
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
@@ -298,7 +303,22 @@ void DisparityDetectorNodelet::publishInvalidInput(const stereo_msgs::DisparityI
   estimate_publisher_.publish(estimate);
 }
 
+// Nothing a disparity image contains may end the manager: whatever the detector throws (cv::Exception
+// is a std::exception) drops that image as invalid input, and the next one is processed.
 void DisparityDetectorNodelet::onDisparity(const stereo_msgs::DisparityImageConstPtr& message) {
+  const double cpu_start_ms = threadCpuMs();
+  try {
+    processDisparity(message);
+  } catch (const std::exception& e) {
+    try {
+      publishInvalidInput(*message, std::string("disparity image dropped: ") + e.what(), cpu_start_ms);
+    } catch (const std::exception& again) {
+      NODELET_ERROR_THROTTLE(5.0, "disparity_detector: could not report a dropped image: %s", again.what());
+    }
+  }
+}
+
+void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImageConstPtr& message) {
   const double cpu_start_ms = threadCpuMs();
   const sensor_msgs::Image& image = message->image;
 
@@ -426,6 +446,12 @@ void DisparityDetectorNodelet::onDisparity(const stereo_msgs::DisparityImageCons
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     if (detection.found) last_range_m_ = detection.range_m;
+  }
+  // What the arbiter would refuse (a NaN, a bad covariance) leaves here as not valid, with the code.
+  const auto own_problem = docking_msgs::checks::withdrawIfMalformed(&estimate);
+  if (own_problem != docking_msgs::checks::EstimateProblem::kNone) {
+    NODELET_ERROR_THROTTLE(5.0, "disparity_detector: estimate withdrawn: %s",
+                           docking_msgs::checks::estimateProblemName(own_problem));
   }
   estimate_publisher_.publish(estimate);
 }

@@ -18,10 +18,12 @@
 #include <fstream>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "docking_msgs/TargetEstimate.h"
+#include "docking_msgs/estimate_check_msg.h"
 #include "docking_msgs/names.h"
 #include "docking_perception/MonoPoseConfig.h"
 #include "docking_perception/mono/debug_drawing.h"
@@ -41,6 +43,7 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   void require(const std::string& name, T* value, std::vector<std::string>* errors);
   void connectionChanged();
   void imageCallback(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
+  void processImage(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
   void reconfigure(MonoPoseConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void publishEstimate(const std_msgs::Header& header, const mono::MonoPoseResult& result);
@@ -134,9 +137,15 @@ void MonoPoseNodelet::onInit() {
   std::vector<std::string> errors;
   if (!readParameters(&errors)) {
     for (const std::string& error : errors) NODELET_FATAL("mono_pose: %s", error.c_str());
-    NODELET_FATAL("mono_pose: invalid or missing parameters (see above; all are listed in config/mono_pose_<mode>.yaml)");
-    ros::requestShutdown();
-    return;
+    // Thrown, not ros::requestShutdown(): the nodelet loader catches it, refuses this nodelet and
+    // says so (its `nodelet load` process exits non-zero), while the manager keeps running. A shutdown
+    // requested from inside the loader's service call tore the manager down with the loader's mutex
+    // still locked (boost::lock_error on the way out).
+    // nodelet::Loader logs the exception's message at DEBUG only: said here first.
+    const std::string message =
+        "mono_pose: invalid or missing parameters (see above; all are listed in config/mono_pose_<mode>.yaml)";
+    NODELET_FATAL("%s", message.c_str());
+    throw std::runtime_error(message);
   }
   const bool visible = params_.mode == mono::MonoMode::kVisible;
   source_ = visible ? docking_msgs::TargetEstimate::SOURCE_MONO_VISIBLE : docking_msgs::TargetEstimate::SOURCE_MONO_IR;
@@ -236,8 +245,29 @@ void MonoPoseNodelet::disparityCallback(const docking_msgs::TargetEstimateConstP
   disparity_hint_ = estimate;
 }
 
+// Nothing an image contains may end the manager: whatever the estimator throws (cv::Exception is a
+// std::exception) drops that image with an invalid estimate saying why, and the next one is processed.
 void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
                                     const sensor_msgs::CameraInfoConstPtr& info) {
+  try {
+    processImage(image, info);
+  } catch (const std::exception& e) {
+    NODELET_ERROR_THROTTLE(5.0, "mono_pose: image dropped: %s", e.what());
+    try {
+      std::lock_guard<std::mutex> lock(mutex_);
+      mono::MonoPoseResult result;
+      result.solver = mono::toString(params_.solver);
+      result.status = std::string("image dropped: ") + e.what();
+      result.reject_reason = mono::RejectReason::kBadInput;
+      publishEstimate(image->header, result);
+    } catch (const std::exception& again) {
+      NODELET_ERROR_THROTTLE(5.0, "mono_pose: could not report the dropped image: %s", again.what());
+    }
+  }
+}
+
+void MonoPoseNodelet::processImage(const sensor_msgs::ImageConstPtr& image,
+                                   const sensor_msgs::CameraInfoConstPtr& info) {
   std::lock_guard<std::mutex> lock(mutex_);
   // Intrinsics of the rectified image: the projection matrix P.
   mono::CameraIntrinsics camera;
@@ -365,6 +395,11 @@ void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono
                         static_cast<int>(mono::RejectReason::kDotAppearance),
                 "TargetEstimate REJECT_* and mono::RejectReason differ");
   msg.reject_reason = static_cast<uint8_t>(result.valid ? mono::RejectReason::kNone : result.reject_reason);
+  // What the arbiter would refuse (a NaN, a non-unit quaternion) leaves here as not valid, with the code.
+  const auto problem = docking_msgs::checks::withdrawIfMalformed(&msg);
+  if (problem != docking_msgs::checks::EstimateProblem::kNone) {
+    NODELET_ERROR_THROTTLE(5.0, "mono_pose: estimate withdrawn: %s", docking_msgs::checks::estimateProblemName(problem));
+  }
   estimate_publisher_.publish(msg);
 }
 

@@ -7,6 +7,8 @@
 
 using docking_perception::arbiter::ArbiterConfig;
 using docking_perception::arbiter::Decision;
+using docking_perception::arbiter::OfferProblem;
+using docking_perception::arbiter::OfferResult;
 using docking_perception::arbiter::EstimateSummary;
 using docking_perception::arbiter::RangeRegime;
 using docking_perception::arbiter::Source;
@@ -514,4 +516,59 @@ TEST(SourceArbiterConsistency, InvalidConsistencySettingsAreRefused) {
   SourceArbiter arbiter{ArbiterConfig{}};
   EXPECT_THROW(arbiter.reconfigure(c), std::invalid_argument);
   EXPECT_GT(arbiter.config().consistency.gate_chi2_position, 0.0);
+}
+
+// Issue 12 item 2: one estimate stamped 1000 s ahead must not become the latest stamp that every later
+// estimate of that source is compared against.
+TEST(SourceArbiterStamps, FutureStampIsRejectedWithoutTrace) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  ASSERT_TRUE(arbiter.offer(good(Source::kMonoVisible, 10.0, 1.0), 10.0).accepted);
+  const OfferResult future = arbiter.offer(good(Source::kMonoVisible, 1010.0, 1.0), 10.01);
+  EXPECT_FALSE(future.accepted);
+  EXPECT_EQ(future.problem, OfferProblem::kStampInFuture);
+  EXPECT_DOUBLE_EQ(arbiter.latest(Source::kMonoVisible)->stamp_s, 10.0);
+  for (int i = 1; i <= 5; ++i) {
+    const double stamp = 10.0 + 0.066 * i;
+    const OfferResult next = arbiter.offer(good(Source::kMonoVisible, stamp, 1.0), stamp + 0.02);
+    EXPECT_TRUE(next.accepted) << next.reason;
+    const Decision d = arbiter.decide(stamp + 0.02);
+    EXPECT_TRUE(d.valid && d.is_new) << d.reason;
+  }
+  // Within the tolerance (0.5 s): accepted (clock skew between computers).
+  EXPECT_TRUE(arbiter.offer(good(Source::kMonoVisible, 10.7, 1.0), 10.4).accepted);
+}
+
+TEST(SourceArbiterStamps, TooOldAndNonFiniteStampsAreRejected) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  const OfferResult old = arbiter.offer(good(Source::kMonoIr, 1.0, 1.0), 100.0);
+  EXPECT_FALSE(old.accepted);
+  EXPECT_EQ(old.problem, OfferProblem::kStampTooOld);
+  EXPECT_FALSE(arbiter.latest(Source::kMonoIr).has_value());
+  EXPECT_EQ(arbiter.offer(good(Source::kMonoIr, NAN, 1.0), 100.0).problem, OfferProblem::kStampNotFinite);
+  EXPECT_EQ(arbiter.rejectedCount(), 2u);
+  EXPECT_TRUE(arbiter.offer(good(Source::kMonoIr, 99.9, 1.0), 100.0).accepted);
+  EXPECT_EQ(arbiter.offer(good(Source::kMonoIr, 99.8, 1.0), 100.0).problem, OfferProblem::kOutOfOrder);
+}
+
+TEST(SourceArbiterStamps, ClockJumpBackResetsTheOrdering) {
+  SourceArbiter arbiter{ArbiterConfig{}};
+  ASSERT_TRUE(arbiter.offer(good(Source::kDisparity, 50.0, 3.0), 50.01).accepted);
+  ASSERT_TRUE(arbiter.decide(50.02).is_new);
+  // Sim time restarts at 0 (or a bag loops): the new timeline's estimates are accepted and published.
+  const OfferResult after = arbiter.offer(good(Source::kDisparity, 1.0, 3.0), 1.01);
+  EXPECT_TRUE(after.accepted) << after.reason;
+  EXPECT_EQ(arbiter.clockJumpsBack(), 1u);
+  const Decision d = arbiter.decide(1.02);
+  EXPECT_TRUE(d.valid) << d.reason;
+  EXPECT_TRUE(d.is_new);
+  EXPECT_DOUBLE_EQ(d.stamp_s, 1.0);
+}
+
+TEST(SourceArbiterStamps, StampLimitsAreValidated) {
+  ArbiterConfig c;
+  c.stamp_limits.max_future_s = -1.0;
+  EXPECT_THROW(SourceArbiter{c}, std::invalid_argument);
+  c = ArbiterConfig{};
+  c.stamp_limits.max_age_s = 0.0;
+  EXPECT_THROW(SourceArbiter{c}, std::invalid_argument);
 }

@@ -24,6 +24,8 @@
 #include <string>
 #include <vector>
 
+#include <docking_msgs/estimate_check.h>
+
 #include "docking_planner/safe_circle_approach.h"
 #include "docking_planner/target_track.h"
 
@@ -66,6 +68,9 @@ std::string checkLimits(const DockingLimits& limits);
 struct PlannerConfig {
   ApproachConfig law;
   TrackConfig track;
+  /// Estimates stamped further ahead of now or older are dropped on arrival by the node
+  /// (max_future_stamp_s, max_stamp_age_s; docking_msgs/estimate_check.h).
+  docking_msgs::checks::StampLimits stamp_limits;
   double estimate_timeout_s{0.6};          ///< the target is visible while its last estimate is younger
   /// No message on the estimate topic for this long (arbiter dead or stalled; it re-publishes at its
   /// status rate even when nothing is seen): perception is gone, HOLD still.
@@ -166,6 +171,11 @@ class DockingPlanner {
 
   /// IDLE, forgetting the target.
   void reset(double now_s);
+
+  /// Forgets the target and its stamps but keeps the docking state (its clock restarts at `now_s`):
+  /// after the clock jumped back (sim time reset, bag loop) the held stamps would refuse every
+  /// new estimate as out of order.
+  void forgetTarget(double now_s);
 
   /// A docking is running (any state but IDLE).
   bool active() const { return state_ != DockingPhase::kIdle; }

@@ -94,6 +94,7 @@ std::string checkLimits(const DockingLimits& limits) {
 void validate(const PlannerConfig& c) {
   validate(c.law);
   validate(c.track);
+  docking_msgs::checks::validate(c.stamp_limits);
   requirePositive(c.estimate_timeout_s, "estimate_timeout_s");
   requirePositive(c.odom_timeout_s, "odom_timeout_s");
   requirePositive(c.orientation_timeout_s, "orientation_timeout_s");
@@ -165,6 +166,16 @@ void DockingPlanner::reset(double now_s) {
   nan_estimate_ = false;
   last_tip_error_m_ = 1e9;
   enter(DockingPhase::kIdle, now_s, "reset: target forgotten; waiting for a docking goal");
+}
+
+void DockingPlanner::forgetTarget(double now_s) {
+  track_.reset();
+  last_seen_s_ = -1e300;
+  last_rejection_.clear();
+  nan_estimate_ = false;
+  last_tip_error_m_ = 1e9;
+  state_since_s_ = now_s;
+  started_s_ = now_s;
 }
 
 bool DockingPlanner::start(double now_s, const DockingLimits& limits, std::string* why_not) {

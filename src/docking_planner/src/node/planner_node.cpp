@@ -17,6 +17,7 @@
 #include <docking_msgs/DockAction.h>
 #include <docking_msgs/DockingState.h>
 #include <docking_msgs/TargetEstimate.h>
+#include <docking_msgs/estimate_check_msg.h>
 #include <docking_msgs/names.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Odometry.h>
@@ -93,6 +94,8 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
     throw std::invalid_argument("parameter ~outlier_reset_count must be in [1, 1000]");
   }
   t.outlier_reset_count = static_cast<int>(reset_count);
+  c.stamp_limits.max_future_s = requireDouble(p, "max_future_stamp_s");
+  c.stamp_limits.max_age_s = requireDouble(p, "max_stamp_age_s");
   c.estimate_timeout_s = requireDouble(p, "estimate_timeout_s");
   c.perception_timeout_s = requireDouble(p, "perception_timeout_s");
   c.odom_timeout_s = requireDouble(p, "odom_timeout_s");
@@ -166,8 +169,8 @@ class PlannerNode {
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>(docking_msgs::topics::kCmdVel, 1);
     state_pub_ = nh.advertise<docking_msgs::DockingState>(docking_msgs::topics::kDockingState, 10);
     path_pub_ = nh.advertise<nav_msgs::Path>(docking_msgs::topics::kDockingPath, 1, true);
-    estimate_sub_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 10, &PlannerNode::onEstimate, this);
-    odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometry, this);
+    estimate_sub_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 10, &PlannerNode::onEstimateEvent, this);
+    odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometryGuarded, this);
 
     reset_service_ = pnh.advertiseService("reset", &PlannerNode::onReset, this);
 
@@ -314,7 +317,48 @@ class PlannerNode {
     }
   }
 
+  // Nothing a message contains may end the node: what the algorithm code throws drops that message,
+  // with a diagnostic, and the node goes on.
+  void onOdometryGuarded(const nav_msgs::OdometryConstPtr& msg) {
+    try {
+      onOdometry(msg);
+    } catch (const std::exception& e) {
+      recordDrop("odometry", "exception", e.what());
+    }
+  }
+
+  void onEstimateEvent(const ros::MessageEvent<docking_msgs::TargetEstimate const>& event) {
+    try {
+      onEstimate(event.getConstMessage(), event.getPublisherName());
+    } catch (const std::exception& e) {
+      recordDrop(event.getPublisherName(), "exception", e.what());
+    }
+  }
+
+  /// Counts a dropped message by its code, keeps who sent it and why for the diagnostics, and warns
+  /// (throttled). No other state changes.
+  void recordDrop(const std::string& publisher, const std::string& code, const std::string& why) {
+    ++drops_by_code_[code];
+    last_drop_ = "from " + publisher + ": " + code + " (" + why + ")";
+    ROS_WARN_THROTTLE(2.0, "planner: dropped an estimate from %s: %s: %s", publisher.c_str(), code.c_str(),
+                      why.c_str());
+  }
+
+  /// Sim time reset or a bag loop: the held stamps (target track, odometry history, waiting estimates)
+  /// belong to the old timeline and would refuse every new message.
+  void followClock(double now_s) {
+    if (!clock_.jumpedBack(now_s)) return;
+    ++clock_jumps_back_;
+    pending_.clear();
+    odometry_history_.clear();
+    odometry_.reset();
+    planner_.forgetTarget(now_s);
+    ROS_WARN("planner: the clock jumped back to %.3f s: target, odometry history and waiting estimates forgotten",
+             now_s);
+  }
+
   void onOdometry(const nav_msgs::OdometryConstPtr& msg) {
+    followClock(ros::Time::now().toSec());
     if (!msg->header.frame_id.empty() && msg->header.frame_id != odom_frame_) {
       ROS_WARN_THROTTLE(5.0, "planner: odometry in frame '%s', expected '%s'", msg->header.frame_id.c_str(),
                         odom_frame_.c_str());
@@ -335,10 +379,25 @@ class PlannerNode {
     if (!pending_.empty() && processPending() && update_on_estimate_) runCycle();
   }
 
-  void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg) {
-    // Any message shows that the arbiter is alive; it also says whether the estimators are.
-    planner_.notePerception(ros::Time::now().toSec(),
-                            !msg->valid && msg->reject_reason == docking_msgs::TargetEstimate::REJECT_SOURCES_SILENT);
+  void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg, const std::string& publisher) {
+    const double now_s = ros::Time::now().toSec();
+    followClock(now_s);
+    // Before the queue: a future stamp would wait there for tf forever and hold every later estimate
+    // behind it (issue 12: SEARCH while 26 valid estimates arrived); a zero quaternion would steer.
+    const auto problem = docking_msgs::checks::checkEstimate(*msg);
+    if (problem != docking_msgs::checks::EstimateProblem::kNone) {
+      recordDrop(publisher, docking_msgs::checks::estimateProblemName(problem), "numbers refused");
+      return;
+    }
+    const double stamp_s = msg->header.stamp.toSec();
+    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, planner_.config().stamp_limits);
+    if (stamp != docking_msgs::checks::StampProblem::kNone) {
+      recordDrop(publisher, docking_msgs::checks::stampProblemName(stamp),
+                 "stamp " + std::to_string(stamp_s - now_s) + " s from now");
+      return;
+    }
+    // A well-formed message shows that the arbiter is alive; it also says whether the estimators are.
+    planner_.notePerception(now_s, !msg->valid && msg->reject_reason == docking_msgs::TargetEstimate::REJECT_SOURCES_SILENT);
     if (msg->source != docking_msgs::TargetEstimate::SOURCE_FUSED) {
       ROS_WARN_ONCE("planner: estimates on %s are not SOURCE_FUSED; using them anyway",
                     docking_msgs::topics::kTargetEstimate);
@@ -484,8 +543,14 @@ class PlannerNode {
   }
 
   void onTimer(const ros::TimerEvent&) {
-    processPending();
-    runCycle();
+    try {
+      followClock(ros::Time::now().toSec());
+      processPending();
+      runCycle();
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(5.0, "planner: cycle failed: %s; zero velocity", e.what());
+      cmd_pub_.publish(geometry_msgs::Twist());
+    }
   }
 
   void runCycle() {
@@ -564,6 +629,9 @@ class PlannerNode {
     stat.add("estimates dropped (no tf)", tf_failures_);
     stat.add("estimates placed from the odometry history", placed_from_odometry_);
     if (tf_failures_ > 0) stat.add("last tf error", last_tf_error_);
+    stat.add("clock jumps back (target forgotten)", clock_jumps_back_);
+    for (const auto& [code, count] : drops_by_code_) stat.add("dropped: " + code, count);
+    if (!last_drop_.empty()) stat.add("last dropped", last_drop_);
   }
 
   DockingPlanner planner_;
@@ -599,6 +667,10 @@ class PlannerNode {
   DockingPhase last_state_{DockingPhase::kIdle};
   std::uint64_t tf_failures_{0};
   std::string last_tf_error_;
+  docking_msgs::checks::ClockJumpDetector clock_;
+  std::uint64_t clock_jumps_back_{0};
+  std::map<std::string, std::uint64_t> drops_by_code_;  ///< dropped messages by problem code
+  std::string last_drop_;                               ///< publisher, code and reason
 };
 
 }  // namespace

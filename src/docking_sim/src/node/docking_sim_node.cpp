@@ -47,7 +47,9 @@ T optionalTyped(const ros::NodeHandle& nh, const std::string& name, const T& fal
   if (!nh.hasParam(name)) return fallback;
   T value;
   if (!nh.getParam(name, value)) {
-    throw std::runtime_error("parameter ~" + name + " must be " + type_name);
+    std::string text;
+    nh.getParam(name, text);
+    throw std::runtime_error("parameter " + nh.resolveName(name) + " must be " + type_name + ", got '" + text + "'");
   }
   return value;
 }
@@ -74,6 +76,7 @@ geometry_msgs::Pose toPose(const Eigen::Isometry3d& t) {
   p.orientation = tf.rotation;
   return p;
 }
+
 
 class SimNode {
  public:

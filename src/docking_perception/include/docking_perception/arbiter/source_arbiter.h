@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include <docking_msgs/estimate_check.h>
+
 #include "docking_perception/arbiter/consistency.h"
 #include "docking_perception/arbiter/frame_change.h"
 
@@ -47,6 +49,9 @@ struct ArbiterConfig {
   double hysteresis_m{0.2};        ///< switch to mono below switch - h, back to disparity above switch + h
   double timeout_s{0.5};           ///< an estimate older than this (against `now`) is never used
   double future_tolerance_s{0.05}; ///< stamps this far ahead of `now` are accepted (clock skew)
+  /// offer(e, now): stamps further ahead (max_future_stamp_s) or older (max_stamp_age_s) are refused
+  /// and leave no trace; future_tolerance_s above only decides whether a stored one is usable yet.
+  docking_msgs::checks::StampLimits stamp_limits;
   std::uint32_t min_visible_inliers{12};       ///< fewer: the visible mono estimate is poor
   std::uint32_t min_ir_inliers{5};             ///< fewer: the IR estimate is poor (an IR pose has 5 LEDs)
   double min_disparity_range_m{0.0};           ///< disparity nearer than this is never used (0: no limit)
@@ -97,8 +102,20 @@ struct Decision {
   std::string reason;              ///< why this source (or why none)
 };
 
+/// Why offer() refused an estimate, as a code (the reason string is for people).
+enum class OfferProblem : std::uint8_t {
+  kNone = 0,
+  kUnknownSource = 1,
+  kStampNotFinite = 2,
+  kStampInFuture = 3,   ///< beyond stamp_limits.max_future_s ahead of now
+  kStampTooOld = 4,     ///< beyond stamp_limits.max_age_s behind now
+  kOutOfOrder = 5,      ///< not after the last estimate accepted from that source (or a duplicate)
+};
+const char* offerProblemName(OfferProblem problem);
+
 struct OfferResult {
   bool accepted{false};
+  OfferProblem problem{OfferProblem::kNone};
   std::string reason;              ///< why it was rejected
 };
 
@@ -107,13 +124,24 @@ class SourceArbiter {
   /// Throws std::invalid_argument for an invalid configuration.
   explicit SourceArbiter(const ArbiterConfig& config);
 
-  /// Records the latest estimate of one source. Rejects stamps that are not finite, or not newer
+  /// Records the latest estimate of one source, received at `now_s`. First, when the clock has jumped
+  /// back (sim time reset, bag loop), forgets the ordering state (resetOrdering). Then rejects, leaving
+  /// every state unchanged, stamps outside config().stamp_limits of `now_s` (a stamp 1000 s ahead
+  /// would otherwise become the latest one that every later estimate is "out of order" against), and
+  /// what offer(estimate) rejects.
+  OfferResult offer(const EstimateSummary& estimate, double now_s);
+  /// Without a clock (offline replays, core tests): rejects stamps that are not finite, or not newer
   /// than the last estimate accepted from that source (out of order or duplicate).
   OfferResult offer(const EstimateSummary& estimate);
+  /// Forgets the latest estimates and the output history (the regime stays): after a clock jump back,
+  /// stamps of the old timeline mean nothing.
+  void resetOrdering();
+  std::uint64_t clockJumpsBack() const { return clock_jumps_back_; }
 
   /// Chooses among the latest estimates at time `now_s`. An estimate is returned as new only once,
   /// and never with a stamp older than one already returned (the output stays in order even when
   /// the sources have different latencies).
+  /// A clock jump back (see offer) resets the ordering state here too.
   Decision decide(double now_s);
 
   const ArbiterConfig& config() const { return config_; }
@@ -171,6 +199,10 @@ class SourceArbiter {
   std::optional<double> last_output_stamp_s_;
   std::optional<Source> last_output_source_;
   std::uint64_t rejected_{0};
+  docking_msgs::checks::ClockJumpDetector clock_;
+  std::uint64_t clock_jumps_back_{0};
+  /// Resets the ordering state when `now_s` shows the clock jumped back.
+  void followClock(double now_s);
   std::deque<ComparablePose> outputs_;  ///< published outputs with a pose, newest last, within timeout_s
   /// Per unordered pair of sources: the stamps last counted.
   std::array<std::optional<std::pair<double, double>>, kSourceCount> counted_pairs_{};

@@ -50,7 +50,9 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   // Subscribes to the inputs while any output has a subscriber, unsubscribes otherwise.
   void updateSubscriptions();
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info);
+  // Catches what processDisparity throws: the message is reported as invalid input, the node goes on.
   void onDisparity(const stereo_msgs::DisparityImageConstPtr& message);
+  void processDisparity(const stereo_msgs::DisparityImageConstPtr& message);
   // Publishes valid = false with `status` (bad input), and counts it in the diagnostics.
   void publishInvalidInput(const stereo_msgs::DisparityImage& message, const std::string& status,
                            double cpu_start_ms);

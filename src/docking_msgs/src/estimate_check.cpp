@@ -1,0 +1,138 @@
+#include "docking_msgs/estimate_check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace docking_msgs {
+namespace checks {
+namespace {
+
+template <std::size_t N>
+bool allFinite(const std::array<double, N>& values) {
+  return std::all_of(values.begin(), values.end(), [](double x) { return std::isfinite(x); });
+}
+
+EstimateProblem pick(CovarianceProblem problem, EstimateProblem not_finite, EstimateProblem not_symmetric,
+                     EstimateProblem negative) {
+  switch (problem) {
+    case CovarianceProblem::kNone:
+      return EstimateProblem::kNone;
+    case CovarianceProblem::kNotFinite:
+      return not_finite;
+    case CovarianceProblem::kNotSymmetric:
+      return not_symmetric;
+    case CovarianceProblem::kNegativeVariance:
+      return negative;
+  }
+  return not_finite;
+}
+
+}  // namespace
+
+const char* stampProblemName(StampProblem problem) {
+  switch (problem) {
+    case StampProblem::kNone:
+      return "none";
+    case StampProblem::kNotFinite:
+      return "stamp_not_finite";
+    case StampProblem::kFuture:
+      return "stamp_in_future";
+    case StampProblem::kTooOld:
+      return "stamp_too_old";
+  }
+  return "unknown";
+}
+
+const char* estimateProblemName(EstimateProblem problem) {
+  switch (problem) {
+    case EstimateProblem::kNone:
+      return "none";
+    case EstimateProblem::kPositionNotFinite:
+      return "position_not_finite";
+    case EstimateProblem::kOrientationNotFinite:
+      return "orientation_not_finite";
+    case EstimateProblem::kOrientationNotUnit:
+      return "orientation_not_unit_quaternion";
+    case EstimateProblem::kPoseCovarianceNotFinite:
+      return "pose_covariance_not_finite";
+    case EstimateProblem::kPoseCovarianceNotSymmetric:
+      return "pose_covariance_not_symmetric";
+    case EstimateProblem::kPoseCovarianceNegativeVariance:
+      return "pose_covariance_negative_variance";
+    case EstimateProblem::kTwistNotFinite:
+      return "twist_not_finite";
+    case EstimateProblem::kTwistCovarianceNotFinite:
+      return "twist_covariance_not_finite";
+    case EstimateProblem::kTwistCovarianceNotSymmetric:
+      return "twist_covariance_not_symmetric";
+    case EstimateProblem::kTwistCovarianceNegativeVariance:
+      return "twist_covariance_negative_variance";
+    case EstimateProblem::kRangeNotFinite:
+      return "range_not_finite";
+  }
+  return "unknown";
+}
+
+void validate(const StampLimits& limits) {
+  if (!std::isfinite(limits.max_future_s) || limits.max_future_s < 0.0) {
+    throw std::invalid_argument("max_future_stamp_s must be a number >= 0");
+  }
+  if (!std::isfinite(limits.max_age_s) || limits.max_age_s <= 0.0) {
+    throw std::invalid_argument("max_stamp_age_s must be a positive number of seconds");
+  }
+}
+
+StampProblem checkStamp(double stamp_s, double now_s, const StampLimits& limits) {
+  if (!std::isfinite(stamp_s)) return StampProblem::kNotFinite;
+  if (stamp_s - now_s > limits.max_future_s) return StampProblem::kFuture;
+  if (now_s - stamp_s > limits.max_age_s) return StampProblem::kTooOld;
+  return StampProblem::kNone;
+}
+
+CovarianceProblem checkCovariance(const std::array<double, 36>& m) {
+  if (!allFinite(m)) return CovarianceProblem::kNotFinite;
+  for (std::size_t r = 0; r < 6; ++r) {
+    if (m[r * 6 + r] < 0.0) return CovarianceProblem::kNegativeVariance;
+    for (std::size_t c = r + 1; c < 6; ++c) {
+      const double a = m[r * 6 + c];
+      const double b = m[c * 6 + r];
+      const double scale = std::max({1.0, std::abs(a), std::abs(b)});
+      if (std::abs(a - b) > kCovarianceSymmetryTolerance * scale) return CovarianceProblem::kNotSymmetric;
+    }
+  }
+  return CovarianceProblem::kNone;
+}
+
+EstimateProblem checkEstimateFields(const EstimateFields& f) {
+  if (!f.valid) return EstimateProblem::kNone;
+  if (f.position_valid && !allFinite(f.position)) return EstimateProblem::kPositionNotFinite;
+  if (f.orientation_valid) {
+    if (!allFinite(f.orientation_xyzw)) return EstimateProblem::kOrientationNotFinite;
+    const auto& q = f.orientation_xyzw;
+    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(std::abs(norm - 1.0) <= kUnitQuaternionTolerance)) return EstimateProblem::kOrientationNotUnit;
+  }
+  if (f.position_valid || f.orientation_valid) {
+    const EstimateProblem p = pick(checkCovariance(f.pose_covariance), EstimateProblem::kPoseCovarianceNotFinite,
+                                   EstimateProblem::kPoseCovarianceNotSymmetric,
+                                   EstimateProblem::kPoseCovarianceNegativeVariance);
+    if (p != EstimateProblem::kNone) return p;
+  }
+  if (f.position_valid && !std::isfinite(f.range_m)) return EstimateProblem::kRangeNotFinite;
+  if (f.twist_valid) {
+    if (!allFinite(f.twist)) return EstimateProblem::kTwistNotFinite;
+    return pick(checkCovariance(f.twist_covariance), EstimateProblem::kTwistCovarianceNotFinite,
+                EstimateProblem::kTwistCovarianceNotSymmetric, EstimateProblem::kTwistCovarianceNegativeVariance);
+  }
+  return EstimateProblem::kNone;
+}
+
+bool ClockJumpDetector::jumpedBack(double now_s) {
+  const bool jumped = latest_now_s_ && now_s < *latest_now_s_ - kClockJumpBackS;
+  if (!latest_now_s_ || jumped || now_s > *latest_now_s_) latest_now_s_ = now_s;
+  return jumped;
+}
+
+}  // namespace checks
+}  // namespace docking_msgs

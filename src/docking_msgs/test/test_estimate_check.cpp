@@ -1,0 +1,135 @@
+// The shared estimate checks: each bad input gives its own code; good ones pass.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "docking_msgs/estimate_check.h"
+
+namespace docking_msgs {
+namespace checks {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+EstimateFields goodFullPose() {
+  EstimateFields f;
+  f.valid = f.position_valid = f.orientation_valid = f.twist_valid = true;
+  f.position = {0.1, -0.2, 1.5};
+  f.orientation_xyzw = {0.0, 0.0, std::sin(0.3), std::cos(0.3)};
+  for (std::size_t i = 0; i < 6; ++i) {
+    f.pose_covariance[i * 6 + i] = 1e-4;
+    f.twist_covariance[i * 6 + i] = 1e-2;
+  }
+  f.pose_covariance[1] = f.pose_covariance[6] = 2e-5;  // symmetric off-diagonal
+  f.twist = {0.01, 0.0, 0.0, 0.0, 0.0, 0.02};
+  f.range_m = 1.52;
+  return f;
+}
+
+TEST(StampCheck, EachKindHasItsCode) {
+  const StampLimits limits;  // 0.5 s ahead, 5 s old
+  EXPECT_EQ(checkStamp(100.0, 100.0, limits), StampProblem::kNone);
+  EXPECT_EQ(checkStamp(100.4, 100.0, limits), StampProblem::kNone);
+  EXPECT_EQ(checkStamp(96.0, 100.0, limits), StampProblem::kNone);
+  EXPECT_EQ(checkStamp(1100.0, 100.0, limits), StampProblem::kFuture);
+  EXPECT_EQ(checkStamp(100.6, 100.0, limits), StampProblem::kFuture);
+  EXPECT_EQ(checkStamp(94.0, 100.0, limits), StampProblem::kTooOld);
+  EXPECT_EQ(checkStamp(0.0, 100.0, limits), StampProblem::kTooOld);
+  EXPECT_EQ(checkStamp(kNaN, 100.0, limits), StampProblem::kNotFinite);
+  EXPECT_EQ(checkStamp(kInf, 100.0, limits), StampProblem::kNotFinite);
+  EXPECT_STREQ(stampProblemName(StampProblem::kFuture), "stamp_in_future");
+}
+
+TEST(StampCheck, LimitsAreValidated) {
+  EXPECT_NO_THROW(validate(StampLimits{}));
+  EXPECT_THROW(validate(StampLimits{-0.1, 5.0}), std::invalid_argument);
+  EXPECT_THROW(validate(StampLimits{kNaN, 5.0}), std::invalid_argument);
+  EXPECT_THROW(validate(StampLimits{0.5, 0.0}), std::invalid_argument);
+}
+
+TEST(EstimateCheck, GoodEstimatesPass) {
+  EXPECT_EQ(checkEstimateFields(goodFullPose()), EstimateProblem::kNone);
+  EstimateFields position_only = goodFullPose();
+  position_only.orientation_valid = false;
+  position_only.orientation_xyzw = {0.0, 0.0, 0.0, 0.0};  // not claimed: not checked
+  position_only.pose_covariance[21] = 1e6;                // "not estimated" variance
+  EXPECT_EQ(checkEstimateFields(position_only), EstimateProblem::kNone);
+}
+
+TEST(EstimateCheck, InvalidEstimateNumbersAreNotChecked) {
+  EstimateFields f = goodFullPose();
+  f.valid = false;
+  f.position = {kNaN, kNaN, kNaN};
+  f.orientation_xyzw = {0.0, 0.0, 0.0, 0.0};
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kNone);
+}
+
+TEST(EstimateCheck, ZeroAndNonUnitQuaternionsAreRefused) {
+  EstimateFields f = goodFullPose();
+  f.orientation_xyzw = {0.0, 0.0, 0.0, 0.0};
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kOrientationNotUnit);
+  f.orientation_xyzw = {0.0, 0.0, 0.0, 1.02};
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kOrientationNotUnit);
+  f.orientation_xyzw = {0.0, 0.0, 0.0, 1.005};  // within the tolerance
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kNone);
+  f.orientation_xyzw = {0.0, kNaN, 0.0, 1.0};
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kOrientationNotFinite);
+}
+
+TEST(EstimateCheck, EachNumericProblemHasItsCode) {
+  EstimateFields f = goodFullPose();
+  f.position[2] = kInf;
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kPositionNotFinite);
+
+  f = goodFullPose();
+  f.pose_covariance[14] = kNaN;
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kPoseCovarianceNotFinite);
+  f = goodFullPose();
+  f.pose_covariance[1] = 0.5;  // (0, 1) != (1, 0)
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kPoseCovarianceNotSymmetric);
+  f = goodFullPose();
+  f.pose_covariance[7] = -1e-4;
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kPoseCovarianceNegativeVariance);
+
+  f = goodFullPose();
+  f.range_m = kNaN;
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kRangeNotFinite);
+
+  f = goodFullPose();
+  f.twist[5] = kNaN;
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kTwistNotFinite);
+  f = goodFullPose();
+  f.twist_covariance[35] = kInf;
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kTwistCovarianceNotFinite);
+  f = goodFullPose();
+  f.twist_covariance[5] = 1.0;
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kTwistCovarianceNotSymmetric);
+  f = goodFullPose();
+  f.twist_covariance[0] = -1.0;
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kTwistCovarianceNegativeVariance);
+  f.twist_valid = false;  // a twist not claimed is not checked
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kNone);
+}
+
+TEST(EstimateCheck, SymmetryToleranceIsRelative) {
+  EstimateFields f = goodFullPose();
+  f.pose_covariance[1] = 1e6;
+  f.pose_covariance[6] = 1e6 + 1e-4;  // rounding of a rotated 1e6 variance
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kNone);
+}
+
+TEST(ClockJump, BackwardJumpIsReportedOnce) {
+  ClockJumpDetector clock;
+  EXPECT_FALSE(clock.jumpedBack(100.0));
+  EXPECT_FALSE(clock.jumpedBack(101.0));
+  EXPECT_FALSE(clock.jumpedBack(100.8));  // a small step back: not a jump
+  EXPECT_TRUE(clock.jumpedBack(3.0));     // sim time reset
+  EXPECT_FALSE(clock.jumpedBack(3.1));
+  EXPECT_FALSE(clock.jumpedBack(4.0));
+}
+
+}  // namespace
+}  // namespace checks
+}  // namespace docking_msgs

@@ -1,0 +1,167 @@
+// image_guard: one camera's image_raw checked before image_proc sees it (issue 12, item 1). Subscribes
+// `image_raw` through image_transport (~image_transport: raw, or the compressed plugin of
+// docking_image_transport, as the debayer nodelets did), republishes every valid image unchanged on
+// `image_checked` (the same shared pointer: no copy in the manager) and drops a malformed one with a
+// throttled warning and a diagnostic naming its publisher (raw transport: the MessageEvent's publisher;
+// another transport: its topic) and the problem (image_check.h).
+// Parameters (config/image_guard.yaml, all required): max_image_side_px, max_future_stamp_s.
+#include <array>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+
+#include "docking_perception/image_guard/image_check.h"
+
+namespace docking_perception {
+namespace image_guard {
+
+class ImageGuardNodelet : public nodelet::Nodelet {
+ public:
+  void onInit() override;
+
+ private:
+  void readParameters();
+  void onImage(const sensor_msgs::ImageConstPtr& image, const std::string& publisher);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  ImageLimits limits_;
+  std::unique_ptr<image_transport::ImageTransport> image_transport_;
+  // raw: a plain subscriber, whose MessageEvent names the publisher; other transports (compressed):
+  // image_transport, whose callback does not, so the drops name the transport topic instead.
+  ros::Subscriber raw_subscriber_;
+  image_transport::Subscriber transport_subscriber_;
+  std::string input_topic_;
+  ros::Publisher checked_publisher_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::Timer diagnostics_timer_;
+
+  std::mutex mutex_;  // guards the counts below (image callback and diagnostics timer)
+  std::uint64_t passed_{0};
+  std::array<std::uint64_t, kImageProblemCount> dropped_{};
+  std::string last_drop_;  ///< publisher, code and details of the last dropped image
+};
+
+void ImageGuardNodelet::readParameters() {
+  const ros::NodeHandle& pnh = getPrivateNodeHandle();
+  int max_side_px = 0;
+  if (!pnh.getParam("max_image_side_px", max_side_px)) {
+    throw std::invalid_argument("missing or non-integer parameter " + pnh.resolveName("max_image_side_px"));
+  }
+  if (!pnh.getParam("max_future_stamp_s", limits_.max_future_stamp_s)) {
+    throw std::invalid_argument("missing or non-numeric parameter " + pnh.resolveName("max_future_stamp_s"));
+  }
+  if (max_side_px <= 0) throw std::invalid_argument("parameter " + pnh.resolveName("max_image_side_px") + " must be > 0");
+  limits_.max_side_px = static_cast<std::uint32_t>(max_side_px);
+  try {
+    validate(limits_);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("parameter " + pnh.getNamespace() + "/" + e.what());
+  }
+}
+
+void ImageGuardNodelet::onInit() {
+  // A bad parameter throws out of onInit: the manager refuses this nodelet (its `nodelet load` exits
+  // non-zero) and carries on; nothing is subscribed or advertised yet. Said here first: Debian's
+  // nodelet::Loader logs the exception's message at DEBUG only.
+  try {
+    readParameters();
+  } catch (const std::exception& e) {
+    NODELET_FATAL("image_guard: %s: not starting", e.what());
+    throw;
+  }
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
+  checked_publisher_ = nh.advertise<sensor_msgs::Image>("image_checked", 2);
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
+  diagnostics_->setHardwareID(nh.resolveName("image_raw"));
+  diagnostics_->add("image guard " + nh.resolveName("image_raw"), this, &ImageGuardNodelet::diagnose);
+  diagnostics_timer_ = nh.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+  // ~image_transport chooses the transport (default raw), as image_proc's nodelets read it.
+  const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
+  if (hints.getTransport() == "raw") {
+    // A boost::function of the event type: a lambda given to subscribe<M>() is wrapped as a callback of
+    // the message pointer, and the event built from that pointer names no publisher.
+    const boost::function<void(const ros::MessageEvent<sensor_msgs::Image const>&)> callback =
+        [this](const ros::MessageEvent<sensor_msgs::Image const>& event) {
+          onImage(event.getConstMessage(), event.getPublisherName());
+        };
+    raw_subscriber_ = nh.subscribe<sensor_msgs::Image>("image_raw", 2, callback);
+    input_topic_ = raw_subscriber_.getTopic();
+  } else {
+    transport_subscriber_ = image_transport_->subscribe(
+        "image_raw", 2,
+        [this](const sensor_msgs::ImageConstPtr& image) {
+          onImage(image, "(a publisher of " + transport_subscriber_.getTopic() + ", " +
+                             transport_subscriber_.getTransport() + " transport)");
+        },
+        ros::VoidPtr(), hints);
+    input_topic_ = transport_subscriber_.getTopic() + " (" + transport_subscriber_.getTransport() + ")";
+  }
+  NODELET_INFO("image_guard: %s -> %s", input_topic_.c_str(), checked_publisher_.getTopic().c_str());
+}
+
+void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image, const std::string& publisher) {
+  ImageProblem problem = ImageProblem::kNone;
+  try {
+    ImageFacts facts;
+    facts.encoding = image->encoding;
+    facts.width = image->width;
+    facts.height = image->height;
+    facts.step = image->step;
+    facts.data_size = image->data.size();
+    facts.is_bigendian = image->is_bigendian;
+    facts.frame_id = image->header.frame_id;
+    facts.stamp_s = image->header.stamp.toSec();
+    problem = checkImage(facts, ros::Time::now().toSec(), limits_);
+    if (problem == ImageProblem::kNone) {
+      checked_publisher_.publish(image);  // the same pointer: intra-process subscribers get it uncopied
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++passed_;
+      return;
+    }
+  } catch (const std::exception& e) {  // a publish on a shut-down publisher, bad_alloc: drop, go on
+    NODELET_ERROR_THROTTLE(5.0, "image_guard: %s", e.what());
+    return;
+  }
+  const std::string details = std::string(imageProblemName(problem)) + ": '" + image->encoding + "' " +
+                              std::to_string(image->width) + "x" + std::to_string(image->height) + ", step " +
+                              std::to_string(image->step) + ", " + std::to_string(image->data.size()) +
+                              " bytes, frame '" + image->header.frame_id + "'";
+  NODELET_WARN_THROTTLE(2.0, "image_guard: dropped an image on %s from %s: %s", input_topic_.c_str(),
+                        publisher.c_str(), details.c_str());
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++dropped_[static_cast<std::size_t>(problem)];
+  last_drop_ = "from " + publisher + ": " + details;
+}
+
+void ImageGuardNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::uint64_t dropped = 0;
+  for (std::uint64_t n : dropped_) dropped += n;
+  if (dropped == 0) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "every image passed");
+  } else {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu image(s) dropped; last %s",
+                    static_cast<unsigned long long>(dropped), last_drop_.c_str());
+  }
+  status.add("passed", passed_);
+  for (std::size_t i = 1; i < kImageProblemCount; ++i) {
+    status.add(std::string("dropped: ") + imageProblemName(static_cast<ImageProblem>(i)), dropped_[i]);
+  }
+  if (!last_drop_.empty()) status.add("last dropped", last_drop_);
+}
+
+}  // namespace image_guard
+}  // namespace docking_perception
+
+PLUGINLIB_EXPORT_CLASS(docking_perception::image_guard::ImageGuardNodelet, nodelet::Nodelet)

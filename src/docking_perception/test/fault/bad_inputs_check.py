@@ -1,0 +1,203 @@
+#!/usr/bin/env python3
+"""Issue 12 items 1-3 end to end (sim time): the simulator renders a still target 1.5 m ahead, the
+guidance chain (perception.launch, the arbiter, the planner) runs on it, and this node publishes
+malformed inputs beside the real ones:
+
+- on every camera's image_raw: encoding "foo", 0x0, truncated mono8, step too small, huge dimensions
+  with little data, no frame_id, a stamp 1000 s ahead;
+- on every estimator topic and on target/estimate: a stamp 1000 s ahead, a zero quaternion with
+  orientation_valid, NaNs, each carrying a marker range (7.77 m) no real estimate has.
+
+It asserts that no process died (the perception manager, the arbiter and the planner answer pings),
+that valid FUSED estimates keep flowing from the real estimators afterwards, that no output carries the
+marker or a non-unit orientation, that the planner still sees the target, and that the diagnostics of
+the image guards, the arbiter and the planner name this node as the publisher of what they dropped.
+"""
+import math
+import threading
+import time
+import unittest
+
+import rosnode
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+from docking_msgs.msg import DockingState, TargetEstimate
+from sensor_msgs.msg import Image
+
+PKG = "docking_perception"
+MARKER_RANGE_M = 7.77  # the injected estimates' range: no real one is there
+CAMERAS = ["stereo/left", "stereo/right", "ir"]
+CAMERA_FRAMES = {"stereo/left": "stereo_left_optical_frame", "stereo/right": "stereo_right_optical_frame",
+                 "ir": "ir_optical_frame"}
+ESTIMATE_TOPICS = {"perception/disparity/estimate": TargetEstimate.SOURCE_DISPARITY,
+                   "perception/mono_visible/estimate": TargetEstimate.SOURCE_MONO_VISIBLE,
+                   "perception/mono_ir/estimate": TargetEstimate.SOURCE_MONO_IR,
+                   "target/estimate": TargetEstimate.SOURCE_FUSED}
+
+
+def malformed_images(frame_id, now):
+    """(code the guard must give, Image) for each malformed kind."""
+    def image(encoding, width, height, step, size, frame=frame_id, stamp=now):
+        msg = Image()
+        msg.header.stamp = stamp
+        msg.header.frame_id = frame
+        msg.encoding, msg.width, msg.height, msg.step = encoding, width, height, step
+        msg.data = bytes(size)
+        return msg
+    return [
+        ("unknown_encoding", image("foo", 64, 48, 64, 64 * 48)),
+        ("zero_size", image("mono8", 0, 0, 0, 0)),
+        ("data_size_mismatch", image("mono8", 640, 480, 640, 640 * 100)),        # truncated
+        ("step_too_small", image("bgr8", 64, 48, 64, 64 * 48)),
+        ("too_large", image("mono8", 100000, 100000, 100000, 1000)),            # huge, little data
+        ("no_frame_id", image("mono8", 64, 48, 64, 64 * 48, frame="")),
+        ("stamp_in_future", image("mono8", 64, 48, 64, 64 * 48, stamp=now + rospy.Duration(1000.0))),
+    ]
+
+
+def bad_estimates(source, now):
+    """(code the consumer must give, TargetEstimate) for each bad kind, all at the marker range."""
+    def estimate(stamp):
+        msg = TargetEstimate()
+        msg.header.stamp = stamp
+        msg.header.frame_id = "stereo_left_optical_frame"
+        msg.source = msg.selected_source = source
+        msg.valid = msg.position_valid = msg.orientation_valid = True
+        msg.pose.pose.position.z = MARKER_RANGE_M
+        msg.pose.pose.orientation.w = 1.0
+        msg.range_m = MARKER_RANGE_M
+        msg.feature_inliers = 100
+        msg.reprojection_error_px = 0.5
+        for i in range(6):
+            msg.pose.covariance[i * 7] = 1e-4
+        return msg
+    future = estimate(now + rospy.Duration(1000.0))
+    zero_quaternion = estimate(now)
+    zero_quaternion.pose.pose.orientation.w = 0.0
+    nan_position = estimate(now)
+    nan_position.pose.pose.position.x = float("nan")
+    return [("stamp_in_future", future), ("orientation_not_unit_quaternion", zero_quaternion),
+            ("position_not_finite", nan_position)]
+
+
+class BadInputs(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("bad_inputs_check")
+
+    def setUp(self):
+        self.lock = threading.Lock()
+        self.fused = []       # (wall time, TargetEstimate) of target/estimate from the arbiter
+        self.states = []      # (wall time, DockingState)
+        self.diagnostics = {}  # status name -> {key: value}, latest
+        self.me = rospy.get_name()
+        self.arbiter_output = rospy.Subscriber("target/estimate", TargetEstimate, self.on_fused, queue_size=50)
+        rospy.Subscriber("docking/state", DockingState, self.on_state, queue_size=50)
+        rospy.Subscriber("diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=50)
+        self.image_pubs = {c: rospy.Publisher(c + "/image_raw", Image, queue_size=20) for c in CAMERAS}
+        self.estimate_pubs = {t: rospy.Publisher(t, TargetEstimate, queue_size=20) for t in ESTIMATE_TOPICS}
+
+    def on_fused(self, msg):
+        if msg._connection_header.get("callerid") == self.me:
+            return  # our own injections on target/estimate
+        with self.lock:
+            self.fused.append((time.time(), msg))
+
+    def on_state(self, msg):
+        with self.lock:
+            self.states.append((time.time(), msg))
+
+    def on_diagnostics(self, msg):
+        with self.lock:
+            for status in msg.status:
+                self.diagnostics[status.name] = {kv.key: kv.value for kv in status.values}
+
+    def valid_since(self, wall_start):
+        with self.lock:
+            return [m for t, m in self.fused if t >= wall_start and m.valid]
+
+    def wait_for(self, condition, timeout_s, what, seen=lambda: ""):
+        deadline = time.time() + timeout_s
+        while time.time() < deadline and not rospy.is_shutdown():
+            if condition():
+                return
+            time.sleep(0.2)
+        self.fail("timed out after %.0f s (wall) waiting for %s %s" % (timeout_s, what, seen()))
+
+    def assert_alive(self):
+        for node in ["/perception_manager", "/arbiter", "/planner"]:
+            self.assertTrue(rosnode.rosnode_ping(node, max_count=1, verbose=False), node + " does not answer")
+
+    def diagnostic_values(self, name_part):
+        with self.lock:
+            return [values for name, values in self.diagnostics.items() if name_part in name]
+
+    def inject(self, rounds):
+        for _ in range(rounds):
+            now = rospy.Time.now()
+            for camera in CAMERAS:
+                for _, msg in malformed_images(CAMERA_FRAMES[camera], now):
+                    self.image_pubs[camera].publish(msg)
+            for topic, source in ESTIMATE_TOPICS.items():
+                for _, msg in bad_estimates(source, now):
+                    self.estimate_pubs[topic].publish(msg)
+            time.sleep(0.3)
+
+    def test_bad_inputs_end_nothing(self):
+        timeout = rospy.get_param("~startup_timeout_s", 240.0)
+        start = time.time()
+        self.wait_for(lambda: len(self.valid_since(start)) >= 3, timeout, "valid FUSED estimates before the injection")
+        self.wait_for(lambda: all(p.get_num_connections() > 0 for p in self.image_pubs.values()) and
+                      all(p.get_num_connections() > 0 for p in self.estimate_pubs.values()), 30.0,
+                      "the guards, the arbiter and the planner to subscribe")
+        self.assert_alive()
+
+        injected = time.time()
+        self.inject(rounds=rospy.get_param("~injection_rounds", 10))
+        after = time.time()
+        time.sleep(1.0)
+        self.assert_alive()
+
+        # Valid estimates keep flowing, from the real estimators, after the future-stamped ones.
+        self.wait_for(lambda: len(self.valid_since(after)) >= 5, rospy.get_param("~flow_timeout_s", 60.0),
+                      "valid FUSED estimates after the injection")
+        with self.lock:
+            outputs = [m for t, m in self.fused if t >= injected]
+        for msg in outputs:
+            self.assertFalse(msg.valid and abs(msg.range_m - MARKER_RANGE_M) < 0.05,
+                             "an injected estimate reached the arbiter's output: %s" % msg)
+            if msg.valid and msg.orientation_valid:
+                q = msg.pose.pose.orientation
+                norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
+                self.assertAlmostEqual(norm, 1.0, delta=0.01, msg="a non-unit orientation was published")
+
+        # The planner still sees the target (a future stamp used to hold every later estimate back).
+        self.wait_for(lambda: any(t >= after and s.target_visible for t, s in self.states), 30.0,
+                      "the planner to see the target after the injection")
+
+        # Diagnostics: each consumer counts the drops by code and names this node as their publisher.
+        def named_everywhere():
+            guards = self.diagnostic_values("image guard")
+            arbiter = self.diagnostic_values("target source")
+            planner = self.diagnostic_values("docking planner")
+            return (len(guards) >= 3 and all(self.me in v.get("last dropped", "") for v in guards) and
+                    arbiter and self.me in arbiter[0].get("last dropped", "") and
+                    planner and self.me in planner[0].get("last dropped", ""))
+        def seen():
+            with self.lock:
+                return "; seen: %s" % {name: values.get("last dropped") for name, values in self.diagnostics.items()}
+        self.wait_for(named_everywhere, 30.0, "diagnostics naming %s as the publisher" % self.me, seen)
+        for values in self.diagnostic_values("image guard"):
+            for code, _ in malformed_images("f", rospy.Time.now()):
+                self.assertGreater(int(values.get("dropped: " + code, "0")), 0, "guard did not count " + code)
+        arbiter = self.diagnostic_values("target source")[0]
+        planner = self.diagnostic_values("docking planner")[0]
+        for code, _ in bad_estimates(0, rospy.Time.now()):
+            self.assertGreater(int(arbiter.get("dropped: " + code, "0")), 0, "arbiter did not count " + code)
+            self.assertGreater(int(planner.get("dropped: " + code, "0")), 0, "planner did not count " + code)
+        self.assert_alive()
+
+
+if __name__ == "__main__":
+    rostest.rosrun(PKG, "bad_inputs", BadInputs)
