@@ -81,7 +81,8 @@ void validate(const TrackConfig& config);
 
 struct TrackUpdate {
   bool accepted{false};
-  std::string reason;  ///< why not
+  std::string reason;  ///< why not, for people
+  bool not_finite{false};  ///< refused because a value is NaN or infinite (the planner stops on it)
 };
 
 class TargetTrack {

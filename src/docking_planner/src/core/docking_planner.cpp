@@ -248,7 +248,7 @@ TrackUpdate DockingPlanner::addObservation(const TargetObservation& observation)
     nan_estimate_ = false;
   } else {
     last_rejection_ = result.reason;
-    if (observation.valid && result.reason.find("NaN") != std::string::npos) nan_estimate_ = true;
+    if (observation.valid && result.not_finite) nan_estimate_ = true;
   }
   return result;
 }

@@ -118,6 +118,7 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
       (o.orientation_valid && !std::isfinite(o.pose.yaw)) || (o.yaw_rate_valid && !std::isfinite(o.yaw_rate)) ||
       !std::isfinite(o.position_sigma_m) || !std::isfinite(o.yaw_sigma_rad)) {
     result.reason = "estimate contains NaN or infinity";
+    result.not_finite = true;
     return result;
   }
   if (last_position_stamp_s_ && o.stamp_s <= *last_position_stamp_s_) {
