@@ -65,6 +65,19 @@ TEST(BaseController, WatchdogStopsTheBaseAfterTheTimeout) {
   EXPECT_EQ(c.watchdogTrips(), 1u);
 }
 
+TEST(BaseController, ZeroCommandStopsAtTheStopDeceleration) {
+  BaseController c(kinematics(), config());
+  run(c, 0.0, 1.0, Twist2D{0.3, 0.0, 0.0}, true);
+  // At the ramp's 0.8 m/s^2, 0.3 m/s would take 0.375 s to stop; a zero command is a stop: 5 m/s^2.
+  auto out = run(c, 1.0, 1.08, Twist2D{}, true);
+  EXPECT_EQ(out.stop_reason, StopReason::kNone);
+  EXPECT_EQ(maxWheel(out), 0.0);
+  // A small non-zero command still ramps at max_acceleration.
+  run(c, 1.08, 2.0, Twist2D{0.3, 0.0, 0.0}, true);
+  out = run(c, 2.0, 2.1, Twist2D{0.01, 0.0, 0.0}, true);
+  EXPECT_GT(out.body.vx, 0.15);
+}
+
 TEST(BaseController, NonFiniteCommandsAreRejectedAndDoNotFeedTheWatchdog) {
   BaseController c(kinematics(), config());
   EXPECT_EQ(c.command(Twist2D{NAN, 0.0, 0.0}, 0.0), CommandVerdict::kRejectedNonFinite);

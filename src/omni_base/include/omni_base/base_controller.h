@@ -14,7 +14,7 @@ namespace omni_base {
 
 struct BaseControllerConfig {
   AxisLimits limits;
-  std::array<double, 3> stop_deceleration{{5.0, 5.0, 15.0}};  ///< used when the base stops on its own
+  std::array<double, 3> stop_deceleration{{5.0, 5.0, 15.0}};  ///< used when the base stops on its own, or on a zero command
   double cmd_timeout_s{0.5};
   double max_wheel_speed_rad_s{20.0};
 };
