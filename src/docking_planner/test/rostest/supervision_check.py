@@ -12,8 +12,9 @@ A death alone is not enough to test the stop: in sim time, at the tests' real-ti
 process is back within ~0.3 s, before any stop is due; the stall keeps it gone long enough (5 s wall is
 1.5 s sim at 0.3) and is itself a fault to survive.
 For each: the chaser (simulator truth) must be still within ~max_stop_s (sim) of the fault, the killed
-process must be back (a new pid), and the docking must resume (moving in a docking state again). At the
-end the docking must reach DOCKED, and every node of the chain must still answer.
+process must be back (a new pid), and the docking must resume (moving in a docking state again). Then the
+docking must end cleanly (a result on docking/dock/result: DOCKED, or the goal's time budget spent), and
+every node of the chain must still answer.
 """
 import math
 import os
@@ -28,7 +29,7 @@ import rosgraph
 import rosnode
 import rospy
 import rostest
-from docking_msgs.msg import DockingState
+from docking_msgs.msg import DockActionResult, DockResult, DockingState
 from nav_msgs.msg import Odometry
 
 PKG = "docking_planner"
@@ -60,6 +61,8 @@ class SupervisionCheck(unittest.TestCase):
         self.truth = []    # (sim time, linear speed, yaw rate)
         rospy.Subscriber("docking/state", DockingState, self.on_state, queue_size=50)
         rospy.Subscriber("sim/truth/chaser", Odometry, self.on_truth, queue_size=200)
+        self.results = []
+        rospy.Subscriber("docking/dock/result", DockActionResult, lambda m: self.results.append(m.result), queue_size=10)
 
     def on_state(self, msg):
         with self.lock:
@@ -155,12 +158,17 @@ class SupervisionCheck(unittest.TestCase):
         self.earliest_fault_s = rospy.get_param("~earliest_fault_s", 3.0)  # the chain warmed up
         for fault in faults:
             self.run_fault(fault, max_stop_s, stall_wall_s, resume_timeout_s)
-        t_docked = self.wait_for(lambda: any(s.state == DockingState.DOCKED for _, s in self.states[-20:]),
-                                 rospy.get_param("~timeout_s", 200.0), "DOCKED after the faults")
+        t_end = self.wait_for(lambda: bool(self.results), rospy.get_param("~timeout_s", 300.0),
+                              "the docking to end (a result) after the faults")
+        outcome = {getattr(DockResult, n): n for n in ("DOCKED", "CANCELLED", "TIME_BUDGET", "TARGET_LOST",
+                                                         "CLIENT_GONE", "REJECTED", "SHUTDOWN")}.get(
+            self.results[-1].outcome, str(self.results[-1].outcome))
+        self.assertIn(outcome, ("DOCKED", "TIME_BUDGET", "TARGET_LOST"), "the docking ended %s: %s" % (
+            outcome, self.results[-1].reason))
         missing = [n for n in CHAIN_NODES if n != "/dock_client" and pid_of(n) is None]
         self.assertFalse(missing, "nodes gone at the end: %s" % missing)
-        print("supervision_check: DOCKED at %.1f s (sim) after %d faults; every node of the chain answers" % (
-            t_docked, len(faults)), flush=True)
+        print("supervision_check: the docking ended %s at %.1f s (sim) after %d faults (%s); every node of the chain "
+              "answers" % (outcome, t_end, len(faults), self.results[-1].reason[:120]), flush=True)
 
 
 if __name__ == "__main__":
