@@ -19,6 +19,8 @@ const char* imageProblemName(ImageProblem problem) {
       return "too_large";
     case ImageProblem::kStepTooSmall:
       return "step_too_small";
+    case ImageProblem::kStepNotAligned:
+      return "step_not_aligned";
     case ImageProblem::kDataSizeMismatch:
       return "data_size_mismatch";
     case ImageProblem::kBadEndianFlag:
@@ -40,16 +42,29 @@ void validate(const ImageLimits& limits) {
   }
 }
 
-std::uint32_t bytesPerPixel(const std::string& encoding) {
+namespace {
+struct PixelLayout {
+  std::uint32_t bytes_per_pixel;
+  std::uint32_t bytes_per_channel;  // a row must start on a whole channel (cv::Mat's esz1)
+};
+
+const PixelLayout* pixelLayout(const std::string& encoding) {
   // sensor_msgs/image_encodings.h names; image_proc's debayer takes mono, bayer, colour and yuv422.
-  static const std::unordered_map<std::string, std::uint32_t> kKnown = {
-      {"mono8", 1},        {"mono16", 2},       {"bgr8", 3},         {"rgb8", 3},         {"bgra8", 4},
-      {"rgba8", 4},        {"bgr16", 6},        {"rgb16", 6},        {"bgra16", 8},       {"rgba16", 8},
-      {"bayer_rggb8", 1},  {"bayer_bggr8", 1},  {"bayer_gbrg8", 1},  {"bayer_grbg8", 1},  {"bayer_rggb16", 2},
-      {"bayer_bggr16", 2}, {"bayer_gbrg16", 2}, {"bayer_grbg16", 2}, {"yuv422", 2},
+  static const std::unordered_map<std::string, PixelLayout> kKnown = {
+      {"mono8", {1, 1}},        {"mono16", {2, 2}},       {"bgr8", {3, 1}},         {"rgb8", {3, 1}},
+      {"bgra8", {4, 1}},        {"rgba8", {4, 1}},        {"bgr16", {6, 2}},        {"rgb16", {6, 2}},
+      {"bgra16", {8, 2}},       {"rgba16", {8, 2}},       {"bayer_rggb8", {1, 1}},  {"bayer_bggr8", {1, 1}},
+      {"bayer_gbrg8", {1, 1}},  {"bayer_grbg8", {1, 1}},  {"bayer_rggb16", {2, 2}}, {"bayer_bggr16", {2, 2}},
+      {"bayer_gbrg16", {2, 2}}, {"bayer_grbg16", {2, 2}}, {"yuv422", {2, 1}},
   };
   const auto it = kKnown.find(encoding);
-  return it == kKnown.end() ? 0 : it->second;
+  return it == kKnown.end() ? nullptr : &it->second;
+}
+}  // namespace
+
+std::uint32_t bytesPerPixel(const std::string& encoding) {
+  const PixelLayout* layout = pixelLayout(encoding);
+  return layout ? layout->bytes_per_pixel : 0;
 }
 
 ImageProblem checkImage(const ImageFacts& image, double now_s, const ImageLimits& limits) {
@@ -61,6 +76,7 @@ ImageProblem checkImage(const ImageFacts& image, double now_s, const ImageLimits
   if (static_cast<std::uint64_t>(image.step) < static_cast<std::uint64_t>(image.width) * bytes_per_pixel) {
     return ImageProblem::kStepTooSmall;
   }
+  if (image.step % pixelLayout(image.encoding)->bytes_per_channel != 0) return ImageProblem::kStepNotAligned;
   if (image.data_size != static_cast<std::uint64_t>(image.step) * image.height) return ImageProblem::kDataSizeMismatch;
   if (image.is_bigendian > 1) return ImageProblem::kBadEndianFlag;
   if (image.frame_id.empty()) return ImageProblem::kNoFrameId;

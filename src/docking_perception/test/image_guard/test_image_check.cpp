@@ -59,6 +59,12 @@ TEST(ImageCheck, EachMalformedKindHasItsCode) {
   f.data_size = 639u * 480u;
   EXPECT_EQ(checkImage(f, kNow, limits), ImageProblem::kStepTooSmall);
 
+  f = goodMono8();  // a 16-bit image whose rows do not start on a whole pixel (cv::Mat throws on it)
+  f.encoding = "mono16";
+  f.step = 1281;
+  f.data_size = 1281u * 480u;
+  EXPECT_EQ(checkImage(f, kNow, limits), ImageProblem::kStepNotAligned);
+
   f = goodMono8();
   f.width = f.height = 100000;  // huge dimensions, small data
   f.step = 100000;
@@ -89,7 +95,7 @@ TEST(ImageCheck, ForgedSizesDoNotOverflow) {
   f.data_size = 1024;
   EXPECT_EQ(checkImage(f, kNow, limits), ImageProblem::kStepTooSmall);
   f.width = 128;
-  f.step = 0xFFFFFFFFu;
+  f.step = 0xFFFFFFFEu;  // even: a whole number of 16-bit channels
   f.height = 0xFFFFu;
   f.data_size = 0xFFFFFFFFu;  // step * height overflows 32 bits to something else
   EXPECT_EQ(checkImage(f, kNow, limits), ImageProblem::kDataSizeMismatch);

@@ -21,8 +21,10 @@ enum class ImageProblem : std::uint8_t {
   kNoFrameId = 7,        ///< header.frame_id empty: nothing downstream could place the image
   kStampNotFinite = 8,
   kStampInFuture = 9,    ///< more than max_future_stamp_s ahead of now
+  kStepNotAligned = 10,  ///< step not a multiple of one channel's size (a 16-bit image with an odd step):
+                         ///< cv::Mat refuses it with an exception that aborted the manager
 };
-constexpr std::size_t kImageProblemCount = 10;
+constexpr std::size_t kImageProblemCount = 11;
 const char* imageProblemName(ImageProblem problem);
 
 /// The parts of a sensor_msgs/Image that are checked (the pixels are not read).
