@@ -156,7 +156,9 @@ class Generator:
         r = self.rng
         m = DockActionGoal()
         m.header.stamp = bad_stamp(r, now)
-        m.goal_id.stamp = m.header.stamp
+        # The goal id's stamp stays 0 ("now"): actionlib's SimpleActionServer orders goals by it, and one
+        # goal stamped in the future makes it recall every later one (docs/RELIABILITY.md, open).
+        m.goal_id.stamp = rospy.Time(0)
         m.goal_id.id = "fuzz-%d" % r.getrandbits(32)
         m.goal.time_budget_s = r.choice(BAD_FLOATS[:3] + (-1.0,))
         m.goal.search_timeout_s = r.choice((0.0, -5.0, float("nan")))
