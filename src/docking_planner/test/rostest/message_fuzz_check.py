@@ -26,11 +26,9 @@ import time
 import unittest
 
 import actionlib
-import rosgraph
-import rosnode
 import rospy
 import rostest
-import xmlrpc.client
+from chain_processes import pid_of
 from docking_msgs.msg import DockAction, DockActionGoal, DockGoal, DockResult, DockingState, TargetEstimate, WheelEncoders
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
@@ -44,16 +42,6 @@ ESTIMATE_TOPICS = ("perception/disparity/estimate", "perception/mono_visible/est
 BAD_FLOATS = (float("nan"), float("inf"), -float("inf"), 1e308, -1e308)
 ENCODINGS = ("foo", "", "bgr8", "mono8", "rgb8", "mono16", "bayer_rggb8", "32FC1", "yuv422", "8UC3", "rgba16")
 
-
-def pid_of(node_name):
-    try:
-        uri = rosnode.get_api_uri(rosgraph.Master("/message_fuzz_check"), node_name, skip_cache=True)
-        if not uri:
-            return None
-        code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/message_fuzz_check")
-        return pid if code == 1 else None
-    except (OSError, xmlrpc.client.Error, rosnode.ROSNodeIOException):
-        return None
 
 
 def bad_stamp(rng, now):

@@ -23,12 +23,10 @@ import sys
 import threading
 import time
 import unittest
-import xmlrpc.client
 
-import rosgraph
-import rosnode
 import rospy
 import rostest
+from chain_processes import pid_of
 from docking_msgs.msg import DockActionResult, DockResult, DockingState
 from nav_msgs.msg import Odometry
 
@@ -40,17 +38,6 @@ STILL_SPEED_MPS = 0.005      # truth: below this (linear, and the wheel circle's
 STILL_RATE_RADPS = 0.02
 CHAIN_NODES = ("/docking_sim", "/omni_base", "/perception_manager", "/arbiter", "/planner", "/dock_client")
 
-
-def pid_of(node_name):
-    """The pid of a running node (by its XML-RPC API), or None when it does not answer."""
-    try:
-        uri = rosnode.get_api_uri(rosgraph.Master("/supervision_check"), node_name, skip_cache=True)
-        if not uri:
-            return None
-        code, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/supervision_check")
-        return pid if code == 1 else None
-    except (OSError, xmlrpc.client.Error, rosnode.ROSNodeIOException):
-        return None
 
 
 class SupervisionCheck(unittest.TestCase):
