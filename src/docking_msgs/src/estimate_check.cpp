@@ -13,6 +13,11 @@ bool allFinite(const std::array<double, N>& values) {
   return std::all_of(values.begin(), values.end(), [](double x) { return std::isfinite(x); });
 }
 
+bool isUnitQuaternion(const std::array<double, 4>& q) {
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  return std::abs(norm - 1.0) <= kUnitQuaternionTolerance;
+}
+
 EstimateProblem pick(CovarianceProblem problem, EstimateProblem not_finite, EstimateProblem not_symmetric,
                      EstimateProblem negative) {
   switch (problem) {
@@ -70,6 +75,8 @@ const char* estimateProblemName(EstimateProblem problem) {
       return "twist_covariance_negative_variance";
     case EstimateProblem::kRangeNotFinite:
       return "range_not_finite";
+    case EstimateProblem::kNoFrameId:
+      return "no_frame_id";
   }
   return "unknown";
 }
@@ -105,13 +112,12 @@ CovarianceProblem checkCovariance(const std::array<double, 36>& m) {
 }
 
 EstimateProblem checkEstimateFields(const EstimateFields& f) {
+  if (!f.has_frame_id) return EstimateProblem::kNoFrameId;
   if (!f.valid) return EstimateProblem::kNone;
   if (f.position_valid && !allFinite(f.position)) return EstimateProblem::kPositionNotFinite;
   if (f.orientation_valid) {
     if (!allFinite(f.orientation_xyzw)) return EstimateProblem::kOrientationNotFinite;
-    const auto& q = f.orientation_xyzw;
-    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(std::abs(norm - 1.0) <= kUnitQuaternionTolerance)) return EstimateProblem::kOrientationNotUnit;
+    if (!isUnitQuaternion(f.orientation_xyzw)) return EstimateProblem::kOrientationNotUnit;
   }
   if (f.position_valid || f.orientation_valid) {
     const EstimateProblem p = pick(checkCovariance(f.pose_covariance), EstimateProblem::kPoseCovarianceNotFinite,
@@ -132,6 +138,41 @@ bool ClockJumpDetector::jumpedBack(double now_s) {
   const bool jumped = latest_now_s_ && now_s < *latest_now_s_ - kClockJumpBackS;
   if (!latest_now_s_ || jumped || now_s > *latest_now_s_) latest_now_s_ = now_s;
   return jumped;
+}
+
+const char* odometryProblemName(OdometryProblem problem) {
+  switch (problem) {
+    case OdometryProblem::kNone:
+      return "none";
+    case OdometryProblem::kPositionNotFinite:
+      return "odometry_position_not_finite";
+    case OdometryProblem::kPositionOutOfBounds:
+      return "odometry_position_out_of_bounds";
+    case OdometryProblem::kOrientationNotFinite:
+      return "odometry_orientation_not_finite";
+    case OdometryProblem::kOrientationNotUnit:
+      return "odometry_orientation_not_unit";
+    case OdometryProblem::kTwistNotFinite:
+      return "odometry_twist_not_finite";
+    case OdometryProblem::kTwistOutOfBounds:
+      return "odometry_twist_out_of_bounds";
+  }
+  return "unknown";
+}
+
+OdometryProblem checkOdometryFields(const OdometryFields& fields) {
+  if (!allFinite(fields.position)) return OdometryProblem::kPositionNotFinite;
+  for (double p : fields.position) {
+    if (std::abs(p) > kMaxOdometryPositionM) return OdometryProblem::kPositionOutOfBounds;
+  }
+  if (!allFinite(fields.orientation_xyzw)) return OdometryProblem::kOrientationNotFinite;
+  if (!isUnitQuaternion(fields.orientation_xyzw)) return OdometryProblem::kOrientationNotUnit;
+  if (!allFinite(fields.twist)) return OdometryProblem::kTwistNotFinite;
+  if (std::hypot(fields.twist[0], fields.twist[1]) > kMaxOdometrySpeedMps ||
+      std::abs(fields.twist[5]) > kMaxOdometryTurnRateRadps) {
+    return OdometryProblem::kTwistOutOfBounds;
+  }
+  return OdometryProblem::kNone;
 }
 
 }  // namespace checks

@@ -113,6 +113,15 @@ TEST(EstimateCheck, EachNumericProblemHasItsCode) {
   EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kNone);
 }
 
+TEST(EstimateCheck, EveryEstimateNeedsAFrame) {
+  EstimateFields f = goodFullPose();
+  f.has_frame_id = false;
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kNoFrameId);
+  f.valid = false;  // even one that claims nothing: the planner would ask tf2 for an empty frame
+  EXPECT_EQ(checkEstimateFields(f), EstimateProblem::kNoFrameId);
+  EXPECT_STREQ(estimateProblemName(EstimateProblem::kNoFrameId), "no_frame_id");
+}
+
 TEST(EstimateCheck, SymmetryToleranceIsRelative) {
   EstimateFields f = goodFullPose();
   f.pose_covariance[1] = 1e6;
@@ -128,6 +137,51 @@ TEST(ClockJump, BackwardJumpIsReportedOnce) {
   EXPECT_TRUE(clock.jumpedBack(3.0));     // sim time reset
   EXPECT_FALSE(clock.jumpedBack(3.1));
   EXPECT_FALSE(clock.jumpedBack(4.0));
+}
+
+OdometryFields goodOdometry() {
+  OdometryFields f;
+  f.position = {3.0, -2.0, 0.0};
+  f.orientation_xyzw = {0.0, 0.0, std::sin(0.3), std::cos(0.3)};
+  f.twist = {0.3, -0.1, 0.0, 0.0, 0.0, 0.5};
+  return f;
+}
+
+TEST(OdometryCheck, ATrueRobotPasses) { EXPECT_EQ(checkOdometryFields(goodOdometry()), OdometryProblem::kNone); }
+
+TEST(OdometryCheck, EachProblemIsNamedByItsCode) {
+  OdometryFields f = goodOdometry();
+  f.position[1] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(checkOdometryFields(f), OdometryProblem::kPositionNotFinite);
+  f = goodOdometry();
+  f.position[0] = 1e30;  // huge but finite: what poisoned the planner's history (issue 12)
+  EXPECT_EQ(checkOdometryFields(f), OdometryProblem::kPositionOutOfBounds);
+  f = goodOdometry();
+  f.orientation_xyzw[3] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(checkOdometryFields(f), OdometryProblem::kOrientationNotFinite);
+  f = goodOdometry();
+  f.orientation_xyzw = {0.0, 0.0, 0.0, 0.0};
+  EXPECT_EQ(checkOdometryFields(f), OdometryProblem::kOrientationNotUnit);
+  f = goodOdometry();
+  f.twist[5] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(checkOdometryFields(f), OdometryProblem::kTwistNotFinite);
+  f = goodOdometry();
+  f.twist[0] = 1e6;
+  EXPECT_EQ(checkOdometryFields(f), OdometryProblem::kTwistOutOfBounds);
+  f = goodOdometry();
+  f.twist[5] = -1e3;
+  EXPECT_EQ(checkOdometryFields(f), OdometryProblem::kTwistOutOfBounds);
+}
+
+TEST(OdometryCheck, BoundsAreInclusiveOfTheLimits) {
+  OdometryFields f = goodOdometry();
+  f.position[0] = kMaxOdometryPositionM;
+  f.twist[0] = kMaxOdometrySpeedMps;
+  f.twist[1] = 0.0;
+  f.twist[5] = kMaxOdometryTurnRateRadps;
+  EXPECT_EQ(checkOdometryFields(f), OdometryProblem::kNone);
+  f.position[0] = std::nextafter(kMaxOdometryPositionM, 2 * kMaxOdometryPositionM);
+  EXPECT_EQ(checkOdometryFields(f), OdometryProblem::kPositionOutOfBounds);
 }
 
 }  // namespace

@@ -54,11 +54,13 @@ enum class EstimateProblem : std::uint8_t {
   kTwistCovarianceNotSymmetric = 9,
   kTwistCovarianceNegativeVariance = 10,
   kRangeNotFinite = 11,
+  kNoFrameId = 12,  ///< header.frame_id empty: nothing could place it (tf2 refuses an empty frame)
 };
 const char* estimateProblemName(EstimateProblem problem);
 
 /// The numbers of a TargetEstimate (docking_msgs/TargetEstimate.msg), without the message type.
 struct EstimateFields {
+  bool has_frame_id{true};  ///< header.frame_id not empty; checked for every estimate, valid or not
   bool valid{false};
   bool position_valid{false};
   bool orientation_valid{false};
@@ -71,13 +73,40 @@ struct EstimateFields {
   double range_m{0.0};
 };
 
-/// Checks what the flags claim: nothing for an invalid estimate (its numbers are undefined by the
+/// A frame for every estimate; then checks what the flags claim: nothing more for an invalid estimate (its numbers are undefined by the
 /// message's definition); the position, the orientation (finite, unit norm), the pose covariance and
 /// the range of a valid one; the twist and its covariance when twist_valid. The first problem found.
 EstimateProblem checkEstimateFields(const EstimateFields& fields);
 
 enum class CovarianceProblem : std::uint8_t { kNone, kNotFinite, kNotSymmetric, kNegativeVariance };
 CovarianceProblem checkCovariance(const std::array<double, 36>& row_major_6x6);
+
+/// Odometry (nav_msgs/Odometry of the chaser's base) beyond these is not a robot on a test floor: a
+/// broken or hostile publisher. Far above anything true (a floor is ~10 m, the base's limits ~1 m/s,
+/// a few rad/s), so only garbage is refused.
+constexpr double kMaxOdometryPositionM = 1000.0;
+constexpr double kMaxOdometrySpeedMps = 10.0;
+constexpr double kMaxOdometryTurnRateRadps = 50.0;
+
+/// Why an odometry message is refused, as a code (odometryProblemName() is for people).
+enum class OdometryProblem : std::uint8_t {
+  kNone = 0,
+  kPositionNotFinite = 1,
+  kPositionOutOfBounds = 2,  ///< |x| or |y| or |z| above kMaxOdometryPositionM
+  kOrientationNotFinite = 3,
+  kOrientationNotUnit = 4,   ///< |‖q‖ - 1| > kUnitQuaternionTolerance
+  kTwistNotFinite = 5,
+  kTwistOutOfBounds = 6,     ///< planar speed or turn rate above the bounds above
+};
+const char* odometryProblemName(OdometryProblem problem);
+
+struct OdometryFields {
+  std::array<double, 3> position{};
+  std::array<double, 4> orientation_xyzw{0.0, 0.0, 0.0, 1.0};
+  std::array<double, 6> twist{};  ///< linear x, y, z, angular x, y, z (child frame)
+};
+/// The first problem found; the stamp is checked apart (checkStamp).
+OdometryProblem checkOdometryFields(const OdometryFields& fields);
 
 /// Detects the clock jumping back (sim time reset, a bag replayed in a loop): ordering state built on
 /// the old timeline (the latest stamp per source) would otherwise refuse every new estimate.

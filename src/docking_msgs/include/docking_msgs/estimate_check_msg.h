@@ -12,6 +12,7 @@ namespace checks {
 
 inline EstimateFields fieldsOf(const TargetEstimate& msg) {
   EstimateFields f;
+  f.has_frame_id = !msg.header.frame_id.empty();
   f.valid = msg.valid;
   f.position_valid = msg.position_valid;
   f.orientation_valid = msg.orientation_valid;

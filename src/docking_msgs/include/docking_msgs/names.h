@@ -22,6 +22,11 @@ constexpr const char kStereoRightImageRaw[] = "stereo/right/image_raw";
 constexpr const char kStereoLeftImageChecked[] = "stereo/left/image_checked";
 constexpr const char kStereoRightImageChecked[] = "stereo/right/image_checked";
 constexpr const char kIrImageChecked[] = "ir/image_checked";
+// camera_info that passed the guard (well formed, the size of the camera's last checked image): what
+// image_proc's rectify, stereo_image_proc and our estimators read (launch/perception.launch remaps them).
+constexpr const char kStereoLeftCameraInfoChecked[] = "stereo/left/camera_info_checked";
+constexpr const char kStereoRightCameraInfoChecked[] = "stereo/right/camera_info_checked";
+constexpr const char kIrCameraInfoChecked[] = "ir/camera_info_checked";
 constexpr const char kStereoLeftImageRect[] = "stereo/left/image_rect";
 constexpr const char kStereoDisparity[] = "stereo/disparity";  // stereo_msgs/DisparityImage
 constexpr const char kIrImageRaw[] = "ir/image_raw";

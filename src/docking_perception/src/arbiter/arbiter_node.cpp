@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <initializer_list>
 #include <map>
 #include <memory>
@@ -325,12 +326,18 @@ class ArbiterNode {
     }
   }
 
+  std::string silenceText(double now_s) const {
+    if (!silence_->heardAny()) return "no estimator has published yet";
+    char text[96];
+    std::snprintf(text, sizeof(text), "no estimator has published for %.2f s", silence_->silentFor(now_s));
+    return text;
+  }
+
   /// No estimator talks (perception stalled or gone): "nothing valid" with its own code, so that the
   /// planner stops and waits instead of searching.
   void publishSilence(double now_s, bool periodic) {
     if (!was_silent_) {
-      ROS_ERROR("arbiter: no estimator has published for %.2f s (perception stalled or gone)",
-                std::min(silence_->silentFor(now_s), 1e9));
+      ROS_ERROR("arbiter: %s (perception stalled or gone)", silenceText(now_s).c_str());
     }
     const bool changed = !was_silent_;
     was_silent_ = true;
@@ -432,8 +439,7 @@ class ArbiterNode {
     const Decision& d = last_decision_;
     const double now = ros::Time::now().toSec();
     if (was_silent_) {
-      stat.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "no estimator has published for %.1f s",
-                    std::min(silence_->silentFor(now), 1e9));
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, silenceText(now));
     } else if (d.code == DecisionCode::kChosen) {
       stat.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "using %s", sourceName(d.source));
     } else if (d.code == DecisionCode::kChosenOverDisagreement) {

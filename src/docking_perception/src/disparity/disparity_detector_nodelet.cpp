@@ -271,9 +271,8 @@ void DisparityDetectorNodelet::updateSubscriptions() {
   if (wanted && !disparity_subscriber_) {
     disparity_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoDisparity, 1,
                                           &DisparityDetectorNodelet::onDisparity, this);
-    camera_info_subscriber_ =
-        nh_.subscribe(image_transport::getCameraInfoTopic(docking_msgs::topics::kStereoLeftImageRect),
-                      1, &DisparityDetectorNodelet::onCameraInfo, this);
+    camera_info_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoLeftCameraInfoChecked, 1,
+                                            &DisparityDetectorNodelet::onCameraInfo, this);
     NODELET_DEBUG("disparity_detector: subscribed to %s", disparity_subscriber_.getTopic().c_str());
   } else if (!wanted && disparity_subscriber_) {
     disparity_subscriber_.shutdown();

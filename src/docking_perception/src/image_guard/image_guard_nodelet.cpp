@@ -1,14 +1,19 @@
-// image_guard: one camera's image_raw checked before image_proc sees it (issue 12, item 1). Subscribes
+// image_guard: one camera's image_raw and camera_info checked before image_proc sees them (issue 12,
+// item 1). Subscribes
 // `image_raw` through image_transport (~image_transport: raw, or the compressed plugin of
 // docking_image_transport, as the debayer nodelets did), republishes every valid image unchanged on
 // `image_checked` (the same shared pointer: no copy in the manager) and drops a malformed one with a
 // throttled warning and a diagnostic naming its publisher (raw transport: the MessageEvent's publisher;
-// another transport: its topic) and the problem (image_check.h).
+// another transport: its topic) and the problem (image_check.h). Likewise `camera_info` ->
+// `camera_info_checked`: a camera_info passes when it is well formed and describes the size of this
+// camera's last image that passed (image_proc's rectify, stereo_image_proc and our estimators read it).
 // Parameters (config/image_guard.yaml, all required): max_image_side_px, max_future_stamp_s.
+#include <algorithm>
 #include <array>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -17,6 +22,7 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
 #include "docking_perception/image_guard/image_check.h"
@@ -31,6 +37,8 @@ class ImageGuardNodelet : public nodelet::Nodelet {
  private:
   void readParameters();
   void onImage(const sensor_msgs::ImageConstPtr& image, const std::string& publisher);
+  void onCameraInfo(const ros::MessageEvent<sensor_msgs::CameraInfo const>& event);
+  void countDrop(std::uint64_t* counter, std::string* last, const std::string& publisher, const std::string& details);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ImageLimits limits_;
@@ -41,6 +49,8 @@ class ImageGuardNodelet : public nodelet::Nodelet {
   image_transport::Subscriber transport_subscriber_;
   std::string input_topic_;
   ros::Publisher checked_publisher_;
+  ros::Subscriber info_subscriber_;
+  ros::Publisher info_checked_publisher_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;
 
@@ -48,6 +58,10 @@ class ImageGuardNodelet : public nodelet::Nodelet {
   std::uint64_t passed_{0};
   std::array<std::uint64_t, kImageProblemCount> dropped_{};
   std::string last_drop_;  ///< publisher, code and details of the last dropped image
+  std::optional<ImageSize> last_image_size_;  ///< of the last image that passed
+  std::uint64_t infos_passed_{0};
+  std::array<std::uint64_t, kCameraInfoProblemCount> infos_dropped_{};
+  std::string last_info_drop_;
 };
 
 void ImageGuardNodelet::readParameters() {
@@ -82,6 +96,7 @@ void ImageGuardNodelet::onInit() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
   checked_publisher_ = nh.advertise<sensor_msgs::Image>("image_checked", 2);
+  info_checked_publisher_ = nh.advertise<sensor_msgs::CameraInfo>("camera_info_checked", 2);
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
   diagnostics_->setHardwareID(nh.resolveName("image_raw"));
   diagnostics_->add("image guard " + nh.resolveName("image_raw"), this, &ImageGuardNodelet::diagnose);
@@ -107,7 +122,11 @@ void ImageGuardNodelet::onInit() {
         ros::VoidPtr(), hints);
     input_topic_ = transport_subscriber_.getTopic() + " (" + transport_subscriber_.getTransport() + ")";
   }
-  NODELET_INFO("image_guard: %s -> %s", input_topic_.c_str(), checked_publisher_.getTopic().c_str());
+  const boost::function<void(const ros::MessageEvent<sensor_msgs::CameraInfo const>&)> info_callback =
+      [this](const ros::MessageEvent<sensor_msgs::CameraInfo const>& event) { onCameraInfo(event); };
+  info_subscriber_ = nh.subscribe<sensor_msgs::CameraInfo>("camera_info", 2, info_callback);
+  NODELET_INFO("image_guard: %s -> %s, %s -> %s", input_topic_.c_str(), checked_publisher_.getTopic().c_str(),
+               info_subscriber_.getTopic().c_str(), info_checked_publisher_.getTopic().c_str());
 }
 
 void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image, const std::string& publisher) {
@@ -124,9 +143,13 @@ void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image, const s
     facts.stamp_s = image->header.stamp.toSec();
     problem = checkImage(facts, ros::Time::now().toSec(), limits_);
     if (problem == ImageProblem::kNone) {
+      {
+        // Before the publish: the camera_info of this image may be checked while image_proc works on it.
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++passed_;
+        last_image_size_ = ImageSize{image->width, image->height};
+      }
       checked_publisher_.publish(image);  // the same pointer: intra-process subscribers get it uncopied
-      std::lock_guard<std::mutex> lock(mutex_);
-      ++passed_;
       return;
     }
   } catch (const std::exception& e) {  // a publish on a shut-down publisher, bad_alloc: drop, go on
@@ -144,21 +167,91 @@ void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image, const s
   last_drop_ = "from " + publisher + ": " + details;
 }
 
+namespace {
+CameraInfoFacts factsOf(const sensor_msgs::CameraInfo& info) {
+  CameraInfoFacts f;
+  f.width = info.width;
+  f.height = info.height;
+  f.binning_x = info.binning_x;
+  f.binning_y = info.binning_y;
+  f.roi_x_offset = info.roi.x_offset;
+  f.roi_y_offset = info.roi.y_offset;
+  f.roi_width = info.roi.width;
+  f.roi_height = info.roi.height;
+  f.distortion_model = info.distortion_model;
+  f.D = info.D;
+  std::copy(info.K.begin(), info.K.end(), f.K.begin());
+  std::copy(info.R.begin(), info.R.end(), f.R.begin());
+  std::copy(info.P.begin(), info.P.end(), f.P.begin());
+  f.frame_id = info.header.frame_id;
+  f.stamp_s = info.header.stamp.toSec();
+  return f;
+}
+}  // namespace
+
+void ImageGuardNodelet::onCameraInfo(const ros::MessageEvent<sensor_msgs::CameraInfo const>& event) {
+  const sensor_msgs::CameraInfoConstPtr info = event.getConstMessage();
+  CameraInfoProblem problem = CameraInfoProblem::kNone;
+  try {
+    std::optional<ImageSize> last_image;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      last_image = last_image_size_;
+    }
+    problem = checkCameraInfo(factsOf(*info), last_image, ros::Time::now().toSec(), limits_);
+    if (problem == CameraInfoProblem::kNone) {
+      info_checked_publisher_.publish(info);
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++infos_passed_;
+      return;
+    }
+    if (problem == CameraInfoProblem::kNoImageYet) {  // start-up order, not a fault: counted, not warned
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++infos_dropped_[static_cast<std::size_t>(problem)];
+      return;
+    }
+  } catch (const std::exception& e) {
+    NODELET_ERROR_THROTTLE(5.0, "image_guard: %s", e.what());
+    return;
+  }
+  const std::string details = std::string(cameraInfoProblemName(problem)) + ": " + std::to_string(info->width) +
+                              "x" + std::to_string(info->height) + ", model '" + info->distortion_model + "', " +
+                              std::to_string(info->D.size()) + " coefficients, frame '" + info->header.frame_id + "'";
+  NODELET_WARN_THROTTLE(2.0, "image_guard: dropped a camera_info on %s from %s: %s",
+                        info_subscriber_.getTopic().c_str(), event.getPublisherName().c_str(), details.c_str());
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++infos_dropped_[static_cast<std::size_t>(problem)];
+  last_info_drop_ = "from " + event.getPublisherName() + ": " + details;
+}
+
 void ImageGuardNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
   std::uint64_t dropped = 0;
   for (std::uint64_t n : dropped_) dropped += n;
-  if (dropped == 0) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "every image passed");
-  } else {
+  std::uint64_t infos_dropped = 0;  // faults only: an info before the first image is start-up order
+  for (std::size_t i = 1; i < kCameraInfoProblemCount; ++i) {
+    if (static_cast<CameraInfoProblem>(i) != CameraInfoProblem::kNoImageYet) infos_dropped += infos_dropped_[i];
+  }
+  if (dropped == 0 && infos_dropped == 0) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "every image and camera_info passed");
+  } else if (dropped > 0) {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu image(s) dropped; last %s",
                     static_cast<unsigned long long>(dropped), last_drop_.c_str());
+  } else {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu camera_info(s) dropped; last %s",
+                    static_cast<unsigned long long>(infos_dropped), last_info_drop_.c_str());
   }
   status.add("passed", passed_);
   for (std::size_t i = 1; i < kImageProblemCount; ++i) {
     status.add(std::string("dropped: ") + imageProblemName(static_cast<ImageProblem>(i)), dropped_[i]);
   }
   if (!last_drop_.empty()) status.add("last dropped", last_drop_);
+  status.add("camera_info passed", infos_passed_);
+  for (std::size_t i = 1; i < kCameraInfoProblemCount; ++i) {
+    status.add(std::string("camera_info dropped: ") + cameraInfoProblemName(static_cast<CameraInfoProblem>(i)),
+               infos_dropped_[i]);
+  }
+  if (!last_info_drop_.empty()) status.add("last dropped camera_info", last_info_drop_);
 }
 
 }  // namespace image_guard

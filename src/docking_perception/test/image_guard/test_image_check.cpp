@@ -1,7 +1,9 @@
 // The image guard's check: each malformed image gives its own code; good images of every kind pass.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "docking_perception/image_guard/image_check.h"
@@ -74,6 +76,18 @@ TEST(ImageCheck, EachMalformedKindHasItsCode) {
   f.is_bigendian = 7;
   EXPECT_EQ(checkImage(f, kNow, limits), ImageProblem::kBadEndianFlag);
 
+  f = goodMono8();  // big-endian 16-bit: debayer's cvtColor threw on rgba16 and bayer_*16 (found by probe)
+  f.encoding = "bayer_rggb16";
+  f.step = 1280;
+  f.data_size = 1280u * 480u;
+  f.is_bigendian = 1;
+  EXPECT_EQ(checkImage(f, kNow, limits), ImageProblem::kBigEndian16Bit);
+  f.is_bigendian = 0;
+  EXPECT_EQ(checkImage(f, kNow, limits), ImageProblem::kNone);
+  f = goodMono8();
+  f.is_bigendian = 1;  // one byte per channel: the flag means nothing
+  EXPECT_EQ(checkImage(f, kNow, limits), ImageProblem::kNone);
+
   f = goodMono8();
   f.frame_id.clear();
   EXPECT_EQ(checkImage(f, kNow, limits), ImageProblem::kNoFrameId);
@@ -115,6 +129,100 @@ TEST(ImageCheck, LimitsAreValidated) {
   EXPECT_THROW(validate(ImageLimits{0, 0.5}), std::invalid_argument);
   EXPECT_THROW(validate(ImageLimits{4096, -1.0}), std::invalid_argument);
   EXPECT_THROW(validate(ImageLimits{4096, std::numeric_limits<double>::infinity()}), std::invalid_argument);
+}
+
+// A C270-like calibration of a 640 x 480 camera, as camera_info_manager publishes it.
+CameraInfoFacts goodInfo() {
+  CameraInfoFacts f;
+  f.width = 640;
+  f.height = 480;
+  f.distortion_model = "plumb_bob";
+  f.D = {0.05, -0.1, 0.001, 0.0, 0.0};
+  f.K = {820.0, 0.0, 320.0, 0.0, 820.0, 240.0, 0.0, 0.0, 1.0};
+  const double c = std::cos(0.01), s = std::sin(0.01);
+  f.R = {c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0};
+  f.P = {815.0, 0.0, 318.0, -49.0, 0.0, 815.0, 241.0, 0.0, 0.0, 0.0, 1.0, 0.0};
+  f.frame_id = "stereo_left_optical_frame";
+  f.stamp_s = kNow;
+  return f;
+}
+constexpr ImageSize kVga{640, 480};
+
+TEST(CameraInfoCheck, GoodInfosPass) {
+  const ImageLimits limits;
+  EXPECT_EQ(checkCameraInfo(goodInfo(), kVga, kNow, limits), CameraInfoProblem::kNone);
+  CameraInfoFacts f = goodInfo();
+  f.D.clear();  // no coefficients: no distortion
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kNone);
+  f = goodInfo();
+  f.binning_x = f.binning_y = 2;  // binned: the image is half the sensor
+  EXPECT_EQ(checkCameraInfo(f, ImageSize{320, 240}, kNow, limits), CameraInfoProblem::kNone);
+  f = goodInfo();
+  f.roi_x_offset = 100;
+  f.roi_y_offset = 50;
+  f.roi_width = 320;
+  f.roi_height = 200;
+  EXPECT_EQ(checkCameraInfo(f, ImageSize{320, 200}, kNow, limits), CameraInfoProblem::kNone);
+  f = goodInfo();
+  f.distortion_model = "rational_polynomial";
+  f.D = {0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kNone);
+}
+
+TEST(CameraInfoCheck, EachMalformedKindHasItsCode) {
+  const ImageLimits limits;
+  CameraInfoFacts f = goodInfo();
+  f.width = 0;
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kZeroSize);
+  f = goodInfo();
+  f.width = 1;
+  f.height = 100000;  // what aborted rectify's cv::remap (message_fuzz)
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kTooLarge);
+  f = goodInfo();
+  f.binning_x = 1000;
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kBadBinningOrRoi);
+  f = goodInfo();
+  f.roi_x_offset = 600;
+  f.roi_width = 100;  // past the sensor's right edge
+  f.roi_height = 100;
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kBadBinningOrRoi);
+  f = goodInfo();
+  f.width = 1;
+  f.height = 1;
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kSizeDiffersFromImage);
+  EXPECT_EQ(checkCameraInfo(goodInfo(), std::nullopt, kNow, limits), CameraInfoProblem::kNoImageYet);
+  f = goodInfo();
+  f.distortion_model = "fisheye_of_my_own";
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kUnknownDistortionModel);
+  f = goodInfo();
+  f.D.push_back(0.0);
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kDistortionCountMismatch);
+  f = goodInfo();
+  f.P[2] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kNotFinite);
+  f = goodInfo();
+  f.K = {};  // an uncalibrated camera publishes zeros
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kUncalibrated);
+  f = goodInfo();
+  f.R = {};
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kRectificationNotRotation);
+  f.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0};  // orthonormal but a mirror
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kRectificationNotRotation);
+  f = goodInfo();
+  f.frame_id.clear();
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kNoFrameId);
+  f = goodInfo();
+  f.stamp_s = kNow + 1000.0;
+  EXPECT_EQ(checkCameraInfo(f, kVga, kNow, limits), CameraInfoProblem::kStampInFuture);
+}
+
+TEST(CameraInfoCheck, EveryCodeHasAName) {
+  for (std::size_t i = 0; i < kCameraInfoProblemCount; ++i) {
+    EXPECT_STRNE(cameraInfoProblemName(static_cast<CameraInfoProblem>(i)), "unknown") << i;
+  }
+  for (std::size_t i = 0; i < kImageProblemCount; ++i) {
+    EXPECT_STRNE(imageProblemName(static_cast<ImageProblem>(i)), "unknown") << i;
+  }
 }
 
 }  // namespace

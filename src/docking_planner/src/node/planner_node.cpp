@@ -13,6 +13,7 @@
 #include <string>
 
 #include <actionlib/server/simple_action_server.h>
+#include <actionlib_msgs/GoalID.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <docking_msgs/DockAction.h>
 #include <docking_msgs/DockingState.h>
@@ -134,6 +135,34 @@ volatile std::sig_atomic_t g_stop_requested = 0;
 void onSigint(int) { g_stop_requested = 1; }
 
 using DockServer = actionlib::SimpleActionServer<docking_msgs::DockAction>;
+
+/// The docking action's goal and cancel topics as the action server subscribes them: the planner's
+/// relay (PlannerNode::onGoalMessage, onCancelMessage) republishes each message there after checking
+/// its goal id stamp. actionlib orders goals and cancels by that stamp, so one message stamped in the
+/// future would make SimpleActionServer recall every later goal, or cancel every later goal on arrival
+/// (issue 12). Feedback, status and result stay on the action's own topics.
+constexpr const char kCheckedSuffix[] = "_checked";
+ros::NodeHandle actionServerHandle(const ros::NodeHandle& nh) {
+  const std::string action = std::string(docking_msgs::topics::kDockAction);
+  const ros::M_string relayed = {
+      {nh.resolveName(action + "/goal"), nh.resolveName(action + "/goal" + kCheckedSuffix)},
+      {nh.resolveName(action + "/cancel"), nh.resolveName(action + "/cancel" + kCheckedSuffix)},
+  };
+  return ros::NodeHandle(nh, "", relayed);
+}
+
+/// Odometry numbers of the chaser's base, for the ROS-free check of docking_msgs/estimate_check.h.
+docking_msgs::checks::OdometryProblem checkOdometry(const nav_msgs::Odometry& msg) {
+  docking_msgs::checks::OdometryFields f;
+  const auto& p = msg.pose.pose.position;
+  const auto& q = msg.pose.pose.orientation;
+  const auto& v = msg.twist.twist.linear;
+  const auto& w = msg.twist.twist.angular;
+  f.position = {p.x, p.y, p.z};
+  f.orientation_xyzw = {q.x, q.y, q.z, q.w};
+  f.twist = {v.x, v.y, v.z, w.x, w.y, w.z};
+  return docking_msgs::checks::checkOdometryFields(f);
+}
 using DockResultMsg = docking_msgs::DockResult;
 static_assert(static_cast<int>(DockingOutcome::kDocked) == DockResultMsg::DOCKED &&
                   static_cast<int>(DockingOutcome::kCancelled) == DockResultMsg::CANCELLED &&
@@ -152,7 +181,7 @@ class PlannerNode {
       : planner_(loadConfig(pnh)),
         tf_listener_(tf_buffer_),
         diagnostics_(nh, pnh),
-        dock_server_(nh, docking_msgs::topics::kDockAction, false) {
+        dock_server_(actionServerHandle(nh), docking_msgs::topics::kDockAction, false) {
     odom_frame_ = pnh.param<std::string>("odom_frame", docking_msgs::frames::kOdom);
     base_frame_ = pnh.param<std::string>("base_frame", docking_msgs::frames::kBaseLink);
     const double rate_hz = requireDouble(pnh, "rate_hz");
@@ -170,7 +199,7 @@ class PlannerNode {
     state_pub_ = nh.advertise<docking_msgs::DockingState>(docking_msgs::topics::kDockingState, 10);
     path_pub_ = nh.advertise<nav_msgs::Path>(docking_msgs::topics::kDockingPath, 1, true);
     estimate_sub_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 10, &PlannerNode::onEstimateEvent, this);
-    odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometryGuarded, this);
+    odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometryEvent, this);
 
     reset_service_ = pnh.advertiseService("reset", &PlannerNode::onReset, this);
 
@@ -190,8 +219,11 @@ class PlannerNode {
         std::string(docking_msgs::topics::kDockAction) + "/feedback", 1,
         boost::bind(&PlannerNode::onFeedbackSubscriber, this, boost::placeholders::_1, +1),
         boost::bind(&PlannerNode::onFeedbackSubscriber, this, boost::placeholders::_1, -1));
-    goal_watch_ = nh.subscribe(std::string(docking_msgs::topics::kDockAction) + "/goal", 10,
-                               &PlannerNode::onGoalMessage, this);
+    const std::string action = docking_msgs::topics::kDockAction;
+    goal_relay_ = nh.advertise<docking_msgs::DockActionGoal>(action + "/goal" + kCheckedSuffix, 10);
+    cancel_relay_ = nh.advertise<actionlib_msgs::GoalID>(action + "/cancel" + kCheckedSuffix, 10);
+    goal_watch_ = nh.subscribe(action + "/goal", 10, &PlannerNode::onGoalMessage, this);
+    cancel_watch_ = nh.subscribe(action + "/cancel", 10, &PlannerNode::onCancelMessage, this);
     dock_server_.registerGoalCallback(boost::bind(&PlannerNode::onGoal, this));
     dock_server_.registerPreemptCallback(boost::bind(&PlannerNode::onPreempt, this));
     dock_server_.start();
@@ -254,8 +286,30 @@ class PlannerNode {
     if (count <= 0) feedback_subscribers_.erase(link.getSubscriberName());
   }
 
+  // The relay in front of the action server (actionServerHandle): a goal id stamped in the future is
+  // restamped 0 ("received now", as actionlib reads 0), with a warning; everything else passes as it is.
   void onGoalMessage(const ros::MessageEvent<docking_msgs::DockActionGoal const>& event) {
     last_goal_sender_ = event.getPublisherName();
+    docking_msgs::DockActionGoal goal = *event.getConstMessage();
+    restampIfFuture(&goal.goal_id, "docking goal", event.getPublisherName());
+    goal_relay_.publish(goal);
+  }
+
+  void onCancelMessage(const ros::MessageEvent<actionlib_msgs::GoalID const>& event) {
+    actionlib_msgs::GoalID cancel = *event.getConstMessage();
+    restampIfFuture(&cancel, "docking cancel", event.getPublisherName());
+    cancel_relay_.publish(cancel);
+  }
+
+  void restampIfFuture(actionlib_msgs::GoalID* id, const char* what, const std::string& publisher) {
+    const double ahead_s = id->stamp.toSec() - ros::Time::now().toSec();
+    if (id->stamp.isZero() || ahead_s <= planner_.config().stamp_limits.max_future_s) return;
+    ++restamped_ids_;
+    last_restamped_ = std::string(what) + " '" + id->id + "' from " + publisher + ", stamped " +
+                      std::to_string(ahead_s) + " s ahead";
+    ROS_WARN_THROTTLE(2.0, "planner: %s '%s' from %s stamped %.3f s in the future: taken as received now", what,
+                      id->id.c_str(), publisher.c_str(), ahead_s);
+    id->stamp = ros::Time(0);
   }
 
   // Cancel from the client (a new goal is handled in onGoal).
@@ -319,11 +373,11 @@ class PlannerNode {
 
   // Nothing a message contains may end the node: what the algorithm code throws drops that message,
   // with a diagnostic, and the node goes on.
-  void onOdometryGuarded(const nav_msgs::OdometryConstPtr& msg) {
+  void onOdometryEvent(const ros::MessageEvent<nav_msgs::Odometry const>& event) {
     try {
-      onOdometry(msg);
+      onOdometry(event.getConstMessage(), event.getPublisherName());
     } catch (const std::exception& e) {
-      recordDrop("odometry", "exception", e.what());
+      recordDrop("odometry", event.getPublisherName(), "exception", e.what());
     }
   }
 
@@ -331,17 +385,16 @@ class PlannerNode {
     try {
       onEstimate(event.getConstMessage(), event.getPublisherName());
     } catch (const std::exception& e) {
-      recordDrop(event.getPublisherName(), "exception", e.what());
+      recordDrop("estimate", event.getPublisherName(), "exception", e.what());
     }
   }
 
   /// Counts a dropped message by its code, keeps who sent it and why for the diagnostics, and warns
   /// (throttled). No other state changes.
-  void recordDrop(const std::string& publisher, const std::string& code, const std::string& why) {
-    ++drops_by_code_[code];
-    last_drop_ = "from " + publisher + ": " + code + " (" + why + ")";
-    ROS_WARN_THROTTLE(2.0, "planner: dropped an estimate from %s: %s: %s", publisher.c_str(), code.c_str(),
-                      why.c_str());
+  void recordDrop(const char* what, const std::string& publisher, const std::string& code, const std::string& why) {
+    ++drops_by_code_[std::string(what) + ": " + code];
+    last_drop_ = std::string(what) + " from " + publisher + ": " + code + " (" + why + ")";
+    ROS_WARN_THROTTLE(2.0, "planner: dropped %s from %s: %s: %s", what, publisher.c_str(), code.c_str(), why.c_str());
   }
 
   /// Sim time reset or a bag loop: the held stamps (target track, odometry history, waiting estimates)
@@ -357,8 +410,23 @@ class PlannerNode {
              now_s);
   }
 
-  void onOdometry(const nav_msgs::OdometryConstPtr& msg) {
-    followClock(ros::Time::now().toSec());
+  void onOdometry(const nav_msgs::OdometryConstPtr& msg, const std::string& publisher) {
+    const double now_s = ros::Time::now().toSec();
+    followClock(now_s);
+    // Before the history: one sample stamped in the future would make it refuse every true sample
+    // after it, and huge numbers would place the target at absurd ranges (issue 12).
+    const auto problem = checkOdometry(*msg);
+    if (problem != docking_msgs::checks::OdometryProblem::kNone) {
+      recordDrop("odometry", publisher, docking_msgs::checks::odometryProblemName(problem), "numbers refused");
+      return;
+    }
+    const double stamp_s = msg->header.stamp.toSec();
+    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, planner_.config().stamp_limits);
+    if (stamp != docking_msgs::checks::StampProblem::kNone) {
+      recordDrop("odometry", publisher, docking_msgs::checks::stampProblemName(stamp),
+                 "stamp " + std::to_string(stamp_s - now_s) + " s from now");
+      return;
+    }
     if (!msg->header.frame_id.empty() && msg->header.frame_id != odom_frame_) {
       ROS_WARN_THROTTLE(5.0, "planner: odometry in frame '%s', expected '%s'", msg->header.frame_id.c_str(),
                         odom_frame_.c_str());
@@ -386,13 +454,13 @@ class PlannerNode {
     // behind it (issue 12: SEARCH while 26 valid estimates arrived); a zero quaternion would steer.
     const auto problem = docking_msgs::checks::checkEstimate(*msg);
     if (problem != docking_msgs::checks::EstimateProblem::kNone) {
-      recordDrop(publisher, docking_msgs::checks::estimateProblemName(problem), "numbers refused");
+      recordDrop("estimate", publisher, docking_msgs::checks::estimateProblemName(problem), "numbers refused");
       return;
     }
     const double stamp_s = msg->header.stamp.toSec();
     const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, planner_.config().stamp_limits);
     if (stamp != docking_msgs::checks::StampProblem::kNone) {
-      recordDrop(publisher, docking_msgs::checks::stampProblemName(stamp),
+      recordDrop("estimate", publisher, docking_msgs::checks::stampProblemName(stamp),
                  "stamp " + std::to_string(stamp_s - now_s) + " s from now");
       return;
     }
@@ -632,6 +700,8 @@ class PlannerNode {
     stat.add("clock jumps back (target forgotten)", clock_jumps_back_);
     for (const auto& [code, count] : drops_by_code_) stat.add("dropped: " + code, count);
     if (!last_drop_.empty()) stat.add("last dropped", last_drop_);
+    stat.add("goal ids stamped in the future (taken as received now)", restamped_ids_);
+    if (!last_restamped_.empty()) stat.add("last restamped goal id", last_restamped_);
   }
 
   DockingPlanner planner_;
@@ -648,7 +718,8 @@ class PlannerNode {
   ros::Timer timer_;
   DockServer dock_server_;
   ros::Publisher feedback_watch_;
-  ros::Subscriber goal_watch_;
+  ros::Subscriber goal_watch_, cancel_watch_;
+  ros::Publisher goal_relay_, cancel_relay_;
   std::map<std::string, int> feedback_subscribers_;  // node name -> connections to the feedback topic
   std::string last_goal_sender_, goal_owner_;
   double feedback_period_s_{0.2};
@@ -671,6 +742,8 @@ class PlannerNode {
   std::uint64_t clock_jumps_back_{0};
   std::map<std::string, std::uint64_t> drops_by_code_;  ///< dropped messages by problem code
   std::string last_drop_;                               ///< publisher, code and reason
+  std::uint64_t restamped_ids_{0};                      ///< goal/cancel ids stamped in the future
+  std::string last_restamped_;
 };
 
 }  // namespace

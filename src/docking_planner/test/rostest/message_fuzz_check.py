@@ -7,12 +7,12 @@ node publishes ~per_topic malformed messages on each input topic, interleaved wi
 ones: images (unknown encodings, zero or huge sizes, data shorter or longer than step x height, a step
 smaller than a row, absurd stamps), target estimates on every estimator topic and on target/estimate (NaN, infinity, zero and non-unit quaternions,
 stamps far in the future or past, flags that contradict each other), cmd_vel
-(NaN, infinity), wheel encoder frames (wrong wheel count, random counts) and docking goals with unusable
-limits (NaN, negative). Not camera_info yet: a malformed one (1 x 100000 px) reaches image_proc's rectify
-unchecked and its cv::remap aborts the perception manager; nor odometry: the planner takes huge finite
-values and future stamps from any publisher of `odom`, and its odometry history then refuses every true
-sample (docs/RELIABILITY.md, both open). Every generated message is malformed in at least one field: a well-formed but wrong
-message cannot be told from a true one and is not what this campaign tests.
+(NaN, infinity), wheel encoder frames (wrong wheel count, random counts), camera_info (huge or zero
+sizes, NaN, unknown distortion models, wrong coefficient counts, no rotation, future stamps), odometry
+(NaN, huge, zero quaternions, future stamps), docking goals with unusable limits (NaN, negative) and goal
+ids stamped in the future, and cancels stamped in the future. Every generated message is malformed in at
+least one field: a well-formed but wrong message cannot be told from a true one and is not what this
+campaign tests.
 
 Asserts: no process of the chain ended or was respawned (same pids before and after), the chaser
 (simulator truth) did not move by more than 1 mm, /odom never jumped by more than 1 mm between two
@@ -32,7 +32,8 @@ from chain_processes import pid_of
 from docking_msgs.msg import DockAction, DockActionGoal, DockGoal, DockResult, DockingState, TargetEstimate, WheelEncoders
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
-from sensor_msgs.msg import Image
+from actionlib_msgs.msg import GoalID
+from sensor_msgs.msg import CameraInfo, Image
 
 PKG = "docking_planner"
 CHAIN_NODES = ("/docking_sim", "/omni_base", "/perception_manager", "/arbiter", "/planner")
@@ -40,7 +41,8 @@ CAMERAS = ("stereo/left", "stereo/right", "ir")
 ESTIMATE_TOPICS = ("perception/disparity/estimate", "perception/mono_visible/estimate",
                    "perception/mono_ir/estimate", "target/estimate")
 BAD_FLOATS = (float("nan"), float("inf"), -float("inf"), 1e308, -1e308)
-ENCODINGS = ("foo", "", "bgr8", "mono8", "rgb8", "mono16", "bayer_rggb8", "32FC1", "yuv422", "8UC3", "rgba16")
+ENCODINGS = ("foo", "", "bgr8", "mono8", "rgb8", "mono16", "bayer_rggb8", "bayer_rggb16", "32FC1", "yuv422", "8UC3",
+             "rgba16")
 
 
 
@@ -71,7 +73,8 @@ class Generator:
         m.encoding = r.choice(ENCODINGS)
         m.width = r.choice((0, 1, 7, 64, 640, 100000, 2 ** 31))
         m.height = r.choice((0, 1, 5, 48, 480, 100000))
-        bpp = {"bgr8": 3, "rgb8": 3, "8UC3": 3, "mono16": 2, "32FC1": 4, "rgba16": 8}.get(m.encoding, 1)
+        bpp = {"bgr8": 3, "rgb8": 3, "8UC3": 3, "mono16": 2, "bayer_rggb16": 2, "32FC1": 4, "rgba16": 8,
+               "yuv422": 2}.get(m.encoding, 1)
         row = min(m.width * bpp, 1 << 20)
         m.step = r.choice((0, max(row - 1, 0), row, row + 3, 2 ** 31 + 1))
         size = r.choice((0, 1, 100, min(m.step * m.height, 64 * 1024), min(m.step * m.height, 64 * 1024) - 1))
@@ -80,6 +83,68 @@ class Generator:
         if m.encoding in ("bgr8", "mono8") and m.step == row and len(m.data) == m.step * m.height and m.width > 0 \
                 and m.height > 0 and m.header.frame_id:
             m.data = m.data[:-1]  # well-formed by chance: make it short
+        return m
+
+    def camera_info(self, now, frame_id):
+        r = self.rng
+        m = CameraInfo()
+        m.header.stamp = rospy.Time.from_sec(now)
+        m.header.frame_id = frame_id
+        m.width, m.height = 640, 480
+        m.distortion_model = "plumb_bob"
+        m.D = [0.0] * 5
+        m.K = [500.0, 0.0, 320.0, 0.0, 500.0, 240.0, 0.0, 0.0, 1.0]
+        m.R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+        m.P = [500.0, 0.0, 320.0, 0.0, 0.0, 500.0, 240.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        defect = r.randrange(9)
+        if defect == 0:
+            m.width, m.height = r.choice(((1, 100000), (100000, 1), (2 ** 31, 480), (1, 1)))
+        elif defect == 1:
+            m.width = m.height = 0
+        elif defect == 2:
+            m.K[r.randrange(9)] = r.choice(BAD_FLOATS[:3])
+        elif defect == 3:
+            m.distortion_model = r.choice(("", "foo", "fisheye"))
+        elif defect == 4:
+            m.D = [0.1] * r.choice((1, 3, 6, 14, 1000))
+        elif defect == 5:
+            m.R = [0.0] * 9
+        elif defect == 6:
+            m.header.stamp = rospy.Time.from_sec(now + r.choice((1000.0, 1e6)))
+        elif defect == 7:
+            m.binning_x, m.roi.x_offset, m.roi.width, m.roi.height = r.choice(((1000, 0, 0, 0), (0, 600, 100, 100)))
+        else:
+            m.K = [0.0] * 9
+            m.P = [r.choice(BAD_FLOATS)] * 12
+        return m
+
+    def odometry(self, now):
+        r = self.rng
+        m = Odometry()
+        m.header.stamp = bad_stamp(r, now)
+        m.header.frame_id = r.choice(("odom", "", "map"))
+        m.child_frame_id = "base_link"
+        m.pose.pose.orientation.w = 1.0
+        defect = r.randrange(5)
+        if defect == 0:
+            m.pose.pose.position.x = r.choice(BAD_FLOATS)
+        elif defect == 1:
+            m.pose.pose.orientation.w = 0.0
+        elif defect == 2:
+            m.header.stamp = rospy.Time.from_sec(now + r.choice((1.0, 1000.0)))
+        elif defect == 3:
+            m.twist.twist.linear.x = r.choice(BAD_FLOATS + (1e6,))
+        else:
+            m.pose.pose.position.y = r.choice((1e30, -1e9, 5e3))
+        return m
+
+    def cancel(self, now):
+        r = self.rng
+        m = GoalID()
+        # In the future: actionlib would cancel every goal stamped before it, the planner's relay says
+        # "received now". Malformed by its stamp.
+        m.stamp = rospy.Time.from_sec(now + r.choice((10.0, 1000.0, 1e6)))
+        m.id = r.choice(("", "fuzz-%d" % r.getrandbits(32)))
         return m
 
     def estimate(self, now, source):
@@ -135,9 +200,9 @@ class Generator:
         r = self.rng
         m = DockActionGoal()
         m.header.stamp = bad_stamp(r, now)
-        # The goal id's stamp stays 0 ("now"): actionlib's SimpleActionServer orders goals by it, and one
-        # goal stamped in the future makes it recall every later one (docs/RELIABILITY.md, open).
-        m.goal_id.stamp = rospy.Time(0)
+        # Half the goal ids stamped in the future: actionlib's SimpleActionServer orders goals by that
+        # stamp and would recall every later goal; the planner's relay takes them as received now.
+        m.goal_id.stamp = rospy.Time(0) if r.random() < 0.5 else rospy.Time.from_sec(now + r.choice((10.0, 1e6)))
         m.goal_id.id = "fuzz-%d" % r.getrandbits(32)
         m.goal.time_budget_s = r.choice(BAD_FLOATS[:3] + (-1.0,))
         m.goal.search_timeout_s = r.choice((0.0, -5.0, float("nan")))
@@ -176,16 +241,25 @@ class MessageFuzzCheck(unittest.TestCase):
         pubs = {}
         for cam in CAMERAS:
             pubs[cam + "/image_raw"] = rospy.Publisher(cam + "/image_raw", Image, queue_size=100)
+            pubs[cam + "/camera_info"] = rospy.Publisher(cam + "/camera_info", CameraInfo, queue_size=100)
         for topic in ESTIMATE_TOPICS:
             pubs[topic] = rospy.Publisher(topic, TargetEstimate, queue_size=100)
         pubs["cmd_vel"] = rospy.Publisher("cmd_vel", Twist, queue_size=100)
         pubs["wheels/encoders"] = rospy.Publisher("wheels/encoders", WheelEncoders, queue_size=100)
         pubs["docking/dock/goal"] = rospy.Publisher("docking/dock/goal", DockActionGoal, queue_size=100)
+        pubs["docking/dock/cancel"] = rospy.Publisher("docking/dock/cancel", GoalID, queue_size=100)
+        pubs["odom"] = rospy.Publisher("odom", Odometry, queue_size=100)
         return pubs
 
     def generate(self, gen, topic, now):
         if topic.endswith("/image_raw"):
             return gen.image(now, topic.split("/")[0] + "_optical_frame")
+        if topic.endswith("/camera_info"):
+            return gen.camera_info(now, topic.rsplit("/", 1)[0].replace("/", "_") + "_optical_frame")
+        if topic == "odom":
+            return gen.odometry(now)
+        if topic == "docking/dock/cancel":
+            return gen.cancel(now)
         if topic in ESTIMATE_TOPICS:
             return gen.estimate(now, ESTIMATE_TOPICS.index(topic) if topic != "target/estimate" else 3)
         if topic == "cmd_vel":

@@ -32,6 +32,8 @@ class InputSilence {
 
   /// Seconds since the last arrival (infinite before the first).
   double silentFor(double now_s) const { return now_s - last_arrival_s_; }
+  /// Whether any estimator has published since start (before that, silentFor() is infinite).
+  bool heardAny() const { return last_arrival_s_ > -std::numeric_limits<double>::infinity(); }
   double timeout() const { return timeout_s_; }
 
   static constexpr double kMaxTimeoutS = 10.0;
