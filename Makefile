@@ -57,10 +57,12 @@ eval: build
 FUZZ_INPUTS ?= 1000000
 FUZZ_CORRUPTIONS ?= 2000000
 FUZZ_SEED ?= 12
-# Randomized message campaign against the running closed loop (docs/RELIABILITY.md): 1000 malformed messages
-# on each of 15 input topics, then a docking (~4 min wall). `make test` runs it with 200 per topic.
+# Randomized message campaign against the running closed loop (docs/RELIABILITY.md): FUZZ_PER_TOPIC
+# malformed messages on each of 15 input topics, then a docking (~8 min wall at 5000). `make test` runs it
+# with 2000 per topic.
+FUZZ_PER_TOPIC ?= 5000
 fuzz-messages: build
-	@$(SETUP) && rostest docking_planner message_fuzz.test
+	@$(SETUP) && rostest docking_planner message_fuzz.test per_topic:=$(FUZZ_PER_TOPIC)
 
 fuzz-serial: deps
 	@mkdir -p devel/lib/python3/dist-packages build

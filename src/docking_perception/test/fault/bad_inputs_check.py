@@ -5,13 +5,17 @@ malformed inputs beside the real ones:
 
 - on every camera's image_raw: encoding "foo", 0x0, truncated mono8, step too small, huge dimensions
   with little data, no frame_id, a stamp 1000 s ahead;
+- on every camera's camera_info: 1 x 100000 px, NaN in K, an unknown distortion model, R all zero, a
+  stamp 1000 s ahead;
 - on every estimator topic and on target/estimate: a stamp 1000 s ahead, a zero quaternion with
-  orientation_valid, NaNs, each carrying a marker range (7.77 m) no real estimate has.
+  orientation_valid, NaNs, each carrying a marker range (7.77 m) no real estimate has;
+- on odom: a position 1e30 m away, a zero quaternion, a stamp 1000 s ahead.
 
 It asserts that no process died (the perception manager, the arbiter and the planner answer pings),
 that valid FUSED estimates keep flowing from the real estimators afterwards, that no output carries the
 marker or a non-unit orientation, that the planner still sees the target, and that the diagnostics of
-the image guards, the arbiter and the planner name this node as the publisher of what they dropped.
+the image guards, the arbiter and the planner name this node as the publisher of what they dropped and
+count each kind by its code.
 """
 import math
 import threading
@@ -23,7 +27,8 @@ import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from docking_msgs.msg import DockingState, TargetEstimate
-from sensor_msgs.msg import Image
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import CameraInfo, Image
 
 PKG = "docking_perception"
 MARKER_RANGE_M = 7.77  # the injected estimates' range: no real one is there
@@ -54,6 +59,44 @@ def malformed_images(frame_id, now):
         ("no_frame_id", image("mono8", 64, 48, 64, 64 * 48, frame="")),
         ("stamp_in_future", image("mono8", 64, 48, 64, 64 * 48, stamp=now + rospy.Duration(1000.0))),
     ]
+
+
+def malformed_camera_infos(frame_id, now):
+    """(code the guard must give, CameraInfo) for each malformed kind; each otherwise a 640 x 480 camera."""
+    def info(stamp=now):
+        msg = CameraInfo()
+        msg.header.stamp = stamp
+        msg.header.frame_id = frame_id
+        msg.width, msg.height = 640, 480
+        msg.distortion_model = "plumb_bob"
+        msg.D = [0.0] * 5
+        msg.K = [500.0, 0.0, 320.0, 0.0, 500.0, 240.0, 0.0, 0.0, 1.0]
+        msg.R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+        msg.P = [500.0, 0.0, 320.0, 0.0, 0.0, 500.0, 240.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        return msg
+    too_large, not_finite, unknown_model, no_rotation = info(), info(), info(), info()
+    too_large.width, too_large.height = 1, 100000  # aborted rectify's cv::remap before the guard checked it
+    not_finite.K[0] = float("nan")
+    unknown_model.distortion_model = "my_own_model"
+    no_rotation.R = [0.0] * 9
+    return [("too_large", too_large), ("not_finite", not_finite), ("unknown_distortion_model", unknown_model),
+            ("rectification_not_rotation", no_rotation),
+            ("stamp_in_future", info(stamp=now + rospy.Duration(1000.0)))]
+
+
+def bad_odometry(now):
+    """(code the planner must give, Odometry) for each bad kind."""
+    def odometry(stamp=now):
+        msg = Odometry()
+        msg.header.stamp = stamp
+        msg.header.frame_id, msg.child_frame_id = "odom", "base_link"
+        msg.pose.pose.orientation.w = 1.0
+        return msg
+    far, zero_quaternion = odometry(), odometry()
+    far.pose.pose.position.x = 1e30
+    zero_quaternion.pose.pose.orientation.w = 0.0
+    return [("odometry_position_out_of_bounds", far), ("odometry_orientation_not_unit", zero_quaternion),
+            ("stamp_in_future", odometry(stamp=now + rospy.Duration(1000.0)))]
 
 
 def bad_estimates(source, now):
@@ -96,6 +139,8 @@ class BadInputs(unittest.TestCase):
         rospy.Subscriber("docking/state", DockingState, self.on_state, queue_size=50)
         rospy.Subscriber("diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=50)
         self.image_pubs = {c: rospy.Publisher(c + "/image_raw", Image, queue_size=20) for c in CAMERAS}
+        self.info_pubs = {c: rospy.Publisher(c + "/camera_info", CameraInfo, queue_size=20) for c in CAMERAS}
+        self.odom_pub = rospy.Publisher("odom", Odometry, queue_size=20)
         self.estimate_pubs = {t: rospy.Publisher(t, TargetEstimate, queue_size=20) for t in ESTIMATE_TOPICS}
 
     def on_fused(self, msg):
@@ -139,6 +184,10 @@ class BadInputs(unittest.TestCase):
             for camera in CAMERAS:
                 for _, msg in malformed_images(CAMERA_FRAMES[camera], now):
                     self.image_pubs[camera].publish(msg)
+                for _, msg in malformed_camera_infos(CAMERA_FRAMES[camera], now):
+                    self.info_pubs[camera].publish(msg)
+            for _, msg in bad_odometry(now):
+                self.odom_pub.publish(msg)
             for topic, source in ESTIMATE_TOPICS.items():
                 for _, msg in bad_estimates(source, now):
                     self.estimate_pubs[topic].publish(msg)
@@ -149,6 +198,8 @@ class BadInputs(unittest.TestCase):
         start = time.time()
         self.wait_for(lambda: len(self.valid_since(start)) >= 3, timeout, "valid FUSED estimates before the injection")
         self.wait_for(lambda: all(p.get_num_connections() > 0 for p in self.image_pubs.values()) and
+                      all(p.get_num_connections() > 0 for p in self.info_pubs.values()) and
+                      self.odom_pub.get_num_connections() > 0 and
                       all(p.get_num_connections() > 0 for p in self.estimate_pubs.values()), 30.0,
                       "the guards, the arbiter and the planner to subscribe")
         self.assert_alive()
@@ -175,6 +226,11 @@ class BadInputs(unittest.TestCase):
         # The planner still sees the target (a future stamp used to hold every later estimate back).
         self.wait_for(lambda: any(t >= after and s.target_visible for t, s in self.states), 30.0,
                       "the planner to see the target after the injection")
+        # ... where it is (1.5 m ahead): odometry 1e30 m away would have placed it at absurd ranges.
+        with self.lock:
+            ranges = [s.range_m for t, s in self.states if t >= injected and s.target_visible]
+        self.assertTrue(ranges and all(0.5 < r < 3.0 for r in ranges),
+                        "target ranges after the injection: %s" % sorted(set(round(r, 2) for r in ranges))[-5:])
 
         # Diagnostics: each consumer counts the drops by code and names this node as their publisher.
         def named_everywhere():
@@ -191,11 +247,18 @@ class BadInputs(unittest.TestCase):
         for values in self.diagnostic_values("image guard"):
             for code, _ in malformed_images("f", rospy.Time.now()):
                 self.assertGreater(int(values.get("dropped: " + code, "0")), 0, "guard did not count " + code)
+            for code, _ in malformed_camera_infos("f", rospy.Time.now()):
+                self.assertGreater(int(values.get("camera_info dropped: " + code, "0")), 0,
+                                   "guard did not count camera_info " + code)
+            self.assertIn(self.me, values.get("last dropped camera_info", ""))
         arbiter = self.diagnostic_values("target source")[0]
         planner = self.diagnostic_values("docking planner")[0]
         for code, _ in bad_estimates(0, rospy.Time.now()):
             self.assertGreater(int(arbiter.get("dropped: " + code, "0")), 0, "arbiter did not count " + code)
-            self.assertGreater(int(planner.get("dropped: " + code, "0")), 0, "planner did not count " + code)
+            self.assertGreater(int(planner.get("dropped: estimate: " + code, "0")), 0, "planner did not count " + code)
+        for code, _ in bad_odometry(rospy.Time.now()):
+            self.assertGreater(int(planner.get("dropped: odometry: " + code, "0")), 0,
+                               "planner did not count odometry " + code)
         self.assert_alive()
 
 
