@@ -13,8 +13,8 @@ process is back within ~0.3 s, before any stop is due; the stall keeps it gone l
 1.5 s sim at 0.3) and is itself a fault to survive.
 For each: the chaser (simulator truth) must be still within ~max_stop_s (sim) of the fault, the killed
 process must be back (a new pid), and the docking must resume (moving in a docking state again). Then the
-docking must end cleanly (a result on docking/dock/result: DOCKED, or the goal's time budget spent), and
-every node of the chain must still answer.
+docking must end in one of ~allowed_outcomes (supervision.test: DOCKED; the target stands still, so
+nothing but the faults stands in its way), and every node of the chain must still answer.
 """
 import math
 import os
@@ -150,8 +150,8 @@ class SupervisionCheck(unittest.TestCase):
         outcome = {getattr(DockResult, n): n for n in ("DOCKED", "CANCELLED", "TIME_BUDGET", "TARGET_LOST",
                                                          "CLIENT_GONE", "REJECTED", "SHUTDOWN")}.get(
             self.results[-1].outcome, str(self.results[-1].outcome))
-        self.assertIn(outcome, ("DOCKED", "TIME_BUDGET", "TARGET_LOST"), "the docking ended %s: %s" % (
-            outcome, self.results[-1].reason))
+        allowed = rospy.get_param("~allowed_outcomes", ["DOCKED"])
+        self.assertIn(outcome, allowed, "the docking ended %s: %s" % (outcome, self.results[-1].reason))
         missing = [n for n in CHAIN_NODES if n != "/dock_client" and pid_of(n) is None]
         self.assertFalse(missing, "nodes gone at the end: %s" % missing)
         print("supervision_check: the docking ended %s at %.1f s (sim) after %d faults (%s); every node of the chain "
