@@ -1,7 +1,9 @@
-// EstimateFields from a TargetEstimate message, for the ROS-free checks of estimate_check.h.
+// EstimateFields from a TargetEstimate message and OdometryFields from a nav_msgs/Odometry, for the
+// ROS-free checks of estimate_check.h.
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <string>
 
 #include "docking_msgs/TargetEstimate.h"
@@ -10,6 +12,28 @@
 namespace docking_msgs {
 namespace checks {
 
+/// Position, orientation (x, y, z, w) and twist (linear, angular) of any message with pose.pose and
+/// twist.twist (TargetEstimate, nav_msgs/Odometry; a template: docking_msgs needs no nav_msgs).
+template <typename Msg>
+void copyPoseAndTwist(const Msg& msg, std::array<double, 3>* position, std::array<double, 4>* orientation_xyzw,
+                      std::array<double, 6>* twist) {
+  const auto& p = msg.pose.pose.position;
+  const auto& q = msg.pose.pose.orientation;
+  const auto& v = msg.twist.twist.linear;
+  const auto& w = msg.twist.twist.angular;
+  *position = {p.x, p.y, p.z};
+  *orientation_xyzw = {q.x, q.y, q.z, q.w};
+  *twist = {v.x, v.y, v.z, w.x, w.y, w.z};
+}
+
+/// The numbers of a nav_msgs/Odometry checked (its stamp apart, with checkStamp).
+template <typename OdometryMsg>
+OdometryProblem checkOdometry(const OdometryMsg& msg) {
+  OdometryFields f;
+  copyPoseAndTwist(msg, &f.position, &f.orientation_xyzw, &f.twist);
+  return checkOdometryFields(f);
+}
+
 inline EstimateFields fieldsOf(const TargetEstimate& msg) {
   EstimateFields f;
   f.has_frame_id = !msg.header.frame_id.empty();
@@ -17,14 +41,8 @@ inline EstimateFields fieldsOf(const TargetEstimate& msg) {
   f.position_valid = msg.position_valid;
   f.orientation_valid = msg.orientation_valid;
   f.twist_valid = msg.twist_valid;
-  const auto& p = msg.pose.pose.position;
-  const auto& q = msg.pose.pose.orientation;
-  const auto& v = msg.twist.twist.linear;
-  const auto& w = msg.twist.twist.angular;
-  f.position = {p.x, p.y, p.z};
-  f.orientation_xyzw = {q.x, q.y, q.z, q.w};
+  copyPoseAndTwist(msg, &f.position, &f.orientation_xyzw, &f.twist);
   std::copy(msg.pose.covariance.begin(), msg.pose.covariance.end(), f.pose_covariance.begin());
-  f.twist = {v.x, v.y, v.z, w.x, w.y, w.z};
   std::copy(msg.twist.covariance.begin(), msg.twist.covariance.end(), f.twist_covariance.begin());
   f.range_m = msg.range_m;
   return f;

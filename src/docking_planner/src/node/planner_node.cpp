@@ -151,18 +151,6 @@ ros::NodeHandle actionServerHandle(const ros::NodeHandle& nh) {
   return ros::NodeHandle(nh, "", relayed);
 }
 
-/// Odometry numbers of the chaser's base, for the ROS-free check of docking_msgs/estimate_check.h.
-docking_msgs::checks::OdometryProblem checkOdometry(const nav_msgs::Odometry& msg) {
-  docking_msgs::checks::OdometryFields f;
-  const auto& p = msg.pose.pose.position;
-  const auto& q = msg.pose.pose.orientation;
-  const auto& v = msg.twist.twist.linear;
-  const auto& w = msg.twist.twist.angular;
-  f.position = {p.x, p.y, p.z};
-  f.orientation_xyzw = {q.x, q.y, q.z, q.w};
-  f.twist = {v.x, v.y, v.z, w.x, w.y, w.z};
-  return docking_msgs::checks::checkOdometryFields(f);
-}
 using DockResultMsg = docking_msgs::DockResult;
 static_assert(static_cast<int>(DockingOutcome::kDocked) == DockResultMsg::DOCKED &&
                   static_cast<int>(DockingOutcome::kCancelled) == DockResultMsg::CANCELLED &&
@@ -415,7 +403,7 @@ class PlannerNode {
     followClock(now_s);
     // Before the history: one sample stamped in the future would make it refuse every true sample
     // after it, and huge numbers would place the target at absurd ranges (issue 12).
-    const auto problem = checkOdometry(*msg);
+    const auto problem = docking_msgs::checks::checkOdometry(*msg);
     if (problem != docking_msgs::checks::OdometryProblem::kNone) {
       recordDrop("odometry", publisher, docking_msgs::checks::odometryProblemName(problem), "numbers refused");
       return;
