@@ -38,7 +38,6 @@ class ImageGuardNodelet : public nodelet::Nodelet {
   void readParameters();
   void onImage(const sensor_msgs::ImageConstPtr& image, const std::string& publisher);
   void onCameraInfo(const ros::MessageEvent<sensor_msgs::CameraInfo const>& event);
-  void countDrop(std::uint64_t* counter, std::string* last, const std::string& publisher, const std::string& details);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ImageLimits limits_;
