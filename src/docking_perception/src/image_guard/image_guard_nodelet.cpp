@@ -38,6 +38,7 @@ class ImageGuardNodelet : public nodelet::Nodelet {
   void readParameters();
   void onImage(const sensor_msgs::ImageConstPtr& image, const std::string& publisher);
   void onCameraInfo(const ros::MessageEvent<sensor_msgs::CameraInfo const>& event);
+  void checkAndPassCameraInfo(const sensor_msgs::CameraInfoConstPtr& info, const std::string& publisher);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ImageLimits limits_;
@@ -58,6 +59,10 @@ class ImageGuardNodelet : public nodelet::Nodelet {
   std::array<std::uint64_t, kImageProblemCount> dropped_{};
   std::string last_drop_;  ///< publisher, code and details of the last dropped image
   std::optional<ImageSize> last_image_size_;  ///< of the last image that passed
+  /// The latest camera_info that came before any image (a camera may publish a frame's info first), and
+  /// its publisher: checked and passed with the first image, so that the first frame is not lost.
+  sensor_msgs::CameraInfoConstPtr info_before_first_image_;
+  std::string info_before_first_image_publisher_;
   std::uint64_t infos_passed_{0};
   std::array<std::uint64_t, kCameraInfoProblemCount> infos_dropped_{};
   std::string last_info_drop_;
@@ -142,13 +147,18 @@ void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image, const s
     facts.stamp_s = image->header.stamp.toSec();
     problem = checkImage(facts, ros::Time::now().toSec(), limits_);
     if (problem == ImageProblem::kNone) {
+      sensor_msgs::CameraInfoConstPtr held_info;
+      std::string held_info_publisher;
       {
         // Before the publish: the camera_info of this image may be checked while image_proc works on it.
         std::lock_guard<std::mutex> lock(mutex_);
         ++passed_;
         last_image_size_ = ImageSize{image->width, image->height};
+        held_info.swap(info_before_first_image_);
+        held_info_publisher.swap(info_before_first_image_publisher_);
       }
       checked_publisher_.publish(image);  // the same pointer: intra-process subscribers get it uncopied
+      if (held_info) checkAndPassCameraInfo(held_info, held_info_publisher);
       return;
     }
   } catch (const std::exception& e) {  // a publish on a shut-down publisher, bad_alloc: drop, go on
@@ -189,12 +199,24 @@ CameraInfoFacts factsOf(const sensor_msgs::CameraInfo& info) {
 }  // namespace
 
 void ImageGuardNodelet::onCameraInfo(const ros::MessageEvent<sensor_msgs::CameraInfo const>& event) {
-  const sensor_msgs::CameraInfoConstPtr info = event.getConstMessage();
+  checkAndPassCameraInfo(event.getConstMessage(), event.getPublisherName());
+}
+
+void ImageGuardNodelet::checkAndPassCameraInfo(const sensor_msgs::CameraInfoConstPtr& info,
+                                               const std::string& publisher) {
   CameraInfoProblem problem = CameraInfoProblem::kNone;
   try {
     std::optional<ImageSize> last_image;
     {
       std::lock_guard<std::mutex> lock(mutex_);
+      if (!last_image_size_) {
+        // Before any image (a camera may publish a frame's info first): start-up order, not a fault.
+        // Held, and checked and passed by onImage with the first image (under this lock: no race).
+        info_before_first_image_ = info;
+        info_before_first_image_publisher_ = publisher;
+        ++infos_dropped_[static_cast<std::size_t>(CameraInfoProblem::kNoImageYet)];
+        return;
+      }
       last_image = last_image_size_;
     }
     problem = checkCameraInfo(factsOf(*info), last_image, ros::Time::now().toSec(), limits_);
@@ -202,11 +224,6 @@ void ImageGuardNodelet::onCameraInfo(const ros::MessageEvent<sensor_msgs::Camera
       info_checked_publisher_.publish(info);
       std::lock_guard<std::mutex> lock(mutex_);
       ++infos_passed_;
-      return;
-    }
-    if (problem == CameraInfoProblem::kNoImageYet) {  // start-up order, not a fault: counted, not warned
-      std::lock_guard<std::mutex> lock(mutex_);
-      ++infos_dropped_[static_cast<std::size_t>(problem)];
       return;
     }
   } catch (const std::exception& e) {
@@ -217,10 +234,10 @@ void ImageGuardNodelet::onCameraInfo(const ros::MessageEvent<sensor_msgs::Camera
                               "x" + std::to_string(info->height) + ", model '" + info->distortion_model + "', " +
                               std::to_string(info->D.size()) + " coefficients, frame '" + info->header.frame_id + "'";
   NODELET_WARN_THROTTLE(2.0, "image_guard: dropped a camera_info on %s from %s: %s",
-                        info_subscriber_.getTopic().c_str(), event.getPublisherName().c_str(), details.c_str());
+                        info_subscriber_.getTopic().c_str(), publisher.c_str(), details.c_str());
   std::lock_guard<std::mutex> lock(mutex_);
   ++infos_dropped_[static_cast<std::size_t>(problem)];
-  last_info_drop_ = "from " + event.getPublisherName() + ": " + details;
+  last_info_drop_ = "from " + publisher + ": " + details;
 }
 
 void ImageGuardNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
