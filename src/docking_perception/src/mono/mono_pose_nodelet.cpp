@@ -319,7 +319,10 @@ void MonoPoseNodelet::processImage(const sensor_msgs::ImageConstPtr& image,
     publishEstimate(image->header, result);
     return;
   }
-  if (disparity_hint_) {
+  // Only a hint older than this image: the disparity of this very frame races with it, and which one
+  // won would make the result depend on thread timing (a lossless replay would not repeat itself). A
+  // same-frame hint waits for the next image (live, the disparity is the slower one anyway).
+  if (disparity_hint_ && disparity_hint_->header.stamp < image->header.stamp) {
     if (disparity_hint_->header.frame_id == image->header.frame_id) {
       const auto& position = disparity_hint_->pose.pose.position;
       estimator_->setPositionHint(Eigen::Vector3d(position.x, position.y, position.z),
