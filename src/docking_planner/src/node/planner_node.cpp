@@ -385,6 +385,16 @@ class PlannerNode {
     ROS_WARN_THROTTLE(2.0, "planner: dropped %s from %s: %s: %s", what, publisher.c_str(), code.c_str(), why.c_str());
   }
 
+  /// A stamp outside [now - max_stamp_age_s, now + max_future_stamp_s] (or not finite): the message is
+  /// recorded as dropped and true is returned.
+  bool stampRefused(const char* what, const std::string& publisher, double stamp_s, double now_s) {
+    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, planner_.config().stamp_limits);
+    if (stamp == docking_msgs::checks::StampProblem::kNone) return false;
+    recordDrop(what, publisher, docking_msgs::checks::stampProblemName(stamp),
+               "stamp " + std::to_string(stamp_s - now_s) + " s from now");
+    return true;
+  }
+
   /// Sim time reset or a bag loop: the held stamps (target track, odometry history, waiting estimates)
   /// belong to the old timeline and would refuse every new message.
   void followClock(double now_s) {
@@ -408,13 +418,7 @@ class PlannerNode {
       recordDrop("odometry", publisher, docking_msgs::checks::odometryProblemName(problem), "numbers refused");
       return;
     }
-    const double stamp_s = msg->header.stamp.toSec();
-    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, planner_.config().stamp_limits);
-    if (stamp != docking_msgs::checks::StampProblem::kNone) {
-      recordDrop("odometry", publisher, docking_msgs::checks::stampProblemName(stamp),
-                 "stamp " + std::to_string(stamp_s - now_s) + " s from now");
-      return;
-    }
+    if (stampRefused("odometry", publisher, msg->header.stamp.toSec(), now_s)) return;
     if (!msg->header.frame_id.empty() && msg->header.frame_id != odom_frame_) {
       ROS_WARN_THROTTLE(5.0, "planner: odometry in frame '%s', expected '%s'", msg->header.frame_id.c_str(),
                         odom_frame_.c_str());
@@ -445,13 +449,7 @@ class PlannerNode {
       recordDrop("estimate", publisher, docking_msgs::checks::estimateProblemName(problem), "numbers refused");
       return;
     }
-    const double stamp_s = msg->header.stamp.toSec();
-    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, planner_.config().stamp_limits);
-    if (stamp != docking_msgs::checks::StampProblem::kNone) {
-      recordDrop("estimate", publisher, docking_msgs::checks::stampProblemName(stamp),
-                 "stamp " + std::to_string(stamp_s - now_s) + " s from now");
-      return;
-    }
+    if (stampRefused("estimate", publisher, msg->header.stamp.toSec(), now_s)) return;
     // A well-formed message shows that the arbiter is alive; it also says whether the estimators are.
     planner_.notePerception(now_s, !msg->valid && msg->reject_reason == docking_msgs::TargetEstimate::REJECT_SOURCES_SILENT);
     if (msg->source != docking_msgs::TargetEstimate::SOURCE_FUSED) {
