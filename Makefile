@@ -58,7 +58,7 @@ FUZZ_INPUTS ?= 1000000
 FUZZ_CORRUPTIONS ?= 2000000
 FUZZ_SEED ?= 12
 # Randomized message campaign against the running closed loop (docs/RELIABILITY.md): FUZZ_PER_TOPIC
-# malformed messages on each of 15 input topics, then a docking (~8 min wall at 5000). `make test` runs it
+# malformed messages on each of 15 input topics, then a docking (2000 took 2 min 45 s). `make test` runs it
 # with 2000 per topic.
 FUZZ_PER_TOPIC ?= 5000
 fuzz-messages: build
