@@ -70,7 +70,7 @@ class ReplayLossless(unittest.TestCase):
         self.launch_dir = os.path.join(rospkg.RosPack().get_path(PKG), "..", "..", "launch")
 
     def tearDown(self):
-        pass shutil.rmtree(self.dir, ignore_errors=True)
+        shutil.rmtree(self.dir, ignore_errors=True)
 
     def test_record_then_replay_twice(self):
         import rospy  # the test node's own master: only for parameters
