@@ -79,14 +79,15 @@ def plot(report, path):
     labels = [c["label"] for c in report["configurations"]]
     figure, axes = plt.subplots(2, 3, figsize=(15, 8))
     for axis, (title, getter) in zip(axes.flat, PANELS):
-        for source in SOURCES:
+        for index, source in enumerate(SOURCES):
             values = series(report, source, getter)
-            if any(v is not None for v in values):
+            if any(v is not None for v in values):  # one colour per source in every panel
                 axis.plot(range(len(labels)), [float("nan") if v is None else v for v in values], marker="o",
-                          label=source)
+                          color="C%d" % index, label=source)
         axis.set_title(title, fontsize=10)
         axis.set_xticks(range(len(labels)))
         axis.set_xticklabels(labels, rotation=15, fontsize=8)
+        axis.set_xlim(-0.3, len(labels) - 0.7)
         axis.grid(alpha=0.3)
     axes.flat[0].legend(fontsize=8)
     figure.suptitle("%s%s" % (report["bag"], "" if report["truth"] else " (no truth in the bag)"), fontsize=10)
