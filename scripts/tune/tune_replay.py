@@ -28,6 +28,8 @@ import sys
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+import rosbag  # noqa: E402
+
 import launch_runner  # noqa: E402
 import tune_analysis  # noqa: E402
 import tune_report  # noqa: E402
@@ -129,6 +131,25 @@ def prepare(configuration, folder):
     return old_values
 
 
+def check_bag(path):
+    """Refuses, before any replay, a file that is not a bag or a bag without the cameras' images (e.g. a
+    replay's own output, or a sim.launch bag:= recording, which holds no images)."""
+    if not path.is_file():
+        raise UsageError("no bag %s" % path)
+    try:
+        with rosbag.Bag(str(path)) as bag:
+            topics = {tune_analysis.name_of(t) for t in bag.get_type_and_topic_info().topics}
+    except (rosbag.ROSBagException, OSError) as err:
+        raise UsageError("%s is not a readable bag (%s)" % (path, err))
+    missing = [camera for camera in ("stereo/left", "stereo/right", "ir")
+               if not {camera + "/image_raw", camera + "/image_raw/compressed"} & topics
+               or camera + "/camera_info" not in topics]
+    if missing:
+        raise UsageError("%s has no images and camera_info of %s (its topics: %s); record with "
+                         "launch/record.launch or scripts/tune/record_sim_bag.py"
+                         % (path, ", ".join(missing), ", ".join(sorted(topics))))
+
+
 def replay(bag, config_dir, out_bag, log_path, timeout_s):
     """One lossless replay; raises UsageError with the nodes' own words when they refuse the
     configuration, RuntimeError when the replay fails otherwise."""
@@ -142,6 +163,8 @@ def replay(bag, config_dir, out_bag, log_path, timeout_s):
     if not result.player_summary or not out_bag.is_file():
         raise RuntimeError("the replay ended without its summary or its output bag (exit %s, log %s)"
                            % (result.exit_code, log_path))
+    if result.frames_played == 0:
+        raise RuntimeError("the player published no complete camera frame (log %s)" % log_path)
     return result
 
 
@@ -163,8 +186,7 @@ def main(argv=None):
     out = pathlib.Path(args.out or ROOT / "results" / "tune" / datetime.datetime.now().strftime("%Y%m%d-%H%M%S"))
     try:
         bag = pathlib.Path(args.bag).resolve()
-        if not bag.is_file():
-            raise UsageError("no bag %s" % args.bag)
+        check_bag(bag)
         configurations = configurations_from(args)
         out.mkdir(parents=True, exist_ok=True)
         old_values = []

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Issue 13: the tuning tool's analysis and its YAML edit (scripts/tune), without a replay (seconds).
+"""Issue 13: the tuning tool's analysis, YAML edit and launch-output reading (scripts/tune), without a
+replay (seconds).
 
 The test writes, with the rosbag API, an input bag (camera frames, the simulator's truth, the static
 camera frames) and two output bags (configurations A and B) whose estimates are the truth plus known
@@ -7,7 +8,8 @@ offsets, and checks that tune_analysis finds exactly those: detection rates, err
 (including the fused estimates at stamps where only the IR camera has a truth, which must be carried
 into the stereo frame through /tf_static), per-stamp differences and validity flips between A and B,
 and the CPU statistics. Then the YAML line edit: one line changed, every comment kept at its column,
-nested keys by dots, and an unknown key or a mapping refused with the file left as it was.
+nested keys by dots, and an unknown key or a mapping refused with the file left as it was. Last, the
+replay runner's reading of roslaunch's output: a node's refusal found and quoted, the normal end not.
 """
 import math
 import os
@@ -29,6 +31,7 @@ from tf2_msgs.msg import TFMessage
 
 PKG = "docking_perception"
 sys.path.insert(0, os.path.join(rospkg.RosPack().get_path(PKG), "..", "..", "scripts", "tune"))
+import launch_runner  # noqa: E402
 import tune_analysis  # noqa: E402
 import tune_replay  # noqa: E402
 import tune_report  # noqa: E402
@@ -292,10 +295,44 @@ class YamlLineEdit(unittest.TestCase):
             tune_replay.split_list("1,,2")
 
 
+class LaunchOutput(unittest.TestCase):
+    """The replay runner reads roslaunch's output: a refused configuration must stop the replay with
+    the node's words, and the normal end (the player, required, exits) must not."""
+    REFUSED = [
+        "\x1b[31m[FATAL] [1796205318.754374201]: disparity_detector: parameter /disparity_detector/median_kernel_px "
+        "must be 0, 1 (off), 3 or 5 (got 4)\x1b[0m",
+        "\x1b[31m[disparity_detector-15] process has died [pid 7974, exit code 255, cmd /usr/lib/nodelet/nodelet "
+        "load docking_perception/DisparityDetectorNodelet perception_manager].\x1b[0m",
+        "\x1b[31m[FATAL] [1796205320.136185174, 1.93]: disparity_detector: parameter /disparity_detector/"
+        "median_kernel_px must be 0, 1 (off), 3 or 5 (got 4)\x1b[0m",
+        "\x1b[31m[disparity_detector-15] process has died [pid 8151, exit code 255, cmd /usr/lib/nodelet/nodelet].",
+    ]
+    NORMAL_END = [
+        "[INFO] [1796205277.315441, 9.880000]: replay_paced: 240 frames played, 0 skipped (incomplete), "
+        "360 estimates waited for, 2 lost (timeout), wall 11.7 s",
+        "\x1b[31m[ERROR] [1796205265.66, 1.895]: arbiter: no estimator has published yet (perception stalled or gone)",
+        "\x1b[31m================================================================================"
+        "REQUIRED process [play-21] has died!",
+    ]
+
+    def test_refusal_reported_once_in_the_nodes_words(self):
+        self.assertEqual(launch_runner.failure_context(self.REFUSED), [
+            "[FATAL] disparity_detector: parameter /disparity_detector/median_kernel_px must be 0, 1 (off), 3 or 5 (got 4)",
+            "[disparity_detector-15] process has died [exit code 255"])
+
+    def test_normal_end_is_no_failure(self):
+        clean = [launch_runner.ANSI_ESCAPE.sub("", line) for line in self.NORMAL_END]
+        self.assertFalse(any(launch_runner.FAILURE.search(line) for line in clean))
+        self.assertTrue(all(launch_runner.FAILURE.search(launch_runner.ANSI_ESCAPE.sub("", line))
+                            for line in self.REFUSED))
+        match = launch_runner.PLAYER_SUMMARY.search(clean[0])
+        self.assertEqual((match.group(1), match.group(3)), ("240", "2"))
+
+
 def all_tests():
     """Both cases in one rostest result (rostest.rosrun runs one case class, or a named suite)."""
     loader = unittest.TestLoader()
-    return unittest.TestSuite([loader.loadTestsFromTestCase(TuneAnalysis), loader.loadTestsFromTestCase(YamlLineEdit)])
+    return unittest.TestSuite([loader.loadTestsFromTestCase(case) for case in (TuneAnalysis, YamlLineEdit, LaunchOutput)])
 
 
 if __name__ == "__main__":
