@@ -53,7 +53,8 @@ def record(scenario, duration_s, rate_hz, real_time_factor, out_path):
             rc = subprocess.call(["roslaunch", str(ROOT / "launch" / "record.launch"),
                                   "path:=" + os.path.join(work, "rec"), "duration:=%gs" % duration_s,
                                   "extra_topics:=" + TRUTH_TOPICS],
-                                 env=env, stdout=log, stderr=subprocess.STDOUT, timeout=60 + 20 * duration_s / real_time_factor)
+                                 env=env, stdout=log, stderr=subprocess.STDOUT,
+                                 timeout=60 + 20 * duration_s / real_time_factor)
     finally:
         os.killpg(sim.pid, 2)
         sim.wait(timeout=60)

@@ -240,7 +240,8 @@ def source_metrics(source, estimates, camera_frames, truth, static_frames):
         metrics["orientation_error_deg"] = statistics_of(orientation)
         metrics["valid_without_truth"] = unmatched
     if source in CPU_SOURCES:
-        metrics["cpu_ms"] = statistics_of([e.processing_time_ms for s, e in estimates.items() if s in set(frames)])
+        frame_set = set(frames)
+        metrics["cpu_ms"] = statistics_of([e.processing_time_ms for s, e in estimates.items() if s in frame_set])
     return metrics
 
 
