@@ -19,7 +19,7 @@ import tempfile
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from launch_runner import free_port  # noqa: E402
+import launch_runner  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 TRUTH_TOPICS = "/sim/truth/stereo_left /sim/truth/ir /sim/truth/chaser"
@@ -37,10 +37,11 @@ def wait_for_cameras(env, timeout_s):
         time.sleep(1.0)
 
 
-def record(scenario, duration_s, rate_hz, real_time_factor, out_path):
-    """Runs the simulator and record.launch; returns the recorded bag moved to out_path."""
+def record(scenario, duration_s, rate_hz, real_time_factor, out_path, images=None):
+    """Runs the simulator and record.launch; returns the recorded bag moved to out_path. images: passed
+    to record.launch as images:= when given (raw, compressed, both), else its default."""
     work = tempfile.mkdtemp(prefix="record_sim_bag_")
-    port = free_port()
+    port = launch_runner.free_port()
     env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port)
     sim_log = open(os.path.join(work, "sim.log"), "w")
     sim = subprocess.Popen(
@@ -50,14 +51,16 @@ def record(scenario, duration_s, rate_hz, real_time_factor, out_path):
     try:
         wait_for_cameras(env, 240.0)
         with open(os.path.join(work, "record.log"), "w") as log:
-            rc = subprocess.call(["roslaunch", str(ROOT / "launch" / "record.launch"),
-                                  "path:=" + os.path.join(work, "rec"), "duration:=%gs" % duration_s,
-                                  "extra_topics:=" + TRUTH_TOPICS],
-                                 env=env, stdout=log, stderr=subprocess.STDOUT,
-                                 timeout=60 + 20 * duration_s / real_time_factor)
+            recorder = subprocess.Popen(["roslaunch", str(ROOT / "launch" / "record.launch"),
+                                         "path:=" + os.path.join(work, "rec"), "duration:=%gs" % duration_s,
+                                         "extra_topics:=" + TRUTH_TOPICS] + (["images:=" + images] if images else []),
+                                        env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+            try:
+                rc = recorder.wait(timeout=60 + 20 * duration_s / real_time_factor)
+            finally:
+                launch_runner.stop(recorder)  # on a timeout: the launch and its rosbag record, not only roslaunch
     finally:
-        os.killpg(sim.pid, 2)
-        sim.wait(timeout=60)
+        launch_runner.stop(sim)
         sim_log.close()
     bags = glob.glob(os.path.join(work, "rec_*.bag"))
     if rc != 0 or len(bags) != 1:
@@ -75,12 +78,14 @@ def main():
     parser.add_argument("--rate", type=float, default=15.0, help="camera rate, Hz (the robot's)")
     parser.add_argument("--real-time-factor", type=float, default=0.3,
                         help="sim seconds per wall second: low enough that the recorder keeps every image")
+    parser.add_argument("--images", choices=("raw", "compressed", "both"),
+                        help="record.launch images:= (a record.launch that has it); default: record.launch's")
     parser.add_argument("--out", required=True, help="the bag to write (keep it out of the repository)")
     args = parser.parse_args()
     if not (ROOT / "config" / "scenarios" / (args.scenario + ".yaml")).exists():
         parser.error("no scenario %s in %s" % (args.scenario, ROOT / "config" / "scenarios"))
     try:
-        path = record(args.scenario, args.duration, args.rate, args.real_time_factor, args.out)
+        path = record(args.scenario, args.duration, args.rate, args.real_time_factor, args.out, args.images)
     except (RuntimeError, subprocess.TimeoutExpired) as err:
         sys.exit("record_sim_bag: %s" % err)
     print("record_sim_bag: wrote %s (%.1f MB)" % (path, os.path.getsize(path) / 1e6))
