@@ -98,7 +98,8 @@ def live_values(node, timeout_s):
         client = Client(node, timeout=timeout_s)
     except rospy.ROSException:
         raise SaveError(f"{node}: not running, or without a dynamic_reconfigure server (no service "
-                        f"{node}/set_parameters within {timeout_s:g} s; `rosnode list` shows the running nodes)") from None
+                        f"{node}/set_parameters within {timeout_s:g} s; `rosnode list` shows the running "
+                        f"nodes)") from None
     try:
         config = client.get_configuration(timeout=timeout_s)
     finally:
