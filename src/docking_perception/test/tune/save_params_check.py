@@ -11,6 +11,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 import rosparam
@@ -47,13 +48,35 @@ class SaveParams(unittest.TestCase):
         for params, namespace in rosparam.load_file(str(cls.yaml), default_namespace=NODE):
             rosparam.upload_params(namespace, params)
         cls.node = subprocess.Popen(["rosrun", PKG, "arbiter", "__name:=arbiter"], start_new_session=True)
-        cls.client = Client(NODE, timeout=60)
+        cls.client = None
+        try:
+            cls.client = cls.wait_for_server(60.0)
+        except BaseException:
+            cls.tearDownClass()  # unittest does not when setUpClass fails
+            raise
+
+    @classmethod
+    def wait_for_server(cls, timeout_s):
+        """The arbiter's dynamic_reconfigure client, once its server is up; an arbiter that exits (not
+        built, a YAML key refused) fails the test at once, with its exit code."""
+        deadline = time.time() + timeout_s
+        while True:
+            if cls.node.poll() is not None:
+                raise RuntimeError("the arbiter exited (code %d) before its dynamic_reconfigure server came up"
+                                   % cls.node.returncode)
+            try:
+                return Client(NODE, timeout=1.0)
+            except rospy.ROSException:
+                if time.time() > deadline:
+                    raise
 
     @classmethod
     def tearDownClass(cls):
-        cls.client.close()
-        os.killpg(cls.node.pid, signal.SIGINT)
-        cls.node.wait(timeout=30)
+        if cls.client:
+            cls.client.close()
+        if cls.node.poll() is None:
+            os.killpg(cls.node.pid, signal.SIGINT)
+            cls.node.wait(timeout=30)
         shutil.rmtree(cls.dir, ignore_errors=True)
 
     def test_1_unchanged_node_writes_nothing(self):
