@@ -1,13 +1,22 @@
 #!/usr/bin/env python3
-"""Analysis of one closed-loop simulator run from its bag (launch/sim.launch bag:=...): the outcome
-measured against the simulator's TRUTH, the planner's state timeline, the arbiter's source timeline,
-the perception error per source (scripts/eval/eval_recorder.py's pairing of estimates with truth at
-their stamps, reused), and PNG plots. Used by scripts/demo/run_demo.py and scripts/demo/run_campaign.py;
+"""Analysis of one docking run from its bag: the outcome measured against the simulator's TRUTH, the
+planner's state timeline, the arbiter's source timeline, the perception error per source
+(scripts/eval/eval_recorder.py's pairing of estimates with truth at their stamps, reused), and PNG plots.
+Used by scripts/demo/run_demo.py and scripts/demo/run_campaign.py;
 standalone:  analyze_run.py RUN.bag OUT_DIR [--probe-x 0.18]
+
+Bags it reads:
+  - launch/sim.launch bag:=FILE (the simulator): everything above.
+  - launch/record.launch (the robot; images, tf, odometry, estimates, docking/state): no truth unless
+    extra_topics added it, so no docking or perception errors: the states, the sources in use and each
+    estimator's detection rate, and a list of what the bag lacks. trajectory.png needs the truth.
+  - older bags whose topics have no leading slash (`docking/state`): names are read either way.
+Images in a bag are not read (only the topics below), so a robot bag is read in seconds.
 """
 import argparse
 import bisect
 import json
+import logging
 import math
 import pathlib
 import sys
@@ -16,6 +25,18 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts" / "eval"))
 from eval_recorder import EvalRecorder, SOURCES, TRUTH_TOPICS  # noqa: E402  (reused, not copied)
 
+# What each topic gives the analysis (absolute names; a bag may hold them without the leading slash).
+TOPIC_CONTENTS = {
+    "/tf": "truth poses of both robots (world -> chaser_truth / target_truth) and world -> odom",
+    "/docking/state": "the planner's state, range and source in use",
+    "/target/arbiter_status": "the arbiter's status text",
+    "/docking/path": "the planned paths",
+    "/docking/dock/goal": "the docking goal's time (times count from it)",
+    "/cmd_vel": "velocity commands",
+    **{topic: f"truth at the image stamps ({frame})" for frame, topic in TRUTH_TOPICS.items()},
+    **{topic: f"{name} estimates" for name, topic in SOURCES.items()},
+}
+READ_TOPICS = set(TOPIC_CONTENTS) | {"/tf_static"}
 STATE_NAMES = ["SEARCH", "APPROACH", "ALIGN", "FINAL", "DOCKED", "HOLD", "ABORT", "IDLE"]
 SOURCE_NAMES = ["disparity", "mono_visible", "mono_ir", "fused"]
 DOCKED = 4
@@ -80,16 +101,27 @@ def segments(samples):
     return out
 
 
+def canonical_topic(name):
+    """Older recorders stored relative names (`docking/state`); both forms mean the same topic here."""
+    return "/" + name.lstrip("/")
+
+
 def read_bag(bag_path):
     import rosbag
     data = {"chaser": Series(), "port": Series(), "states": [], "arbiter": [], "paths": [],
             "truth": {frame: {} for frame in TRUTH_TOPICS}, "estimates": {n: [] for n in SOURCES},
-            "world_to_odom": None, "cmd_vel": [], "goal_times": []}
+            "world_to_odom": None, "cmd_vel": [], "goal_times": [], "topics": set(), "span": None}
     truth_topic_frame = {topic: frame for frame, topic in TRUTH_TOPICS.items()}
     source_topic = {topic: name for name, topic in SOURCES.items()}
     last_clock = None
     with rosbag.Bag(str(bag_path)) as bag:
-        for topic, msg, t in bag.read_messages():
+        stored = [t for t in bag.get_type_and_topic_info().topics if canonical_topic(t) in READ_TOPICS]
+        data["topics"] = {canonical_topic(t) for t in stored}
+        if bag.get_message_count():
+            data["span"] = (bag.get_start_time(), bag.get_end_time())
+        # Only these topics (an empty list would read every topic, images included).
+        for stored_topic, msg, t in (bag.read_messages(topics=stored) if stored else ()):
+            topic = canonical_topic(stored_topic)
             last_clock = t.to_sec()
             if topic in ("/tf", "/tf_static"):
                 for tr in msg.transforms:
@@ -123,27 +155,66 @@ def read_bag(bag_path):
 
 
 def perception_errors(data):
-    """Per source, eval_recorder's figures (estimates paired with truth at their image stamps)."""
+    """Per source, eval_recorder's figures (estimates paired with truth at their image stamps). A bag
+    with no truth at all (a robot's) leaves detection rates and timings only; eval_recorder's warning
+    per source that its estimates had no truth is then held back: the summary's missing list says it."""
     rec = EvalRecorder.__new__(EvalRecorder)  # its evaluate() only needs the truth table
     rec.truth = data["truth"]
     out, raw = {}, {}
-    for name, estimates in data["estimates"].items():
-        if estimates:
-            out[name], raw[name] = rec.evaluate(name, estimates)
+    rospy_log = logging.getLogger("rosout")  # where rospy.logwarn writes
+    level = rospy_log.level
+    if not any(data["truth"].values()):
+        rospy_log.setLevel(logging.ERROR)
+    try:
+        for name, estimates in data["estimates"].items():
+            if estimates:
+                out[name], raw[name] = rec.evaluate(name, estimates)
+    finally:
+        rospy_log.setLevel(level)
     return out, raw
 
 
-def analyze(bag_path, probe_x=None, timeout_s=None):
+def missing_from(data):
+    """What the analysis lacks in this bag, as `what (topic)`: a robot bag has no truth, an older one
+    may lack the arbiter status or the docking goal."""
+    missing = [f"{TOPIC_CONTENTS[t]} ({t})" for t in TOPIC_CONTENTS if t not in data["topics"]]
+    if "/tf" in data["topics"] and not has_truth_poses(data):
+        missing.insert(0, f"{TOPIC_CONTENTS['/tf']} (/tf holds no world -> *_truth frames)")
+    return missing
+
+
+def has_truth_poses(data):
+    return bool(data["chaser"].t and data["port"].t)
+
+
+def run_span(data):
+    """(start, end) of the run in bag time: the truth poses where the bag has them, else the planner's
+    states, else the bag itself."""
+    if has_truth_poses(data):
+        return data["chaser"].t[0], data["chaser"].t[-1]
+    if data["states"]:
+        return data["states"][0].header.stamp.to_sec(), data["states"][-1].header.stamp.to_sec()
+    return data["span"]
+
+
+def analyze(bag_path, probe_x=None, timeout_s=None, require_truth=False):
+    """The summary of one run. Without the simulator's truth (a robot bag) the docking errors are None
+    and summary["missing"] says so; require_truth (a simulator run judged on it) makes that an error."""
     probe_x = probe_x_from_robot_yaml() if probe_x is None else probe_x
     data = read_bag(bag_path)
     states = data["states"]
-    if not data["chaser"].t or not data["port"].t:
+    truth = has_truth_poses(data)
+    if require_truth and not truth:
         raise RuntimeError(f"{bag_path}: no truth poses (world -> chaser_truth / target_truth) in the bag")
+    if not data["topics"] or data["span"] is None:
+        raise RuntimeError(f"{bag_path}: none of the topics this analysis reads: {', '.join(sorted(TOPIC_CONTENTS))}")
+    start, end = run_span(data)
     # Time counts from the docking goal (the planner is IDLE before it), or from the start of the run.
-    t0 = data["goal_times"][0] if data["goal_times"] else data["chaser"].t[0]
+    t0 = data["goal_times"][0] if data["goal_times"] else start
     docked_msg = next((s for s in states if s.state == DOCKED), None)
-    t_end = docked_msg.header.stamp.to_sec() if docked_msg else data["chaser"].t[-1]
-    pos_err, yaw_err = docking_errors(data["chaser"].at(t_end), data["port"].at(t_end), probe_x)
+    t_end = docked_msg.header.stamp.to_sec() if docked_msg else end
+    pos_err, yaw_err = (docking_errors(data["chaser"].at(t_end), data["port"].at(t_end), probe_x) if truth
+                        else (None, None))
 
     state_tl = segments([(s.header.stamp.to_sec() - t0, s.state_name) for s in states])
     # Each state segment with the reason given when it opened.
@@ -173,7 +244,10 @@ def analyze(bag_path, probe_x=None, timeout_s=None):
         "final_position_error_m": pos_err,
         "final_yaw_error_deg": yaw_err,
         "errors_at": "DOCKED" if docked_msg else "end of run",
-        "sim_duration_s": data["chaser"].t[-1] - t0,
+        "sim_duration_s": end - t0,
+        "t0_s": t0,
+        "truth": truth,
+        "missing": missing_from(data),
         "last_state": last.state_name if last else None,
         "last_reason": last.reason if last else "the planner never published docking/state",
         "states_visited": visited,
@@ -194,16 +268,22 @@ def analyze(bag_path, probe_x=None, timeout_s=None):
 
 
 def plot(summary, data, raw, out_dir):
+    """trajectory.png (needs the truth) and timeline.png (its truth panels only where the bag has it)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     out_dir = pathlib.Path(out_dir)
+    if summary["truth"]:
+        plot_trajectory(plt, summary, data, out_dir)
+    plot_timeline(plt, summary, data, raw, out_dir)
+
+
+def plot_trajectory(plt, summary, data, out_dir):
+    """Top-down: truth of both robots, safe circle around the port, planned paths (odom -> world)."""
     ch, po = data["chaser"], data["port"]
     t0 = ch.t[0]
     probe_x = summary["probe_x_m"]
-
-    # Top-down: truth of both robots, safe circle around the port, planned paths (odom -> world).
     fig, ax = plt.subplots(figsize=(7, 7))
     ax.plot(ch.x, ch.y, "b-", label="chaser base_link (truth)")
     tips = [(x + probe_x * math.cos(a), y + probe_x * math.sin(a)) for x, y, a in zip(ch.x, ch.y, ch.yaw)]
@@ -217,7 +297,7 @@ def plot(summary, data, raw, out_dir):
     for i in range(0, len(ch.t), step):
         ax.arrow(ch.x[i], ch.y[i], 0.12 * math.cos(ch.yaw[i]), 0.12 * math.sin(ch.yaw[i]), color="b",
                  width=0.003, alpha=0.5)
-    t_end = (summary["time_to_dock_s"] + t0) if summary["docked"] else ch.t[-1]
+    t_end = (summary["time_to_dock_s"] + summary["t0_s"]) if summary["docked"] else ch.t[-1]
     pe = po.at(t_end)
     ax.add_patch(plt.Circle((pe[1], pe[2]), 0.6, fill=False, ls="--", color="k", label="safe circle (0.6 m), final"))
     pstart = po.at(t0)
@@ -245,46 +325,63 @@ def plot(summary, data, raw, out_dir):
     fig.savefig(out_dir / "trajectory.png", dpi=100)
     plt.close(fig)
 
-    # Against time: range, errors (truth), planner state, source in use, perception error.
-    ts = [t - t0 for t in ch.t]
-    rng, perr, yerr = [], [], []
-    for t in ch.t:
-        p = po.at(t)
-        c = ch.at(t)
-        e, y = docking_errors(c, p, probe_x)
-        rng.append(math.hypot(c[1] - p[1], c[2] - p[2]))
-        perr.append(e)
-        yerr.append(y)
-    fig, axes = plt.subplots(5, 1, figsize=(10, 11), sharex=True)
-    axes[0].plot(ts, rng, label="base_link to port (truth)")
-    axes[0].plot(ts, perr, label="probe tip to port (truth)")
+
+def plot_timeline(plt, summary, data, raw, out_dir):
+    """Against time: range, errors (truth), planner state, source in use, and the estimates' errors
+    against the truth at their stamps or, where the bag has none, the estimated ranges."""
+    ch, po = data["chaser"], data["port"]
+    truth = summary["truth"]
+    t0 = ch.t[0] if truth else summary["t0_s"]
+    probe_x = summary["probe_x_m"]
+    panels = ["range"] + (["errors"] if truth else []) + ["state", "source", "estimates"]
+    fig, axes = plt.subplots(len(panels), 1, figsize=(10, 2.2 * len(panels)), sharex=True)
+    ax = dict(zip(panels, axes))
     st = data["states"]
-    axes[0].plot([s.header.stamp.to_sec() - t0 for s in st], [s.range_m for s in st], ".", ms=1,
-                 label="planner's range (estimated)")
-    axes[0].axhline(0.6, ls="--", color="k", lw=0.7)
-    axes[0].set_ylabel("range [m]")
-    axes[0].legend(fontsize=7)
-    axes[1].semilogy(ts, [max(e, 1e-4) * 100 for e in perr], label="tip position error (truth) [cm]")
-    axes[1].semilogy(ts, [max(y, 1e-3) for y in yerr], label="yaw error (truth) [deg]")
-    axes[1].axhline(1.0, ls="--", color="k", lw=0.7)
-    axes[1].set_ylabel("error")
-    axes[1].legend(fontsize=7)
-    axes[2].step([s.header.stamp.to_sec() - t0 for s in st], [s.state for s in st], where="post")
-    axes[2].set_yticks(range(len(STATE_NAMES)))
-    axes[2].set_yticklabels(STATE_NAMES, fontsize=7)
-    axes[2].set_ylabel("planner state")
-    axes[3].plot([s.header.stamp.to_sec() - t0 for s in st],
-                 [s.estimate_source if s.target_visible else -1 for s in st], ".", ms=2)
-    axes[3].set_yticks([-1, 0, 1, 2])
-    axes[3].set_yticklabels(["none", "disparity", "mono_visible", "mono_ir"], fontsize=7)
-    axes[3].set_ylabel("source in use")
-    for name, samples in raw.items():
-        pts = [(x["t"] - t0, 100 * x["position_error"]) for x in samples if x["position_error"] is not None]
-        if pts:
-            axes[4].semilogy([p[0] for p in pts], [max(p[1], 1e-2) for p in pts], ".", ms=2, label=name)
-    axes[4].set_ylabel("estimate error [cm]")
-    axes[4].set_xlabel("sim time [s]")
-    axes[4].legend(fontsize=7)
+    if truth:
+        ts, rng, perr, yerr = [t - t0 for t in ch.t], [], [], []
+        for t in ch.t:
+            p = po.at(t)
+            c = ch.at(t)
+            e, y = docking_errors(c, p, probe_x)
+            rng.append(math.hypot(c[1] - p[1], c[2] - p[2]))
+            perr.append(e)
+            yerr.append(y)
+        ax["range"].plot(ts, rng, label="base_link to port (truth)")
+        ax["range"].plot(ts, perr, label="probe tip to port (truth)")
+        ax["errors"].semilogy(ts, [max(e, 1e-4) * 100 for e in perr], label="tip position error (truth) [cm]")
+        ax["errors"].semilogy(ts, [max(y, 1e-3) for y in yerr], label="yaw error (truth) [deg]")
+        ax["errors"].axhline(1.0, ls="--", color="k", lw=0.7)
+        ax["errors"].set_ylabel("error")
+        ax["errors"].legend(fontsize=7)
+    ax["range"].plot([s.header.stamp.to_sec() - t0 for s in st], [s.range_m for s in st], ".", ms=1,
+                     label="planner's range (estimated)")
+    ax["range"].axhline(0.6, ls="--", color="k", lw=0.7)
+    ax["range"].set_ylabel("range [m]")
+    ax["range"].legend(fontsize=7)
+    ax["state"].step([s.header.stamp.to_sec() - t0 for s in st], [s.state for s in st], where="post")
+    ax["state"].set_yticks(range(len(STATE_NAMES)))
+    ax["state"].set_yticklabels(STATE_NAMES, fontsize=7)
+    ax["state"].set_ylabel("planner state")
+    ax["source"].plot([s.header.stamp.to_sec() - t0 for s in st],
+                      [s.estimate_source if s.target_visible else -1 for s in st], ".", ms=2)
+    ax["source"].set_yticks([-1, 0, 1, 2])
+    ax["source"].set_yticklabels(["none", "disparity", "mono_visible", "mono_ir"], fontsize=7)
+    ax["source"].set_ylabel("source in use")
+    errors = {name: [(x["t"] - t0, 100 * x["position_error"]) for x in samples if x["position_error"] is not None]
+              for name, samples in raw.items()}
+    if any(errors.values()):
+        for name, pts in errors.items():
+            if pts:
+                ax["estimates"].semilogy([p[0] for p in pts], [max(p[1], 1e-2) for p in pts], ".", ms=2, label=name)
+        ax["estimates"].set_ylabel("estimate error [cm]")
+    else:
+        for name, estimates in data["estimates"].items():
+            pts = [(e.header.stamp.to_sec() - t0, e.range_m) for e in estimates if e.valid]
+            if pts:
+                ax["estimates"].plot([p[0] for p in pts], [p[1] for p in pts], ".", ms=2, label=name)
+        ax["estimates"].set_ylabel("estimated range [m]")
+    ax["estimates"].set_xlabel("sim time [s]" if truth else "time [s]")
+    ax["estimates"].legend(fontsize=7)
     for a in axes:
         a.grid(True, alpha=0.3)
     fig.tight_layout()
@@ -294,25 +391,37 @@ def plot(summary, data, raw, out_dir):
 
 def print_summary(s, out=sys.stdout):
     w = out.write
+    clock = "sim" if s["truth"] else "bag time"
     if s["docked"]:
-        w("DOCKED in %.1f s (sim)%s\n" % (s["time_to_dock_s"], ", finished on odometry" if s["docked_on_odometry"] else ""))
+        w("DOCKED in %.1f s (%s)%s\n" % (s["time_to_dock_s"], clock,
+                                        ", finished on odometry" if s["docked_on_odometry"] else ""))
     else:
-        w("NOT DOCKED after %.1f s (sim): last state %s: %s\n" % (s["sim_duration_s"], s["last_state"], s["last_reason"]))
-    w("  final error (truth, %s): probe tip %.1f mm, yaw %.2f deg  (goal: 10 mm, 1 deg)\n"
-      % (s["errors_at"], 1000 * s["final_position_error_m"], s["final_yaw_error_deg"]))
+        w("NOT DOCKED after %.1f s (%s): last state %s: %s\n" % (s["sim_duration_s"], clock, s["last_state"],
+                                                               s["last_reason"]))
+    if s["truth"]:
+        w("  final error (truth, %s): probe tip %.1f mm, yaw %.2f deg  (goal: 10 mm, 1 deg)\n"
+          % (s["errors_at"], 1000 * s["final_position_error_m"], s["final_yaw_error_deg"]))
+    else:
+        w("  final error: not measured, the bag holds no truth (a robot bag; the simulator's bag:= has it)\n")
     w("  states: %s\n" % " -> ".join(s["states_visited"]))
     for seg in s["state_timeline"]:
         w("    %6.1f-%6.1f s  %-8s %s\n" % (seg["start_s"], seg["end_s"], seg["value"], seg["reason"][:90]))
     w("  source in use (planner's view):\n")
     for seg in s["source_timeline"]:
         w("    %6.1f-%6.1f s  %s\n" % (seg["start_s"], seg["end_s"], seg["value"]))
-    w("  perception against truth at the image stamps:\n")
+    w("  perception against truth at the image stamps:\n" if any(
+        v["position_error_median_m"] is not None for v in s["perception"].values()) else
+      "  perception (no truth at the image stamps: detection rates only):\n")
     for name, v in s["perception"].items():
         def f(x, scale=1.0, fmt="%.1f"):
             return "-" if x is None else fmt % (x * scale)
         w("    %-13s %5d frames, detection %.2f, position median %s cm / p95 %s cm, orientation median %s deg\n"
           % (name, v["frames"], v["detection_rate"], f(v["position_error_median_m"], 100),
              f(v["position_error_p95_m"], 100), f(v["orientation_error_median_deg"])))
+    if s["missing"]:
+        w("  not in this bag:\n")
+        for what in s["missing"]:
+            w("    %s\n" % what)
 
 
 def main():
@@ -321,7 +430,10 @@ def main():
     ap.add_argument("out_dir")
     ap.add_argument("--probe-x", type=float, default=None)
     a = ap.parse_args()
-    s, data, raw = analyze(a.bag, a.probe_x)
+    try:
+        s, data, raw = analyze(a.bag, a.probe_x)
+    except RuntimeError as e:
+        sys.exit(f"analyze_run: {e}")
     pathlib.Path(a.out_dir).mkdir(parents=True, exist_ok=True)
     plot(s, data, raw, a.out_dir)
     with open(pathlib.Path(a.out_dir) / "summary.json", "w") as f:

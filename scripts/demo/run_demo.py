@@ -85,7 +85,7 @@ def run(args):
         print(f"demo: no bag was written ({bag}); see {log_path}", file=sys.stderr)
         return 1
     import analyze_run
-    summary, data, raw = analyze_run.analyze(bag, timeout_s=args.timeout)
+    summary, data, raw = analyze_run.analyze(bag, timeout_s=args.timeout, require_truth=True)  # judged on it
     summary.update({"scenario": args.scenario_file or args.scenario, "real_time_factor": args.real_time_factor,
                     "timeout_s": args.timeout, "run_failure": failure,
                     "bag_size_mb": bag.stat().st_size / 1e6, "wall_time_s": outcome.get("wall_s"),
