@@ -53,15 +53,17 @@ eval: build
 # Replays BAG losslessly with two configurations or a sweep and compares them per source (docs/TUNING.md):
 #   make tune BAG=/tmp/b.bag SET="disparity_detector.yaml:median_kernel_px=5"     (A = config/, B = A + SET)
 #   make tune BAG=/tmp/b.bag SWEEP="mono_pose_visible.yaml:fast_threshold=5,10,20" [SET=...] [OUT=dir]
+#   make tune BAG=/tmp/both.bag IMAGES=raw,compressed     (what JPEG recording costs: a bag of record.launch images:=both)
 # SET: edits separated by spaces (no spaces inside a value: [1,2]). Output: OUT (default results/tune/<date-time>/).
 BAG ?=
 SET ?=
 SWEEP ?=
+IMAGES ?=
 OUT ?=
 tune: build
 	@test -n "$(BAG)" || { echo "make tune: BAG=file.bag is required (docs/TUNING.md)"; exit 2; }
 	@$(SETUP) && scripts/tune/tune_replay.py --bag "$(BAG)" $(foreach edit,$(SET),--set "$(edit)") \
-		$(if $(SWEEP),--sweep "$(SWEEP)") $(if $(OUT),--out "$(OUT)")
+		$(if $(SWEEP),--sweep "$(SWEEP)") $(if $(IMAGES),--images "$(IMAGES)") $(if $(OUT),--out "$(OUT)")
 
 # Seeded fuzz of omni_base's serial stream decoder (src/omni_base/README.md, "Serial fuzz harness"):
 # 1 M random streams checked for its invariants, 2 M corrupted zero-duty frames that must never decode

@@ -3,10 +3,12 @@
 
     record_sim_bag.py --scenario translating_2m --duration 8 --out /tmp/tune/translating_2m.bag
 
-The simulator (no perception: the bag is to be replayed through perception) runs on a master of its own;
-once its cameras publish, launch/record.launch records `duration` seconds of sim time, with the
-simulator's truth (/sim/truth/stereo_left, /sim/truth/ir) added, and the bag is moved to --out.
-The same steps as the replay_lossless rostest, as one command. About 30 MB per second of sim time.
+The simulator (no perception: the bag is to be replayed through perception; --dock: the closed loop
+docking from the start) runs on a master of its own; once its cameras publish, launch/record.launch
+records `duration` seconds of sim time, with the simulator's truth (/sim/truth/stereo_left, /sim/truth/ir,
+/sim/truth/chaser) added, and the bag is moved to --out. The same steps as the replay_lossless rostest, as
+one command. About 7 MB per second of sim time with 15 Hz cameras and JPEG images (record.launch's
+default), 31 MB raw (--images raw).
 """
 import argparse
 import glob
@@ -37,17 +39,18 @@ def wait_for_cameras(env, timeout_s):
         time.sleep(1.0)
 
 
-def record(scenario, duration_s, rate_hz, real_time_factor, out_path, images=None):
+def record(scenario, duration_s, rate_hz, real_time_factor, out_path, images=None, dock=False):
     """Runs the simulator and record.launch; returns the recorded bag moved to out_path. images: passed
-    to record.launch as images:= when given (raw, compressed, both), else its default."""
+    to record.launch as images:= when given (raw, compressed, both), else its default. dock: the closed
+    loop (perception, planner) with a docking goal from the start, instead of the cameras alone."""
     work = tempfile.mkdtemp(prefix="record_sim_bag_")
     port = launch_runner.free_port()
     env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port)
     sim_log = open(os.path.join(work, "sim.log"), "w")
     sim = subprocess.Popen(
         ["roslaunch", "-p", str(port), str(ROOT / "launch" / "sim.launch"), "scenario:=" + scenario,
-         "real_time_factor:=%g" % real_time_factor, "camera_rate_hz:=%g" % rate_hz, "perception:=false",
-         "output:=log"], env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)
+         "real_time_factor:=%g" % real_time_factor, "camera_rate_hz:=%g" % rate_hz,
+         "dock:=true" if dock else "perception:=false", "output:=log"], env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)
     try:
         wait_for_cameras(env, 240.0)
         with open(os.path.join(work, "record.log"), "w") as log:
@@ -79,13 +82,18 @@ def main():
     parser.add_argument("--real-time-factor", type=float, default=0.3,
                         help="sim seconds per wall second: low enough that the recorder keeps every image")
     parser.add_argument("--images", choices=("raw", "compressed", "both"),
-                        help="record.launch images:= (a record.launch that has it); default: record.launch's")
+                        help="record.launch images:= (default: record.launch's, compressed); raw for bit-exact frames, "
+                             "both to measure what compression costs (tune_replay.py --images raw,compressed)")
+    parser.add_argument("--dock", action="store_true",
+                        help="closed loop: perception and the planner run and dock from the start (else the "
+                             "cameras alone: the scenario's own motion)")
     parser.add_argument("--out", required=True, help="the bag to write (keep it out of the repository)")
     args = parser.parse_args()
     if not (ROOT / "config" / "scenarios" / (args.scenario + ".yaml")).exists():
         parser.error("no scenario %s in %s" % (args.scenario, ROOT / "config" / "scenarios"))
     try:
-        path = record(args.scenario, args.duration, args.rate, args.real_time_factor, args.out, args.images)
+        path = record(args.scenario, args.duration, args.rate, args.real_time_factor, args.out, args.images,
+                      args.dock)
     except (RuntimeError, subprocess.TimeoutExpired) as err:
         sys.exit("record_sim_bag: %s" % err)
     print("record_sim_bag: wrote %s (%.1f MB)" % (path, os.path.getsize(path) / 1e6))

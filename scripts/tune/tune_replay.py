@@ -5,6 +5,7 @@ docs/TUNING.md). Two configurations (A/B) or one parameter swept over a list of 
   tune_replay.py --bag B.bag --set disparity_detector.yaml:median_kernel_px=5          # A = config/, B = A + the edit
   tune_replay.py --bag B.bag --config-a DIR_A --config-b DIR_B                          # two folders
   tune_replay.py --bag B.bag --sweep mono_pose_visible.yaml:fast_threshold=5,10,20      # one run per value
+  tune_replay.py --bag BOTH.bag --images raw,compressed     # what JPEG recording costs (record.launch images:=both)
 
 Each configuration is config/ (or --config-a) copied to a temporary folder with its edits made in place
 (scripts/tune/yaml_line_edit.py: one line changed, comments kept, an unknown key refused), then replayed
@@ -54,6 +55,7 @@ class Configuration:
     label: str
     base_dir: pathlib.Path
     edits: list
+    images: str = "auto"  # replay.launch images:= (auto, raw, compressed): which frames of the bag to play
 
 
 class UsageError(Exception):
@@ -93,6 +95,16 @@ def configurations_from(args):
     """The configurations to replay, in report order (the first is the reference)."""
     base = pathlib.Path(args.config_a or ROOT / "config").resolve()
     edits = [Edit(*parse_assignment(text, "--set")) for text in args.set]
+    if args.images:
+        # The images' cost, not a parameter's: one configuration, replayed from each kind of frame of a bag
+        # recorded with record.launch images:=both.
+        if args.sweep or args.config_b:
+            raise UsageError("--images compares image sources under one configuration: not with --sweep or --config-b")
+        kinds = split_list(args.images)
+        unknown = [k for k in kinds if k not in ("raw", "compressed")]
+        if unknown or len(kinds) < 2:
+            raise UsageError("--images takes two or more of raw, compressed (got %r)" % args.images)
+        return [Configuration("images=" + kind, base, edits, kind) for kind in kinds]
     if args.sweep:
         if args.config_b:
             raise UsageError("--sweep and --config-b: choose one")
@@ -149,12 +161,13 @@ def check_bag(path):
                          % (path, ", ".join(missing), ", ".join(sorted(topics))))
 
 
-def replay(bag, config_dir, out_bag, log_path, timeout_s):
+def replay(bag, config_dir, out_bag, log_path, timeout_s, images="auto"):
     """One lossless replay; raises UsageError with the nodes' own words when they refuse the
     configuration, RuntimeError when the replay fails otherwise."""
     result = launch_runner.run_launch(
         [str(ROOT / "launch" / "replay.launch"), "bag:=%s" % bag, "config_dir:=%s" % config_dir,
-         "out:=%s" % out_bag, "lossless:=true", "dock:=false", "output:=screen"], str(log_path), timeout_s)
+         "out:=%s" % out_bag, "lossless:=true", "dock:=false", "output:=screen", "images:=%s" % images],
+        str(log_path), timeout_s)
     if result.failure_lines:
         raise UsageError("a node refused this configuration (%s):\n  %s" % (log_path, "\n  ".join(result.failure_lines)))
     if result.timed_out:
@@ -176,6 +189,9 @@ def parse_args(argv):
     parser.add_argument("--config-a", metavar="DIR", help="configuration A, the base of the edits (default: config/)")
     parser.add_argument("--config-b", metavar="DIR", help="configuration B as a whole folder")
     parser.add_argument("--out", help="output folder (default: results/tune/<date-time>/)")
+    parser.add_argument("--images", metavar="raw,compressed",
+                        help="replay one configuration from each kind of image frame of a bag recorded with "
+                             "record.launch images:=both: what the JPEG recording costs the estimates")
     parser.add_argument("--timeout", type=float, default=1800.0, help="wall seconds allowed per replay")
     return parser.parse_args(argv)
 
@@ -197,7 +213,8 @@ def main(argv=None):
         for index, configuration in enumerate(configurations):
             out_bag = out / ("replay_%d.bag" % index)
             print("tune_replay: [%d/%d] %s ..." % (index + 1, len(configurations), configuration.label), flush=True)
-            result = replay(bag, out / ("config_%d" % index), out_bag, out / ("replay_%d.log" % index), args.timeout)
+            result = replay(bag, out / ("config_%d" % index), out_bag, out / ("replay_%d.log" % index), args.timeout,
+                            configuration.images)
             print("  " + result.player_summary, flush=True)
             runs.append((out_bag, result))
     except UsageError as err:
@@ -212,7 +229,7 @@ def main(argv=None):
         "camera_frames": analysis["frames"],
         "reference": configurations[0].label,
         "configurations": [
-            {"label": c.label, "base_dir": str(c.base_dir), "edits": [str(e) for e in c.edits],
+            {"label": c.label, "base_dir": str(c.base_dir), "edits": [str(e) for e in c.edits], "images": c.images,
              "replaced_values": old, "output_bag": str(path), "player": result.player_summary,
              "frames_lost": result.frames_lost, "sources": metrics}
             for c, old, (path, result), metrics in zip(configurations, old_values, runs, analysis["configurations"])],

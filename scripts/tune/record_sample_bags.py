@@ -11,29 +11,25 @@ Both add the truth topics (/sim/truth/stereo_left, /sim/truth/ir, /sim/truth/cha
 --camera-rate-hz (5 Hz, the paper's monocular rate: 15 Hz would not fit 6 s into 20 MB). Each bag must
 stay under --max-mb (20); the script fails otherwise.
 
-  source devel/setup.bash; scripts/record_sample_bags.py [--out-dir bags] [--seconds 6]
+  source devel/setup.bash; scripts/tune/record_sample_bags.py [--out-dir bags] [--seconds 6]
 """
 import argparse
 import glob
 import math
 import os
+import pathlib
 import shutil
-import signal
-import socket
 import subprocess
 import sys
 import tempfile
 import time
 
-REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import launch_runner  # noqa: E402
+from record_sim_bag import TRUTH_TOPICS, wait_for_cameras  # noqa: E402
+
+REPO = str(pathlib.Path(__file__).resolve().parents[2])
 LAUNCH = os.path.join(REPO, "launch")
-TRUTH_TOPICS = "/sim/truth/stereo_left /sim/truth/ir /sim/truth/chaser"
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def parse_args():
@@ -104,7 +100,7 @@ def finish(recorder, name, work, out_dir, max_mb, deadline):
 def main():
     args = parse_args()
     work = tempfile.mkdtemp(prefix="sample_bags_")
-    port = free_port()
+    port = launch_runner.free_port()
     env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port)
     os.environ["ROS_MASTER_URI"] = env["ROS_MASTER_URI"]
     deadline = time.time() + args.timeout_s
@@ -115,11 +111,7 @@ def main():
                             "real_time_factor:=%g" % args.real_time_factor],
                            env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)
     try:
-        while subprocess.call(["rostopic", "echo", "-n", "1", "/stereo/left/camera_info"], env=env,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) != 0:
-            if time.time() > deadline or sim.poll() is not None:
-                sys.exit("record_sample_bags: the simulator's cameras did not start (log %s)" % sim_log.name)
-            time.sleep(1.0)
+        wait_for_cameras(env, 240.0)
         far = start_recording(env, os.path.join(work, "far_approach"), args.seconds, work, "far_approach")
         wait_until_recording(env, deadline)
         dock = subprocess.Popen(["rosrun", "docking_planner", "dock", "start"], env=env,
@@ -136,8 +128,7 @@ def main():
         print("record_sample_bags: done, %.1f MB in all (work folder %s)" % (sum(sizes), work), flush=True)
         dock.wait(timeout=max(1.0, deadline - time.time()))
     finally:
-        os.killpg(sim.pid, signal.SIGINT)
-        sim.wait(timeout=60)
+        launch_runner.stop(sim)
 
 
 if __name__ == "__main__":
