@@ -11,12 +11,13 @@ import json
 import os
 import pathlib
 import signal
-import socket
 import subprocess
 import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "scripts" / "tune"))
+from launch_runner import free_port  # noqa: E402  (one copy: masters outside the ephemeral ports)
 
 # (scenario, lighting). The far set is issue 4's; the near, rotating, dark and glare ones issue 5's.
 FAR = [(f"eval_far_{r}m_{p}", "nominal") for r in ("2", "3", "4", "6") for p in ("on", "off")]
@@ -39,11 +40,6 @@ REALISTIC = realistic_scenarios()
 SETS = {"far": FAR, "near": NEAR, "special": SPECIAL, "realistic": REALISTIC,
         "all": FAR + NEAR + SPECIAL + REALISTIC}
 
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def scenario_range(name):

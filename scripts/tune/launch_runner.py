@@ -9,6 +9,7 @@ node's own words (e.g. "parameter /disparity_detector/median_kernel_px must be 0
 """
 import dataclasses
 import os
+import random
 import re
 import signal
 import socket
@@ -36,11 +37,34 @@ class LaunchResult:
     frames_lost: int
 
 
+# Masters get ports below the kernel's ephemeral range (/proc/sys/net/ipv4/ip_local_port_range, 32768-60999
+# by default). A port the kernel picked (bind to 0) is free when checked, but it can be handed to any
+# node's XML-RPC server before roslaunch binds it; roslaunch then takes that node for a running master
+# and exits 1 (seen once in a rostest). The kernel hands out no port below its range by itself.
+MASTER_PORTS = (20000, 32767)
+_port_random = random.Random(os.urandom(8))  # not the global generator, which a test may have seeded
+
+
+def ephemeral_low():
+    try:
+        with open("/proc/sys/net/ipv4/ip_local_port_range") as stream:
+            return int(stream.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return MASTER_PORTS[1] + 1
+
+
 def free_port():
-    """A TCP port nobody listens on now (the kernel's choice), for `roslaunch -p`."""
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
+    """A TCP port nobody listens on now, outside the kernel's ephemeral range, for `roslaunch -p`."""
+    high = min(MASTER_PORTS[1], ephemeral_low() - 1)
+    for _ in range(1000):
+        port = _port_random.randint(MASTER_PORTS[0], high)
+        with socket.socket() as sock:
+            try:
+                sock.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    raise RuntimeError("no free port in %d-%d" % (MASTER_PORTS[0], high))
 
 
 def stop(proc):

@@ -18,7 +18,6 @@ import glob
 import math
 import os
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
@@ -30,14 +29,12 @@ import rospkg
 import rostest
 
 PKG = "docking_perception"
+# One free_port for every script that starts a master of its own (scripts/tune/launch_runner.py).
+sys.path.insert(0, os.path.join(rospkg.RosPack().get_path(PKG), "..", "..", "scripts", "tune"))
+from launch_runner import free_port  # noqa: E402
 ESTIMATE_TOPICS = ("/perception/disparity/estimate", "/perception/mono_visible/estimate",
                    "/perception/mono_ir/estimate", "/target/estimate")
 
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def roslaunch(args, timeout_s, log_path):

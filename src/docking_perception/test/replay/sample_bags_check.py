@@ -14,7 +14,6 @@ printed (bags/README.md quotes them).
 import math
 import os
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
@@ -26,12 +25,10 @@ import rospy
 import rostest
 
 PKG = "docking_perception"
+# One free_port for every script that starts a master of its own (scripts/tune/launch_runner.py).
+sys.path.insert(0, os.path.join(rospkg.RosPack().get_path(PKG), "..", "..", "scripts", "tune"))
+from launch_runner import free_port  # noqa: E402
 
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def quantile(values, q):
