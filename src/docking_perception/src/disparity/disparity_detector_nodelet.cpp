@@ -254,7 +254,7 @@ void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/)
     track_gate_.setParams(toTrackGateParams(config));
     config_ = config;
   } catch (const std::invalid_argument& error) {
-    // Keep running with the last good values, and show them back in rqt_reconfigure.
+    // Keep running with the last good values, and show them back to dynamic_reconfigure clients (dynparam get).
     NODELET_ERROR("disparity_detector: reconfigure rejected, keeping the previous values: %s",
                   error.what());
     config = config_;
