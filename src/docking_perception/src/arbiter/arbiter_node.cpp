@@ -337,7 +337,13 @@ class ArbiterNode {
   /// planner stops and waits instead of searching.
   void publishSilence(double now_s, bool periodic) {
     if (!was_silent_) {
-      ROS_ERROR("arbiter: %s (perception stalled or gone)", silenceText(now_s).c_str());
+      // Before the first estimate this is start-up (perception loading, a replay's clock jumping to the
+      // bag's start), not a fault: a warning. Silence after estimates have come is the fault.
+      if (silence_->heardAny()) {
+        ROS_ERROR("arbiter: %s (perception stalled or gone)", silenceText(now_s).c_str());
+      } else {
+        ROS_WARN("arbiter: %s (waiting for perception)", silenceText(now_s).c_str());
+      }
     }
     const bool changed = !was_silent_;
     was_silent_ = true;
