@@ -44,6 +44,8 @@ constexpr const char kArbiterStatus[] = "target/arbiter_status";  // std_msgs/St
 // Planner
 constexpr const char kDockingState[] = "docking/state";        // docking_msgs/DockingState
 constexpr const char kDockingPath[] = "docking/path";          // nav_msgs/Path
+constexpr const char kDockingGeometry[] = "docking/geometry";  // docking_msgs/PlannerGeometry (lazy)
+constexpr const char kDockingMarkers[] = "docking/markers";    // visualization_msgs/MarkerArray (docking_viz, lazy)
 constexpr const char kDockAction[] = "docking/dock";           // actionlib: docking_msgs/Dock (goal, cancel, feedback, result)
 
 // Simulator ground truth: nav_msgs/Odometry of the target in each camera's optical frame, at each
