@@ -483,6 +483,10 @@ TEST_F(StateMachineTest, PositionOnlyApproachesToTheSearchOrbitThenOrbitsFacingT
   EXPECT_GT(out.command.vx, 0.1);  // the chaser faces the target (yaw pi): advancing is +x in base_link
   const double far_range = std::hypot(kFar.x, kFar.y);
   EXPECT_NEAR(out.goal_distance_m, far_range - c.search_orbit_radius_m, 0.05);
+  // Reported for display: the port's axis is not known, the goal lies on the search orbit.
+  EXPECT_FALSE(out.port_orientation_known);
+  ASSERT_TRUE(out.goal);
+  EXPECT_NEAR(std::hypot(out.goal->x - port_.x, out.goal->y - port_.y), c.search_orbit_radius_m, 1e-9);
 
   // On the orbit, looking 0.3 rad to the side of the target: moves along the orbit (no radial
   // motion into it), and turns towards the target.
@@ -631,4 +635,29 @@ TEST(DockingPlannerConfig, RejectsInvalidStampLimitsWithTheirName) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("max_future_stamp_s"), std::string::npos);
   }
+}
+
+// What the planner reports for display (docking_msgs/PlannerGeometry): the held port and the goal it
+// drives to; no goal while it stands still.
+TEST_F(StateMachineTest, ReportsThePortAndTheGoalItDrivesTo) {
+  PlannerOutput out = step(kFar, false);
+  EXPECT_EQ(out.state, DockingPhase::kSearch);
+  EXPECT_FALSE(out.goal);
+  EXPECT_FALSE(out.port);
+  out = step(kFar, true);
+  ASSERT_EQ(out.state, DockingPhase::kApproach) << out.reason;
+  ASSERT_TRUE(out.port);
+  EXPECT_TRUE(out.port_orientation_known);
+  EXPECT_NEAR(out.port->pose.x, port_.x, 1e-6);
+  ASSERT_TRUE(out.goal);
+  // APPROACH aims at a point of the safe circle.
+  const double r_safe = planner_.config().law.safe_radius_m;
+  EXPECT_NEAR(std::hypot(out.goal->x - port_.x, out.goal->y - port_.y), r_safe, 1e-9);
+  out = step(kSafePoint, true);
+  out = step(kSafePoint, true);
+  ASSERT_EQ(out.state, DockingPhase::kFinal) << out.reason;
+  ASSERT_TRUE(out.goal);
+  // FINAL aims at the docked position: probe tip on the port centre.
+  EXPECT_NEAR(out.goal->x, port_.x + planner_.config().law.probe_x_m, 1e-9);
+  EXPECT_NEAR(out.goal->y, port_.y, 1e-9);
 }

@@ -137,6 +137,11 @@ struct PlannerOutput {
   ApproachGeometry geometry;           ///< errors against the (held or fresh) port pose
   double goal_distance_m{0.0};
   std::optional<PortState> port;       ///< the port pose the command was computed from
+  /// port->pose.yaw is the port axis. False: position only (stereo far away, face turned away), and the
+  /// yaw is the line of sight to the chaser that the law uses in its place.
+  bool port_orientation_known{false};
+  /// The current phase's goal (the base_link pose the law steers to), odom; absent when standing still.
+  std::optional<Pose2D> goal;
   std::vector<Pose2D> path;            ///< planned path in odom (empty without a target)
   /// Set in the one cycle in which a docking ended by itself (DOCKED, time budget, target lost); the
   /// planner is IDLE from the next cycle on. Ends asked for with cancel() are not reported here.

@@ -348,6 +348,7 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
   if (out.has_target) {
     out.geometry = law_.measure(chaser, port.pose);
     out.port = port;
+    out.port_orientation_known = orientation_known;
     last_tip_error_m_ = out.geometry.tip_error_m;
   }
   out.target_visible = visible && odom_problem.empty();
@@ -409,6 +410,7 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
     const LawCommand cmd = law_.command(phase, chaser, port);
     o.command = cmd.twist;
     o.goal_distance_m = cmd.goal_distance_m;
+    o.goal = cmd.goal;
     o.path = law_.plannedPath(phase, chaser, port.pose);
     o.reason = reason + (cmd.fov_limited ? " (heading held at the edge of the camera's view)" : "");
     return o;
@@ -512,6 +514,7 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
               PlannerOutput o = out;
               o.command = to_orbit.twist;
               o.goal_distance_m = to_orbit.goal_distance_m;
+              o.goal = to_orbit.goal;
               o.path = orbit_law_.plannedPath(Phase::kApproach, chaser, port.pose);
               o.reason = fmt("approaching on position only (port orientation unknown) to %.2f m", r_orbit);
               return finish(o);
@@ -529,6 +532,7 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
             o.command.wz = clampAbs(orbit_rate + config_.law.yaw_gain * wrapAngle(line_of_sight - chaser.yaw),
                                     config_.law.max_yaw_rate_radps);
             o.goal_distance_m = cmd.goal_distance_m;
+            o.goal = cmd.goal;
             o.path = orbit_law_.plannedPath(Phase::kAlign, chaser, lead.pose);
             o.reason = fmt("orbiting the target at %.2f m to find the port face", r_orbit);
             return finish(o);

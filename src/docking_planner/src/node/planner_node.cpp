@@ -17,6 +17,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <docking_msgs/DockAction.h>
 #include <docking_msgs/DockingState.h>
+#include <docking_msgs/PlannerGeometry.h>
 #include <docking_msgs/TargetEstimate.h>
 #include <docking_msgs/estimate_check_msg.h>
 #include <docking_msgs/names.h>
@@ -186,6 +187,8 @@ class PlannerNode {
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>(docking_msgs::topics::kCmdVel, 1);
     state_pub_ = nh.advertise<docking_msgs::DockingState>(docking_msgs::topics::kDockingState, 10);
     path_pub_ = nh.advertise<nav_msgs::Path>(docking_msgs::topics::kDockingPath, 1, true);
+    // For display only (docking_viz): filled and sent only while someone subscribes.
+    geometry_pub_ = nh.advertise<docking_msgs::PlannerGeometry>(docking_msgs::topics::kDockingGeometry, 1);
     estimate_sub_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 10, &PlannerNode::onEstimateEvent, this);
     odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometryEvent, this);
 
@@ -655,7 +658,29 @@ class PlannerNode {
       path.poses.push_back(ps);
     }
     path_pub_.publish(path);
+    if (geometry_pub_.getNumSubscribers() > 0) publishGeometry(now);
     diagnostics_.update();
+  }
+
+  /// The held port and the current goal in odom (docking_msgs/PlannerGeometry), for display.
+  void publishGeometry(const ros::Time& now) {
+    docking_msgs::PlannerGeometry geometry;
+    geometry.header.stamp = now;
+    geometry.header.frame_id = odom_frame_;
+    geometry.has_port = last_.port.has_value();
+    if (last_.port) {
+      geometry.port.x = last_.port->pose.x;
+      geometry.port.y = last_.port->pose.y;
+      geometry.port.theta = last_.port->pose.yaw;
+      geometry.port_orientation_known = last_.port_orientation_known;
+    }
+    geometry.has_goal = last_.goal.has_value();
+    if (last_.goal) {
+      geometry.goal.x = last_.goal->x;
+      geometry.goal.y = last_.goal->y;
+      geometry.goal.theta = last_.goal->yaw;
+    }
+    geometry_pub_.publish(geometry);
   }
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
@@ -698,7 +723,7 @@ class PlannerNode {
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   diagnostic_updater::Updater diagnostics_;
-  ros::Publisher cmd_pub_, state_pub_, path_pub_;
+  ros::Publisher cmd_pub_, state_pub_, path_pub_, geometry_pub_;
   ros::Subscriber estimate_sub_, odom_sub_;
   ros::ServiceServer reset_service_;
   ros::Timer timer_;
