@@ -161,6 +161,29 @@ class Description(unittest.TestCase):
         self.assertEqual(len(chaser.findall("link")), 1 + 3 + 1 + 3)  # base, wheels, probe, cameras
         self.check_urdf(rospy.get_param("/target_description"), self.target["frame_id"], [])
 
+    def test_truth_ghost_is_the_target_renamed(self):
+        """The simulator's ghost (description.launch truth_ghost:=true): the target model rooted at
+        target_truth, every other link prefixed truth_, and each part where the model has it."""
+        target = ET.fromstring(rospy.get_param("/target_description"))
+        ghost = self.check_urdf(rospy.get_param("/target_truth_description"), "target_truth", [])
+        root = self.target["frame_id"]
+        links = [l.get("name") for l in target.findall("link") if l.get("name") != root]
+        self.assertEqual(sorted(l.get("name") for l in ghost.findall("link")),
+                         sorted(["target_truth"] + ["truth_" + name for name in links]))
+        for name in links:
+            model = self.lookup(root, name)
+            copy = self.lookup("target_truth", "truth_" + name)
+            self.assertVectorNear((copy.translation.x, copy.translation.y, copy.translation.z),
+                                  (model.translation.x, model.translation.y, model.translation.z), name)
+            self.assertQuaternionNear((copy.rotation.x, copy.rotation.y, copy.rotation.z, copy.rotation.w),
+                                      (model.rotation.x, model.rotation.y, model.rotation.z, model.rotation.w), name)
+
+    def test_generator_refuses_a_root_rename_without_prefix(self):
+        run = subprocess.run([sys.executable, SCRIPT, "target", "--config-dir", self.config_dir, "--root-frame",
+                              "target_truth"], capture_output=True, text=True, timeout=30)
+        self.assertEqual(run.returncode, 2)
+        self.assertIn("--root-frame needs --link-prefix", run.stderr)
+
     # ----- the generator's errors -----
     def generate(self, robot_edit=None, base_edit=None):
         tmp = tempfile.mkdtemp(prefix="make_urdf_test_")
