@@ -1,0 +1,124 @@
+#!/usr/bin/env python3
+"""Screenshots of rviz (config/docking.rviz) during a simulated docking, headless (issue 14): how to see
+what a user sees without a screen, and where the README's pictures come from.
+
+Starts Xvfb, then sim.launch rviz:=true dock:=true on a master of its own, and saves the whole screen
+(ImageMagick's `import -window root`) at each moment asked for: a sim time in seconds ("12.5"), or a
+planner state, taken when the planner first enters it ("ALIGN", "DOCKED"; --settle-s later, so that rviz
+has drawn it). Ends when every moment is taken or --timeout-s (wall) passes.
+
+  source devel/setup.bash
+  scripts/rviz_screenshots.py [--scenario default] [--at 2,ALIGN,DOCKED] [--out results/rviz]
+"""
+import argparse
+import os
+import pathlib
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent / "tune"))
+import launch_runner  # noqa: E402
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def parse_args():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--scenario", default="default")
+    p.add_argument("--at", default="2,ALIGN,DOCKED", help="sim seconds and/or planner states, comma separated")
+    p.add_argument("--out", default=str(ROOT / "results" / "rviz"))
+    p.add_argument("--real-time-factor", type=float, default=0.3)
+    p.add_argument("--settle-s", type=float, default=0.3,
+                   help="sim seconds after a state is entered (DOCKED lasts one planner cycle before IDLE)")
+    p.add_argument("--size", default="1500x900", help="screen size (docking.rviz's window is 1500x900)")
+    p.add_argument("--display", default=":97")
+    p.add_argument("--timeout-s", type=float, default=900.0)
+    return p.parse_args()
+
+
+class Moments:
+    """What to capture: sim times, and states turned into sim times when the planner enters them."""
+
+    def __init__(self, text, settle_s):
+        self.pending = {}   # label -> sim time to capture at (None: waiting for the state)
+        self.settle_s = settle_s
+        for item in (x.strip() for x in text.split(",") if x.strip()):
+            try:
+                self.pending["t%06.1fs" % float(item)] = float(item)
+            except ValueError:
+                self.pending[item.upper()] = None
+
+    def on_state(self, state_name, now_s):
+        if self.pending.get(state_name, 0.0) is None:
+            self.pending[state_name] = now_s + self.settle_s
+
+    def due(self, now_s):
+        return [label for label, t in self.pending.items() if t is not None and now_s >= t]
+
+
+def main():
+    args = parse_args()
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    moments = Moments(args.at, args.settle_s)
+    # GLX on and Mesa's software renderer: without them rviz (OGRE) dies at start-up (SIGSEGV) on Xvfb.
+    xvfb = subprocess.Popen(["Xvfb", args.display, "-screen", "0", args.size + "x24", "+extension", "GLX",
+                             "-nolisten", "tcp"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    port = launch_runner.free_port()
+    env = dict(os.environ, DISPLAY=args.display, LIBGL_ALWAYS_SOFTWARE="1",
+               ROS_MASTER_URI="http://127.0.0.1:%d" % port)
+    os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"])
+    sim = subprocess.Popen(["roslaunch", "-p", str(port), str(ROOT / "launch" / "sim.launch"),
+                            "scenario:=" + args.scenario, "dock:=true", "rviz:=true", "output:=log",
+                            "real_time_factor:=%g" % args.real_time_factor],
+                           env=env, stdout=open(out / "sim.log", "w"), stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        capture_all(moments, env, out, args)
+    finally:
+        launch_runner.stop(sim)
+        xvfb.terminate()
+        xvfb.wait(timeout=30)
+
+
+def wait_for_rviz(master, deadline, drawn_s=5.0):
+    """Until rviz has subscribed to the markers (its displays are up), then drawn_s wall seconds for its
+    first frames: a moment due earlier is taken then, not on rviz's splash screen."""
+    while time.time() < deadline:
+        _, subscribers, _ = master.getSystemState()
+        if any(topic == "/docking/markers" and any(n.startswith("/rviz") for n in nodes) for topic, nodes in subscribers):
+            time.sleep(drawn_s)
+            return
+        time.sleep(0.5)
+
+
+def capture_all(moments, env, out, args):
+    import rosgraph
+    import rospy
+    from docking_msgs.msg import DockingState
+    # On the simulator's clock: /use_sim_time must be set before this node starts, and /clock running.
+    master = rosgraph.Master("/rviz_screenshots")
+    while not (master.is_online() and master.hasParam("/use_sim_time")):
+        time.sleep(0.5)
+    rospy.init_node("rviz_screenshots", anonymous=True, disable_signals=True)
+    while rospy.Time.now().is_zero():
+        time.sleep(0.1)
+    rospy.Subscriber("/docking/state", DockingState,
+                     lambda m: moments.on_state(m.state_name, rospy.Time.now().to_sec()), queue_size=10)
+    deadline = time.time() + args.timeout_s
+    wait_for_rviz(master, deadline)
+    while moments.pending and time.time() < deadline:
+        now_s = rospy.Time.now().to_sec()
+        for label in moments.due(now_s):
+            path = out / ("%s_%s.png" % (args.scenario, label))
+            subprocess.run(["import", "-window", "root", str(path)], env=env, check=True, timeout=60)
+            print("rviz_screenshots: %s at sim %.1f s" % (path, now_s), flush=True)
+            del moments.pending[label]
+        time.sleep(0.1)
+    if moments.pending:
+        sys.exit("rviz_screenshots: not reached within %.0f s: %s" % (args.timeout_s, ", ".join(moments.pending)))
+
+
+if __name__ == "__main__":
+    main()
