@@ -18,6 +18,8 @@ from std_srvs.srv import Trigger
 
 WHEEL_RADIUS = 0.024
 STOPPED_RAD_S = 0.02 / WHEEL_RADIUS  # a wheel slower than 2 cm/s at the rim counts as stopped
+# The largest /odom step beyond the commanded speed across a board reboot (test 7; the bug was 0.68 m).
+MAX_ODOM_STEP_EXCESS_M = 0.03
 
 
 class BaseBench(unittest.TestCase):
@@ -240,14 +242,17 @@ class BaseBench(unittest.TestCase):
             track = list(self.odom_track)
             encoder_levels = [lvl for t, lvl in self.encoder_levels if t > t_reboot]
         # Each /odom step beyond what 0.2 m/s (+25 %) explains over its stamps: a jump would add the old
-        # counter values (0.68 m before the fix). The stamps are host receive times, and a reply that
-        # misses a cycle on a busy machine makes one 8 mm step over 20 ms of stamps: 1 cm of slack. The
-        # 1 mm bound at the reboot itself is the gtest BoardSession.FastRebootWhileDriving...
+        # counter values (0.68 m before the fix). The stamps are host receive times: a driver that runs
+        # late on a busy machine reads several replies at once and puts their travel into one step over a
+        # short span of stamps. 1 cm of slack (one missed cycle) failed once at 10.7 mm with two
+        # `make test`s and two CPU hogs on the two cores; 3 cm is 150 ms of late running at 0.2 m/s and
+        # still 23 times below the jump. The 1 mm bound at the reboot itself is the gtest
+        # BoardSession.FastRebootWhileDriving...
         excess = [math.hypot(b[1] - a[1], b[2] - a[2]) - 0.25 * (b[0] - a[0]) for a, b in zip(track, track[1:])]
         travelled = math.hypot(track[-1][1] - track[0][1], track[-1][2] - track[0][2])
         print("measured: across the reboot, largest /odom step beyond the commanded speed %.4f m, "
               "travelled %.3f m in 3 s at 0.2 m/s" % (max(excess), travelled))
-        self.assertLess(max(excess), 0.01)
+        self.assertLess(max(excess), MAX_ODOM_STEP_EXCESS_M)
         self.assertAlmostEqual(travelled, 0.6, delta=0.08)
         self.assertIn(DiagnosticStatus.ERROR, encoder_levels, "diagnostics did not report the reboot")
         self.assertEqual(encoder_levels[-1], DiagnosticStatus.OK, "diagnostics did not recover after the reboot")
