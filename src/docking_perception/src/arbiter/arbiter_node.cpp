@@ -16,6 +16,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <docking_perception/ArbiterConfig.h>
 #include <dynamic_reconfigure/server.h>
+#include "docking_msgs/require_param.h"
 #include <docking_msgs/TargetEstimate.h>
 #include <docking_msgs/estimate_check_msg.h>
 #include <docking_msgs/names.h>
@@ -36,14 +37,7 @@ namespace docking_perception {
 namespace arbiter {
 namespace {
 
-template <typename T>
-T requireParam(const ros::NodeHandle& nh, const std::string& name) {
-  T value;
-  if (!nh.getParam(name, value)) {
-    throw std::invalid_argument("missing parameter '" + nh.resolveName(name) + "'");
-  }
-  return value;
-}
+using docking_msgs::requireParam;
 
 ArbiterConfig loadConfig(const ros::NodeHandle& pnh) {
   ArbiterConfig c;

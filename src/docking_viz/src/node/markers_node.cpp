@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "docking_msgs/require_param.h"
 #include <docking_msgs/DockingState.h>
 #include <docking_msgs/PlannerGeometry.h>
 #include <docking_msgs/TargetEstimate.h>
@@ -62,12 +63,7 @@ constexpr char kCommandNamespace[] = "cmd_vel";
 constexpr char kStateNamespace[] = "state";
 std::string estimateNamespace(std::uint8_t source) { return std::string("estimate/") + sourceStyle(source).key; }
 
-template <typename T>
-T requireParam(const ros::NodeHandle& nh, const std::string& name) {
-  T value;
-  if (!nh.getParam(name, value)) throw std::invalid_argument("missing parameter '" + nh.resolveName(name) + "'");
-  return value;
-}
+using docking_msgs::requireParam;
 
 MarkerConfig loadConfig(const ros::NodeHandle& pnh) {
   MarkerConfig c;
