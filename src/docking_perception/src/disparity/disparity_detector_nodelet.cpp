@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <ctime>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -10,6 +9,7 @@
 #include <cv_bridge/cv_bridge.h>
 #include <docking_msgs/estimate_check_msg.h>
 #include <docking_msgs/names.h>
+#include <docking_msgs/thread_cpu_time.h>
 #include <image_geometry/pinhole_camera_model.h>
 #include <image_transport/camera_common.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -18,15 +18,10 @@
 namespace docking_perception {
 namespace {
 
+using docking_msgs::threadCpuMs;
+
 // Variance of the components a disparity estimate does not measure (TargetEstimate.msg: >= 1e6).
 constexpr double kUnknownVariance = 1e6;
-
-// CPU time of the calling thread, ms: what this frame cost, whatever else the manager runs.
-double threadCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
-}
 
 // The estimate every frame starts from: not valid, orientation and twist unknown.
 docking_msgs::TargetEstimate blankEstimate(const std_msgs::Header& header) {
@@ -434,10 +429,12 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   }
 
   if (debug_publisher_.getNumSubscribers() > 0) {
+    const double debug_start_ms = threadCpuMs();
     cv_bridge::CvImage debug(message->header, enc::BGR8,
                              disparity::renderDebugImage(disparity, detection,
                                                          config.debug_display_max_disparity_px));
     debug_publisher_.publish(debug.toImageMsg());
+    recordDebugImage(threadCpuMs() - debug_start_ms);
   }
 
   estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
@@ -471,6 +468,12 @@ void DisparityDetectorNodelet::recordOutcome(bool found, const std::string& reas
   }
 }
 
+void DisparityDetectorNodelet::recordDebugImage(double cpu_ms) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  ++debug_images_;
+  debug_image_cpu_ms_total_ += cpu_ms;
+}
+
 void DisparityDetectorNodelet::produceDiagnostics(
     diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(state_mutex_);
@@ -487,6 +490,8 @@ void DisparityDetectorNodelet::produceDiagnostics(
   status.add("last range m", last_range_m_);
   status.add("last processing ms (CPU)", last_processing_ms_);
   status.add("subscribed", static_cast<bool>(disparity_subscriber_));
+  status.add("debug images drawn", debug_images_);
+  status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
 
   if (!disparity_subscriber_) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle: no subscribers");

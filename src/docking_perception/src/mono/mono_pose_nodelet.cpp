@@ -25,6 +25,7 @@
 #include "docking_msgs/TargetEstimate.h"
 #include "docking_msgs/estimate_check_msg.h"
 #include "docking_msgs/names.h"
+#include "docking_msgs/thread_cpu_time.h"
 #include "docking_perception/MonoPoseConfig.h"
 #include "docking_perception/mono/debug_drawing.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
@@ -82,6 +83,9 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   int found_ = 0;
   double last_processing_ms_ = 0.0;
   int last_inliers_ = 0;
+  // Debug images are drawn only while someone subscribes: what they cost, and proof of none without.
+  unsigned long debug_images_ = 0;
+  double debug_image_cpu_ms_total_ = 0.0;
   // The latest valid disparity estimate (visible mode), applied before the next image.
   docking_msgs::TargetEstimateConstPtr disparity_hint_;
   int hints_used_ = 0;
@@ -345,9 +349,12 @@ void MonoPoseNodelet::processImage(const sensor_msgs::ImageConstPtr& image,
   publishEstimate(image->header, result);
 
   if (publish_debug_image_ && debug_publisher_.getNumSubscribers() > 0) {
+    const double cpu_start_ms = docking_msgs::threadCpuMs();
     cv_bridge::CvImage debug(image->header, sensor_msgs::image_encodings::BGR8,
                              mono::drawDebugImage(cv_image->image, result, estimator_->camera(), *model_));
     debug_publisher_.publish(debug.toImageMsg());
+    ++debug_images_;
+    debug_image_cpu_ms_total_ += docking_msgs::threadCpuMs() - cpu_start_ms;
   }
 }
 
@@ -427,6 +434,8 @@ void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("last processing time ms", last_processing_ms_);
   status.add("last inliers", last_inliers_);
   status.add("disparity search hints used", hints_used_);
+  status.add("debug images drawn", debug_images_);
+  status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
 }
 
 }  // namespace docking_perception

@@ -2,16 +2,19 @@
 
 #include "bilinear.h"
 
+#include <docking_msgs/thread_cpu_time.h>
+
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cstring>
 #include <cmath>
-#include <ctime>
 
 namespace docking_sim {
 namespace {
+
+using docking_msgs::threadCpuMs;
 
 constexpr double kNearPlaneM = 0.02;
 
@@ -109,12 +112,6 @@ double shadeSegment(bool repeat, bool saturate, int count, double nw, double dnw
   }
   return saturate ? shadeSegmentImpl<kChannels, false, true>(count, nw, dnw, u, du, v, dv, depth, row, img, gain)
                   : shadeSegmentImpl<kChannels, false, false>(count, nw, dnw, u, du, v, dv, depth, row, img, gain);
-}
-
-double threadCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
 }
 
 }  // namespace

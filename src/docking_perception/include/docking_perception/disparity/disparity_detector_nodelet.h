@@ -58,6 +58,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
                            double cpu_start_ms);
   void produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
   void recordOutcome(bool found, const std::string& reason, double processing_ms);
+  void recordDebugImage(double cpu_ms);
 
   ros::NodeHandle nh_;
   ros::NodeHandle private_nh_;
@@ -89,6 +90,9 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   unsigned long detections_ = 0;
   double last_processing_ms_ = 0.0;
   double last_range_m_ = 0.0;
+  // Debug images are drawn only while someone subscribes: what they cost, and proof of none without.
+  unsigned long debug_images_ = 0;
+  double debug_image_cpu_ms_total_ = 0.0;
 };
 
 }  // namespace docking_perception
