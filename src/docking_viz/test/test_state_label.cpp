@@ -69,6 +69,26 @@ TEST(StateLabel, LongReasonWrappedAndCut) {
   EXPECT_EQ(lines.back().substr(lines.back().size() - 3), "...");
 }
 
+TEST(EndedStateMemory, IdleSaysHowTheLastDockingEnded) {
+  EndedStateMemory memory;
+  EXPECT_EQ(memory.update(true, "IDLE"), "") << "start-up: no docking has ended";
+  EXPECT_EQ(memory.update(false, "SEARCH"), "");
+  EXPECT_EQ(memory.update(false, "FINAL"), "");
+  EXPECT_EQ(memory.update(false, "DOCKED"), "");
+  EXPECT_EQ(memory.update(true, "IDLE"), "DOCKED");
+  EXPECT_EQ(memory.update(true, "IDLE"), "DOCKED") << "kept for as long as the planner stays idle";
+  EXPECT_EQ(memory.update(false, "SEARCH"), "") << "a new docking forgets the last end";
+  EXPECT_EQ(memory.update(true, "IDLE"), "SEARCH") << "cancelled while searching";
+}
+
+TEST(StateLabel, IdleAfterADockingNamesItsEnd) {
+  StateSummary s;
+  s.state_name = "IDLE";
+  s.ended_in = "DOCKED";
+  s.reason = "docked: probe tip 3.0 mm from the port";
+  EXPECT_EQ(splitLines(formatStateLabel(s)).front(), "IDLE (ended in DOCKED)  0.0 s  target not seen");
+}
+
 TEST(WrapText, BreaksAtSpacesOnly) {
   EXPECT_EQ(wrapText("one two three four", 9, 5), "one two\nthree\nfour");
   EXPECT_EQ(wrapText("", 9, 5), "");

@@ -26,6 +26,7 @@ struct CommandedVelocity {
 /// docking_msgs/DockingState's fields that the label shows, plus the last commanded velocity.
 struct StateSummary {
   std::string state_name;
+  std::string ended_in;  ///< while IDLE: the state the last docking ended in (see EndedStateMemory), or ""
   std::string reason;
   double time_in_state_s{0.0};
   std::uint8_t estimate_source{0};  ///< TargetEstimate.SOURCE_*
@@ -38,7 +39,21 @@ struct StateSummary {
   std::optional<CommandedVelocity> command;  ///< absent: none received
 };
 
-/// Lines: "STATE  t s  source", "range .. m  goal .. m", "lat .. m  axial .. m  yaw .. deg",
+/// The planner shows an end state (DOCKED, ABORT, ...) for one cycle only, then IDLE with the end's
+/// reason: this remembers which state that was, so that the label can say how the docking ended.
+class EndedStateMemory {
+ public:
+  /// Feed every state in order (`idle`: the state is DockingState.IDLE, by its code). Returns, while
+  /// idle, the name of the state before IDLE ("" at start-up, before any docking); otherwise "".
+  const std::string& update(bool idle, const std::string& state_name);
+
+ private:
+  bool previous_idle_{true};  // the planner starts in IDLE
+  std::string previous_name_;
+  std::string ended_in_;
+};
+
+/// Lines: "STATE  t s  source" ("IDLE (ended in DOCKED)  t s  source" after a docking), "range .. m  goal .. m", "lat .. m  axial .. m  yaw .. deg",
 /// "cmd vx vy m/s  wz rad/s" (when known), then the reason wrapped at kLabelLineWidth.
 std::string formatStateLabel(const StateSummary& summary);
 

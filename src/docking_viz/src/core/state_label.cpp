@@ -60,11 +60,23 @@ std::string wrapText(const std::string& text, std::size_t width, std::size_t max
   return out;
 }
 
+const std::string& EndedStateMemory::update(bool idle, const std::string& state_name) {
+  if (!idle) {
+    ended_in_.clear();
+  } else if (!previous_idle_) {
+    ended_in_ = previous_name_;
+  }
+  previous_idle_ = idle;
+  previous_name_ = state_name;
+  return ended_in_;
+}
+
 std::string formatStateLabel(const StateSummary& s) {
   const std::string source = s.target_visible ? sourceStyle(s.estimate_source).name : std::string("target not seen");
   std::vector<std::string> lines;
-  lines.push_back((s.state_name.empty() ? std::string("?") : s.state_name) + "  " + number("%.1f", s.time_in_state_s) +
-                  " s  " + source);
+  std::string state = s.state_name.empty() ? std::string("?") : s.state_name;
+  if (!s.ended_in.empty()) state += " (ended in " + s.ended_in + ")";
+  lines.push_back(state + "  " + number("%.1f", s.time_in_state_s) + " s  " + source);
   lines.push_back("range " + number("%.2f", s.range_m) + " m  goal " + number("%.2f", s.goal_distance_m) + " m");
   lines.push_back("lat " + number("%+.3f", s.lateral_error_m) + " m  axial " + number("%.2f", s.axial_distance_m) +
                   " m  yaw " + number("%+.1f", s.yaw_error_rad * kRadToDeg) + " deg");
