@@ -82,12 +82,18 @@ def main():
         xvfb.wait(timeout=30)
 
 
-def wait_for_rviz(master, deadline, drawn_s=5.0):
-    """Until rviz has subscribed to the markers (its displays are up), then drawn_s wall seconds for its
-    first frames: a moment due earlier is taken then, not on rviz's splash screen."""
+# What docking.rviz subscribes to last: when rviz subscribes to all of them, its displays are up.
+RVIZ_TOPICS = ("/docking/markers", "/perception/mono_visible/debug_image", "/perception/disparity/debug_image",
+               "/perception/mono_ir/debug_image")
+
+
+def wait_for_rviz(master, deadline, drawn_s=10.0):
+    """Until rviz has subscribed to its last displays' topics, then drawn_s wall seconds for its first frames
+    (software rendering on a busy machine is slow): a moment due earlier is taken then, not on the splash."""
     while time.time() < deadline:
         _, subscribers, _ = master.getSystemState()
-        if any(topic == "/docking/markers" and any(n.startswith("/rviz") for n in nodes) for topic, nodes in subscribers):
+        by_rviz = {topic for topic, nodes in subscribers if any(n.startswith("/rviz") for n in nodes)}
+        if by_rviz.issuperset(RVIZ_TOPICS):
             time.sleep(drawn_s)
             return
         time.sleep(0.5)

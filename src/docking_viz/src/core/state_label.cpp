@@ -73,15 +73,17 @@ const std::string& EndedStateMemory::update(bool idle, const std::string& state_
 
 std::string formatStateLabel(const StateSummary& s) {
   const std::string source = s.target_visible ? sourceStyle(s.estimate_source).name : std::string("target not seen");
-  std::vector<std::string> lines;
   std::string state = s.state_name.empty() ? std::string("?") : s.state_name;
   if (!s.ended_in.empty()) state += " (ended in " + s.ended_in + ")";
-  lines.push_back(state + "  " + number("%.1f", s.time_in_state_s) + " s  " + source);
-  lines.push_back("range " + number("%.2f", s.range_m) + " m  goal " + number("%.2f", s.goal_distance_m) + " m");
-  lines.push_back("lat " + number("%+.3f", s.lateral_error_m) + " m  axial " + number("%.2f", s.axial_distance_m) +
-                  " m  yaw " + number("%+.1f", s.yaw_error_rad * kRadToDeg) + " deg");
+  // Short lines: a narrow label stays inside the default view wherever the chaser is.
+  std::vector<std::string> lines;
+  lines.push_back(state + "  " + number("%.1f", s.time_in_state_s) + " s");
+  lines.push_back(source + "  range " + number("%.2f", s.range_m) + " m");
+  lines.push_back("goal " + number("%.2f", s.goal_distance_m) + " m  lat " + number("%+.3f", s.lateral_error_m) + " m");
+  lines.push_back("axial " + number("%.2f", s.axial_distance_m) + " m  yaw " +
+                  number("%+.1f", s.yaw_error_rad * kRadToDeg) + " deg");
   if (s.command) {
-    lines.push_back("cmd " + number("%+.2f", s.command->vx_mps) + " " + number("%+.2f", s.command->vy_mps) + " m/s  " +
+    lines.push_back("cmd " + number("%+.2f", s.command->vx_mps) + " " + number("%+.2f", s.command->vy_mps) + " m/s " +
                     number("%+.2f", s.command->wz_radps) + " rad/s");
   }
   const std::string reason = wrapText(s.reason, kLabelLineWidth, kMaxReasonLines);
