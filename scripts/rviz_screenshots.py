@@ -2,13 +2,15 @@
 """Screenshots of rviz (config/docking.rviz) during a simulated docking, headless (issue 14): how to see
 what a user sees without a screen, and where the README's pictures come from.
 
-Starts Xvfb, then sim.launch rviz:=true dock:=true on a master of its own, and saves the whole screen
-(ImageMagick's `import -window root`) at each moment asked for: a sim time in seconds ("12.5"), or a
-planner state, taken when the planner first enters it ("ALIGN", "DOCKED"; --settle-s later, so that rviz
-has drawn it). Ends when every moment is taken or --timeout-s (wall) passes.
+Starts Xvfb, then sim.launch rviz:=true dock:=true (or, with --replay BAG, replay.launch bag:=BAG
+rviz:=true) on a master of its own, and saves the whole screen (ImageMagick's `import -window root`) at
+each moment asked for: seconds of ROS time since its clock started ("12.5"), or a planner state, taken
+when the planner first enters it ("ALIGN", "DOCKED"; --settle-s later, so that rviz has drawn it). Ends
+when every moment is taken or --timeout-s (wall) passes.
 
   source devel/setup.bash
   scripts/rviz_screenshots.py [--scenario default] [--at 2,ALIGN,DOCKED] [--out results/rviz]
+  scripts/rviz_screenshots.py --replay bags/near_approach.bag --at 4 --out results/rviz
 """
 import argparse
 import os
@@ -26,6 +28,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 def parse_args():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--scenario", default="default")
+    p.add_argument("--replay", metavar="BAG", help="replay this bag (replay.launch) instead of simulating")
     p.add_argument("--at", default="2,ALIGN,DOCKED", help="sim seconds and/or planner states, comma separated")
     p.add_argument("--out", default=str(ROOT / "results" / "rviz"))
     p.add_argument("--real-time-factor", type=float, default=0.3)
@@ -70,10 +73,18 @@ def main():
     env = dict(os.environ, DISPLAY=args.display, LIBGL_ALWAYS_SOFTWARE="1",
                ROS_MASTER_URI="http://127.0.0.1:%d" % port)
     os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"])
-    sim = subprocess.Popen(["roslaunch", "-p", str(port), str(ROOT / "launch" / "sim.launch"),
-                            "scenario:=" + args.scenario, "dock:=true", "rviz:=true", "output:=log",
-                            "real_time_factor:=%g" % args.real_time_factor],
-                           env=env, stdout=open(out / "sim.log", "w"), stderr=subprocess.STDOUT, start_new_session=True)
+    if args.replay:
+        # Looping (the clock rising pass after pass): rviz starts slowly, and a moment past by then is taken
+        # in a later pass, on a live view.
+        launch = [str(ROOT / "launch" / "replay.launch"), "bag:=" + str(pathlib.Path(args.replay).resolve()),
+                  "loop:=true"]
+        args.scenario = pathlib.Path(args.replay).stem  # names the pictures
+    else:
+        launch = [str(ROOT / "launch" / "sim.launch"), "scenario:=" + args.scenario, "dock:=true",
+                  "real_time_factor:=%g" % args.real_time_factor]
+    sim = subprocess.Popen(["roslaunch", "-p", str(port)] + launch + ["rviz:=true", "output:=log"],
+                           env=env, stdout=open(out / "launch.log", "w"), stderr=subprocess.STDOUT,
+                           start_new_session=True)
     try:
         capture_all(moments, env, out, args)
     finally:
@@ -110,12 +121,13 @@ def capture_all(moments, env, out, args):
     rospy.init_node("rviz_screenshots", anonymous=True, disable_signals=True)
     while rospy.Time.now().is_zero():
         time.sleep(0.1)
+    clock_start_s = rospy.Time.now().to_sec()  # a simulation starts at 0, a replay at its bag's time
     rospy.Subscriber("/docking/state", DockingState,
-                     lambda m: moments.on_state(m.state_name, rospy.Time.now().to_sec()), queue_size=10)
+                     lambda m: moments.on_state(m.state_name, rospy.Time.now().to_sec() - clock_start_s), queue_size=10)
     deadline = time.time() + args.timeout_s
     wait_for_rviz(master, deadline)
     while moments.pending and time.time() < deadline:
-        now_s = rospy.Time.now().to_sec()
+        now_s = rospy.Time.now().to_sec() - clock_start_s
         for label in moments.due(now_s):
             path = out / ("%s_%s.png" % (args.scenario, label))
             subprocess.run(["import", "-window", "root", str(path)], env=env, check=True, timeout=60)
