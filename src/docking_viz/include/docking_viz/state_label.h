@@ -46,6 +46,8 @@ class EndedStateMemory {
   /// Feed every state in order (`idle`: the state is DockingState.IDLE, by its code). Returns, while
   /// idle, the name of the state before IDLE ("" at start-up, before any docking); otherwise "".
   const std::string& update(bool idle, const std::string& state_name);
+  /// What the last update returned.
+  const std::string& endedIn() const { return ended_in_; }
 
  private:
   bool previous_idle_{true};  // the planner starts in IDLE
@@ -53,8 +55,9 @@ class EndedStateMemory {
   std::string ended_in_;
 };
 
-/// Lines: "STATE  t s  source" ("IDLE (ended in DOCKED)  t s  source" after a docking), "range .. m  goal .. m", "lat .. m  axial .. m  yaw .. deg",
-/// "cmd vx vy m/s  wz rad/s" (when known), then the reason wrapped at kLabelLineWidth.
+/// Lines: "STATE  t s" ("IDLE (ended in DOCKED)  t s" after a docking), "source  range .. m",
+/// "goal .. m  lat .. m", "axial .. m  yaw .. deg", "cmd vx vy m/s wz rad/s" (when known), then the
+/// reason wrapped at kLabelLineWidth.
 std::string formatStateLabel(const StateSummary& summary);
 
 /// `text` broken at spaces into lines of at most `width` characters (a longer word gets a line of its

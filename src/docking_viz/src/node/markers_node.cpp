@@ -156,7 +156,6 @@ class MarkersNode {
       estimates_.clear();
       state_ = {};
       ended_state_memory_ = {};
-      ended_in_.clear();
       geometry_ = {};
       command_ = {};
       return;
@@ -180,7 +179,7 @@ class MarkersNode {
   }
   void onState(const docking_msgs::DockingStateConstPtr& msg) {
     store(&state_, *msg);
-    ended_in_ = ended_state_memory_.update(msg->state == docking_msgs::DockingState::IDLE, msg->state_name);
+    ended_state_memory_.update(msg->state == docking_msgs::DockingState::IDLE, msg->state_name);
   }
   void onGeometry(const docking_msgs::PlannerGeometryConstPtr& msg) { store(&geometry_, *msg); }
   void onCommand(const geometry_msgs::TwistConstPtr& msg) { store(&command_, *msg); }
@@ -394,7 +393,7 @@ class MarkersNode {
     const docking_msgs::DockingState& s = *state_.message;
     StateSummary summary;
     summary.state_name = s.state_name;
-    summary.ended_in = ended_in_;
+    summary.ended_in = ended_state_memory_.endedIn();
     summary.reason = s.reason;
     summary.time_in_state_s = s.time_in_state_s;
     summary.estimate_source = s.estimate_source;
@@ -425,8 +424,7 @@ class MarkersNode {
   std::vector<ros::Subscriber> subscribers_;  // empty while nobody subscribes to the markers
   std::map<std::uint8_t, Latest<TargetEstimate>> estimates_;  // by TargetEstimate source
   Latest<docking_msgs::DockingState> state_;
-  EndedStateMemory ended_state_memory_;
-  std::string ended_in_;  // while IDLE: how the last docking ended
+  EndedStateMemory ended_state_memory_;  // while IDLE: how the last docking ended
   Latest<docking_msgs::PlannerGeometry> geometry_;
   Latest<geometry_msgs::Twist> command_;
   std::uint64_t skipped_total_{0};
