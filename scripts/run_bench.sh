@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # make bench: single-thread benchmarks of each perception stage on fixed 640x480 frames. Each program
-# prints its figures and writes its stages; this merges them into results/bench/summary.json:
-#   {"image": "640x480", "threads": 1, "stages": {NAME: {"ms_median": float, "hz": float}}}
+# prints its figures and writes its stages; then scripts/bench_instructions.py counts each stage's
+# instructions per frame under callgrind (load-independent). This merges them into results/bench/summary.json:
+#   {"image": "640x480", "threads": 1, "stages": {NAME: {"ms_median": float, "hz": float,
+#                                                        "instructions_per_frame_M": float}}}
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=results/bench
@@ -26,16 +28,25 @@ if [ -x "$lib/bench_apriltag" ]; then
   "$lib/bench_apriltag" "$out/parts/apriltag.json" --sequence "$out/frames/tagged1m" \
     --target config/target_tagged.yaml || status=1
 fi
+echo "== bench_instructions (instructions per frame of each stage, callgrind; ~3 min)"
+/usr/bin/python3 scripts/bench_instructions.py "$out/parts/instructions.json" \
+  --far-left "$out/frames/far3m_stereo_left.png" --far-right "$out/frames/far3m_stereo_right.png" \
+  --tagged-sequence "$out/frames/tagged1m" --tagged-target config/target_tagged.yaml || status=1
 /usr/bin/python3 - "$out" <<'PY'
 import json, pathlib, sys
 out = pathlib.Path(sys.argv[1])
 stages = {}
 for part in sorted((out / "parts").glob("*.json")):
-    stages.update(json.loads(part.read_text()).get("stages", {}))
+    for name, figures in json.loads(part.read_text()).get("stages", {}).items():
+        stages.setdefault(name, {}).update(figures)
 summary = {"image": "640x480", "threads": 1, "stages": stages}
 (out / "summary.json").write_text(json.dumps(summary, indent=2))
 print(f"bench: {len(stages)} stages -> {out / 'summary.json'}")
+print(f"  {'stage':24s} {'ms CPU':>8s}  {'Hz':>8s}  {'M instr/frame':>13s}")
 for name, v in stages.items():
-    print(f"  {name:24s} {v['ms_median']:8.2f} ms  {v['hz']:8.1f} Hz")
+    ms = f"{v['ms_median']:8.2f}" if "ms_median" in v else f"{'-':>8s}"
+    hz = f"{v['hz']:8.1f}" if "hz" in v else f"{'-':>8s}"
+    instructions = v.get("instructions_per_frame_M")
+    print(f"  {name:24s} {ms}  {hz}  {instructions if instructions is not None else '-':>13}")
 PY
 exit $status

@@ -84,6 +84,20 @@ void rectifyMaps(const testing::CameraCalibration& calibration, cv::Mat* map1, c
                               CV_16SC2, *map1, *map2);
 }
 
+// What image_proc does to each camera of the pair: bgr8 to grey (debayer's image_mono), then rectify.
+// Not inlined: scripts/bench_instructions.py counts this step's instructions by its name under callgrind.
+__attribute__((noinline)) void rectifyPair(const cv::Mat& left_raw, const cv::Mat& right_raw,
+                                           const cv::Mat (&left_maps)[2], const cv::Mat (&right_maps)[2],
+                                           cv::Mat* left_rect, cv::Mat* right_rect) {
+  cv::Mat left_mono = left_raw, right_mono = right_raw;
+  if (left_raw.channels() == 3) {
+    cv::cvtColor(left_raw, left_mono, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(right_raw, right_mono, cv::COLOR_BGR2GRAY);
+  }
+  cv::remap(left_mono, *left_rect, left_maps[0], left_maps[1], cv::INTER_LINEAR);
+  cv::remap(right_mono, *right_rect, right_maps[0], right_maps[1], cv::INTER_LINEAR);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -154,9 +168,9 @@ int main(int argc, char** argv) {
       }
     }
 
-    cv::Mat left_map1, left_map2, right_map1, right_map2;
-    rectifyMaps(left_calibration, &left_map1, &left_map2);
-    rectifyMaps(right_calibration, &right_map1, &right_map2);
+    cv::Mat left_maps[2], right_maps[2];
+    rectifyMaps(left_calibration, &left_maps[0], &left_maps[1]);
+    rectifyMaps(right_calibration, &right_maps[0], &right_maps[1]);
     auto matcher = testing::createMatcher(settings);
     const DisparityDetector detector(params);
     const StereoGeometry geometry = testing::geometryOf(scene);
@@ -178,13 +192,8 @@ int main(int argc, char** argv) {
     const int warmup = 3;
     for (int frame = 0; frame < frames + warmup; ++frame) {
       const auto start = Clock::now();
-      cv::Mat left_mono = left_raw, right_mono = right_raw, left_rect, right_rect;
-      if (left_raw.channels() == 3) {  // image_proc/debayer: bgr8 -> image_mono
-        cv::cvtColor(left_raw, left_mono, cv::COLOR_BGR2GRAY);
-        cv::cvtColor(right_raw, right_mono, cv::COLOR_BGR2GRAY);
-      }
-      cv::remap(left_mono, left_rect, left_map1, left_map2, cv::INTER_LINEAR);
-      cv::remap(right_mono, right_rect, right_map1, right_map2, cv::INTER_LINEAR);
+      cv::Mat left_rect, right_rect;
+      rectifyPair(left_raw, right_raw, left_maps, right_maps, &left_rect, &right_rect);
       const double rectify_ms = ms_since(start);
       const auto disparity_start = Clock::now();
       const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
@@ -234,13 +243,8 @@ int main(int argc, char** argv) {
               << " ms against " << cpu_total_ms / frames
               << " ms CPU: the difference is other load on the machine)\n";
     if (!debug_path.empty() || !disparity_path.empty()) {
-      cv::Mat left_mono = left_raw, right_mono = right_raw, left_rect, right_rect;
-      if (left_raw.channels() == 3) {
-        cv::cvtColor(left_raw, left_mono, cv::COLOR_BGR2GRAY);
-        cv::cvtColor(right_raw, right_mono, cv::COLOR_BGR2GRAY);
-      }
-      cv::remap(left_mono, left_rect, left_map1, left_map2, cv::INTER_LINEAR);
-      cv::remap(right_mono, right_rect, right_map1, right_map2, cv::INTER_LINEAR);
+      cv::Mat left_rect, right_rect;
+      rectifyPair(left_raw, right_raw, left_maps, right_maps, &left_rect, &right_rect);
       const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
       if (!debug_path.empty()) {
         cv::imwrite(debug_path,

@@ -1,6 +1,6 @@
 // bench_mono: time of detection + pose on 640x480 frames, single-threaded (cv::setNumThreads(1)).
 //
-//   bench_mono OUTPUT.json [TARGET_YAML]
+//   bench_mono OUTPUT.json [TARGET_YAML] [--stages NAME,NAME,...]
 //
 // Stages: mono_full (visible, PnP, full-frame search on every frame), mono_tracking (the same with the
 // region predicted from the last pose), mono_full_paper_5point (the paper's solver, full frame) and
@@ -8,13 +8,16 @@
 // TARGET_YAML when given and readable, else a seeded synthetic texture), approaching from 1.4 m to
 // 0.6 m while yawing. ms_median is the CPU time of the estimator's thread (the machine is shared, so
 // wall time measures the neighbours too; it is printed beside). Accuracy on the same frames is printed
-// too. Nothing here is a test: it prints figures.
+// too. --stages runs only the named stages (scripts/bench_instructions.py counts each stage's instructions
+// under callgrind, one stage per run). Nothing here is a test: it prints figures.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <opencv2/core.hpp>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -85,19 +88,30 @@ StageFigures runStage(const std::string& name, const TargetModel& model, const C
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: %s OUTPUT.json [TARGET_YAML]\n", argv[0]);
+  std::vector<std::string> positional;
+  std::set<std::string> only_stages;  // empty: every stage
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--stages" && i + 1 < argc) {
+      std::stringstream list(argv[++i]);
+      for (std::string name; std::getline(list, name, ',');) only_stages.insert(name);
+    } else {
+      positional.push_back(arg);
+    }
+  }
+  if (positional.empty() || positional.size() > 2) {
+    std::fprintf(stderr, "usage: %s OUTPUT.json [TARGET_YAML] [--stages NAME,NAME,...]\n", argv[0]);
     return 2;
   }
   cv::setNumThreads(1);
-  const std::string output = argv[1];
+  const std::string output = positional[0];
 
   TargetModel model = synthetic::makeModel(1);
   std::string texture_source = "synthetic texture (seed 1)";
-  if (argc > 2) {
+  if (positional.size() > 1) {
     try {
-      model = TargetModel::loadFromYaml(argv[2]);
-      texture_source = argv[2];
+      model = TargetModel::loadFromYaml(positional[1]);
+      texture_source = positional[1];
     } catch (const TargetModelError& e) {
       std::fprintf(stderr, "bench_mono: %s; using the synthetic texture\n", e.what());
     }
@@ -139,14 +153,28 @@ int main(int argc, char** argv) {
   ir.mode = MonoMode::kIr;
   ir.solver = PoseSolverType::kPaperFivePoint;
 
-  std::vector<StageFigures> stages;
-  stages.push_back(runStage("mono_full", model, camera, full, visible, false));
-  stages.push_back(runStage("mono_tracking", model, camera, tracking, visible, true));
-  stages.push_back(runStage("mono_full_paper_5point", model, camera, five_point, visible, false));
   MonoPoseParams tracking_two_passes = tracking;  // refine_passes: 2 (not deployed; its cost)
   tracking_two_passes.features.refine_passes = 2;
-  stages.push_back(runStage("mono_tracking_2_passes", model, camera, tracking_two_passes, visible, true));
-  stages.push_back(runStage("mono_ir", model, camera, ir, infrared, false));
+  struct StagePlan {
+    const char* name;
+    const MonoPoseParams* params;
+    const std::vector<Frame>* frames;
+    bool skip_first;
+  };
+  const std::vector<StagePlan> plans = {{"mono_full", &full, &visible, false},
+                                        {"mono_tracking", &tracking, &visible, true},
+                                        {"mono_full_paper_5point", &five_point, &visible, false},
+                                        {"mono_tracking_2_passes", &tracking_two_passes, &visible, true},
+                                        {"mono_ir", &ir, &infrared, false}};
+  std::vector<StageFigures> stages;
+  for (const StagePlan& plan : plans) {
+    if (!only_stages.empty() && only_stages.count(plan.name) == 0) continue;
+    stages.push_back(runStage(plan.name, model, camera, *plan.params, *plan.frames, plan.skip_first));
+  }
+  if (stages.empty()) {
+    std::fprintf(stderr, "bench_mono: --stages names no stage of this program\n");
+    return 2;
+  }
 
   std::printf("bench_mono: 640x480, 1 thread, %zu frames, %s\n", visible.size(), texture_source.c_str());
   std::printf("%-24s %9s %8s %9s %9s %9s %9s %8s\n", "stage", "cpu ms", "Hz", "wall ms", "detect", "pos mm", "ang deg",
