@@ -58,48 +58,6 @@ __attribute__((target("popcnt"))) void knnLoopPopcnt(const cv::Mat& query, const
 }
 #endif
 
-// Normalised cross-correlation of a small template at every position inside a window (the result is
-// (window - template + 1) square, float). Direct sums: for 11x11 over 7x7 positions this is several
-// times cheaper than cv::matchTemplate's general machinery.
-void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv::Mat* response) {
-  const int size = templ.rows;
-  const int positions = window.rows - size + 1;
-  response->create(positions, positions, CV_32F);
-  const double n = static_cast<double>(size * size);
-  // 8-bit data: every sum fits in 32 bits (121 * 255^2 < 2^23), and integer loops vectorise.
-  int t_sum = 0;
-  int t_sum2 = 0;
-  for (int y = 0; y < size; ++y) {
-    const uint8_t* t = templ.ptr<uint8_t>(y);
-    for (int x = 0; x < size; ++x) {
-      t_sum += t[x];
-      t_sum2 += t[x] * t[x];
-    }
-  }
-  const double t_var = t_sum2 - static_cast<double>(t_sum) * t_sum / n;
-  for (int oy = 0; oy < positions; ++oy) {
-    for (int ox = 0; ox < positions; ++ox) {
-      int w_sum = 0;
-      int w_sum2 = 0;
-      int cross = 0;
-      for (int y = 0; y < size; ++y) {
-        const uint8_t* w = window.ptr<uint8_t>(oy + y) + ox;
-        const uint8_t* t = templ.ptr<uint8_t>(y);
-        for (int x = 0; x < size; ++x) {
-          const int wv = w[x];
-          w_sum += wv;
-          w_sum2 += wv * wv;
-          cross += wv * t[x];
-        }
-      }
-      const double w_var = w_sum2 - static_cast<double>(w_sum) * w_sum / n;
-      const double covariance = cross - static_cast<double>(w_sum) * t_sum / n;
-      const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
-      response->at<float>(oy, ox) = denominator > 1e-9 ? static_cast<float>(covariance / denominator) : 0.0f;
-    }
-  }
-}
-
 }  // namespace
 
 std::vector<HammingPair> hammingKnn2(const cv::Mat& query, const cv::Mat& train, int first_row, int row_count) {
@@ -117,6 +75,61 @@ std::vector<HammingPair> hammingKnn2(const cv::Mat& query, const cv::Mat& train,
 #endif
   knnLoop(query, train, first_row, row_count, &pairs);
   return pairs;
+}
+
+void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv::Mat* response) {
+  const int size = templ.rows;
+  const int positions = window.rows - size + 1;
+  response->create(positions, positions, CV_32F);
+  const double n = static_cast<double>(size * size);
+  // 8-bit data: every sum fits in 32 bits (121 * 255^2 < 2^23).
+  int t_sum = 0;
+  int t_sum2 = 0;
+  for (int y = 0; y < size; ++y) {
+    const uint8_t* t = templ.ptr<uint8_t>(y);
+    for (int x = 0; x < size; ++x) {
+      t_sum += t[x];
+      t_sum2 += t[x] * t[x];
+    }
+  }
+  const double t_var = t_sum2 - static_cast<double>(t_sum) * t_sum / n;
+  // The sums of kLanes neighbouring positions of a row advance together: one template pixel times
+  // kLanes window pixels per step, a loop the compiler turns into vector instructions (the integer
+  // sums are the same as position by position). The window rows are copied into a buffer padded with
+  // zeros, so the lanes past the last position read inside it; their sums are not used.
+  constexpr int kLanes = 8;
+  const int padded_cols = window.cols + kLanes;
+  std::vector<uint8_t> padded(static_cast<size_t>(padded_cols) * static_cast<size_t>(window.rows), 0);
+  for (int y = 0; y < window.rows; ++y) {
+    std::memcpy(padded.data() + static_cast<size_t>(y) * padded_cols, window.ptr<uint8_t>(y),
+                static_cast<size_t>(window.cols));
+  }
+  for (int oy = 0; oy < positions; ++oy) {
+    for (int ox0 = 0; ox0 < positions; ox0 += kLanes) {
+      int32_t w_sum[kLanes] = {};
+      int32_t w_sum2[kLanes] = {};
+      int32_t cross[kLanes] = {};
+      for (int y = 0; y < size; ++y) {
+        const uint8_t* w = padded.data() + static_cast<size_t>(oy + y) * padded_cols + ox0;
+        const uint8_t* t = templ.ptr<uint8_t>(y);
+        for (int x = 0; x < size; ++x) {
+          const int32_t tv = t[x];
+          for (int k = 0; k < kLanes; ++k) {
+            const int32_t wv = w[x + k];
+            w_sum[k] += wv;
+            w_sum2[k] += wv * wv;
+            cross[k] += wv * tv;
+          }
+        }
+      }
+      for (int k = 0; k < kLanes && ox0 + k < positions; ++k) {
+        const double w_var = w_sum2[k] - static_cast<double>(w_sum[k]) * w_sum[k] / n;
+        const double covariance = cross[k] - static_cast<double>(w_sum[k]) * t_sum / n;
+        const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
+        response->at<float>(oy, ox0 + k) = denominator > 1e-9 ? static_cast<float>(covariance / denominator) : 0.0f;
+      }
+    }
+  }
 }
 
 FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(params) {

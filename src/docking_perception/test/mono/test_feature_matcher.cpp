@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "docking_perception/mono/feature_matcher.h"
 #include "synthetic_scene.h"
@@ -34,6 +35,58 @@ TEST(HammingKnn2, AgreesWithBruteForceNorm) {
     EXPECT_EQ(pairs[q].second_distance, second);
     EXPECT_EQ(pairs[q].best_index, best_index);
   }
+}
+
+// The refinement's correlation against OpenCV's own zero-mean normalised correlation, on textured random
+// patches: the refinement's size (11x11 over 7x7 positions, fewer positions than the vector lanes) and a
+// larger window (17x17 positions: several groups of lanes, the last one partial), views into a larger
+// image as the refinement passes them.
+TEST(NormalisedCrossCorrelation, AgreesWithMatchTemplate) {
+  cv::RNG rng(11);
+  for (const auto& sizes : {std::pair<int, int>{11, 17}, std::pair<int, int>{9, 25}}) {
+    const int template_size = sizes.first;
+    const int window_size = sizes.second;
+    for (int trial = 0; trial < 20; ++trial) {
+      cv::Mat image(60, 70, CV_8U);
+      rng.fill(image, cv::RNG::UNIFORM, 0, 256);
+      cv::GaussianBlur(image, image, cv::Size(3, 3), 0.8);  // correlated neighbours, as in a real image
+      const cv::Mat window = image(cv::Rect(rng.uniform(0, 70 - window_size), rng.uniform(0, 60 - window_size),
+                                            window_size, window_size));
+      const cv::Mat templ = image(cv::Rect(rng.uniform(0, 70 - template_size), rng.uniform(0, 60 - template_size),
+                                           template_size, template_size));
+      cv::Mat ours;
+      normalisedCrossCorrelation(window, templ, &ours);
+      cv::Mat reference;
+      cv::matchTemplate(window, templ, reference, cv::TM_CCOEFF_NORMED);
+      ASSERT_EQ(ours.size(), reference.size());
+      ASSERT_EQ(ours.type(), CV_32F);
+      EXPECT_LT(cv::norm(ours, reference, cv::NORM_INF), 1e-4) << template_size << " over " << window_size;
+    }
+  }
+}
+
+// Where the template sits inside the window, the correlation peaks there at 1.
+TEST(NormalisedCrossCorrelation, PeaksAtTheTemplatesPlace) {
+  cv::RNG rng(12);
+  cv::Mat window(17, 17, CV_8U);
+  rng.fill(window, cv::RNG::UNIFORM, 0, 256);
+  const cv::Mat templ = window(cv::Rect(5, 2, 11, 11)).clone();
+  cv::Mat response;
+  normalisedCrossCorrelation(window, templ, &response);
+  cv::Point peak;
+  double best = 0.0;
+  cv::minMaxLoc(response, nullptr, &best, nullptr, &peak);
+  EXPECT_EQ(peak, cv::Point(5, 2));
+  EXPECT_NEAR(best, 1.0, 1e-6);
+}
+
+TEST(NormalisedCrossCorrelation, FlatTemplateGivesZero) {
+  cv::RNG rng(13);
+  cv::Mat window(17, 17, CV_8U);
+  rng.fill(window, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat response;
+  normalisedCrossCorrelation(window, cv::Mat(11, 11, CV_8U, cv::Scalar(128)), &response);
+  EXPECT_EQ(cv::countNonZero(response), 0);
 }
 
 // The refined homography must put the texture corners where the true plane homography puts them.

@@ -124,5 +124,11 @@ struct HammingPair {
 };
 std::vector<HammingPair> hammingKnn2(const cv::Mat& query, const cv::Mat& train, int first_row, int row_count);
 
+// Zero-mean normalised cross-correlation of a small square 8-bit template at every position inside a
+// square 8-bit window: response is (window - template + 1) square, CV_32F, in [-1, 1]; 0 where the
+// template or the window patch is flat. Cheaper than cv::matchTemplate at these sizes (11x11 over 7x7
+// positions: the refinement runs it for every refined point). Exposed for tests.
+void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv::Mat* response);
+
 }  // namespace mono
 }  // namespace docking_perception
