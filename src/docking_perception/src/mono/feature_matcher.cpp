@@ -93,41 +93,46 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
     }
   }
   const double t_var = t_sum2 - static_cast<double>(t_sum) * t_sum / n;
-  // The sums of kLanes neighbouring positions of a row advance together: one template pixel times
-  // kLanes window pixels per step, a loop the compiler turns into vector instructions (the integer
-  // sums are the same as position by position). The window rows are copied into a buffer padded with
-  // zeros, so the lanes past the last position read inside it; their sums are not used.
-  constexpr int kLanes = 8;
-  const int padded_cols = window.cols + kLanes;
-  std::vector<uint8_t> padded(static_cast<size_t>(padded_cols) * static_cast<size_t>(window.rows), 0);
+  // Each row of a position's sums is a dot product over a fixed-length run of 16-bit values, a loop
+  // the compiler turns into multiply-add vector instructions. The template rows are padded with zeros
+  // to whole runs, and `inside` (1 under the template, 0 past it) keeps the window pixels past the
+  // template out of the window's sums. The window rows are padded too, so every run reads inside them.
+  constexpr int kRun = 16;
+  const int row_length = (size + kRun - 1) / kRun * kRun;
+  const int window_stride = window.cols + row_length;
+  std::vector<int16_t> window16(static_cast<size_t>(window_stride) * static_cast<size_t>(window.rows), 0);
+  std::vector<int16_t> templ16(static_cast<size_t>(row_length) * static_cast<size_t>(size), 0);
+  std::vector<int16_t> inside(static_cast<size_t>(row_length), 0);
   for (int y = 0; y < window.rows; ++y) {
-    std::memcpy(padded.data() + static_cast<size_t>(y) * padded_cols, window.ptr<uint8_t>(y),
-                static_cast<size_t>(window.cols));
+    const uint8_t* w = window.ptr<uint8_t>(y);
+    std::copy(w, w + window.cols, window16.begin() + static_cast<std::ptrdiff_t>(y) * window_stride);
   }
+  for (int y = 0; y < size; ++y) {
+    const uint8_t* t = templ.ptr<uint8_t>(y);
+    std::copy(t, t + size, templ16.begin() + static_cast<std::ptrdiff_t>(y) * row_length);
+  }
+  std::fill(inside.begin(), inside.begin() + size, static_cast<int16_t>(1));
   for (int oy = 0; oy < positions; ++oy) {
-    for (int ox0 = 0; ox0 < positions; ox0 += kLanes) {
-      int32_t w_sum[kLanes] = {};
-      int32_t w_sum2[kLanes] = {};
-      int32_t cross[kLanes] = {};
+    for (int ox = 0; ox < positions; ++ox) {
+      int32_t w_sum = 0;
+      int32_t w_sum2 = 0;
+      int32_t cross = 0;
       for (int y = 0; y < size; ++y) {
-        const uint8_t* w = padded.data() + static_cast<size_t>(oy + y) * padded_cols + ox0;
-        const uint8_t* t = templ.ptr<uint8_t>(y);
-        for (int x = 0; x < size; ++x) {
-          const int32_t tv = t[x];
-          for (int k = 0; k < kLanes; ++k) {
-            const int32_t wv = w[x + k];
-            w_sum[k] += wv;
-            w_sum2[k] += wv * wv;
-            cross[k] += wv * tv;
+        const int16_t* w = window16.data() + static_cast<size_t>(oy + y) * window_stride + ox;
+        const int16_t* t = templ16.data() + static_cast<size_t>(y) * row_length;
+        for (int run = 0; run < row_length; run += kRun) {
+          for (int x = run; x < run + kRun; ++x) {
+            const int16_t masked = static_cast<int16_t>(w[x] * inside[x]);
+            cross += static_cast<int32_t>(w[x]) * t[x];
+            w_sum += masked;
+            w_sum2 += static_cast<int32_t>(masked) * masked;
           }
         }
       }
-      for (int k = 0; k < kLanes && ox0 + k < positions; ++k) {
-        const double w_var = w_sum2[k] - static_cast<double>(w_sum[k]) * w_sum[k] / n;
-        const double covariance = cross[k] - static_cast<double>(w_sum[k]) * t_sum / n;
-        const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
-        response->at<float>(oy, ox0 + k) = denominator > 1e-9 ? static_cast<float>(covariance / denominator) : 0.0f;
-      }
+      const double w_var = w_sum2 - static_cast<double>(w_sum) * w_sum / n;
+      const double covariance = cross - static_cast<double>(w_sum) * t_sum / n;
+      const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
+      response->at<float>(oy, ox) = denominator > 1e-9 ? static_cast<float>(covariance / denominator) : 0.0f;
     }
   }
 }
