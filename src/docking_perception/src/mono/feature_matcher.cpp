@@ -20,12 +20,15 @@ double signedArea(const std::vector<cv::Point2f>& polygon) {
   return 0.5 * area;
 }
 
-// The matching loop; instantiated twice so that the popcount builtin compiles to the POPCNT
-// instruction where the CPU has it, and to portable code elsewhere.
+// The matching loop. kWords > 0: descriptors of exactly kWords 64-bit words (BRISK's 64 bytes), a
+// loop of fixed length the compiler unrolls with the query's words held in registers; 0: any width.
+// Instantiated twice more so that the popcount builtin compiles to the POPCNT instruction where the CPU
+// has it, and to portable code elsewhere.
+template <int kWords>
 inline void knnLoop(const cv::Mat& query, const cv::Mat& train, int first_row, int row_count,
                     std::vector<HammingPair>* pairs) {
-  const int words = query.cols / 8;
-  const int tail = query.cols % 8;
+  const int words = kWords > 0 ? kWords : query.cols / 8;
+  const int tail = kWords > 0 ? 0 : query.cols % 8;
   for (int q = 0; q < query.rows; ++q) {
     const uint8_t* a = query.ptr<uint8_t>(q);
     HammingPair& pair = (*pairs)[static_cast<size_t>(q)];
@@ -51,10 +54,21 @@ inline void knnLoop(const cv::Mat& query, const cv::Mat& train, int first_row, i
   }
 }
 
+constexpr int kBriskWords = 8;  // 64-byte descriptors
+
+inline void knnLoopAnyWidth(const cv::Mat& query, const cv::Mat& train, int first_row, int row_count,
+                            std::vector<HammingPair>* pairs) {
+  if (query.cols == 8 * kBriskWords) {
+    knnLoop<kBriskWords>(query, train, first_row, row_count, pairs);
+  } else {
+    knnLoop<0>(query, train, first_row, row_count, pairs);
+  }
+}
+
 #if defined(__x86_64__) && defined(__GNUC__)
 __attribute__((target("popcnt"))) void knnLoopPopcnt(const cv::Mat& query, const cv::Mat& train, int first_row,
                                                      int row_count, std::vector<HammingPair>* pairs) {
-  knnLoop(query, train, first_row, row_count, pairs);
+  knnLoopAnyWidth(query, train, first_row, row_count, pairs);
 }
 #endif
 
@@ -73,7 +87,7 @@ std::vector<HammingPair> hammingKnn2(const cv::Mat& query, const cv::Mat& train,
     return pairs;
   }
 #endif
-  knnLoop(query, train, first_row, row_count, &pairs);
+  knnLoopAnyWidth(query, train, first_row, row_count, &pairs);
   return pairs;
 }
 

@@ -11,29 +11,32 @@
 
 using namespace docking_perception::mono;  // NOLINT: test file
 
+// BRISK's 64-byte descriptors (the fixed-width loop) and an odd width (any-width loop, with a byte tail).
 TEST(HammingKnn2, AgreesWithBruteForceNorm) {
-  cv::RNG rng(3);
-  cv::Mat query(40, 64, CV_8U);
-  cv::Mat train(300, 64, CV_8U);
-  rng.fill(query, cv::RNG::UNIFORM, 0, 256);
-  rng.fill(train, cv::RNG::UNIFORM, 0, 256);
-  const auto pairs = hammingKnn2(query, train, 50, 200);
-  ASSERT_EQ(pairs.size(), 40u);
-  for (int q = 0; q < query.rows; ++q) {
-    int best = 1 << 30, second = 1 << 30, best_index = -1;
-    for (int t = 50; t < 250; ++t) {
-      const int d = static_cast<int>(cv::norm(query.row(q), train.row(t), cv::NORM_HAMMING));
-      if (d < best) {
-        second = best;
-        best = d;
-        best_index = t;
-      } else if (d < second) {
-        second = d;
+  for (const int width : {64, 37}) {
+    cv::RNG rng(3);
+    cv::Mat query(40, width, CV_8U);
+    cv::Mat train(300, width, CV_8U);
+    rng.fill(query, cv::RNG::UNIFORM, 0, 256);
+    rng.fill(train, cv::RNG::UNIFORM, 0, 256);
+    const auto pairs = hammingKnn2(query, train, 50, 200);
+    ASSERT_EQ(pairs.size(), 40u);
+    for (int q = 0; q < query.rows; ++q) {
+      int best = 1 << 30, second = 1 << 30, best_index = -1;
+      for (int t = 50; t < 250; ++t) {
+        const int d = static_cast<int>(cv::norm(query.row(q), train.row(t), cv::NORM_HAMMING));
+        if (d < best) {
+          second = best;
+          best = d;
+          best_index = t;
+        } else if (d < second) {
+          second = d;
+        }
       }
+      EXPECT_EQ(pairs[q].best_distance, best) << width << " bytes";
+      EXPECT_EQ(pairs[q].second_distance, second) << width << " bytes";
+      EXPECT_EQ(pairs[q].best_index, best_index) << width << " bytes";
     }
-    EXPECT_EQ(pairs[q].best_distance, best);
-    EXPECT_EQ(pairs[q].second_distance, second);
-    EXPECT_EQ(pairs[q].best_index, best_index);
   }
 }
 
