@@ -5,6 +5,9 @@
 #include <cstring>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace docking_perception {
 namespace mono {
@@ -107,11 +110,12 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
     }
   }
   const double t_var = t_sum2 - static_cast<double>(t_sum) * t_sum / n;
-  // Each row of a position's sums is a dot product over a fixed-length run of 16-bit values, a loop
-  // the compiler turns into multiply-add vector instructions. The template rows are padded with zeros
-  // to whole runs, and `inside` (1 under the template, 0 past it) keeps the window pixels past the
-  // template out of the window's sums. The window rows are padded too, so every run reads inside them.
-  constexpr int kRun = 16;
+  // A position's sums are dot products over the template's rows, in runs of kRun 16-bit values: the
+  // template rows are padded with zeros to whole runs, and `inside` (all ones under the template, 0 past
+  // it) keeps the window pixels past the template out of the window's sums. The window rows are padded
+  // too, so every run reads inside them. With SSE2 each run of 8 is three multiply-adds (pmaddwd) into
+  // accumulators kept across the rows; elsewhere the same sums in plain loops.
+  constexpr int kRun = 8;
   const int row_length = (size + kRun - 1) / kRun * kRun;
   const int window_stride = window.cols + row_length;
   std::vector<int16_t> window16(static_cast<size_t>(window_stride) * static_cast<size_t>(window.rows), 0);
@@ -125,24 +129,48 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
     const uint8_t* t = templ.ptr<uint8_t>(y);
     std::copy(t, t + size, templ16.begin() + static_cast<std::ptrdiff_t>(y) * row_length);
   }
-  std::fill(inside.begin(), inside.begin() + size, static_cast<int16_t>(1));
+  std::fill(inside.begin(), inside.begin() + size, static_cast<int16_t>(-1));  // all bits set: a mask
   for (int oy = 0; oy < positions; ++oy) {
     for (int ox = 0; ox < positions; ++ox) {
       int32_t w_sum = 0;
       int32_t w_sum2 = 0;
       int32_t cross = 0;
+#if defined(__SSE2__)
+      __m128i cross4 = _mm_setzero_si128();
+      __m128i sum4 = _mm_setzero_si128();
+      __m128i sum2_4 = _mm_setzero_si128();
+      const __m128i ones = _mm_set1_epi16(1);
       for (int y = 0; y < size; ++y) {
         const int16_t* w = window16.data() + static_cast<size_t>(oy + y) * window_stride + ox;
         const int16_t* t = templ16.data() + static_cast<size_t>(y) * row_length;
-        for (int run = 0; run < row_length; run += kRun) {
-          for (int x = run; x < run + kRun; ++x) {
-            const int16_t masked = static_cast<int16_t>(w[x] * inside[x]);
-            cross += static_cast<int32_t>(w[x]) * t[x];
-            w_sum += masked;
-            w_sum2 += static_cast<int32_t>(masked) * masked;
-          }
+        for (int x = 0; x < row_length; x += kRun) {
+          const __m128i wv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(w + x));
+          const __m128i tv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(t + x));
+          const __m128i masked = _mm_and_si128(wv, _mm_loadu_si128(reinterpret_cast<const __m128i*>(inside.data() + x)));
+          cross4 = _mm_add_epi32(cross4, _mm_madd_epi16(wv, tv));
+          sum4 = _mm_add_epi32(sum4, _mm_madd_epi16(masked, ones));
+          sum2_4 = _mm_add_epi32(sum2_4, _mm_madd_epi16(masked, masked));
         }
       }
+      alignas(16) int32_t lanes[3][4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(lanes[0]), cross4);
+      _mm_store_si128(reinterpret_cast<__m128i*>(lanes[1]), sum4);
+      _mm_store_si128(reinterpret_cast<__m128i*>(lanes[2]), sum2_4);
+      cross = lanes[0][0] + lanes[0][1] + lanes[0][2] + lanes[0][3];
+      w_sum = lanes[1][0] + lanes[1][1] + lanes[1][2] + lanes[1][3];
+      w_sum2 = lanes[2][0] + lanes[2][1] + lanes[2][2] + lanes[2][3];
+#else
+      for (int y = 0; y < size; ++y) {
+        const int16_t* w = window16.data() + static_cast<size_t>(oy + y) * window_stride + ox;
+        const int16_t* t = templ16.data() + static_cast<size_t>(y) * row_length;
+        for (int x = 0; x < row_length; ++x) {
+          const int32_t masked = w[x] & inside[x];
+          cross += static_cast<int32_t>(w[x]) * t[x];
+          w_sum += masked;
+          w_sum2 += masked * masked;
+        }
+      }
+#endif
       const double w_var = w_sum2 - static_cast<double>(w_sum) * w_sum / n;
       const double covariance = cross - static_cast<double>(w_sum) * t_sum / n;
       const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
