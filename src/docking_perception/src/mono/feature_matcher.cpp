@@ -94,6 +94,92 @@ std::vector<HammingPair> hammingKnn2(const cv::Mat& query, const cv::Mat& train,
   return pairs;
 }
 
+namespace {
+
+// The patch correlation's inputs as 16-bit rows padded for whole runs of kCorrelationRun values: the
+// template rows with zeros, and `inside` (all bits set under the template, 0 past it) keeps the window
+// pixels past the template out of the window's sums. The window rows are padded too, so every run reads
+// inside them. Kept per thread and reused: the refinement correlates ~270 patches a frame.
+constexpr int kCorrelationRun = 8;
+struct PaddedPatches {
+  int template_size = 0;
+  int row_length = 0;     // template row length, padded
+  int window_stride = 0;  // window row length, padded
+  std::vector<int16_t> window;
+  std::vector<int16_t> templ;
+  std::vector<int16_t> inside;
+};
+
+void padPatches(const cv::Mat& window, const cv::Mat& templ, PaddedPatches* padded) {
+  const int size = templ.rows;
+  padded->template_size = size;
+  padded->row_length = (size + kCorrelationRun - 1) / kCorrelationRun * kCorrelationRun;
+  padded->window_stride = window.cols + padded->row_length;
+  padded->window.assign(static_cast<size_t>(padded->window_stride) * static_cast<size_t>(window.rows), 0);
+  padded->templ.assign(static_cast<size_t>(padded->row_length) * static_cast<size_t>(size), 0);
+  padded->inside.assign(static_cast<size_t>(padded->row_length), 0);
+  for (int y = 0; y < window.rows; ++y) {
+    const uint8_t* w = window.ptr<uint8_t>(y);
+    std::copy(w, w + window.cols, padded->window.begin() + static_cast<std::ptrdiff_t>(y) * padded->window_stride);
+  }
+  for (int y = 0; y < size; ++y) {
+    const uint8_t* t = templ.ptr<uint8_t>(y);
+    std::copy(t, t + size, padded->templ.begin() + static_cast<std::ptrdiff_t>(y) * padded->row_length);
+  }
+  std::fill(padded->inside.begin(), padded->inside.begin() + size, static_cast<int16_t>(-1));
+}
+
+struct CorrelationSums {
+  int32_t cross = 0;        // sum of window x template
+  int32_t window_sum = 0;   // sum of the window pixels under the template
+  int32_t window_sum2 = 0;  // sum of their squares
+};
+
+// The sums at one position: dot products over the template's rows. With SSE2 each run of 8 is three
+// multiply-adds (pmaddwd) into accumulators kept across the rows; elsewhere the same sums in plain loops.
+CorrelationSums positionSums(const PaddedPatches& p, int oy, int ox) {
+  CorrelationSums sums;
+#if defined(__SSE2__)
+  __m128i cross4 = _mm_setzero_si128();
+  __m128i sum4 = _mm_setzero_si128();
+  __m128i sum2_4 = _mm_setzero_si128();
+  const __m128i ones = _mm_set1_epi16(1);
+  for (int y = 0; y < p.template_size; ++y) {
+    const int16_t* w = p.window.data() + static_cast<size_t>(oy + y) * p.window_stride + ox;
+    const int16_t* t = p.templ.data() + static_cast<size_t>(y) * p.row_length;
+    for (int x = 0; x < p.row_length; x += kCorrelationRun) {
+      const __m128i wv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(w + x));
+      const __m128i tv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(t + x));
+      const __m128i masked = _mm_and_si128(wv, _mm_loadu_si128(reinterpret_cast<const __m128i*>(p.inside.data() + x)));
+      cross4 = _mm_add_epi32(cross4, _mm_madd_epi16(wv, tv));
+      sum4 = _mm_add_epi32(sum4, _mm_madd_epi16(masked, ones));
+      sum2_4 = _mm_add_epi32(sum2_4, _mm_madd_epi16(masked, masked));
+    }
+  }
+  alignas(16) int32_t lanes[3][4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(lanes[0]), cross4);
+  _mm_store_si128(reinterpret_cast<__m128i*>(lanes[1]), sum4);
+  _mm_store_si128(reinterpret_cast<__m128i*>(lanes[2]), sum2_4);
+  sums.cross = lanes[0][0] + lanes[0][1] + lanes[0][2] + lanes[0][3];
+  sums.window_sum = lanes[1][0] + lanes[1][1] + lanes[1][2] + lanes[1][3];
+  sums.window_sum2 = lanes[2][0] + lanes[2][1] + lanes[2][2] + lanes[2][3];
+#else
+  for (int y = 0; y < p.template_size; ++y) {
+    const int16_t* w = p.window.data() + static_cast<size_t>(oy + y) * p.window_stride + ox;
+    const int16_t* t = p.templ.data() + static_cast<size_t>(y) * p.row_length;
+    for (int x = 0; x < p.row_length; ++x) {
+      const int32_t masked = w[x] & p.inside[x];
+      sums.cross += static_cast<int32_t>(w[x]) * t[x];
+      sums.window_sum += masked;
+      sums.window_sum2 += masked * masked;
+    }
+  }
+#endif
+  return sums;
+}
+
+}  // namespace
+
 void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv::Mat* response) {
   const int size = templ.rows;
   const int positions = window.rows - size + 1;
@@ -110,69 +196,13 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
     }
   }
   const double t_var = t_sum2 - static_cast<double>(t_sum) * t_sum / n;
-  // A position's sums are dot products over the template's rows, in runs of kRun 16-bit values: the
-  // template rows are padded with zeros to whole runs, and `inside` (all ones under the template, 0 past
-  // it) keeps the window pixels past the template out of the window's sums. The window rows are padded
-  // too, so every run reads inside them. With SSE2 each run of 8 is three multiply-adds (pmaddwd) into
-  // accumulators kept across the rows; elsewhere the same sums in plain loops.
-  constexpr int kRun = 8;
-  const int row_length = (size + kRun - 1) / kRun * kRun;
-  const int window_stride = window.cols + row_length;
-  std::vector<int16_t> window16(static_cast<size_t>(window_stride) * static_cast<size_t>(window.rows), 0);
-  std::vector<int16_t> templ16(static_cast<size_t>(row_length) * static_cast<size_t>(size), 0);
-  std::vector<int16_t> inside(static_cast<size_t>(row_length), 0);
-  for (int y = 0; y < window.rows; ++y) {
-    const uint8_t* w = window.ptr<uint8_t>(y);
-    std::copy(w, w + window.cols, window16.begin() + static_cast<std::ptrdiff_t>(y) * window_stride);
-  }
-  for (int y = 0; y < size; ++y) {
-    const uint8_t* t = templ.ptr<uint8_t>(y);
-    std::copy(t, t + size, templ16.begin() + static_cast<std::ptrdiff_t>(y) * row_length);
-  }
-  std::fill(inside.begin(), inside.begin() + size, static_cast<int16_t>(-1));  // all bits set: a mask
+  thread_local PaddedPatches padded;
+  padPatches(window, templ, &padded);
   for (int oy = 0; oy < positions; ++oy) {
     for (int ox = 0; ox < positions; ++ox) {
-      int32_t w_sum = 0;
-      int32_t w_sum2 = 0;
-      int32_t cross = 0;
-#if defined(__SSE2__)
-      __m128i cross4 = _mm_setzero_si128();
-      __m128i sum4 = _mm_setzero_si128();
-      __m128i sum2_4 = _mm_setzero_si128();
-      const __m128i ones = _mm_set1_epi16(1);
-      for (int y = 0; y < size; ++y) {
-        const int16_t* w = window16.data() + static_cast<size_t>(oy + y) * window_stride + ox;
-        const int16_t* t = templ16.data() + static_cast<size_t>(y) * row_length;
-        for (int x = 0; x < row_length; x += kRun) {
-          const __m128i wv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(w + x));
-          const __m128i tv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(t + x));
-          const __m128i masked = _mm_and_si128(wv, _mm_loadu_si128(reinterpret_cast<const __m128i*>(inside.data() + x)));
-          cross4 = _mm_add_epi32(cross4, _mm_madd_epi16(wv, tv));
-          sum4 = _mm_add_epi32(sum4, _mm_madd_epi16(masked, ones));
-          sum2_4 = _mm_add_epi32(sum2_4, _mm_madd_epi16(masked, masked));
-        }
-      }
-      alignas(16) int32_t lanes[3][4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(lanes[0]), cross4);
-      _mm_store_si128(reinterpret_cast<__m128i*>(lanes[1]), sum4);
-      _mm_store_si128(reinterpret_cast<__m128i*>(lanes[2]), sum2_4);
-      cross = lanes[0][0] + lanes[0][1] + lanes[0][2] + lanes[0][3];
-      w_sum = lanes[1][0] + lanes[1][1] + lanes[1][2] + lanes[1][3];
-      w_sum2 = lanes[2][0] + lanes[2][1] + lanes[2][2] + lanes[2][3];
-#else
-      for (int y = 0; y < size; ++y) {
-        const int16_t* w = window16.data() + static_cast<size_t>(oy + y) * window_stride + ox;
-        const int16_t* t = templ16.data() + static_cast<size_t>(y) * row_length;
-        for (int x = 0; x < row_length; ++x) {
-          const int32_t masked = w[x] & inside[x];
-          cross += static_cast<int32_t>(w[x]) * t[x];
-          w_sum += masked;
-          w_sum2 += masked * masked;
-        }
-      }
-#endif
-      const double w_var = w_sum2 - static_cast<double>(w_sum) * w_sum / n;
-      const double covariance = cross - static_cast<double>(w_sum) * t_sum / n;
+      const CorrelationSums sums = positionSums(padded, oy, ox);
+      const double w_var = sums.window_sum2 - static_cast<double>(sums.window_sum) * sums.window_sum / n;
+      const double covariance = sums.cross - static_cast<double>(sums.window_sum) * t_sum / n;
       const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
       response->at<float>(oy, ox) = denominator > 1e-9 ? static_cast<float>(covariance / denominator) : 0.0f;
     }
