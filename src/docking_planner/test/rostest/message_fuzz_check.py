@@ -318,8 +318,9 @@ class MessageFuzzCheck(unittest.TestCase):
                                                                     moved, max_jump), flush=True)
         # Then a docking still works. The action topics' publishers stay registered: the action client
         # publishes on the same topics from this node, and unregistering then registering a topic again
-        # at once races in the master's publisher updates (seen once in a loaded make test: the planner
-        # applied the empty update last, dropped the client's goal connection, and the goal never arrived).
+        # at once races in the master's publisher updates (most likely what happened once in a loaded make
+        # test: the planner got the empty update and the client's, one goal connection was dropped at once,
+        # and the goal never started a docking).
         for topic, p in pubs.items():
             if topic not in ("docking/dock/goal", "docking/dock/cancel"):
                 p.unregister()
