@@ -11,7 +11,8 @@ function that does the stage's work (--toggle-collect); the count is divided by 
 Writes {"stages": {NAME: {"instructions_per_frame_M": float, "frames": int}}}. Stages:
   rectify, disparity, detection, disparity_total  bench_disparity on the rendered far pair (per pair)
   mono_full, mono_tracking, mono_ir               bench_mono's 90-frame approach (MonoPoseEstimator::process)
-  apriltag                                        bench_apriltag on the tagged frame (detection + pose)
+  apriltag, mono_full_same_frame,                 bench_apriltag on one frame of the target with a tag
+  mono_tracking_same_frame                        inset (AprilTag 3, then our pose on the same pixels)
 Under callgrind the programs run ~50x slower: about 3 minutes in all on this machine.
 """
 import argparse
@@ -27,7 +28,7 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 LIB = ROOT / "devel" / "lib" / "docking_perception"
 DISPARITY_FRAMES = 3  # timed frames; bench_disparity adds 3 warm-up frames, counted too
 DISPARITY_WARMUP = 3
-APRILTAG_FRAMES = 5   # bench_apriltag adds one warm-up detection, counted too
+APRILTAG_FRAMES = 5   # bench_apriltag adds one warm-up call per stage, counted too
 MONO_STAGES = ("mono_full", "mono_tracking", "mono_ir")
 # The function whose every call is one frame of the stage.
 DISPARITY_STAGE_FUNCTIONS = {
@@ -88,11 +89,17 @@ def count_mono(workdir):
     return stages
 
 
-def count_apriltag(args, workdir):
-    command = [LIB / "bench_apriltag", pathlib.Path(workdir) / "apriltag.json", "--sequence", args.tagged_sequence,
-               "--target", args.tagged_target, "--frames", APRILTAG_FRAMES]
-    instructions, _ = collected_instructions(command, APRILTAG_FUNCTION, workdir)
-    return {"apriltag": per_frame(instructions, APRILTAG_FRAMES + 1)}
+def count_same_frame(args, workdir):
+    """AprilTag and our mono pose on the same frame, each stage in its own run."""
+    stages = {}
+    for stage, function in (("apriltag", APRILTAG_FUNCTION), ("mono_full_same_frame", MONO_FUNCTION),
+                            ("mono_tracking_same_frame", MONO_FUNCTION)):
+        command = [LIB / "bench_apriltag", pathlib.Path(workdir) / "apriltag.json", "--sequence",
+                   args.tagged_sequence, "--target", args.tagged_target, "--mono-params",
+                   ROOT / "config" / "mono_pose_visible.yaml", "--stages", stage, "--frames", APRILTAG_FRAMES]
+        instructions, _ = collected_instructions(command, function, workdir)
+        stages[stage] = per_frame(instructions, APRILTAG_FRAMES + 1)
+    return stages
 
 
 def main():
@@ -113,7 +120,7 @@ def main():
             stages.update(count_disparity(args, workdir))
             stages.update(count_mono(workdir))
             if (LIB / "bench_apriltag").exists():  # built only where libapriltag-dev is installed
-                stages.update(count_apriltag(args, workdir))
+                stages.update(count_same_frame(args, workdir))
     except CountError as error:
         print(f"bench_instructions: {error}", file=sys.stderr)
         return 1

@@ -21,17 +21,18 @@ echo "== bench_disparity (rectify + disparity + detection on the rendered pair)"
 echo "== bench_mono (detection + pose, full frame and tracking)"
 "$lib/bench_mono" "$out/parts/mono.json" config/target.yaml || status=1
 if [ -x "$lib/bench_apriltag" ]; then
-  echo "== bench_apriltag (AprilTag 3 on the tagged target variant)"
-  # The tagged target (config/target_tagged.yaml) 1 m ahead, left camera rectified as mono_pose sees it.
+  echo "== bench_apriltag (AprilTag 3 and our mono pose on the same frame)"
+  # Our target with a tag inset in its face (config/target_tagged_inset.yaml) 1 m ahead, the left
+  # camera's frame rectified as mono_pose sees it: AprilTag and our pose on identical pixels.
   devel/lib/docking_sim/sim_render --config config --scenario eval_near_1m_on --time 1.0 --sequence 1 \
-    --target config/target_tagged.yaml --out "$out/frames/tagged1m" >/dev/null
-  "$lib/bench_apriltag" "$out/parts/apriltag.json" --sequence "$out/frames/tagged1m" \
-    --target config/target_tagged.yaml || status=1
+    --target config/target_tagged_inset.yaml --out "$out/frames/inset1m" >/dev/null
+  "$lib/bench_apriltag" "$out/parts/apriltag.json" --sequence "$out/frames/inset1m" \
+    --target config/target_tagged_inset.yaml --mono-params config/mono_pose_visible.yaml || status=1
 fi
 echo "== bench_instructions (instructions per frame of each stage, callgrind; ~3 min)"
 /usr/bin/python3 scripts/bench_instructions.py "$out/parts/instructions.json" \
   --far-left "$out/frames/far3m_stereo_left.png" --far-right "$out/frames/far3m_stereo_right.png" \
-  --tagged-sequence "$out/frames/tagged1m" --tagged-target config/target_tagged.yaml || status=1
+  --tagged-sequence "$out/frames/inset1m" --tagged-target config/target_tagged_inset.yaml || status=1
 /usr/bin/python3 - "$out" <<'PY'
 import json, pathlib, sys
 out = pathlib.Path(sys.argv[1])
