@@ -16,6 +16,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <docking_perception/ArbiterConfig.h>
 #include <dynamic_reconfigure/server.h>
+#include "docking_msgs/latency_window.h"
 #include "docking_msgs/require_param.h"
 #include <docking_msgs/TargetEstimate.h>
 #include <docking_msgs/estimate_check_msg.h>
@@ -412,6 +413,7 @@ class ArbiterNode {
     out.status.clear();  // TargetEstimate: empty when valid; the choice's reason is on the status topic
     estimate_pub_.publish(out);
     ++published_;
+    latency_.add((ros::Time::now() - out.header.stamp).toSec());  // the stamp is the source image's
 
     geometry_msgs::PoseWithCovarianceStamped pose_msg;
     pose_msg.header = out.header;
@@ -459,6 +461,7 @@ class ArbiterNode {
       stat.add(std::string(sourceName(s)) + " age (s)", latest ? std::to_string(now - latest->stamp_s) : "never");
     }
     stat.add("published", published_);
+    docking_msgs::addLatency(stat, "image->target estimate", latency_);
     stat.add("rejected (out of order / bad stamp)", arbiter_.rejectedCount());
     stat.add("clock jumps back (ordering reset)", arbiter_.clockJumpsBack());
     for (const auto& [code, count] : rejections_by_code_) stat.add("dropped: " + code, count);
@@ -491,6 +494,7 @@ class ArbiterNode {
   std::unique_ptr<InputSilence> silence_;
   bool was_silent_{false};  // the last decision was "no estimator talks"
   std::uint64_t published_{0};
+  docking_msgs::LatencyWindow latency_;  // image stamp -> the chosen estimate published
   std::uint64_t tf_failures_{0};
   std::string last_tf_error_;
   std::map<std::string, std::uint64_t> rejections_by_code_;  ///< dropped estimates by problem code

@@ -294,7 +294,7 @@ void DisparityDetectorNodelet::publishInvalidInput(const stereo_msgs::DisparityI
     last_input_error_ = status;
   }
   recordOutcome(false, status, estimate.processing_time_ms);
-  estimate_publisher_.publish(estimate);
+  publishEstimate(estimate);
 }
 
 // Nothing a disparity image contains may end the manager: whatever the detector throws (cv::Exception
@@ -449,7 +449,15 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
     NODELET_ERROR_THROTTLE(5.0, "disparity_detector: estimate withdrawn: %s",
                            docking_msgs::checks::estimateProblemName(own_problem));
   }
+  publishEstimate(estimate);
+}
+
+void DisparityDetectorNodelet::publishEstimate(const docking_msgs::TargetEstimate& estimate) {
   estimate_publisher_.publish(estimate);
+  if (estimate.header.stamp.isZero()) return;
+  const double latency_s = (ros::Time::now() - estimate.header.stamp).toSec();
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  latency_.add(latency_s);
 }
 
 void DisparityDetectorNodelet::recordOutcome(bool found, const std::string& reason,
@@ -492,6 +500,7 @@ void DisparityDetectorNodelet::produceDiagnostics(
   status.add("subscribed", static_cast<bool>(disparity_subscriber_));
   status.add("debug images drawn", debug_images_);
   status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
+  docking_msgs::addLatency(status, "image->estimate", latency_);
 
   if (!disparity_subscriber_) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle: no subscribers");

@@ -24,6 +24,7 @@
 
 #include "docking_msgs/TargetEstimate.h"
 #include "docking_msgs/estimate_check_msg.h"
+#include "docking_msgs/latency_window.h"
 #include "docking_msgs/names.h"
 #include "docking_msgs/thread_cpu_time.h"
 #include "docking_perception/MonoPoseConfig.h"
@@ -89,6 +90,8 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   // The latest valid disparity estimate (visible mode), applied before the next image.
   docking_msgs::TargetEstimateConstPtr disparity_hint_;
   int hints_used_ = 0;
+  // Image stamp -> this estimate's publication (diagnostics: this stage's share of the chain's latency).
+  docking_msgs::LatencyWindow latency_;
 };
 
 template <typename T>
@@ -411,6 +414,7 @@ void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono
     NODELET_ERROR_THROTTLE(5.0, "mono_pose: estimate withdrawn: %s", docking_msgs::checks::estimateProblemName(problem));
   }
   estimate_publisher_.publish(msg);
+  if (!header.stamp.isZero()) latency_.add((ros::Time::now() - header.stamp).toSec());
 }
 
 void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
@@ -436,6 +440,7 @@ void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("disparity search hints used", hints_used_);
   status.add("debug images drawn", debug_images_);
   status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
+  docking_msgs::addLatency(status, "image->estimate", latency_);
 }
 
 }  // namespace docking_perception

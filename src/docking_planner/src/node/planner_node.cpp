@@ -20,6 +20,7 @@
 #include <docking_msgs/PlannerGeometry.h>
 #include <docking_msgs/TargetEstimate.h>
 #include <docking_msgs/estimate_check_msg.h>
+#include <docking_msgs/latency_window.h>
 #include <docking_msgs/names.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Odometry.h>
@@ -439,7 +440,7 @@ class PlannerNode {
       ROS_WARN_THROTTLE(5.0, "planner: odometry sample not kept (not finite, or stamp not after the last one)");
     }
     // An estimate that waited for odometry at its stamp can be placed now.
-    if (!pending_.empty() && processPending() && update_on_estimate_) runCycle();
+    if (!pending_.empty() && processPending() && update_on_estimate_) runCycle(last_placed_stamp_);
   }
 
   void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg, const std::string& publisher) {
@@ -462,7 +463,7 @@ class PlannerNode {
     pending_.push_back(msg);
     // A fresh estimate is acted on at once rather than at the next timer tick: that tick would add up
     // to one period to the image-to-cmd_vel latency.
-    if (processPending() && update_on_estimate_) runCycle();
+    if (processPending() && update_on_estimate_) runCycle(last_placed_stamp_);
   }
 
   // Estimates wait here until the camera can be placed in odom at their stamp (placeCamera), for at
@@ -493,6 +494,7 @@ class PlannerNode {
       const TrackUpdate result = planner_.addObservation(toObservation(*msg, odom_from_camera));
       if (!result.accepted) ROS_DEBUG("planner: estimate not used: %s", result.reason.c_str());
       placed = true;  // acted on at once even when not used (an outlier, near contact): the planner has decided
+      last_placed_stamp_ = msg->header.stamp;
       pending_.pop_front();
     }
     return placed;
@@ -602,15 +604,17 @@ class PlannerNode {
   void onTimer(const ros::TimerEvent&) {
     try {
       followClock(ros::Time::now().toSec());
-      processPending();
-      runCycle();
+      const bool placed = processPending();
+      runCycle(placed ? last_placed_stamp_ : ros::Time());
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5.0, "planner: cycle failed: %s; zero velocity", e.what());
       cmd_pub_.publish(geometry_msgs::Twist());
     }
   }
 
-  void runCycle() {
+  // One planning step and its cmd_vel. `image_stamp`: the stamp of the estimate this step acts on (its
+  // image's), for the image -> cmd_vel latency; zero for a step of the timer alone.
+  void runCycle(const ros::Time& image_stamp = ros::Time()) {
     const ros::Time now = ros::Time::now();
     last_ = planner_.update(now.toSec(), odometry_);
 
@@ -619,6 +623,7 @@ class PlannerNode {
     cmd.linear.y = last_.command.vy;
     cmd.angular.z = last_.command.wz;
     cmd_pub_.publish(cmd);
+    if (!image_stamp.isZero()) latency_.add((ros::Time::now() - image_stamp).toSec());
 
     docking_msgs::DockingState state;
     state.header.stamp = now;
@@ -713,6 +718,7 @@ class PlannerNode {
     if (!last_drop_.empty()) stat.add("last dropped", last_drop_);
     stat.add("goal ids stamped in the future (taken as received now)", restamped_ids_);
     if (!last_restamped_.empty()) stat.add("last restamped goal id", last_restamped_);
+    docking_msgs::addLatency(stat, "image->cmd_vel", latency_);
   }
 
   DockingPlanner planner_;
@@ -745,6 +751,8 @@ class PlannerNode {
   std::map<std::string, Eigen::Isometry3d> camera_mounts_;
   std::uint64_t placed_from_odometry_{0};
   std::deque<docking_msgs::TargetEstimateConstPtr> pending_;
+  ros::Time last_placed_stamp_;            ///< stamp of the newest estimate processPending() placed
+  docking_msgs::LatencyWindow latency_;    ///< image stamp -> the cmd_vel acting on it
   PlannerOutput last_;
   DockingPhase last_state_{DockingPhase::kIdle};
   std::uint64_t tf_failures_{0};

@@ -17,6 +17,7 @@
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <docking_msgs/TargetEstimate.h>
+#include <docking_msgs/latency_window.h>
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
@@ -58,6 +59,8 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
                            double cpu_start_ms);
   void produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
   void recordOutcome(bool found, const std::string& reason, double processing_ms);
+  // Publishes and records the image stamp -> publication latency (takes state_mutex_).
+  void publishEstimate(const docking_msgs::TargetEstimate& estimate);
   void recordDebugImage(double cpu_ms);
 
   ros::NodeHandle nh_;
@@ -90,6 +93,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   unsigned long detections_ = 0;
   double last_processing_ms_ = 0.0;
   double last_range_m_ = 0.0;
+  docking_msgs::LatencyWindow latency_;  // image stamp -> estimate published
   // Debug images are drawn only while someone subscribes: what they cost, and proof of none without.
   unsigned long debug_images_ = 0;
   double debug_image_cpu_ms_total_ = 0.0;
