@@ -67,17 +67,20 @@ def node_name(pid):
 
 
 def memory_kb(pid):
-    """(VmRSS, VmHWM) in kB, or None when the process has gone."""
+    """(VmRSS, VmHWM, Pss) in kB, or None when the process has gone. RSS counts every shared library page
+    in every process that maps it; PSS splits each shared page among its users, so PSS sums to what the
+    processes together hold."""
     try:
         status = pathlib.Path(f"/proc/{pid}/status").read_text()
+        rollup = pathlib.Path(f"/proc/{pid}/smaps_rollup").read_text()
     except OSError:
         return None
     values = {}
-    for line in status.splitlines():
+    for line in (status + rollup).splitlines():
         key, _, rest = line.partition(":")
-        if key in ("VmRSS", "VmHWM"):
+        if key in ("VmRSS", "VmHWM", "Pss") and rest.split():
             values[key] = int(rest.split()[0])
-    return (values.get("VmRSS", 0), values.get("VmHWM", 0)) if values else None
+    return (values.get("VmRSS", 0), values.get("VmHWM", 0), values.get("Pss", 0)) if values else None
 
 
 def group(name):
@@ -101,20 +104,24 @@ def main():
                                "output:=log", "rviz:=false"],
                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     peak_hwm = {}     # node name -> highest VmHWM seen, kB
-    peak_sum = {"stack": 0, "simulator": 0, "master": 0, "helper": 0}
+    peak_sum = {"stack": 0, "simulator": 0, "master": 0, "helper": 0}      # RSS summed, kB
+    peak_pss_sum = dict(peak_sum)                                             # PSS summed, kB
     try:
         deadline = time.time() + args.seconds
         while time.time() < deadline and launch.poll() is None:
             sums = {"stack": 0, "simulator": 0, "master": 0, "helper": 0}
+            pss_sums = dict(sums)
             for pid in descendants(launch.pid):
                 name = node_name(pid)
                 memory = memory_kb(pid)
                 if not name or not memory:
                     continue
                 sums[group(name)] += memory[0]
+                pss_sums[group(name)] += memory[2]
                 peak_hwm[name] = max(peak_hwm.get(name, 0), memory[1])
             for key, value in sums.items():
                 peak_sum[key] = max(peak_sum[key], value)
+                peak_pss_sum[key] = max(peak_pss_sum[key], pss_sums[key])
             time.sleep(1.0)
     finally:
         os.killpg(launch.pid, signal.SIGINT)
@@ -129,11 +136,13 @@ def main():
     for name, kb in sorted(peak_hwm.items(), key=lambda item: -item[1]):
         print(f"  {name:28s} {kb / 1024:7.1f}  ({group(name)})")
     by_group = {g: sum(kb for n, kb in peak_hwm.items() if group(n) == g) / 1024 for g in peak_sum}
-    print(f"stack without the simulator: sum of peaks {by_group['stack']:.1f} MB, peak of the sum "
-          f"{peak_sum['stack'] / 1024:.1f} MB; simulator {by_group['simulator']:.1f} MB; master {by_group['master']:.1f} MB")
+    print(f"stack without the simulator: RSS: sum of peaks {by_group['stack']:.1f} MB, peak of the sum "
+          f"{peak_sum['stack'] / 1024:.1f} MB; PSS (shared pages split): peak of the sum {peak_pss_sum['stack'] / 1024:.1f} MB; "
+          f"simulator {by_group['simulator']:.1f} MB; master {by_group['master']:.1f} MB")
     result = {"scenario": args.scenario, "seconds": args.seconds,
               "peak_rss_mb_by_process": {n: round(kb / 1024, 1) for n, kb in peak_hwm.items()},
               "stack_sum_of_peaks_mb": round(by_group["stack"], 1), "stack_peak_of_sum_mb": round(peak_sum["stack"] / 1024, 1),
+              "stack_peak_of_pss_sum_mb": round(peak_pss_sum["stack"] / 1024, 1),
               "simulator_mb": round(by_group["simulator"], 1), "master_mb": round(by_group["master"], 1)}
     pathlib.Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     pathlib.Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
