@@ -22,8 +22,8 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SIMULATOR_NAMES = ("docking_sim",)       # the simulator's own processes: excluded from the stack's figure
 MASTER_NAMES = ("rosmaster", "rosout", "roslaunch")
-# roslaunch's substitution helpers ($(find), $(eval)): alive for a moment at start-up, not the stack.
-HELPER_NAMES = ("catkin_find", "rosversion", "bash", "sh")
+# roslaunch's substitution helpers ($(find), $(eval), the URDF command): alive for a moment at start-up.
+HELPER_NAMES = ("catkin_find", "rosversion", "bash", "sh", "make_urdf.py")
 
 
 def free_port():
