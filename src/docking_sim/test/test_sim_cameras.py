@@ -1,8 +1,17 @@
 #!/usr/bin/env python3
 """rostest: docking_sim publishes the three cameras at the configured rate in sim time, with valid
-camera_info matching the calibration files, and ground truth stamped like the images."""
+camera_info matching the calibration files, and ground truth stamped like the images.
+
+The rate is the simulator's publishing rate: frames published (the headers' seq, which the publisher
+counts) over the sim time their stamps span. A frame lost on its way to this test is not a frame the
+simulator failed to publish: when rendering falls behind on a busy machine the simulator catches up in a
+burst, and a slow subscriber loses part of it in the publisher's queue (stop 17: 25.7 Hz received of 30
+published, beside two CPU hogs and a second make test). Images are received undecoded (rospy.AnyMsg, a
+16 MB read buffer: decoding three 640x480 cameras at 30 Hz in Python is most of what loses them); only
+the image whose fields are checked is decoded."""
 import math
 import os
+import struct
 import sys
 import unittest
 
@@ -23,6 +32,26 @@ CAMERAS = {
 }
 
 
+IMAGE_BUFFER_BYTES = 2 ** 24  # rospy's default 64 kB reads a 900 kB image in many small pieces
+
+
+def seq_of(raw):
+    """The header seq of an undecoded message: the header's seq, secs, nsecs lead the buffer."""
+    return struct.unpack_from("<I", raw._buff, 0)[0]
+
+
+def stamp_of(raw):
+    """The header stamp of an undecoded message."""
+    _, secs, nsecs = struct.unpack_from("<III", raw._buff, 0)
+    return rospy.Time(secs, nsecs)
+
+
+def decoded_image(raw):
+    image = Image()
+    image.deserialize(raw._buff)
+    return image
+
+
 class SimCamerasTest(unittest.TestCase):
     def setUp(self):
         self.config_dir = rospy.get_param("~config_dir")
@@ -34,7 +63,8 @@ class SimCamerasTest(unittest.TestCase):
         self.clock = []
         subs = [rospy.Subscriber("/clock", Clock, lambda m: self.clock.append(m.clock.to_sec()))]
         for base in CAMERAS:
-            subs.append(rospy.Subscriber(base + "/image_raw", Image, self.images[base].append, queue_size=50))
+            subs.append(rospy.Subscriber(base + "/image_raw", rospy.AnyMsg, self.images[base].append, queue_size=50,
+                                         buff_size=IMAGE_BUFFER_BYTES))
             subs.append(rospy.Subscriber(base + "/camera_info", CameraInfo, self.infos[base].append, queue_size=50))
         for topic in self.truth:
             subs.append(rospy.Subscriber(topic, Odometry, self.truth[topic].append, queue_size=50))
@@ -46,7 +76,7 @@ class SimCamerasTest(unittest.TestCase):
         start_wall = time.time()
         while not rospy.is_shutdown() and time.time() - start_wall < 90.0:
             if self.clock and all(len(v) > 2 for v in self.images.values()):
-                first = min(v[0].header.stamp.to_sec() for v in self.images.values())
+                first = min(stamp_of(v[0]).to_sec() for v in self.images.values())
                 if self.clock[-1] - first > self.sim_seconds:
                     return
             time.sleep(0.1)
@@ -58,19 +88,26 @@ class SimCamerasTest(unittest.TestCase):
         self.wait_for_sim_seconds()
         for base, (frame, encoding, calib_file) in CAMERAS.items():
             images = self.images[base]
-            stamps = [m.header.stamp.to_sec() for m in images]
-            # Rate in sim time: frames counted over the stamps they cover.
+            stamps = [stamp_of(m).to_sec() for m in images]
+            seqs = [seq_of(m) for m in images]
+            # Rate in sim time: frames published (seq) over the stamps they cover.
             span = stamps[-1] - stamps[0]
-            rate = (len(stamps) - 1) / span
+            published = seqs[-1] - seqs[0]
+            rate = published / span
+            received = len(images) - 1
+            print("%s: %d frames published over %.2f s of sim time, %d received" % (base, published, span, received))
             self.assertAlmostEqual(rate, self.rate, delta=0.05 * self.rate, msg="%s rate %.2f Hz" % (base, rate))
-            for a, b in zip(stamps, stamps[1:]):
-                self.assertAlmostEqual(b - a, 1.0 / self.rate, delta=1e-3, msg="%s: uneven frame spacing" % base)
+            self.assertGreater(received, published // 2, "%s: most frames lost on the way" % base)
+            for (a, seq_a), (b, seq_b) in zip(zip(stamps, seqs), zip(stamps[1:], seqs[1:])):
+                self.assertGreater(seq_b, seq_a, "%s: frames out of order" % base)
+                self.assertAlmostEqual(b - a, (seq_b - seq_a) / self.rate, delta=1e-3,
+                                       msg="%s: uneven frame spacing" % base)
             # The newest image whose camera_info has arrived (the info of the very last image may still
             # be on its way: image and info are two topics).
             info_by_stamp = {m.header.stamp: m for m in self.infos[base]}
-            paired = [m for m in images if m.header.stamp in info_by_stamp]
+            paired = [m for m in images if stamp_of(m) in info_by_stamp]
             self.assertGreater(len(paired), len(images) // 2, "%s: most images have no camera_info with their stamp" % base)
-            img = paired[-1]
+            img = decoded_image(paired[-1])
             self.assertEqual(img.encoding, encoding)
             self.assertEqual((img.width, img.height), (640, 480))
             self.assertEqual(img.header.frame_id, frame)
@@ -91,7 +128,7 @@ class SimCamerasTest(unittest.TestCase):
             self.assertGreater(len(set(img.data[::97])), 20, "%s image looks blank" % base)
 
         # Truth: one message per image stamp, in the camera optical frame (still_3m).
-        left_stamps = set(m.header.stamp for m in self.images["stereo/left"])
+        left_stamps = set(stamp_of(m) for m in self.images["stereo/left"])
         for topic, frame in (("sim/truth/stereo_left", "stereo_left_optical_frame"), ("sim/truth/ir", "ir_optical_frame")):
             msgs = self.truth[topic]
             self.assertTrue(msgs, topic + " silent")
