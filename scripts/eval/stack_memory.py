@@ -7,7 +7,7 @@ and each process's CPU time per second of sim time: at the simulator's camera ra
 factor the machine reached.
 
   scripts/eval/stack_memory.py [--scenario closed_loop_still_1p5m] [--seconds 60] [--camera-rate-hz 30]
-                               [--out FILE.json]
+                               [--launch-arg NAME:=VALUE ...] [--out FILE.json]
 
 Runs its own roscore on a free port (ROS_MASTER_URI is set for the launch), binds to loopback, and stops
 everything it started. The master (rosmaster, rosout) is counted apart: a robot runs one whatever the
@@ -126,12 +126,14 @@ def main():
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--real-time-factor", default="1.0")
     parser.add_argument("--camera-rate-hz", default="30")
+    parser.add_argument("--launch-arg", action="append", default=[], metavar="NAME:=VALUE",
+                        help="another sim.launch argument, e.g. perception_launch:=my_variant.launch")
     parser.add_argument("--out", default=str(ROOT / "results" / "stack_memory.json"))
     args = parser.parse_args()
     env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{free_port()}", ROS_IP="127.0.0.1")
     launch = subprocess.Popen(["roslaunch", str(ROOT / "launch" / "sim.launch"),
                                f"scenario:={args.scenario}", f"real_time_factor:={args.real_time_factor}",
-                               f"camera_rate_hz:={args.camera_rate_hz}", "output:=log", "rviz:=false"],
+                               f"camera_rate_hz:={args.camera_rate_hz}", "output:=log", "rviz:=false", *args.launch_arg],
                               env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     peak_hwm = {}     # node name -> highest VmHWM seen, kB
     peak_sum = {"stack": 0, "simulator": 0, "master": 0, "helper": 0}      # RSS summed, kB
