@@ -87,8 +87,8 @@ void ImageGuardNodelet::readParameters() {
 }
 
 void ImageGuardNodelet::onInit() {
-  // A bad parameter throws out of onInit: the manager refuses this nodelet (its `nodelet load` exits
-  // non-zero) and carries on; nothing is subscribed or advertised yet. Said here first: Debian's
+  // A bad parameter throws out of onInit: the loader refuses this nodelet (perception_host says so; a
+  // `nodelet load` exits non-zero) and carries on; nothing is subscribed or advertised yet. Said here first: Debian's
   // nodelet::Loader logs the exception's message at DEBUG only.
   try {
     readParameters();

@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <utility>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #if defined(__SSE2__)
@@ -12,6 +16,23 @@
 namespace docking_perception {
 namespace mono {
 namespace {
+
+// One BRISK object per (threshold, octaves) in the process: each one precomputes its sampling
+// pattern for 64 scales x 1024 rotations, 46 MB (measured), and the visible and IR mono_pose nodelets
+// in one perception process would otherwise hold one each. Sharing is safe: OpenCV's BRISK detect and
+// compute are const and keep their buffers on the stack. Held weakly: the last matcher frees it.
+cv::Ptr<cv::BRISK> sharedBrisk(int threshold, int octaves) {
+  static std::mutex mutex;
+  static std::map<std::pair<int, int>, std::weak_ptr<cv::BRISK>> instances;
+  const std::lock_guard<std::mutex> lock(mutex);
+  std::weak_ptr<cv::BRISK>& slot = instances[{threshold, octaves}];
+  std::shared_ptr<cv::BRISK> brisk = slot.lock();
+  if (!brisk) {
+    brisk = cv::BRISK::create(threshold, octaves);
+    slot = brisk;
+  }
+  return cv::Ptr<cv::BRISK>(brisk);
+}
 
 double signedArea(const std::vector<cv::Point2f>& polygon) {
   double area = 0.0;
@@ -209,9 +230,9 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
   }
 }
 
-FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(params) {
-  brisk_ = cv::BRISK::create(params_.brisk_threshold, params_.brisk_octaves);
-}
+// BRISK is created with the model (buildModel): a matcher that never gets one (mono_pose in IR mode)
+// never pays for its pattern tables.
+FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(params) {}
 
 void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
   const bool rebuild = params.brisk_threshold != params_.brisk_threshold ||
@@ -222,10 +243,7 @@ void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
                        params.model_widths_px != params_.model_widths_px ||
                        params.blurred_model_sigma_px != params_.blurred_model_sigma_px;
   params_ = params;
-  if (rebuild) {
-    brisk_ = cv::BRISK::create(params_.brisk_threshold, params_.brisk_octaves);
-    if (!texture_.empty()) buildModel(texture_, nullptr);
-  }
+  if (rebuild && !texture_.empty()) buildModel(texture_, nullptr);
 }
 
 void FeatureMatcher::detect(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, int max_keypoints) const {
@@ -276,6 +294,7 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
     if (reason) *reason = "the model texture must be a non-empty 8-bit gray image";
     return false;
   }
+  brisk_ = sharedBrisk(params_.brisk_threshold, params_.brisk_octaves);
   std::vector<int> widths = params_.model_widths_px;
   std::sort(widths.rbegin(), widths.rend());
   // The sharp levels, then (blurred_model_sigma_px > 0) the same widths blurred: the descriptors a

@@ -145,7 +145,8 @@ void MonoPoseNodelet::onInit() {
   if (!readParameters(&errors)) {
     for (const std::string& error : errors) NODELET_FATAL("mono_pose: %s", error.c_str());
     // Thrown, not ros::requestShutdown(): the nodelet loader catches it, refuses this nodelet and
-    // says so (its `nodelet load` process exits non-zero), while the manager keeps running. A shutdown
+    // says so (perception_host runs without it; a `nodelet load` process exits non-zero), while the
+    // process keeps running. A shutdown
     // requested from inside the loader's service call tore the manager down with the loader's mutex
     // still locked (boost::lock_error on the way out).
     // nodelet::Loader logs the exception's message at DEBUG only: said here first.

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <iostream>
+#include <thread>
+#include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -164,4 +166,42 @@ TEST(FeatureMatcher, SecondRefinementPassIsAtLeastAsAccurate) {
             << " px\n";
   EXPECT_LT(total_two / 4.0, 0.3);
   EXPECT_LE(total_two, 1.1 * total_one) << "two passes " << total_two / 4.0 << " px, one pass " << total_one / 4.0 << " px";
+}
+
+// Matchers with the same BRISK parameters share one BRISK object (46 MB of pattern tables each), made
+// only when a model is built, and two threads matching through it at once get what one thread gets.
+TEST(FeatureMatcher, SharesOneBriskPerParametersAndMatchesConcurrently) {
+  const TargetModel model = synthetic::makeModel(4);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  const cv::Mat image = synthetic::renderVisible(model, camera, synthetic::facingRotation(0.2, 0.1, -0.1),
+                                                 Eigen::Vector3d(-0.03, 0.01, 0.9), 5);
+  FeatureMatcher first;
+  EXPECT_EQ(first.descriptorExtractor(), nullptr);
+  FeatureMatcher second;
+  std::string reason;
+  ASSERT_TRUE(first.buildModel(model.textureGray(), &reason)) << reason;
+  ASSERT_TRUE(second.buildModel(model.textureGray(), &reason)) << reason;
+  ASSERT_NE(first.descriptorExtractor(), nullptr);
+  EXPECT_EQ(first.descriptorExtractor(), second.descriptorExtractor());
+  FeatureMatcherParams other_params;
+  other_params.brisk_threshold += 5;
+  FeatureMatcher other(other_params);
+  ASSERT_TRUE(other.buildModel(model.textureGray(), &reason)) << reason;
+  EXPECT_NE(other.descriptorExtractor(), first.descriptorExtractor());
+
+  const FaceMatch alone = first.match(image);
+  ASSERT_TRUE(alone.found) << alone.status;
+  constexpr int kRounds = 20;
+  std::vector<FaceMatch> from_first(kRounds), from_second(kRounds);
+  std::thread a([&] { for (FaceMatch& m : from_first) m = first.match(image); });
+  std::thread b([&] { for (FaceMatch& m : from_second) m = second.match(image); });
+  a.join();
+  b.join();
+  for (const std::vector<FaceMatch>* results : {&from_first, &from_second}) {
+    for (const FaceMatch& m : *results) {
+      ASSERT_TRUE(m.found) << m.status;
+      EXPECT_EQ(m.inliers, alone.inliers);
+      EXPECT_LT(cv::norm(m.homography - alone.homography), 1e-9);
+    }
+  }
 }

@@ -80,6 +80,9 @@ class FeatureMatcher {
   void setParams(const FeatureMatcherParams& params);
   const FeatureMatcherParams& params() const { return params_; }
   int modelKeypointCount() const { return static_cast<int>(model_points_.size()); }
+  // The BRISK object in use: null until buildModel, then one per (brisk_threshold, brisk_octaves) in
+  // the process, shared by every matcher with those parameters (its pattern tables take 46 MB).
+  const cv::BRISK* descriptorExtractor() const { return brisk_.get(); }
 
   // Matches in roi (empty: the whole image) of an 8-bit gray image. expected_face_width_px > 0 (from
   // a predicted pose) restricts matching to the model levels within a factor 1.6 of that width.
