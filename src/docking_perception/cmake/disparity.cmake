@@ -5,6 +5,7 @@
 add_library(docking_perception_disparity_core
   src/disparity/disparity_detector.cpp
   src/disparity/target_track_gate.cpp
+  src/disparity/near_range_pause.cpp
 )
 target_include_directories(docking_perception_disparity_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR})
 target_link_libraries(docking_perception_disparity_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES})
@@ -64,6 +65,11 @@ if(CATKIN_ENABLE_TESTING)
 
   # The whole far-range pipeline on rendered stereo pairs: matcher with the launch file's settings,
   # then the detector.
+  # Issue 15: when the disparity stage may rest (near, the arbiter on a monocular pose).
+  catkin_add_gtest(test_near_range_pause test/disparity/test_near_range_pause.cpp)
+  if(TARGET test_near_range_pause)
+    target_link_libraries(test_near_range_pause docking_perception_disparity_core gtest_main)
+  endif()
   catkin_add_gtest(test_disparity_pipeline test/disparity/test_disparity_pipeline.cpp)
   if(TARGET test_disparity_pipeline)
     target_link_libraries(test_disparity_pipeline
@@ -81,6 +87,10 @@ if(CATKIN_ENABLE_TESTING)
     add_dependencies(test_disparity_detector_node disparity_detector docking_perception_disparity_nodelet
       ${catkin_EXPORTED_TARGETS})
   endif()
+
+  # Issue 15: near the target the stage rests; it wakes when the arbiter stops (~1-2 min wall).
+  add_rostest(test/disparity/disparity_pause.test
+    DEPENDENCIES perception_host arbiter docking_perception_disparity_nodelet)
 
   # Against the simulator's truth at 3 m (needs docking_sim, omni_base and the camera frames node).
   add_rostest_gtest(test_disparity_sim test/disparity/disparity_sim_still_3m.test

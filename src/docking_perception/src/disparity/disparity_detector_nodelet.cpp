@@ -54,8 +54,8 @@ void DisparityDetectorNodelet::onInit() {
   Config config;
   if (!loadConfig(&config)) {
     // Thrown, not ros::requestShutdown(): the nodelet loader catches it and refuses this nodelet (see
-    // mono_pose_nodelet.cpp); its `nodelet load` process exits non-zero, and the launch, where the
-    // detector is required, ends cleanly.
+    // mono_pose_nodelet.cpp); perception_host says so and runs without it, a `nodelet load` process
+    // exits non-zero.
     // nodelet::Loader logs the exception's message at DEBUG only: said here first.
     const std::string message = "disparity_detector: invalid or missing parameters in " +
                                 private_nh_.getNamespace() +
@@ -68,6 +68,10 @@ void DisparityDetectorNodelet::onInit() {
     config_ = config;
     detector_.setParams(toDetectorParams(config));  // validated in loadConfig
     track_gate_.setParams(toTrackGateParams(config));
+  }
+  {
+    std::lock_guard<std::mutex> lock(pause_mutex_);
+    pause_.setParams(toPauseParams(config));
   }
 
   // Live tuning: the server starts from the same parameter server values we just validated.
@@ -97,10 +101,28 @@ void DisparityDetectorNodelet::onInit() {
       ros::names::parentNamespace(docking_msgs::topics::kDisparityEstimate) + "/debug_image";
   debug_publisher_ = image_transport_->advertise(debug_topic, 1, image_connection_changed,
                                                  image_connection_changed);
+  // The arbiter's output says when this stage may rest (near, on a monocular pose); the timer resumes it
+  // when that output stops arriving.
+  fused_subscriber_ = nh_.subscribe(docking_msgs::topics::kTargetEstimate, 1,
+                                    &DisparityDetectorNodelet::onFusedEstimate, this);
+  pause_timer_ = nh_.createTimer(ros::Duration(kPauseCheckPeriodS),
+                                 [this](const ros::TimerEvent&) { updateSubscriptions(); });
   NODELET_INFO("disparity_detector: publishing %s and %s; subscribing %s only while they have "
-               "subscribers",
+               "subscribers and the target is not near (%s)",
                estimate_publisher_.getTopic().c_str(), debug_publisher_.getTopic().c_str(),
-               nh_.resolveName(docking_msgs::topics::kStereoDisparity).c_str());
+               nh_.resolveName(docking_msgs::topics::kStereoDisparity).c_str(),
+               fused_subscriber_.getTopic().c_str());
+}
+
+void DisparityDetectorNodelet::onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused) {
+  const bool monocular = fused->selected_source == docking_msgs::TargetEstimate::SOURCE_MONO_VISIBLE ||
+                         fused->selected_source == docking_msgs::TargetEstimate::SOURCE_MONO_IR;
+  {
+    std::lock_guard<std::mutex> lock(pause_mutex_);
+    pause_.onFusedEstimate(ros::Time::now().toSec(), fused->valid && fused->position_valid, monocular,
+                           fused->range_m);
+  }
+  updateSubscriptions();
 }
 
 bool DisparityDetectorNodelet::loadConfig(Config* config) {
@@ -169,6 +191,9 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("track_gate_sigmas", &Config::track_gate_sigmas);
   read("track_confirm_frames", &Config::track_confirm_frames);
   read("track_timeout_s", &Config::track_timeout_s);
+  read("pause_inside_range_m", &Config::pause_inside_range_m);
+  read("pause_hysteresis_m", &Config::pause_hysteresis_m);
+  read("pause_max_fused_age_s", &Config::pause_max_fused_age_s);
   read("debug_display_max_disparity_px", &Config::debug_display_max_disparity_px);
   read("diagnostic_window_frames", &Config::diagnostic_window_frames);
   read("min_detection_rate_ok", &Config::min_detection_rate_ok);
@@ -194,6 +219,14 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   }
   for (const auto& error : errors) NODELET_FATAL("disparity_detector: %s", error.c_str());
   return errors.empty();
+}
+
+disparity::NearRangePauseParams DisparityDetectorNodelet::toPauseParams(const Config& c) {
+  disparity::NearRangePauseParams p;
+  p.pause_inside_range_m = c.pause_inside_range_m;
+  p.hysteresis_m = c.pause_hysteresis_m;
+  p.max_fused_age_s = c.pause_max_fused_age_s;
+  return p;
 }
 
 disparity::TrackGateParams DisparityDetectorNodelet::toTrackGateParams(const Config& c) {
@@ -248,6 +281,8 @@ void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/)
     detector_.setParams(toDetectorParams(config));
     track_gate_.setParams(toTrackGateParams(config));
     config_ = config;
+    std::lock_guard<std::mutex> pause_lock(pause_mutex_);
+    pause_.setParams(toPauseParams(config));
   } catch (const std::invalid_argument& error) {
     // Keep running with the last good values, and show them back to dynamic_reconfigure clients (dynparam get).
     NODELET_ERROR("disparity_detector: reconfigure rejected, keeping the previous values: %s",
@@ -260,9 +295,16 @@ void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/)
 }
 
 void DisparityDetectorNodelet::updateSubscriptions() {
+  disparity::PauseState pause_state;
+  {
+    std::lock_guard<std::mutex> lock(pause_mutex_);
+    pause_state = pause_.state(ros::Time::now().toSec());
+    pause_state_ = pause_state;
+  }
   std::lock_guard<std::mutex> lock(connection_mutex_);
   const bool wanted =
-      estimate_publisher_.getNumSubscribers() > 0 || debug_publisher_.getNumSubscribers() > 0;
+      (estimate_publisher_.getNumSubscribers() > 0 || debug_publisher_.getNumSubscribers() > 0) &&
+      pause_state != disparity::PauseState::kPaused;
   if (wanted && !disparity_subscriber_) {
     disparity_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoDisparity, 1,
                                           &DisparityDetectorNodelet::onDisparity, this);
@@ -274,7 +316,7 @@ void DisparityDetectorNodelet::updateSubscriptions() {
     camera_info_subscriber_.shutdown();
     disparity_subscriber_ = ros::Subscriber();
     camera_info_subscriber_ = ros::Subscriber();
-    NODELET_DEBUG("disparity_detector: no subscribers, unsubscribed from the disparity");
+    NODELET_DEBUG("disparity_detector: unsubscribed from the disparity (%s)", disparity::describe(pause_state));
   }
 }
 
@@ -498,11 +540,20 @@ void DisparityDetectorNodelet::produceDiagnostics(
   status.add("last range m", last_range_m_);
   status.add("last processing ms (CPU)", last_processing_ms_);
   status.add("subscribed", static_cast<bool>(disparity_subscriber_));
+  disparity::PauseState pause_state;
+  {
+    std::lock_guard<std::mutex> pause_lock(pause_mutex_);
+    pause_state = pause_state_;
+  }
+  status.add("paused", pause_state == disparity::PauseState::kPaused);
+  status.add("duty", disparity::describe(pause_state));
   status.add("debug images drawn", debug_images_);
   status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
   docking_msgs::addLatency(status, "image->estimate", latency_);
 
-  if (!disparity_subscriber_) {
+  if (!disparity_subscriber_ && pause_state == disparity::PauseState::kPaused) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, disparity::describe(pause_state));
+  } else if (!disparity_subscriber_) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle: no subscribers");
   } else if (!last_input_error_.empty()) {
     status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "bad input: " + last_input_error_);

@@ -1,8 +1,11 @@
 // disparity_detector nodelet: the thin ROS wrapper around DisparityDetector (see the package README).
 //
-// Subscribes (lazily, only while an output has subscribers):
+// Subscribes (lazily, only while an output has subscribers and the stage is not paused):
 //   stereo/disparity           stereo_msgs/DisparityImage (stereo_image_proc)
 //   stereo/left/camera_info    sensor_msgs/CameraInfo: the rectified principal point
+// and always
+//   target/estimate            docking_msgs/TargetEstimate, the arbiter's: near and monocular pauses the
+//                              stage (disparity/near_range_pause.h)
 // Publishes:
 //   perception/disparity/estimate     docking_msgs/TargetEstimate (SOURCE_DISPARITY, position only)
 //   perception/disparity/debug_image  sensor_msgs/Image bgr8 (image_transport)
@@ -27,6 +30,7 @@
 
 #include "docking_perception/DisparityDetectorConfig.h"
 #include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/disparity/near_range_pause.h"
 #include "docking_perception/disparity/target_track_gate.h"
 
 namespace docking_perception {
@@ -46,10 +50,13 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   bool loadConfig(Config* config);
   disparity::DetectorParams toDetectorParams(const Config& config) const;  // + target_shape_
   static disparity::TrackGateParams toTrackGateParams(const Config& config);
+  static disparity::NearRangePauseParams toPauseParams(const Config& config);
   void onReconfigure(Config& config, uint32_t level);
 
-  // Subscribes to the inputs while any output has a subscriber, unsubscribes otherwise.
+  // Subscribes to the inputs while any output has a subscriber and the stage is not paused,
+  // unsubscribes otherwise.
   void updateSubscriptions();
+  void onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused);
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info);
   // Catches what processDisparity throws: the message is reported as invalid input, the node goes on.
   void onDisparity(const stereo_msgs::DisparityImageConstPtr& message);
@@ -71,6 +78,15 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   ros::Subscriber disparity_subscriber_;
   ros::Subscriber camera_info_subscriber_;
   std::mutex connection_mutex_;
+
+  // Resting near the target (issue 15): the arbiter's output, and a timer that resumes the stage when
+  // that output stops arriving.
+  static constexpr double kPauseCheckPeriodS = 0.1;
+  ros::Subscriber fused_subscriber_;
+  ros::Timer pause_timer_;
+  std::mutex pause_mutex_;
+  disparity::NearRangePause pause_;
+  disparity::PauseState pause_state_ = disparity::PauseState::kNoFusedEstimate;  // as last applied
 
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<Config>> reconfigure_server_;

@@ -1,0 +1,80 @@
+#!/usr/bin/env python3
+"""Issue 15: the disparity stage rests near the target and wakes when it must.
+
+With the target 0.7 m ahead the arbiter's fused estimate is monocular and inside the detector's
+pause_inside_range_m (0.8 m): the detector's diagnostics must say paused, and its frame count must not
+grow over a few seconds of sim time (no disparity image processed). Then the arbiter is killed (roslaunch
+respawns it): with no fused estimate for pause_max_fused_age_s the detector must resubscribe (its frame
+count grows), and once the new arbiter publishes near and monocular again, it must rest again.
+Reads /diagnostics only.
+"""
+import os
+import signal
+import threading
+import time
+import unittest
+import xmlrpc.client
+
+import rosgraph
+import rosnode
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+
+PKG = "docking_perception"
+DETECTOR_STATUS = "disparity_detector"
+ARBITER_NODE = "/arbiter"
+CALLER = "/disparity_pause_check"
+
+
+def pid_of(node):
+    uri = rosnode.get_api_uri(rosgraph.Master(CALLER), node)
+    return xmlrpc.client.ServerProxy(uri).getPid(CALLER)[2]
+
+
+class DisparityPause(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("disparity_pause_check")
+
+    def setUp(self):
+        self.lock = threading.Lock()
+        self.status = None  # (paused, frames) of the detector's latest status
+        self.deadline = time.monotonic() + rospy.get_param("~timeout_s", 240.0)
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=50)
+
+    def on_diagnostics(self, msg):
+        for status in msg.status:
+            if DETECTOR_STATUS in status.name:
+                values = {kv.key: kv.value for kv in status.values}
+                if "paused" in values and "frames" in values:
+                    with self.lock:
+                        self.status = (values["paused"] == "True", int(values["frames"]))
+
+    def latest(self):
+        with self.lock:
+            return self.status
+
+    def wait_for(self, what, predicate):
+        while time.monotonic() < self.deadline and not rospy.is_shutdown():
+            status = self.latest()
+            if status is not None and predicate(status):
+                return status
+            time.sleep(0.2)
+        self.fail("timed out waiting until %s (last detector status: %s)" % (what, self.latest()))
+
+    def test_rests_near_and_wakes_when_the_arbiter_stops(self):
+        paused_frames = self.wait_for("the detector is paused", lambda s: s[0])[1]
+        rospy.sleep(3.0)  # sim time: 45 camera frames at 15 Hz
+        still = self.latest()
+        self.assertTrue(still[0], "the detector resumed with the target still near: %s" % (still,))
+        self.assertEqual(still[1], paused_frames, "disparity frames processed while paused")
+
+        os.kill(pid_of(ARBITER_NODE), signal.SIGKILL)
+        woke = self.wait_for("the detector processes disparity again", lambda s: s[1] > paused_frames)
+        rospy.loginfo("resumed: %d frames processed after the arbiter was killed", woke[1] - paused_frames)
+        self.wait_for("the detector rests again (arbiter respawned)", lambda s: s[0] and s[1] > paused_frames)
+
+
+if __name__ == "__main__":
+    rostest.rosrun(PKG, "disparity_pause", DisparityPause)
