@@ -2,7 +2,7 @@
 # Included by ../CMakeLists.txt after catkin_package().
 
 # ROS-free core: what an image must satisfy (encoding, sizes, step, data size, frame, stamp).
-add_library(${PROJECT_NAME}_image_guard_core src/image_guard/image_check.cpp)
+add_library(${PROJECT_NAME}_image_guard_core src/image_guard/image_check.cpp src/image_guard/rate_cap.cpp)
 
 # Nodelet (nodelet_plugins.xml): image_raw (any image_transport) -> image_checked, drops with diagnostics.
 add_library(${PROJECT_NAME}_image_guard_nodelet src/image_guard/image_guard_nodelet.cpp)
@@ -14,7 +14,7 @@ install(TARGETS ${PROJECT_NAME}_image_guard_core ${PROJECT_NAME}_image_guard_nod
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION})
 
 if(CATKIN_ENABLE_TESTING)
-  catkin_add_gtest(test_image_guard_core test/image_guard/test_image_check.cpp)
+  catkin_add_gtest(test_image_guard_core test/image_guard/test_image_check.cpp test/image_guard/test_rate_cap.cpp)
   if(TARGET test_image_guard_core)
     # Debian's catkin links GTest::gtest only; the tests use gtest's own main().
     target_link_libraries(test_image_guard_core ${PROJECT_NAME}_image_guard_core GTest::gtest_main)

@@ -7,9 +7,12 @@
 // another transport: its topic) and the problem (image_check.h). Likewise `camera_info` ->
 // `camera_info_checked`: a camera_info passes when it is well formed and describes the size of this
 // camera's last image that passed (image_proc's rectify, stereo_image_proc and our estimators read it).
-// Parameters (config/image_guard.yaml, all required): max_image_side_px, max_future_stamp_s.
+// Parameters (config/image_guard.yaml, all required): max_image_side_px, max_future_stamp_s,
+// max_rate_hz (valid frames passed at most this often, by stamp, image and camera_info alike: rate_cap.h;
+// perception.launch sets it for the right stereo camera).
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -26,6 +29,7 @@
 #include <sensor_msgs/Image.h>
 
 #include "docking_perception/image_guard/image_check.h"
+#include "docking_perception/image_guard/rate_cap.h"
 
 namespace docking_perception {
 namespace image_guard {
@@ -42,6 +46,7 @@ class ImageGuardNodelet : public nodelet::Nodelet {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ImageLimits limits_;
+  RateCap rate_cap_;  // ~max_rate_hz; under mutex_
   std::unique_ptr<image_transport::ImageTransport> image_transport_;
   // raw: a plain subscriber, whose MessageEvent names the publisher; other transports (compressed):
   // image_transport, whose callback does not, so the drops name the transport topic instead.
@@ -56,6 +61,8 @@ class ImageGuardNodelet : public nodelet::Nodelet {
 
   std::mutex mutex_;  // guards the counts below (image callback and diagnostics timer)
   std::uint64_t passed_{0};
+  std::uint64_t images_capped_{0};  // valid, left out by ~max_rate_hz (not faults)
+  std::uint64_t infos_capped_{0};
   std::array<std::uint64_t, kImageProblemCount> dropped_{};
   std::string last_drop_;  ///< publisher, code and details of the last dropped image
   std::optional<ImageSize> last_image_size_;  ///< of the last image that passed
@@ -79,6 +86,14 @@ void ImageGuardNodelet::readParameters() {
   }
   if (max_side_px <= 0) throw std::invalid_argument("parameter " + pnh.resolveName("max_image_side_px") + " must be > 0");
   limits_.max_side_px = static_cast<std::uint32_t>(max_side_px);
+  double max_rate_hz = 0.0;
+  if (!pnh.getParam("max_rate_hz", max_rate_hz)) {
+    throw std::invalid_argument("missing or non-numeric parameter " + pnh.resolveName("max_rate_hz"));
+  }
+  if (!std::isfinite(max_rate_hz) || max_rate_hz < 0.0) {
+    throw std::invalid_argument("parameter " + pnh.resolveName("max_rate_hz") + " must be >= 0 (0: every frame)");
+  }
+  rate_cap_ = RateCap(max_rate_hz);
   try {
     validate(limits_);
   } catch (const std::invalid_argument& e) {
@@ -152,6 +167,10 @@ void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image, const s
       {
         // Before the publish: the camera_info of this image may be checked while image_proc works on it.
         std::lock_guard<std::mutex> lock(mutex_);
+        if (!rate_cap_.admit(facts.stamp_s)) {
+          ++images_capped_;
+          return;
+        }
         ++passed_;
         last_image_size_ = ImageSize{image->width, image->height};
         held_info.swap(info_before_first_image_);
@@ -221,9 +240,15 @@ void ImageGuardNodelet::checkAndPassCameraInfo(const sensor_msgs::CameraInfoCons
     }
     problem = checkCameraInfo(factsOf(*info), last_image, ros::Time::now().toSec(), limits_);
     if (problem == CameraInfoProblem::kNone) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!rate_cap_.admit(info->header.stamp.toSec())) {
+          ++infos_capped_;
+          return;
+        }
+        ++infos_passed_;
+      }
       info_checked_publisher_.publish(info);
-      std::lock_guard<std::mutex> lock(mutex_);
-      ++infos_passed_;
       return;
     }
   } catch (const std::exception& e) {
@@ -258,6 +283,9 @@ void ImageGuardNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
                     static_cast<unsigned long long>(infos_dropped), last_info_drop_.c_str());
   }
   status.add("passed", passed_);
+  status.add("max rate Hz (0: every frame)", rate_cap_.maxRateHz());
+  status.add("left out by the rate cap", images_capped_);
+  status.add("camera_info left out by the rate cap", infos_capped_);
   for (std::size_t i = 1; i < kImageProblemCount; ++i) {
     status.add(std::string("dropped: ") + imageProblemName(static_cast<ImageProblem>(i)), dropped_[i]);
   }
