@@ -5,7 +5,6 @@
 add_library(docking_perception_disparity_core
   src/disparity/disparity_detector.cpp
   src/disparity/target_track_gate.cpp
-  src/disparity/near_range_pause.cpp
 )
 target_include_directories(docking_perception_disparity_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR})
 target_link_libraries(docking_perception_disparity_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES})
@@ -26,7 +25,7 @@ add_library(docking_perception_disparity_nodelet
 )
 add_dependencies(docking_perception_disparity_nodelet ${PROJECT_NAME}_gencfg ${catkin_EXPORTED_TARGETS})
 target_link_libraries(docking_perception_disparity_nodelet
-  docking_perception_disparity_core ${catkin_LIBRARIES} ${OpenCV_LIBRARIES})
+  docking_perception_disparity_core docking_perception_duty_core ${catkin_LIBRARIES} ${OpenCV_LIBRARIES})
 
 # Standalone node: loads the nodelet in-process (pluginlib finds it through nodelet_plugins.xml).
 add_executable(disparity_detector src/disparity/disparity_detector_node.cpp)
@@ -65,11 +64,6 @@ if(CATKIN_ENABLE_TESTING)
 
   # The whole far-range pipeline on rendered stereo pairs: matcher with the launch file's settings,
   # then the detector.
-  # Issue 15: when the disparity stage may rest (near, the arbiter on a monocular pose).
-  catkin_add_gtest(test_near_range_pause test/disparity/test_near_range_pause.cpp)
-  if(TARGET test_near_range_pause)
-    target_link_libraries(test_near_range_pause docking_perception_disparity_core gtest_main)
-  endif()
   catkin_add_gtest(test_disparity_pipeline test/disparity/test_disparity_pipeline.cpp)
   if(TARGET test_disparity_pipeline)
     target_link_libraries(test_disparity_pipeline

@@ -71,7 +71,7 @@ void DisparityDetectorNodelet::onInit() {
   }
   {
     std::lock_guard<std::mutex> lock(pause_mutex_);
-    pause_.setParams(toPauseParams(config));
+    near_.setParams(toPauseParams(config));
   }
 
   // Live tuning: the server starts from the same parameter server values we just validated.
@@ -119,8 +119,8 @@ void DisparityDetectorNodelet::onFusedEstimate(const docking_msgs::TargetEstimat
                          fused->selected_source == docking_msgs::TargetEstimate::SOURCE_MONO_IR;
   {
     std::lock_guard<std::mutex> lock(pause_mutex_);
-    pause_.onFusedEstimate(ros::Time::now().toSec(), fused->valid && fused->position_valid, monocular,
-                           fused->range_m);
+    near_.onFusedEstimate(ros::Time::now().toSec(), fused->valid && fused->position_valid, monocular,
+                          fused->range_m);
   }
   updateSubscriptions();
 }
@@ -221,9 +221,9 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   return errors.empty();
 }
 
-disparity::NearRangePauseParams DisparityDetectorNodelet::toPauseParams(const Config& c) {
-  disparity::NearRangePauseParams p;
-  p.pause_inside_range_m = c.pause_inside_range_m;
+duty::FusedRangeConditionParams DisparityDetectorNodelet::toPauseParams(const Config& c) {
+  duty::FusedRangeConditionParams p;
+  p.range_m = c.pause_inside_range_m;
   p.hysteresis_m = c.pause_hysteresis_m;
   p.max_fused_age_s = c.pause_max_fused_age_s;
   return p;
@@ -282,7 +282,7 @@ void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/)
     track_gate_.setParams(toTrackGateParams(config));
     config_ = config;
     std::lock_guard<std::mutex> pause_lock(pause_mutex_);
-    pause_.setParams(toPauseParams(config));
+    near_.setParams(toPauseParams(config));
   } catch (const std::invalid_argument& error) {
     // Keep running with the last good values, and show them back to dynamic_reconfigure clients (dynparam get).
     NODELET_ERROR("disparity_detector: reconfigure rejected, keeping the previous values: %s",
@@ -295,16 +295,16 @@ void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/)
 }
 
 void DisparityDetectorNodelet::updateSubscriptions() {
-  disparity::PauseState pause_state;
+  duty::FusedRangeState near_state;
   {
     std::lock_guard<std::mutex> lock(pause_mutex_);
-    pause_state = pause_.state(ros::Time::now().toSec());
-    pause_state_ = pause_state;
+    near_state = near_.state(ros::Time::now().toSec());
+    near_state_ = near_state;
   }
   std::lock_guard<std::mutex> lock(connection_mutex_);
   const bool wanted =
       (estimate_publisher_.getNumSubscribers() > 0 || debug_publisher_.getNumSubscribers() > 0) &&
-      pause_state != disparity::PauseState::kPaused;
+      near_state != duty::FusedRangeState::kHolds;
   if (wanted && !disparity_subscriber_) {
     disparity_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoDisparity, 1,
                                           &DisparityDetectorNodelet::onDisparity, this);
@@ -316,7 +316,7 @@ void DisparityDetectorNodelet::updateSubscriptions() {
     camera_info_subscriber_.shutdown();
     disparity_subscriber_ = ros::Subscriber();
     camera_info_subscriber_ = ros::Subscriber();
-    NODELET_DEBUG("disparity_detector: unsubscribed from the disparity (%s)", disparity::describe(pause_state));
+    NODELET_DEBUG("disparity_detector: unsubscribed from the disparity (near: %s)", duty::describe(near_state));
   }
 }
 
@@ -540,19 +540,20 @@ void DisparityDetectorNodelet::produceDiagnostics(
   status.add("last range m", last_range_m_);
   status.add("last processing ms (CPU)", last_processing_ms_);
   status.add("subscribed", static_cast<bool>(disparity_subscriber_));
-  disparity::PauseState pause_state;
+  duty::FusedRangeState near_state;
   {
     std::lock_guard<std::mutex> pause_lock(pause_mutex_);
-    pause_state = pause_state_;
+    near_state = near_state_;
   }
-  status.add("paused", pause_state == disparity::PauseState::kPaused);
-  status.add("duty", disparity::describe(pause_state));
+  const bool paused = near_state == duty::FusedRangeState::kHolds;
+  status.add("paused", paused);
+  status.add("target near on a monocular pose", duty::describe(near_state));
   status.add("debug images drawn", debug_images_);
   status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
   docking_msgs::addLatency(status, "image->estimate", latency_);
 
-  if (!disparity_subscriber_ && pause_state == disparity::PauseState::kPaused) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, disparity::describe(pause_state));
+  if (!disparity_subscriber_ && paused) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "paused: target near, the arbiter on a monocular pose");
   } else if (!disparity_subscriber_) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle: no subscribers");
   } else if (!last_input_error_.empty()) {

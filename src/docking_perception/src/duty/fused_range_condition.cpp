@@ -1,44 +1,47 @@
-#include "docking_perception/disparity/near_range_pause.h"
+#include "docking_perception/duty/fused_range_condition.h"
 
 #include <cmath>
 
 namespace docking_perception {
-namespace disparity {
+namespace duty {
 
-const char* describe(PauseState state) {
+const char* describe(FusedRangeState state) {
   switch (state) {
-    case PauseState::kDisabled: return "running: pausing disabled (pause_inside_range_m 0)";
-    case PauseState::kNoFusedEstimate: return "running: no recent fused estimate";
-    case PauseState::kFusedInvalid: return "running: the fused estimate is not valid";
-    case PauseState::kFusedNotMono: return "running: the arbiter uses disparity";
-    case PauseState::kBeyondRange: return "running: the target is beyond the pause range";
-    case PauseState::kPaused: return "paused: target near, the arbiter on a monocular pose";
+    case FusedRangeState::kDisabled: return "off (range 0)";
+    case FusedRangeState::kNoFusedEstimate: return "no recent fused estimate";
+    case FusedRangeState::kFusedInvalid: return "the fused estimate is not valid";
+    case FusedRangeState::kOtherSource: return "the arbiter uses another source";
+    case FusedRangeState::kOutOfRange: return "the target is on the other side of the range";
+    case FusedRangeState::kHolds: return "holds";
   }
   return "unknown";
 }
 
-void NearRangePause::onFusedEstimate(double arrival_s, bool valid, bool from_monocular, double range_m) {
-  const bool was_paused = have_estimate_ && last_state_ == PauseState::kPaused &&
-                          arrival_s - last_arrival_s_ <= params_.max_fused_age_s;
+bool FusedRangeCondition::onWantedSide(double range_m, bool was_holding) const {
+  // Hysteresis: once holding, the limit moves hysteresis_m the other way.
+  const double margin = was_holding ? params_.hysteresis_m : 0.0;
+  return side_ == RangeSide::kInside ? range_m < params_.range_m + margin : range_m > params_.range_m - margin;
+}
+
+void FusedRangeCondition::onFusedEstimate(double arrival_s, bool valid, bool wanted_source, double range_m) {
+  const bool was_holding = have_estimate_ && last_state_ == FusedRangeState::kHolds &&
+                           arrival_s - last_arrival_s_ <= params_.max_fused_age_s;
   have_estimate_ = true;
   last_arrival_s_ = arrival_s;
   if (!valid || !std::isfinite(range_m)) {
-    last_state_ = PauseState::kFusedInvalid;
-  } else if (!from_monocular) {
-    last_state_ = PauseState::kFusedNotMono;
+    last_state_ = FusedRangeState::kFusedInvalid;
+  } else if (!wanted_source) {
+    last_state_ = FusedRangeState::kOtherSource;
   } else {
-    // Hysteresis: once paused, stay paused until the target is clearly beyond the range.
-    const double limit = was_paused ? params_.pause_inside_range_m + params_.hysteresis_m
-                                    : params_.pause_inside_range_m;
-    last_state_ = range_m < limit ? PauseState::kPaused : PauseState::kBeyondRange;
+    last_state_ = onWantedSide(range_m, was_holding) ? FusedRangeState::kHolds : FusedRangeState::kOutOfRange;
   }
 }
 
-PauseState NearRangePause::state(double now_s) const {
-  if (params_.pause_inside_range_m <= 0.0) return PauseState::kDisabled;
-  if (!have_estimate_ || now_s - last_arrival_s_ > params_.max_fused_age_s) return PauseState::kNoFusedEstimate;
+FusedRangeState FusedRangeCondition::state(double now_s) const {
+  if (params_.range_m <= 0.0) return FusedRangeState::kDisabled;
+  if (!have_estimate_ || now_s - last_arrival_s_ > params_.max_fused_age_s) return FusedRangeState::kNoFusedEstimate;
   return last_state_;
 }
 
-}  // namespace disparity
+}  // namespace duty
 }  // namespace docking_perception

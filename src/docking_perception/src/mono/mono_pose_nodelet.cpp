@@ -28,6 +28,8 @@
 #include "docking_msgs/names.h"
 #include "docking_msgs/thread_cpu_time.h"
 #include "docking_perception/MonoPoseConfig.h"
+#include "docking_perception/duty/fused_range_condition.h"
+#include "docking_perception/image_guard/rate_cap.h"
 #include "docking_perception/mono/debug_drawing.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
 #include "docking_perception/mono/mono_pose_param_keys.h"
@@ -51,6 +53,11 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   void publishEstimate(const std_msgs::Header& header, const mono::MonoPoseResult& result);
   // Visible mode: the disparity detector's estimate (same camera) as the region to search first.
   void disparityCallback(const docking_msgs::TargetEstimateConstPtr& estimate);
+  // Far throttle (issue 15): the arbiter's output says whether the target is far and on disparity.
+  void fusedCallback(const docking_msgs::TargetEstimateConstPtr& fused);
+  // True when this image is left out: the target is far on disparity and the image comes sooner than
+  // far_throttle_max_rate_hz allows.
+  bool throttledFar(const ros::Time& stamp);
 
   ros::NodeHandle nh_;
   ros::NodeHandle private_nh_;
@@ -59,6 +66,7 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   image_transport::Publisher debug_publisher_;
   ros::Publisher estimate_publisher_;
   ros::Subscriber disparity_subscriber_;
+  ros::Subscriber fused_subscriber_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::Timer diagnostics_timer_;
   boost::recursive_mutex reconfigure_mutex_;
@@ -92,6 +100,11 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   int hints_used_ = 0;
   // Image stamp -> this estimate's publication (diagnostics: this stage's share of the chain's latency).
   docking_msgs::LatencyWindow latency_;
+  // Far throttle: beyond far_throttle_beyond_range_m on disparity, at most far_throttle_max_rate_hz.
+  duty::FusedRangeCondition far_{duty::RangeSide::kBeyond};
+  image_guard::RateCap far_rate_cap_;
+  duty::FusedRangeState far_state_ = duty::FusedRangeState::kNoFusedEstimate;  // as last applied
+  unsigned long images_throttled_far_ = 0;
 };
 
 template <typename T>
@@ -112,7 +125,25 @@ bool MonoPoseNodelet::readParameters(std::vector<std::string>* errors) {
   mono::MonoPoseParams& p = params_;
   mono::visitMonoPoseParams(p, [&](const char* key, auto* field) { require(key, field, errors); });
   require("publish_debug_image", &publish_debug_image_, errors);
+  duty::FusedRangeConditionParams far;
+  double far_max_rate_hz = 0.0;
+  require("far_throttle_beyond_range_m", &far.range_m, errors);
+  require("far_throttle_hysteresis_m", &far.hysteresis_m, errors);
+  require("far_throttle_max_fused_age_s", &far.max_fused_age_s, errors);
+  require("far_throttle_max_rate_hz", &far_max_rate_hz, errors);
   if (!errors->empty()) return false;
+  for (const auto& [name, value] : {std::pair<const char*, double>{"far_throttle_beyond_range_m", far.range_m},
+                                    {"far_throttle_hysteresis_m", far.hysteresis_m},
+                                    {"far_throttle_max_rate_hz", far_max_rate_hz}}) {
+    if (!std::isfinite(value) || value < 0.0) {
+      errors->push_back("parameter '" + private_nh_.resolveName(name) + "' must be a number >= 0 (0: off)");
+    }
+  }
+  if (!std::isfinite(far.max_fused_age_s) || far.max_fused_age_s <= 0.0) {
+    errors->push_back("parameter '" + private_nh_.resolveName("far_throttle_max_fused_age_s") + "' must be > 0");
+  }
+  far_.setParams(far);
+  far_rate_cap_ = image_guard::RateCap(far_max_rate_hz);
 
   mono::MonoMode mode;
   if (!mono::parseMonoMode(mode_name_, &mode)) {
@@ -185,6 +216,8 @@ void MonoPoseNodelet::onInit() {
     disparity_subscriber_ = nh_.subscribe(docking_msgs::topics::kDisparityEstimate, 1,
                                           &MonoPoseNodelet::disparityCallback, this);
   }
+  // Far from the target the arbiter uses disparity: this stage then needs far fewer frames.
+  fused_subscriber_ = nh_.subscribe(docking_msgs::topics::kTargetEstimate, 1, &MonoPoseNodelet::fusedCallback, this);
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<MonoPoseConfig>>(reconfigure_mutex_, private_nh_);
   reconfigure_server_->setCallback([this](MonoPoseConfig& config, uint32_t level) { reconfigure(config, level); });
   NODELET_INFO("mono_pose (%s, %s): %s -> %s, debug image on %s", mode_name_.c_str(),
@@ -253,11 +286,26 @@ void MonoPoseNodelet::disparityCallback(const docking_msgs::TargetEstimateConstP
   disparity_hint_ = estimate;
 }
 
+void MonoPoseNodelet::fusedCallback(const docking_msgs::TargetEstimateConstPtr& fused) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  far_.onFusedEstimate(ros::Time::now().toSec(), fused->valid && fused->position_valid,
+                       fused->selected_source == docking_msgs::TargetEstimate::SOURCE_DISPARITY, fused->range_m);
+}
+
+bool MonoPoseNodelet::throttledFar(const ros::Time& stamp) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  far_state_ = far_.state(ros::Time::now().toSec());
+  if (far_state_ != duty::FusedRangeState::kHolds || far_rate_cap_.admit(stamp.toSec())) return false;
+  ++images_throttled_far_;
+  return true;
+}
+
 // Nothing an image contains may end the manager: whatever the estimator throws (cv::Exception is a
 // std::exception) drops that image with an invalid estimate saying why, and the next one is processed.
 void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
                                     const sensor_msgs::CameraInfoConstPtr& info) {
   try {
+    if (throttledFar(image->header.stamp)) return;
     processImage(image, info);
   } catch (const std::exception& e) {
     NODELET_ERROR_THROTTLE(5.0, "mono_pose: image dropped: %s", e.what());
@@ -439,6 +487,8 @@ void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("last processing time ms", last_processing_ms_);
   status.add("last inliers", last_inliers_);
   status.add("disparity search hints used", hints_used_);
+  status.add("far throttle (target far on disparity)", duty::describe(far_state_));
+  status.add("images left out far", images_throttled_far_);
   status.add("debug images drawn", debug_images_);
   status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
   docking_msgs::addLatency(status, "image->estimate", latency_);

@@ -5,7 +5,7 @@
 //   stereo/left/camera_info    sensor_msgs/CameraInfo: the rectified principal point
 // and always
 //   target/estimate            docking_msgs/TargetEstimate, the arbiter's: near and monocular pauses the
-//                              stage (disparity/near_range_pause.h)
+//                              stage (duty/fused_range_condition.h)
 // Publishes:
 //   perception/disparity/estimate     docking_msgs/TargetEstimate (SOURCE_DISPARITY, position only)
 //   perception/disparity/debug_image  sensor_msgs/Image bgr8 (image_transport)
@@ -30,7 +30,7 @@
 
 #include "docking_perception/DisparityDetectorConfig.h"
 #include "docking_perception/disparity/disparity_detector.h"
-#include "docking_perception/disparity/near_range_pause.h"
+#include "docking_perception/duty/fused_range_condition.h"
 #include "docking_perception/disparity/target_track_gate.h"
 
 namespace docking_perception {
@@ -50,7 +50,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   bool loadConfig(Config* config);
   disparity::DetectorParams toDetectorParams(const Config& config) const;  // + target_shape_
   static disparity::TrackGateParams toTrackGateParams(const Config& config);
-  static disparity::NearRangePauseParams toPauseParams(const Config& config);
+  static duty::FusedRangeConditionParams toPauseParams(const Config& config);
   void onReconfigure(Config& config, uint32_t level);
 
   // Subscribes to the inputs while any output has a subscriber and the stage is not paused,
@@ -85,8 +85,8 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   ros::Subscriber fused_subscriber_;
   ros::Timer pause_timer_;
   std::mutex pause_mutex_;
-  disparity::NearRangePause pause_;
-  disparity::PauseState pause_state_ = disparity::PauseState::kNoFusedEstimate;  // as last applied
+  duty::FusedRangeCondition near_{duty::RangeSide::kInside};  // target inside pause_inside_range_m on mono
+  duty::FusedRangeState near_state_ = duty::FusedRangeState::kNoFusedEstimate;  // as last applied
 
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<Config>> reconfigure_server_;

@@ -1,51 +1,62 @@
-// When may the disparity stage stop? (issue 15: cost proportional to need; ROS-free.)
-// Near the target the arbiter never uses disparity (config/arbiter.yaml min_disparity_range_m: 0.9 m),
-// yet block matching is most of perception's CPU. The detector follows the arbiter's fused estimate
-// (target/estimate) and pauses while that estimate is fresh, valid, comes from a monocular source and
-// is nearer than pause_inside_range_m. It resumes, without waiting, when any of that stops being true:
-// the estimate moves out past pause_inside_range_m + hysteresis_m, the arbiter falls back to disparity
-// or has nothing valid, or no fused estimate arrived for max_fused_age_s (the arbiter stalled).
+// Does the arbiter's fused estimate (target/estimate) put the target on one side of a range, from a given
+// source? (issue 15: cost proportional to need; ROS-free.) A stage that the current state does not use
+// asks this to do less, and does its full work again, without waiting, as soon as the answer is no:
+//   - disparity_detector rests (unsubscribes) while the target is INSIDE 0.8 m on a monocular pose:
+//     there the arbiter never uses disparity (arbiter.yaml min_disparity_range_m 0.9 m);
+//   - mono_pose processes at most far_max_rate_hz while the target is BEYOND 2.6 m on disparity: there
+//     the arbiter uses disparity (switch_range_m 2.0 + hysteresis 0.2).
+// The condition holds while the last fused estimate is fresh (arrived within max_fused_age_s), valid, from
+// the wanted source and on the wanted side of range_m, with hysteresis: once holding, it holds until the
+// target is hysteresis_m past range_m the other way. A stale estimate (the arbiter stalled or died), an
+// invalid one or another source ends it at once.
 #pragma once
 
 namespace docking_perception {
-namespace disparity {
+namespace duty {
 
-struct NearRangePauseParams {
-  double pause_inside_range_m = 0.0;  // 0: never pause
-  double hysteresis_m = 0.1;          // resume beyond pause_inside_range_m + this
-  double max_fused_age_s = 0.3;       // an older fused estimate (by arrival time) resumes the stage
+enum class RangeSide { kInside, kBeyond };
+
+struct FusedRangeConditionParams {
+  double range_m = 0.0;          // 0: never holds (the reduced duty is off)
+  double hysteresis_m = 0.1;
+  double max_fused_age_s = 0.3;  // by arrival time (ROS time)
 };
 
-// Why the stage runs or rests, for diagnostics (no behaviour depends on a message's wording).
-enum class PauseState {
-  kDisabled,        // pause_inside_range_m == 0
-  kNoFusedEstimate, // none received yet, or the last one is older than max_fused_age_s
-  kFusedInvalid,    // the arbiter has nothing valid
-  kFusedNotMono,    // the arbiter uses disparity (or an unknown source)
-  kBeyondRange,     // the fused estimate is farther than the pause range (with hysteresis)
-  kPaused,          // near, on a monocular source: the stage rests
+// Why the condition holds or not, for diagnostics (no behaviour depends on a message's wording).
+enum class FusedRangeState {
+  kDisabled,         // range_m == 0
+  kNoFusedEstimate,  // none received yet, or the last one is older than max_fused_age_s
+  kFusedInvalid,     // the arbiter has nothing valid
+  kOtherSource,      // the arbiter uses another source than the wanted one
+  kOutOfRange,       // the target is on the other side of range_m (with hysteresis)
+  kHolds,            // fresh, valid, the wanted source, on the wanted side
 };
 
-const char* describe(PauseState state);
+const char* describe(FusedRangeState state);
 
-class NearRangePause {
+class FusedRangeCondition {
  public:
-  explicit NearRangePause(const NearRangePauseParams& params = NearRangePauseParams()) : params_(params) {}
-  void setParams(const NearRangePauseParams& params) { params_ = params; }
-  const NearRangePauseParams& params() const { return params_; }
+  explicit FusedRangeCondition(RangeSide side, const FusedRangeConditionParams& params = FusedRangeConditionParams())
+      : side_(side), params_(params) {}
+  void setParams(const FusedRangeConditionParams& params) { params_ = params; }
+  const FusedRangeConditionParams& params() const { return params_; }
 
-  // One fused estimate, received at arrival_s (ROS time).
-  void onFusedEstimate(double arrival_s, bool valid, bool from_monocular, double range_m);
-  // The state at now_s (ROS time); kPaused only while the last fused estimate is fresh.
-  PauseState state(double now_s) const;
-  bool paused(double now_s) const { return state(now_s) == PauseState::kPaused; }
+  // One fused estimate received at arrival_s (ROS time); wanted_source: its selected source is the one
+  // this condition asks for.
+  void onFusedEstimate(double arrival_s, bool valid, bool wanted_source, double range_m);
+  // The state at now_s (ROS time); kHolds only while the last fused estimate is fresh.
+  FusedRangeState state(double now_s) const;
+  bool holds(double now_s) const { return state(now_s) == FusedRangeState::kHolds; }
 
  private:
-  NearRangePauseParams params_;
+  bool onWantedSide(double range_m, bool was_holding) const;
+
+  RangeSide side_;
+  FusedRangeConditionParams params_;
   bool have_estimate_ = false;
   double last_arrival_s_ = 0.0;
-  PauseState last_state_ = PauseState::kNoFusedEstimate;  // from the last estimate alone
+  FusedRangeState last_state_ = FusedRangeState::kNoFusedEstimate;  // from the last estimate alone
 };
 
-}  // namespace disparity
+}  // namespace duty
 }  // namespace docking_perception
