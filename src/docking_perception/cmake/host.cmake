@@ -6,7 +6,7 @@ add_library(${PROJECT_NAME}_host_core src/host/nodelet_list.cpp)
 target_link_libraries(${PROJECT_NAME}_host_core ${catkin_LIBRARIES})
 
 add_executable(perception_host src/host/perception_host.cpp)
-target_link_libraries(perception_host ${PROJECT_NAME}_host_core ${catkin_LIBRARIES})
+target_link_libraries(perception_host ${PROJECT_NAME}_host_core ${catkin_LIBRARIES} ${OpenCV_LIBRARIES})
 
 install(TARGETS ${PROJECT_NAME}_host_core perception_host
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}

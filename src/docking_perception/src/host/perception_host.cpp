@@ -9,6 +9,7 @@
 // reported and left out; the others run, and the arbiter reports the missing source silent. With none
 // loaded the host exits non-zero (roslaunch respawns it).
 #include <nodelet/loader.h>
+#include <opencv2/core/utility.hpp>
 #include <ros/ros.h>
 
 #include <string>
@@ -20,6 +21,8 @@ namespace {
 
 constexpr int kExitNothingLoaded = 1;
 constexpr int kExitBadList = 2;
+constexpr int kExitBadParameter = 3;
+constexpr int kOpenCvDefaultThreads = -1;  // cv::setNumThreads(-1): OpenCV's own default (all cores)
 
 // Remappings as `nodelet load` passes them: both sides resolved in the host's namespace.
 nodelet::M_string resolvedRemappings(const docking_perception::host::NodeletSpec& spec) {
@@ -61,6 +64,17 @@ int main(int argc, char** argv) {
     ROS_FATAL("perception_host: %s", error.c_str());
     return kExitBadList;
   }
+  // OpenCV's own worker threads (block matching, remap) beside the nodelet workers: on a 2-core computer
+  // they mostly wait and yield (measured: a sixth of this process's CPU in the scheduler). 1: each call
+  // runs in the nodelet's thread; the nodelets still run in parallel on the worker threads.
+  int opencv_threads = kOpenCvDefaultThreads;
+  private_nh.param("opencv_threads", opencv_threads, kOpenCvDefaultThreads);
+  if (opencv_threads < kOpenCvDefaultThreads) {
+    ROS_FATAL("perception_host: ~opencv_threads must be -1 (OpenCV's default), 0 or 1 (no extra threads) "
+              "or a thread count; got %d", opencv_threads);
+    return kExitBadParameter;
+  }
+  cv::setNumThreads(opencv_threads);
   nodelet::Loader loader(true);  // the manager's ROS API and worker threads, as `nodelet manager` has
   const int loaded = loadAll(&loader, specs);
   if (loaded == 0) {
