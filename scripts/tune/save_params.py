@@ -43,23 +43,44 @@ class SaveError(Exception):
 
 # --- Which YAML each node loads (launch files) ------------------------------------------------------
 
+def yaml_loads(rosparams):
+    """The YAML file names of the <rosparam command="load" file="*.yaml"> among rosparams."""
+    return [pathlib.PurePosixPath(r.get("file")).name for r in rosparams
+            if r.get("command", "load") == "load" and (r.get("file") or "").endswith(".yaml")]
+
+
 def yaml_of_nodes(launch_dir=LAUNCH_DIR):
-    """{node name: YAML file name} from every <node> of launch_dir that loads exactly one YAML from the
-    config folder into its private namespace. A node loading several such files, or different files in
-    different launch files, maps to None: which file holds a key would be a guess."""
+    """{node name: YAML file name} from launch_dir: every <node> that loads exactly one YAML from the
+    config folder into its private namespace, and every nodelet of a launch file whose YAML is loaded
+    into its name by a launch-level <rosparam file=... ns="NAME"/> (perception.launch: the nodelets run
+    in one process, perception_host, and their parameters sit under their names). A node loading several
+    such files, or different files in different launch files, maps to None: which file holds a key would
+    be a guess."""
     mapping = {}
+
+    def add(name, files):
+        if not files:
+            return
+        found = files[0] if len(files) == 1 else None
+        mapping[name] = found if mapping.get(name, found) == found else None
+
     for launch in sorted(pathlib.Path(launch_dir).glob("*.launch")):
-        for node in ElementTree.parse(launch).getroot().iter("node"):
+        root = ElementTree.parse(launch).getroot()
+        inside_nodes = set()
+        for node in root.iter("node"):
+            inside_nodes.update(node.iter("rosparam"))
             name = node.get("name", "")
             if not name or "$(" in name:
                 continue
-            files = [pathlib.PurePosixPath(r.get("file")).name for r in node.iter("rosparam")
-                     if r.get("command", "load") == "load" and r.get("file") and not r.get("ns")
-                     and r.get("file").endswith(".yaml")]
-            if not files:
+            add(name, yaml_loads(r for r in node.iter("rosparam") if not r.get("ns")))
+        by_namespace = {}
+        for r in root.iter("rosparam"):
+            ns = r.get("ns") or ""
+            if r in inside_nodes or not ns or "$(" in ns or "/" in ns:
                 continue
-            found = files[0] if len(files) == 1 else None
-            mapping[name] = found if mapping.get(name, found) == found else None
+            by_namespace.setdefault(ns, []).extend(yaml_loads([r]))
+        for name, files in by_namespace.items():
+            add(name, files)
     return mapping
 
 
