@@ -131,6 +131,8 @@ TEST(MonoParams, ShippedFilesHoldExactlyTheListedKeys) {
   std::set<std::string> listed = {"mode", "target_yaml", "solver", "velocity_method", "publish_debug_image"};
   mono::MonoPoseParams params;
   mono::visitMonoPoseParams(params, [&](const char* key, auto*) { listed.insert(key); });
+  mono::FarThrottleSettings far;
+  mono::visitFarThrottleSettings(far, [&](const char* key, double*) { listed.insert(key); });
   for (const std::string file : {"mono_pose_visible.yaml", "mono_pose_ir.yaml"}) {
     const YAML::Node root = YAML::LoadFile(std::string(CONFIG_DIR) + "/" + file);
     std::set<std::string> in_file;
@@ -138,6 +140,25 @@ TEST(MonoParams, ShippedFilesHoldExactlyTheListedKeys) {
     for (const auto& key : in_file) EXPECT_TRUE(listed.count(key)) << file << ": '" << key << "' is read by nobody";
     for (const auto& key : listed) EXPECT_TRUE(in_file.count(key)) << file << ": '" << key << "' is missing";
   }
+}
+
+// The far throttle's settings: zeros turn it off; a negative or non-finite value, or a zero age, is refused
+// naming the key.
+TEST(MonoParams, FarThrottleSettingsAreChecked) {
+  mono::FarThrottleSettings ok;
+  ok.beyond_range_m = 2.6;
+  ok.max_rate_hz = 10.0;
+  EXPECT_EQ(mono::validateFarThrottle(ok), "");
+  EXPECT_EQ(mono::validateFarThrottle(mono::FarThrottleSettings()), "");  // off
+  mono::FarThrottleSettings negative = ok;
+  negative.max_rate_hz = -1.0;
+  EXPECT_EQ(mono::validateFarThrottle(negative).rfind("far_throttle_max_rate_hz", 0), 0u);
+  mono::FarThrottleSettings not_finite = ok;
+  not_finite.beyond_range_m = std::nan("");
+  EXPECT_EQ(mono::validateFarThrottle(not_finite).rfind("far_throttle_beyond_range_m", 0), 0u);
+  mono::FarThrottleSettings no_age = ok;
+  no_age.max_fused_age_s = 0.0;
+  EXPECT_EQ(mono::validateFarThrottle(no_age), "far_throttle_max_fused_age_s must be > 0");
 }
 
 TEST(Stats, Percentile) {

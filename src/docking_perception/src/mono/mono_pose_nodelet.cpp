@@ -125,25 +125,17 @@ bool MonoPoseNodelet::readParameters(std::vector<std::string>* errors) {
   mono::MonoPoseParams& p = params_;
   mono::visitMonoPoseParams(p, [&](const char* key, auto* field) { require(key, field, errors); });
   require("publish_debug_image", &publish_debug_image_, errors);
-  duty::FusedRangeConditionParams far;
-  double far_max_rate_hz = 0.0;
-  require("far_throttle_beyond_range_m", &far.range_m, errors);
-  require("far_throttle_hysteresis_m", &far.hysteresis_m, errors);
-  require("far_throttle_max_fused_age_s", &far.max_fused_age_s, errors);
-  require("far_throttle_max_rate_hz", &far_max_rate_hz, errors);
+  mono::FarThrottleSettings far;
+  mono::visitFarThrottleSettings(far, [&](const char* key, double* field) { require(key, field, errors); });
   if (!errors->empty()) return false;
-  for (const auto& [name, value] : {std::pair<const char*, double>{"far_throttle_beyond_range_m", far.range_m},
-                                    {"far_throttle_hysteresis_m", far.hysteresis_m},
-                                    {"far_throttle_max_rate_hz", far_max_rate_hz}}) {
-    if (!std::isfinite(value) || value < 0.0) {
-      errors->push_back("parameter '" + private_nh_.resolveName(name) + "' must be a number >= 0 (0: off)");
-    }
-  }
-  if (!std::isfinite(far.max_fused_age_s) || far.max_fused_age_s <= 0.0) {
-    errors->push_back("parameter '" + private_nh_.resolveName("far_throttle_max_fused_age_s") + "' must be > 0");
-  }
-  far_.setParams(far);
-  far_rate_cap_ = image_guard::RateCap(far_max_rate_hz);
+  const std::string far_problem = mono::validateFarThrottle(far);
+  if (!far_problem.empty()) errors->push_back("parameter " + private_nh_.getNamespace() + "/" + far_problem);
+  duty::FusedRangeConditionParams far_condition;
+  far_condition.range_m = far.beyond_range_m;
+  far_condition.hysteresis_m = far.hysteresis_m;
+  far_condition.max_fused_age_s = far.max_fused_age_s;
+  far_.setParams(far_condition);
+  far_rate_cap_ = image_guard::RateCap(far.max_rate_hz);
 
   mono::MonoMode mode;
   if (!mono::parseMonoMode(mode_name_, &mode)) {

@@ -4,6 +4,9 @@
 // forgotten by the other. `mode`, `solver` and `velocity_method` are strings and parsed separately.
 #pragma once
 
+#include <cmath>
+#include <string>
+
 #include "docking_perception/mono/mono_pose_estimator.h"
 
 namespace docking_perception {
@@ -92,6 +95,36 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("direct_max_iterations", &p.direct.max_iterations);
   visit("direct_grid_columns", &p.direct.grid_columns);
   visit("direct_grid_rows", &p.direct.grid_rows);
+}
+
+// The far throttle (issue 15): settings the mono_pose nodelet reads itself, beside MonoPoseParams (same
+// YAML files). Far on disparity, images are processed at most max_rate_hz (duty/fused_range_condition.h).
+struct FarThrottleSettings {
+  double beyond_range_m = 0.0;   // 0: off
+  double hysteresis_m = 0.1;
+  double max_fused_age_s = 0.3;
+  double max_rate_hz = 0.0;      // 0: no limit
+};
+
+template <typename Visitor>
+void visitFarThrottleSettings(FarThrottleSettings& s, Visitor&& visit) {
+  visit("far_throttle_beyond_range_m", &s.beyond_range_m);
+  visit("far_throttle_hysteresis_m", &s.hysteresis_m);
+  visit("far_throttle_max_fused_age_s", &s.max_fused_age_s);
+  visit("far_throttle_max_rate_hz", &s.max_rate_hz);
+}
+
+// The first problem with the settings ("<key> must be ..."), or empty.
+inline std::string validateFarThrottle(const FarThrottleSettings& s) {
+  std::string problem;
+  FarThrottleSettings copy = s;
+  visitFarThrottleSettings(copy, [&](const char* key, double* value) {
+    const bool age = std::string(key) == "far_throttle_max_fused_age_s";
+    if (problem.empty() && (!std::isfinite(*value) || *value < 0.0 || (age && *value == 0.0))) {
+      problem = std::string(key) + (age ? " must be > 0" : " must be a number >= 0 (0: off)");
+    }
+  });
+  return problem;
 }
 
 }  // namespace mono
