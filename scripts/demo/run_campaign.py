@@ -127,7 +127,10 @@ def main():
             yaw_ok = s["final_yaw_error_deg"] <= 1.0
             row.update({k: s.get(k) for k in ("docked", "time_to_dock_s", "final_position_error_m",
                                                  "final_yaw_error_deg", "last_state", "last_reason",
-                                                 "states_visited", "run_failure")})
+                                                 "states_visited", "run_failure", "achieved_real_time_factor")})
+            latency = s.get("image_to_cmd_vel_latency_wall") or {}
+            row["latency_p95_ms"] = latency.get("p95_ms")
+            row["latency_max_ms"] = latency.get("max_ms")
             row["success"] = bool(s["docked"] and pos_ok and yaw_ok)
             if not row["success"]:
                 row["cause"] = (s.get("run_failure") or
@@ -142,7 +145,8 @@ def main():
         print(f"  -> {'OK' if row['success'] else 'FAIL: ' + row.get('cause', '')}", flush=True)
         write_summary(out, rows)
     s = write_summary(out, rows)
-    print(json.dumps({k: s[k] for k in ("runs", "success_rate", "position_error_mm", "yaw_error_deg")}, indent=2))
+    print(json.dumps({k: s[k] for k in ("runs", "success_rate", "position_error_mm", "yaw_error_deg",
+                                         "latency_p95_ms", "achieved_real_time_factor")}, indent=2))
 
 
 def write_summary(out, rows):
@@ -156,6 +160,8 @@ def write_summary(out, rows):
             key = r["cause"].split(":")[0] if r.get("cause") else "unknown"
             causes[key] = causes.get(key, 0) + 1
     seeds = [r["seed"] for r in rows]
+    p95s = [r["latency_p95_ms"] for r in rows if r.get("latency_p95_ms") is not None]
+    rtfs = [r["achieved_real_time_factor"] for r in rows if r.get("achieved_real_time_factor")]
     s = {
         "runs": len(rows),
         # Report every campaign with its seeds: tune on one range, report on another (issue 11).
@@ -165,6 +171,10 @@ def write_summary(out, rows):
         "position_error_mm": {"median": percentile(pos, 50), "p95": percentile(pos, 95), "max": max(pos) if pos else None},
         "yaw_error_deg": {"median": percentile(yaw, 50), "p95": percentile(yaw, 95), "max": max(yaw) if yaw else None},
         "time_to_dock_s": {"median": percentile(ttd, 50), "p95": percentile(ttd, 95)},
+        # Issue 15: image -> cmd_vel p95 of each run (wall, make demo's probe) and the real-time factor reached.
+        "latency_p95_ms": {"median": percentile(p95s, 50), "max": max(p95s) if p95s else None,
+                           "runs_measured": len(p95s), "runs_at_most_30_ms": sum(1 for v in p95s if v <= 30.0)},
+        "achieved_real_time_factor": {"min": min(rtfs) if rtfs else None, "median": percentile(rtfs, 50)},
         "failure_causes": causes,
         "failures": [{"run": r["run"], "cause": r.get("cause"), "lighting": r["lighting"], "range_m": r["range_m"]}
                      for r in rows if not r["success"]],

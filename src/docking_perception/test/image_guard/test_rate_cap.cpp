@@ -21,9 +21,17 @@ TEST(RateCap, PassesEveryThirdFrameAt30HzAndEverySecondAt15Hz) {
   RateCap at30(10.0);
   EXPECT_EQ(admittedOf(&at30, 30.0, 300), 100);
   RateCap at15(10.0);
-  EXPECT_EQ(admittedOf(&at15, 15.0, 150), 75);  // 7.5 Hz: the next frame after 75 ms is 133 ms later
+  EXPECT_EQ(admittedOf(&at15, 15.0, 150), 75);  // 7.5 Hz: the next frame after 90 ms is 133 ms later
   RateCap slow(10.0);
   EXPECT_EQ(admittedOf(&slow, 5.0, 50), 50);     // a camera slower than the cap loses nothing
+}
+
+// perception.launch's cap: 7.5 Hz from a 15 Hz and from a 30 Hz camera alike.
+TEST(RateCap, SevenAndAHalfHertzFromFifteenAndThirty) {
+  RateCap at15(7.5);
+  EXPECT_EQ(admittedOf(&at15, 15.0, 150), 75);
+  RateCap at30(7.5);
+  EXPECT_EQ(admittedOf(&at30, 30.0, 300), 75);
 }
 
 TEST(RateCap, ZeroPassesAll) {
@@ -46,8 +54,8 @@ TEST(RateCap, SameStampSameAnswer) {
 TEST(RateCap, ToleratesJitterAndStartsOverWhenTimeGoesBack) {
   RateCap cap(10.0);
   EXPECT_TRUE(cap.admit(5.0));
-  EXPECT_TRUE(cap.admit(5.09));   // 90 ms: within the 25 % jitter allowance
-  EXPECT_FALSE(cap.admit(5.1));   // 10 ms later
+  EXPECT_TRUE(cap.admit(5.095));  // 95 ms: within the 10 % jitter allowance
+  EXPECT_FALSE(cap.admit(5.105));  // 10 ms later
   EXPECT_TRUE(cap.admit(1.0));    // the replay looped
   EXPECT_FALSE(cap.admit(1.0333));
 }

@@ -1,5 +1,5 @@
 // Frames passed at most max_rate_hz, decided by stamp (issue 15; ROS-free). perception.launch caps the
-// right stereo camera: its images feed only block matching, which the far stage needs at ~10 Hz, not at
+// right stereo camera: its images feed only block matching, which the far stage needs at 7.5 Hz, not at
 // the camera's 30 Hz. The left camera (mono_pose and the matcher's other half) is not capped; the
 // matcher pairs by stamp, so it runs on the capped frames only.
 // Decided by the stamp, not arrival: an image and its camera_info (either may come first) get the same
@@ -16,8 +16,10 @@ namespace image_guard {
 class RateCap {
  public:
   // Admitted when at least (1 - kJitterFraction) of the period after the last admitted stamp, so a
-  // frame that comes a little early is not pushed to the next one.
-  static constexpr double kJitterFraction = 0.25;
+  // frame that comes a little early is not pushed to the next one. 10 %: a 7.5 Hz cap passes every
+  // second frame of a 15 Hz camera and every fourth of a 30 Hz one (7.5 Hz both), with a few ms of
+  // jitter either way.
+  static constexpr double kJitterFraction = 0.1;
   // Decisions remembered (the image and the info of one stamp arrive within a few frames of each other).
   static constexpr std::size_t kRememberedStamps = 16;
 
