@@ -116,15 +116,12 @@ void visitFarThrottleSettings(FarThrottleSettings& s, Visitor&& visit) {
 
 // The first problem with the settings ("<key> must be ..."), or empty.
 inline std::string validateFarThrottle(const FarThrottleSettings& s) {
-  std::string problem;
-  FarThrottleSettings copy = s;
-  visitFarThrottleSettings(copy, [&](const char* key, double* value) {
-    const bool age = std::string(key) == "far_throttle_max_fused_age_s";
-    if (problem.empty() && (!std::isfinite(*value) || *value < 0.0 || (age && *value == 0.0))) {
-      problem = std::string(key) + (age ? " must be > 0" : " must be a number >= 0 (0: off)");
-    }
-  });
-  return problem;
+  const auto off_or_positive = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  if (!off_or_positive(s.beyond_range_m)) return "far_throttle_beyond_range_m must be a number >= 0 (0: off)";
+  if (!off_or_positive(s.hysteresis_m)) return "far_throttle_hysteresis_m must be a number >= 0";
+  if (!(std::isfinite(s.max_fused_age_s) && s.max_fused_age_s > 0.0)) return "far_throttle_max_fused_age_s must be > 0";
+  if (!off_or_positive(s.max_rate_hz)) return "far_throttle_max_rate_hz must be a number >= 0 (0: no limit)";
+  return "";
 }
 
 }  // namespace mono
