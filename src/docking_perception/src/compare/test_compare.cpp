@@ -146,7 +146,7 @@ TEST(MonoParams, ShippedFilesHoldExactlyTheListedKeys) {
 // naming the key.
 TEST(MonoParams, FarThrottleSettingsAreChecked) {
   mono::FarThrottleSettings ok;
-  ok.beyond_range_m = 2.6;
+  ok.far.range_m = 2.6;
   ok.max_rate_hz = 10.0;
   EXPECT_EQ(mono::validateFarThrottle(ok), "");
   EXPECT_EQ(mono::validateFarThrottle(mono::FarThrottleSettings()), "");  // off
@@ -154,10 +154,10 @@ TEST(MonoParams, FarThrottleSettingsAreChecked) {
   negative.max_rate_hz = -1.0;
   EXPECT_EQ(mono::validateFarThrottle(negative).rfind("far_throttle_max_rate_hz", 0), 0u);
   mono::FarThrottleSettings not_finite = ok;
-  not_finite.beyond_range_m = std::nan("");
+  not_finite.far.range_m = std::nan("");
   EXPECT_EQ(mono::validateFarThrottle(not_finite).rfind("far_throttle_beyond_range_m", 0), 0u);
   mono::FarThrottleSettings no_age = ok;
-  no_age.max_fused_age_s = 0.0;
+  no_age.far.max_fused_age_s = 0.0;
   EXPECT_EQ(mono::validateFarThrottle(no_age), "far_throttle_max_fused_age_s must be > 0");
 }
 

@@ -130,11 +130,7 @@ bool MonoPoseNodelet::readParameters(std::vector<std::string>* errors) {
   if (!errors->empty()) return false;
   const std::string far_problem = mono::validateFarThrottle(far);
   if (!far_problem.empty()) errors->push_back("parameter " + private_nh_.getNamespace() + "/" + far_problem);
-  duty::FusedRangeConditionParams far_condition;
-  far_condition.range_m = far.beyond_range_m;
-  far_condition.hysteresis_m = far.hysteresis_m;
-  far_condition.max_fused_age_s = far.max_fused_age_s;
-  far_.setParams(far_condition);
+  far_.setParams(far.far);
   far_rate_cap_ = image_guard::RateCap(far.max_rate_hz);
 
   mono::MonoMode mode;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "docking_perception/duty/fused_range_condition.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
 
 namespace docking_perception {
@@ -98,28 +99,29 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
 }
 
 // The far throttle (issue 15): settings the mono_pose nodelet reads itself, beside MonoPoseParams (same
-// YAML files). Far on disparity, images are processed at most max_rate_hz (duty/fused_range_condition.h).
+// YAML files). Far on disparity (`far`, a duty::FusedRangeCondition beyond its range), images are
+// processed at most max_rate_hz.
 struct FarThrottleSettings {
-  double beyond_range_m = 0.0;   // 0: off
-  double hysteresis_m = 0.1;
-  double max_fused_age_s = 0.3;
-  double max_rate_hz = 0.0;      // 0: no limit
+  duty::FusedRangeConditionParams far;  // range_m 0: off
+  double max_rate_hz = 0.0;             // 0: no limit
 };
 
 template <typename Visitor>
 void visitFarThrottleSettings(FarThrottleSettings& s, Visitor&& visit) {
-  visit("far_throttle_beyond_range_m", &s.beyond_range_m);
-  visit("far_throttle_hysteresis_m", &s.hysteresis_m);
-  visit("far_throttle_max_fused_age_s", &s.max_fused_age_s);
+  visit("far_throttle_beyond_range_m", &s.far.range_m);
+  visit("far_throttle_hysteresis_m", &s.far.hysteresis_m);
+  visit("far_throttle_max_fused_age_s", &s.far.max_fused_age_s);
   visit("far_throttle_max_rate_hz", &s.max_rate_hz);
 }
 
 // The first problem with the settings ("<key> must be ..."), or empty.
 inline std::string validateFarThrottle(const FarThrottleSettings& s) {
   const auto off_or_positive = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  if (!off_or_positive(s.beyond_range_m)) return "far_throttle_beyond_range_m must be a number >= 0 (0: off)";
-  if (!off_or_positive(s.hysteresis_m)) return "far_throttle_hysteresis_m must be a number >= 0";
-  if (!(std::isfinite(s.max_fused_age_s) && s.max_fused_age_s > 0.0)) return "far_throttle_max_fused_age_s must be > 0";
+  if (!off_or_positive(s.far.range_m)) return "far_throttle_beyond_range_m must be a number >= 0 (0: off)";
+  if (!off_or_positive(s.far.hysteresis_m)) return "far_throttle_hysteresis_m must be a number >= 0";
+  if (!(std::isfinite(s.far.max_fused_age_s) && s.far.max_fused_age_s > 0.0)) {
+    return "far_throttle_max_fused_age_s must be > 0";
+  }
   if (!off_or_positive(s.max_rate_hz)) return "far_throttle_max_rate_hz must be a number >= 0 (0: no limit)";
   return "";
 }
