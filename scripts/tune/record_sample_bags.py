@@ -107,6 +107,7 @@ def main():
     sim_log = open(os.path.join(work, "sim.log"), "w")
     sim = subprocess.Popen(["roslaunch", "-p", str(port), os.path.join(LAUNCH, "sim.launch"),
                             "scenario:=" + args.scenario, "dock:=false", "output:=log",
+                            "stereo_right_rate_hz:=0",  # complete stereo pairs for lossless replays
                             "camera_rate_hz:=%g" % args.camera_rate_hz,
                             "real_time_factor:=%g" % args.real_time_factor],
                            env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)

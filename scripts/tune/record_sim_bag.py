@@ -50,7 +50,9 @@ def record(scenario, duration_s, rate_hz, real_time_factor, out_path, images=Non
     sim = subprocess.Popen(
         ["roslaunch", "-p", str(port), str(ROOT / "launch" / "sim.launch"), "scenario:=" + scenario,
          "real_time_factor:=%g" % real_time_factor, "camera_rate_hz:=%g" % rate_hz,
-         "dock:=true" if dock else "perception:=false", "output:=log"], env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)
+         "dock:=true" if dock else "perception:=false", "output:=log",
+         "stereo_right_rate_hz:=0"],  # complete stereo pairs: lossless replays need both frames of each
+        env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)
     try:
         wait_for_cameras(env, 240.0)
         with open(os.path.join(work, "record.log"), "w") as log:

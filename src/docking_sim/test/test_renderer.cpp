@@ -511,3 +511,29 @@ TEST(Renderer, LedSpotBrightnessFallsWithDistanceAsItsProjectedArea) {
     last_peak = hi;
   }
 }
+
+TEST(Renderer, CamerasRenderedInParallelEqualOneAfterAnother) {
+  // A turning target: each exposure moves it across sub-frames in the scene a camera draws, so cameras
+  // sharing one scene across threads would show each other's sub-frame poses.
+  const std::string path = writeTempFile("parallel", scenarioText(1.2, 0.1, 180.0, 200.0));
+  docking_sim::Simulation serial(files(path)), parallel(files(path));
+  for (int step = 0; step < 3; ++step) {
+    serial.advance(1.0 / 15);
+    parallel.advance(1.0 / 15);
+    std::array<cv::Mat, 3> expected;
+    for (int cam = 0; cam < 3; ++cam) expected[static_cast<std::size_t>(cam)] = serial.render(cam).clone();
+    const auto frames = parallel.renderCameras({{true, true, true}}, 3);
+    for (int cam = 0; cam < 3; ++cam) {
+      ASSERT_NE(frames[static_cast<std::size_t>(cam)], nullptr);
+      EXPECT_EQ(cv::norm(*frames[static_cast<std::size_t>(cam)], expected[static_cast<std::size_t>(cam)], cv::NORM_INF), 0.0)
+          << "camera " << cam << ", instant " << step;
+    }
+    EXPECT_GT(parallel.renderer(RobotModel::kStereoLeft).lastExposure().subframes, 1) << "the target must blur";
+  }
+  // Only the wanted cameras render.
+  parallel.advance(1.0 / 15);
+  const auto some = parallel.renderCameras({{true, false, true}}, 2);
+  EXPECT_NE(some[RobotModel::kStereoLeft], nullptr);
+  EXPECT_EQ(some[RobotModel::kStereoRight], nullptr);
+  EXPECT_NE(some[RobotModel::kIr], nullptr);
+}

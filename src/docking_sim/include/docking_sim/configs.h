@@ -103,6 +103,8 @@ struct SimSettings {
   double encoder_rate_hz{100.0};
   double truth_tf_rate_hz{50.0};
   double real_time_factor{1.0};      ///< <= 0: as fast as possible
+  int render_threads{2};             ///< threads rendering the cameras of one instant (1: one after another)
+  double stereo_right_rate_hz{0.0};  ///< the right stereo camera's own rate (0: camera_rate_hz)
   double command_timeout_s{0.25};    ///< wheel commands older than this: set-points zero
   Eigen::Vector3d light_direction{0.3, 0.2, -1.0};  ///< direction the key light travels (world)
   double ambient{0.45};              ///< shading floor: fraction of light every surface gets

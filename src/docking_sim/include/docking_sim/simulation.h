@@ -64,6 +64,11 @@ class Simulation {
   /// Renders camera RobotModel::kStereoLeft / kStereoRight / kIr for an exposure centred on the current
   /// time (the stamp): motion blur from both robots' motion across it.
   const cv::Mat& render(int camera);
+  /// Renders the cameras whose entry in `wanted` is true, on up to `threads` threads (the caller's
+  /// thread among them), and returns each one's frame (null where not wanted). Each camera renders its
+  /// own copy of the scene with its own noise generator, so the frames are the same whatever the
+  /// thread count or the order in which the threads finish.
+  std::array<const cv::Mat*, 3> renderCameras(const std::array<bool, 3>& wanted, int threads);
   const CameraRenderer& renderer(int camera) const { return *renderers_.at(static_cast<std::size_t>(camera)); }
 
   const SimSettings& settings() const { return settings_; }
@@ -83,9 +88,17 @@ class Simulation {
   ChaserBase chaser_;
   omni_base::OmniKinematics kinematics_;  ///< for the scripted chaser motion's wheel commands
   Scene scene_;
+  /// One scene per camera: rendering moves the target across the exposure (motion blur) in the scene
+  /// it draws, so cameras rendered at once cannot share one.
+  std::array<Scene, 3> camera_scenes_;
   std::array<std::unique_ptr<CameraRenderer>, 3> renderers_;
   double time_s_{0.0};
   double scene_time_s_{-1.0};
+
+  /// The scene at the current time (scene()), outside the per-camera copies.
+  void updateSharedScene();
+  /// Renders one camera into its renderer from its own scene copy; touches nothing shared.
+  const cv::Mat& renderOwnScene(int camera);
 };
 
 }  // namespace docking_sim

@@ -177,6 +177,8 @@ SimSettings loadSimSettings(const std::string& path) {
   s.encoder_rate_hz = sim["encoder_rate_hz"].asDouble(1.0, 1000.0);
   s.truth_tf_rate_hz = sim["truth_tf_rate_hz"].asDouble(1.0, 1000.0);
   s.real_time_factor = sim["real_time_factor"].asDouble(0.0, 100.0);
+  s.render_threads = static_cast<int>(sim["render_threads"].asInteger(1, 3));
+  s.stereo_right_rate_hz = sim["stereo_right_rate_hz"].asDouble(0.0, 200.0);
   s.command_timeout_s = sim["command_timeout_s"].asDouble(0.01, 10.0);
 
   const YamlField shading = root["shading"];

@@ -1,5 +1,11 @@
 #include "docking_sim/simulation.h"
 
+#include <algorithm>
+#include <atomic>
+#include <exception>
+#include <thread>
+#include <vector>
+
 #include <cmath>
 
 #include "docking_sim/config_error.h"
@@ -68,6 +74,7 @@ Simulation::Simulation(const SimulationFiles& files, const RenderOptions& render
       kinematics_(base_model_.layout),
       scene_(settings_, target_, lighting_, scenario_.seed) {
   scenario_ = validated(scenario_, settings_, robot_);
+  camera_scenes_.fill(scene_);
   for (int i = 0; i < 3; ++i) {
     const CameraMount& cam = robot_.cameras[static_cast<std::size_t>(i)];
     const CameraEffects& effects = cam.band == Band::kVisible ? settings_.visible_effects : settings_.ir_effects;
@@ -147,15 +154,55 @@ RelativeTruth Simulation::truthInCamera(int camera) const {
   return truth;
 }
 
-const cv::Mat& Simulation::render(int camera) {
+void Simulation::updateSharedScene() {
   if (scene_time_s_ != time_s_) {
     scene_.update(worldTTargetRobot());
     scene_time_s_ = time_s_;
   }
+}
+
+const cv::Mat& Simulation::renderOwnScene(int camera) {
   ExposureMotion motion;
   motion.world_T_camera = [this, camera](double dt) { return worldTCameraAt(camera, dt); };
   motion.world_T_target_robot = [this](double dt) { return worldTTargetRobotAt(time_s_ + dt); };
-  return renderers_.at(static_cast<std::size_t>(camera))->render(scene_, motion);
+  const auto index = static_cast<std::size_t>(camera);
+  return renderers_.at(index)->render(camera_scenes_.at(index), motion);
+}
+
+const cv::Mat& Simulation::render(int camera) {
+  updateSharedScene();
+  return renderOwnScene(camera);
+}
+
+std::array<const cv::Mat*, 3> Simulation::renderCameras(const std::array<bool, 3>& wanted, int threads) {
+  updateSharedScene();
+  std::array<const cv::Mat*, 3> frames{{nullptr, nullptr, nullptr}};
+  std::vector<int> jobs;
+  for (int i = 0; i < 3; ++i) {
+    if (wanted[static_cast<std::size_t>(i)]) jobs.push_back(i);
+  }
+  // Workers take the next camera in order until none is left; the caller's thread is one of them.
+  std::atomic<std::size_t> next{0};
+  std::array<std::exception_ptr, 3> errors;
+  auto work = [&]() {
+    for (std::size_t j = next++; j < jobs.size(); j = next++) {
+      const auto camera = static_cast<std::size_t>(jobs[j]);
+      try {
+        frames[camera] = &renderOwnScene(jobs[j]);
+      } catch (...) {
+        errors[camera] = std::current_exception();
+      }
+    }
+  };
+  const int helpers = std::clamp(threads, 1, std::max<int>(1, static_cast<int>(jobs.size()))) - 1;
+  std::vector<std::thread> pool;
+  for (int t = 0; t < helpers; ++t) pool.emplace_back(work);
+  work();
+  for (auto& thread : pool) thread.join();
+  for (const auto& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
+  return frames;
 }
 
 }  // namespace docking_sim

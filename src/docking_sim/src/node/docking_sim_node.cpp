@@ -103,6 +103,15 @@ class SimNode {
     if (!std::isfinite(camera_rate_hz_) || camera_rate_hz_ <= 0.0 || camera_rate_hz_ > 200.0) {
       throw std::runtime_error("parameter ~camera_rate_hz must be within (0, 200]");
     }
+    render_threads_ = optionalTyped(pnh, "render_threads", settings.render_threads, "an integer");
+    if (render_threads_ < 1 || render_threads_ > 3) {
+      throw std::runtime_error("parameter ~render_threads must be 1, 2 or 3");
+    }
+    const double right_rate_hz = optionalTyped(pnh, "stereo_right_rate_hz", settings.stereo_right_rate_hz, "a number");
+    if (!std::isfinite(right_rate_hz) || right_rate_hz < 0.0) {
+      throw std::runtime_error("parameter ~stereo_right_rate_hz must be >= 0 (0 = camera_rate_hz)");
+    }
+    right_camera_every_ = rightCameraEvery(camera_rate_hz_, right_rate_hz);
     exit_at_end_ = optionalTyped(pnh, "exit_at_end", true, "true or false");
     publish_world_to_odom_ = optionalTyped(pnh, "publish_world_to_odom", true, "true or false");
 
@@ -140,9 +149,9 @@ class SimNode {
     diagnostics_.add("Simulator", this, &SimNode::diagnose);
     const auto& sc = sim_->scenario();
     ROS_INFO("docking_sim: scenario '%s' (%s), lighting %s, seed %llu, duration %.0f s, real-time factor %.2f, "
-             "cameras %.1f Hz",
+             "cameras %.1f Hz (right stereo camera %.2f Hz), %d render thread(s)",
              sc.name.c_str(), sc.description.c_str(), sc.lighting.c_str(), static_cast<unsigned long long>(sc.seed),
-             sc.duration_s, real_time_factor_, camera_rate_hz_);
+             sc.duration_s, real_time_factor_, camera_rate_hz_, camera_rate_hz_ / right_camera_every_, render_threads_);
   }
 
   void run() {
@@ -189,8 +198,8 @@ class SimNode {
         publishTruthTf(stamp);
       }
       if (camera_n * camera_dt <= next + eps) {
+        publishCameras(stamp, camera_n);
         ++camera_n;
-        publishCameras(stamp);
       }
       const double duration = sim_->scenario().duration_s;
       if (duration > 0.0 && sim_->time() >= duration && !finished_) {
@@ -205,6 +214,13 @@ class SimNode {
 
  private:
   static constexpr uint32_t kImageQueueSize = 5;
+
+  /// The right camera renders every n-th frame of the cameras' clock: the largest n whose rate still
+  /// reaches the one asked (0 = every frame). Its stamps stay the left camera's, so stereo pairs match.
+  static long rightCameraEvery(double camera_rate_hz, double right_rate_hz) {
+    if (right_rate_hz <= 0.0 || right_rate_hz >= camera_rate_hz) return 1;
+    return std::max(1L, static_cast<long>(std::floor(camera_rate_hz / right_rate_hz + 1e-9)));
+  }
   // Sim time 0 would read as "no time yet" to ROS nodes: the published clock starts at this offset.
   static constexpr double kTimeOffsetS = 1.0;
 
@@ -272,31 +288,40 @@ class SimNode {
     truth_chaser_pub_.publish(odom);
   }
 
-  void publishCameras(const ros::Time& stamp) {
+  void publishCameras(const ros::Time& stamp, long frame_index) {
+    std::array<bool, 3> wanted{};
     for (int i = 0; i < 3; ++i) {
-      const auto& mount = sim_->robot().cameras[static_cast<std::size_t>(i)];
-      if (camera_pubs_[i].getNumSubscribers() == 0) continue;  // render only what someone watches
-      const cv::Mat& frame = sim_->render(i);
+      wanted[static_cast<std::size_t>(i)] = camera_pubs_[i].getNumSubscribers() > 0;  // only what someone watches
+    }
+    if (frame_index % right_camera_every_ != 0) wanted[RobotModel::kStereoRight] = false;
+    const auto frames = sim_->renderCameras(wanted, render_threads_);
+    for (int i = 0; i < 3; ++i) {
+      if (frames[static_cast<std::size_t>(i)] == nullptr) continue;
       const auto& t = sim_->renderer(i).lastTiming();
       render_ms_[i] = 0.9 * render_ms_[i] + 0.1 * (t.rasterize_ms + t.defocus_ms + t.distort_ms + t.effects_ms);
-      sensor_msgs::ImagePtr image = boost::make_shared<sensor_msgs::Image>();
-      image->header.stamp = stamp;
-      image->header.frame_id = mount.image_frame_id;
-      image->height = static_cast<uint32_t>(frame.rows);
-      image->width = static_cast<uint32_t>(frame.cols);
-      image->encoding = frame.channels() == 3 ? sensor_msgs::image_encodings::BGR8 : sensor_msgs::image_encodings::MONO8;
-      image->is_bigendian = 0;
-      image->step = static_cast<uint32_t>(frame.cols * frame.channels());
-      image->data.resize(image->step * image->height);
-      for (int r = 0; r < frame.rows; ++r) {
-        std::copy(frame.ptr<uchar>(r), frame.ptr<uchar>(r) + image->step, image->data.begin() + r * image->step);
-      }
-      sensor_msgs::CameraInfoPtr info = boost::make_shared<sensor_msgs::CameraInfo>(infos_[i]);
-      info->header = image->header;
-      camera_pubs_[i].publish(image, info);
+      publishFrame(i, *frames[static_cast<std::size_t>(i)], stamp);
     }
     publishCameraTruth(RobotModel::kStereoLeft, truth_left_pub_, stamp);
     publishCameraTruth(RobotModel::kIr, truth_ir_pub_, stamp);
+  }
+
+  void publishFrame(int camera, const cv::Mat& frame, const ros::Time& stamp) {
+    const auto& mount = sim_->robot().cameras[static_cast<std::size_t>(camera)];
+    sensor_msgs::ImagePtr image = boost::make_shared<sensor_msgs::Image>();
+    image->header.stamp = stamp;
+    image->header.frame_id = mount.image_frame_id;
+    image->height = static_cast<uint32_t>(frame.rows);
+    image->width = static_cast<uint32_t>(frame.cols);
+    image->encoding = frame.channels() == 3 ? sensor_msgs::image_encodings::BGR8 : sensor_msgs::image_encodings::MONO8;
+    image->is_bigendian = 0;
+    image->step = static_cast<uint32_t>(frame.cols * frame.channels());
+    image->data.resize(image->step * image->height);
+    for (int r = 0; r < frame.rows; ++r) {
+      std::copy(frame.ptr<uchar>(r), frame.ptr<uchar>(r) + image->step, image->data.begin() + r * image->step);
+    }
+    sensor_msgs::CameraInfoPtr info = boost::make_shared<sensor_msgs::CameraInfo>(infos_[camera]);
+    info->header = image->header;
+    camera_pubs_[camera].publish(image, info);
   }
 
   void publishCameraTruth(int camera, ros::Publisher& pub, const ros::Time& stamp) {
@@ -321,6 +346,8 @@ class SimNode {
   std::unique_ptr<docking_sim::Simulation> sim_;
   double real_time_factor_{1.0};
   double camera_rate_hz_{30.0};
+  int render_threads_{2};
+  long right_camera_every_{1};
   bool exit_at_end_{true};
   bool finished_{false};
   bool publish_world_to_odom_{true};
