@@ -85,6 +85,9 @@ if(CATKIN_ENABLE_TESTING)
   # Issue 15: near the target the stage rests; it wakes when the arbiter stops (~1-2 min wall).
   add_rostest(test/disparity/disparity_pause.test
     DEPENDENCIES perception_host arbiter docking_perception_disparity_nodelet)
+  # Issue 15: at 1.5 m block matching at the keep-alive rate; full rate when the arbiter stops (~1-2 min).
+  add_rostest(test/disparity/disparity_keepalive.test
+    DEPENDENCIES perception_host arbiter docking_perception_image_guard_nodelet)
 
   # Against the simulator's truth at 3 m (needs docking_sim, omni_base and the camera frames node).
   add_rostest_gtest(test_disparity_sim test/disparity/disparity_sim_still_3m.test

@@ -6,7 +6,8 @@ add_library(${PROJECT_NAME}_image_guard_core src/image_guard/image_check.cpp src
 
 # Nodelet (nodelet_plugins.xml): image_raw (any image_transport) -> image_checked, drops with diagnostics.
 add_library(${PROJECT_NAME}_image_guard_nodelet src/image_guard/image_guard_nodelet.cpp)
-target_link_libraries(${PROJECT_NAME}_image_guard_nodelet ${PROJECT_NAME}_image_guard_core ${catkin_LIBRARIES})
+target_link_libraries(${PROJECT_NAME}_image_guard_nodelet ${PROJECT_NAME}_image_guard_core docking_perception_duty_core
+                      ${catkin_LIBRARIES})
 add_dependencies(${PROJECT_NAME}_image_guard_nodelet ${catkin_EXPORTED_TARGETS})
 
 install(TARGETS ${PROJECT_NAME}_image_guard_core ${PROJECT_NAME}_image_guard_nodelet

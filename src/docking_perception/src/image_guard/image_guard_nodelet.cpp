@@ -9,7 +9,9 @@
 // camera's last image that passed (image_proc's rectify, stereo_image_proc and our estimators read it).
 // Parameters (config/image_guard.yaml, all required): max_image_side_px, max_future_stamp_s,
 // max_rate_hz (valid frames passed at most this often, by stamp, image and camera_info alike: rate_cap.h;
-// perception.launch sets it for the right stereo camera).
+// perception.launch sets it for the right stereo camera), near_max_rate_hz with near_range_m,
+// near_hysteresis_m, near_max_fused_age_s (a lower cap while the arbiter's target/estimate is a monocular
+// pose inside near_range_m: block matching at a keep-alive rate near; duty/fused_range_condition.h).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -28,6 +30,9 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
+#include "docking_msgs/TargetEstimate.h"
+#include "docking_msgs/names.h"
+#include "docking_perception/duty/fused_range_condition.h"
 #include "docking_perception/image_guard/image_check.h"
 #include "docking_perception/image_guard/rate_cap.h"
 
@@ -44,9 +49,18 @@ class ImageGuardNodelet : public nodelet::Nodelet {
   void onCameraInfo(const ros::MessageEvent<sensor_msgs::CameraInfo const>& event);
   void checkAndPassCameraInfo(const sensor_msgs::CameraInfoConstPtr& info, const std::string& publisher);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  void onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused);
+  /// Whether the lower cap applies to a frame arriving now (near_max_rate_hz set, the condition holds).
+  bool nearCapInForce() const;  // under mutex_
+  /// The cap for a frame arriving now: near_max_rate_hz while the near condition holds, else max_rate_hz.
+  double maxRateHzFor(bool near_cap) const;
 
   ImageLimits limits_;
-  RateCap rate_cap_;  // ~max_rate_hz; under mutex_
+  RateCap rate_cap_;  // the cap in force; under mutex_
+  double max_rate_hz_{0.0};       // ~max_rate_hz
+  double near_max_rate_hz_{0.0};  // ~near_max_rate_hz (0: no lower cap near)
+  duty::FusedRangeCondition near_{duty::RangeSide::kInside};  // under mutex_
+  ros::Subscriber fused_subscriber_;
   std::unique_ptr<image_transport::ImageTransport> image_transport_;
   // raw: a plain subscriber, whose MessageEvent names the publisher; other transports (compressed):
   // image_transport, whose callback does not, so the drops name the transport topic instead.
@@ -61,6 +75,7 @@ class ImageGuardNodelet : public nodelet::Nodelet {
 
   std::mutex mutex_;  // guards the counts below (image callback and diagnostics timer)
   std::uint64_t passed_{0};
+  std::uint64_t passed_at_full_rate_{0};  // passed while the lower cap near was not in force
   std::uint64_t images_capped_{0};  // valid, left out by ~max_rate_hz (not faults)
   std::uint64_t infos_capped_{0};
   std::array<std::uint64_t, kImageProblemCount> dropped_{};
@@ -86,14 +101,26 @@ void ImageGuardNodelet::readParameters() {
   }
   if (max_side_px <= 0) throw std::invalid_argument("parameter " + pnh.resolveName("max_image_side_px") + " must be > 0");
   limits_.max_side_px = static_cast<std::uint32_t>(max_side_px);
-  double max_rate_hz = 0.0;
-  if (!pnh.getParam("max_rate_hz", max_rate_hz)) {
-    throw std::invalid_argument("missing or non-numeric parameter " + pnh.resolveName("max_rate_hz"));
-  }
-  if (!std::isfinite(max_rate_hz) || max_rate_hz < 0.0) {
-    throw std::invalid_argument("parameter " + pnh.resolveName("max_rate_hz") + " must be >= 0 (0: every frame)");
-  }
-  rate_cap_ = RateCap(max_rate_hz);
+  auto readRate = [&pnh](const char* name, double min_value, const char* meaning) {
+    double value = 0.0;
+    if (!pnh.getParam(name, value)) {
+      throw std::invalid_argument("missing or non-numeric parameter " + pnh.resolveName(name));
+    }
+    if (!std::isfinite(value) || value < min_value) {
+      throw std::invalid_argument("parameter " + pnh.resolveName(name) + " must be >= " + std::to_string(min_value) +
+                                  " (" + meaning + ")");
+    }
+    return value;
+  };
+  max_rate_hz_ = readRate("max_rate_hz", 0.0, "0: every frame");
+  near_max_rate_hz_ = readRate("near_max_rate_hz", 0.0, "0: no lower cap near");
+  duty::FusedRangeConditionParams near;
+  near.range_m = readRate("near_range_m", 0.0, "0: no lower cap near");
+  near.hysteresis_m = readRate("near_hysteresis_m", 0.0, "metres");
+  near.max_fused_age_s = readRate("near_max_fused_age_s", 0.01, "seconds");
+  if (near_max_rate_hz_ <= 0.0) near.range_m = 0.0;  // the condition is off with its rate
+  near_.setParams(near);
+  rate_cap_ = RateCap(max_rate_hz_);
   try {
     validate(limits_);
   } catch (const std::invalid_argument& e) {
@@ -120,6 +147,9 @@ void ImageGuardNodelet::onInit() {
   diagnostics_->setHardwareID(nh.resolveName("image_raw"));
   diagnostics_->add("image guard " + nh.resolveName("image_raw"), this, &ImageGuardNodelet::diagnose);
   diagnostics_timer_ = nh.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+  if (near_.params().range_m > 0.0) {
+    fused_subscriber_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 1, &ImageGuardNodelet::onFusedEstimate, this);
+  }
   // ~image_transport chooses the transport (default raw), as image_proc's nodelets read it.
   const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
   if (hints.getTransport() == "raw") {
@@ -167,11 +197,14 @@ void ImageGuardNodelet::onImage(const sensor_msgs::ImageConstPtr& image, const s
       {
         // Before the publish: the camera_info of this image may be checked while image_proc works on it.
         std::lock_guard<std::mutex> lock(mutex_);
+        const bool near_cap = nearCapInForce();
+        rate_cap_.setMaxRateHz(maxRateHzFor(near_cap));
         if (!rate_cap_.admit(facts.stamp_s)) {
           ++images_capped_;
           return;
         }
         ++passed_;
+        if (!near_cap) ++passed_at_full_rate_;
         last_image_size_ = ImageSize{image->width, image->height};
         held_info.swap(info_before_first_image_);
         held_info_publisher.swap(info_before_first_image_publisher_);
@@ -242,6 +275,7 @@ void ImageGuardNodelet::checkAndPassCameraInfo(const sensor_msgs::CameraInfoCons
     if (problem == CameraInfoProblem::kNone) {
       {
         std::lock_guard<std::mutex> lock(mutex_);
+        rate_cap_.setMaxRateHz(maxRateHzFor(nearCapInForce()));
         if (!rate_cap_.admit(info->header.stamp.toSec())) {
           ++infos_capped_;
           return;
@@ -265,6 +299,22 @@ void ImageGuardNodelet::checkAndPassCameraInfo(const sensor_msgs::CameraInfoCons
   last_info_drop_ = "from " + publisher + ": " + details;
 }
 
+void ImageGuardNodelet::onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused) {
+  const bool monocular = fused->selected_source == docking_msgs::TargetEstimate::SOURCE_MONO_VISIBLE ||
+                         fused->selected_source == docking_msgs::TargetEstimate::SOURCE_MONO_IR;
+  std::lock_guard<std::mutex> lock(mutex_);
+  near_.onFusedEstimate(ros::Time::now().toSec(), fused->valid && fused->position_valid, monocular, fused->range_m);
+}
+
+bool ImageGuardNodelet::nearCapInForce() const {
+  return near_max_rate_hz_ > 0.0 && near_.holds(ros::Time::now().toSec());
+}
+
+double ImageGuardNodelet::maxRateHzFor(bool near_cap) const {
+  if (!near_cap) return max_rate_hz_;
+  return max_rate_hz_ > 0.0 ? std::min(max_rate_hz_, near_max_rate_hz_) : near_max_rate_hz_;
+}
+
 void ImageGuardNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
   std::uint64_t dropped = 0;
@@ -283,7 +333,11 @@ void ImageGuardNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
                     static_cast<unsigned long long>(infos_dropped), last_info_drop_.c_str());
   }
   status.add("passed", passed_);
-  status.add("max rate Hz (0: every frame)", rate_cap_.maxRateHz());
+  status.add("max rate Hz (0: every frame)", max_rate_hz_);
+  status.add("near: max rate Hz (0: off)", near_max_rate_hz_);
+  status.add("near", duty::describe(near_.state(ros::Time::now().toSec())));
+  status.add("rate cap in force Hz (0: every frame)", rate_cap_.maxRateHz());
+  status.add("passed at the full rate", passed_at_full_rate_);
   status.add("left out by the rate cap", images_capped_);
   status.add("camera_info left out by the rate cap", infos_capped_);
   for (std::size_t i = 1; i < kImageProblemCount; ++i) {

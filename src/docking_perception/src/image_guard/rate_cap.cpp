@@ -4,10 +4,10 @@ namespace docking_perception {
 namespace image_guard {
 
 bool RateCap::admit(double stamp_s) {
-  if (max_rate_hz_ <= 0.0) return true;
   for (const auto& decision : decisions_) {
     if (decision.first == stamp_s) return decision.second;
   }
+  if (max_rate_hz_ <= 0.0) return true;
   const double min_spacing_s = (1.0 - kJitterFraction) / max_rate_hz_;
   bool admitted = !have_admitted_ || stamp_s < last_admitted_s_ || stamp_s - last_admitted_s_ >= min_spacing_s;
   if (admitted) {

@@ -59,3 +59,16 @@ TEST(RateCap, ToleratesJitterAndStartsOverWhenTimeGoesBack) {
   EXPECT_TRUE(cap.admit(1.0));    // the replay looped
   EXPECT_FALSE(cap.admit(1.0333));
 }
+
+// The right camera's guard lowers the cap while the arbiter is on a monocular pose near, and raises it
+// again: a stamp decided before the change keeps its answer (its camera_info may come after the image).
+TEST(RateCap, ANewRateAppliesFromTheNextStampOn) {
+  RateCap cap(7.5);
+  EXPECT_EQ(admittedOf(&cap, 15.0, 30, 100.0), 15);  // 2 s at 7.5 Hz
+  EXPECT_TRUE(cap.admit(102.0));
+  cap.setMaxRateHz(2.5);
+  EXPECT_TRUE(cap.admit(102.0)) << "decided before the change";
+  EXPECT_EQ(admittedOf(&cap, 15.0, 60, 102.0 + 1.0 / 15.0), 10);  // 4 s at 2.5 Hz: every 6th frame
+  cap.setMaxRateHz(7.5);
+  EXPECT_EQ(admittedOf(&cap, 15.0, 30, 106.0 + 1.0 / 15.0), 15);
+}

@@ -25,6 +25,9 @@ class RateCap {
 
   explicit RateCap(double max_rate_hz = 0.0) : max_rate_hz_(max_rate_hz) {}
   double maxRateHz() const { return max_rate_hz_; }
+  // A new cap from the next undecided stamp on (stamps already decided keep their answer): the right
+  // camera's guard slows block matching to a keep-alive rate while the arbiter is on a monocular pose.
+  void setMaxRateHz(double max_rate_hz) { max_rate_hz_ = max_rate_hz; }
 
   // Whether the frame stamped stamp_s passes. The same stamp gets the same answer; max_rate_hz 0 passes
   // all; a stamp before the last admitted one (a replay looped, the simulator restarted) starts over.
