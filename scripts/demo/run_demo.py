@@ -140,9 +140,11 @@ class LatencyProbe:
         self.samples = []        # (total, perception, planner) seconds
         self.in_use = False      # the planner's last state: acting on estimates
         for topic in ("/stereo/left/camera_info", "/ir/camera_info"):
-            rospy.Subscriber(topic, rospy.AnyMsg, self.on_image, queue_size=5)
-        rospy.Subscriber("/target/estimate", TargetEstimate, self.on_estimate, queue_size=10)
-        rospy.Subscriber("/cmd_vel", Twist, self.on_cmd, queue_size=10)
+            rospy.Subscriber(topic, rospy.AnyMsg, self.on_image, queue_size=5, tcp_nodelay=True)
+        # tcp_nodelay: without it Nagle's algorithm may hold a small message back until the previous one
+        # is acknowledged, and the probe would measure its own transport.
+        rospy.Subscriber("/target/estimate", TargetEstimate, self.on_estimate, queue_size=10, tcp_nodelay=True)
+        rospy.Subscriber("/cmd_vel", Twist, self.on_cmd, queue_size=10, tcp_nodelay=True)
         rospy.Subscriber("/docking/state", DockingState, self.on_state, queue_size=10)
 
     def on_image(self, msg):

@@ -215,7 +215,10 @@ class ArbiterNode {
         [this, source](const ros::MessageEvent<docking_msgs::TargetEstimate const>& event) {
           onEstimateEvent(event, source);
         };
-    subscribers_.push_back(nh.subscribe<docking_msgs::TargetEstimate>(topic, 10, callback));
+    // TCP_NODELAY: an estimate is a small message on the way to cmd_vel; Nagle's algorithm would hold
+    // one back until the previous one is acknowledged (tens of ms on a delayed ACK).
+    subscribers_.push_back(nh.subscribe<docking_msgs::TargetEstimate>(topic, 10, callback, ros::VoidConstPtr(),
+                                                                       ros::TransportHints().tcpNoDelay()));
   }
 
   // Nothing an estimate contains may end the node: whatever the algorithm code throws drops that

@@ -104,7 +104,8 @@ void DisparityDetectorNodelet::onInit() {
   // The arbiter's output says when this stage may rest (near, on a monocular pose); the timer resumes it
   // when that output stops arriving.
   fused_subscriber_ = nh_.subscribe(docking_msgs::topics::kTargetEstimate, 1,
-                                    &DisparityDetectorNodelet::onFusedEstimate, this);
+                                    &DisparityDetectorNodelet::onFusedEstimate, this,
+                                    ros::TransportHints().tcpNoDelay());  // small and timely: no Nagle delay
   pause_timer_ = nh_.createTimer(ros::Duration(kPauseCheckPeriodS),
                                  [this](const ros::TimerEvent&) { updateSubscriptions(); });
   NODELET_INFO("disparity_detector: publishing %s and %s; subscribing %s only while they have "

@@ -148,7 +148,8 @@ void ImageGuardNodelet::onInit() {
   diagnostics_->add("image guard " + nh.resolveName("image_raw"), this, &ImageGuardNodelet::diagnose);
   diagnostics_timer_ = nh.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
   if (near_.params().range_m > 0.0) {
-    fused_subscriber_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 1, &ImageGuardNodelet::onFusedEstimate, this);
+    fused_subscriber_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 1, &ImageGuardNodelet::onFusedEstimate, this,
+                                     ros::TransportHints().tcpNoDelay());  // small and timely: no Nagle delay
   }
   // ~image_transport chooses the transport (default raw), as image_proc's nodelets read it.
   const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);

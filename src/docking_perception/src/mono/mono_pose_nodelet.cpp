@@ -202,10 +202,11 @@ void MonoPoseNodelet::onInit() {
     // Far from the target the whole-frame search spends its keypoints on the room; the stereo blob
     // says where to look (issue 11: cold starts over clutter).
     disparity_subscriber_ = nh_.subscribe(docking_msgs::topics::kDisparityEstimate, 1,
-                                          &MonoPoseNodelet::disparityCallback, this);
+                                          &MonoPoseNodelet::disparityCallback, this, ros::TransportHints().tcpNoDelay());
   }
   // Far from the target the arbiter uses disparity: this stage then needs far fewer frames.
-  fused_subscriber_ = nh_.subscribe(docking_msgs::topics::kTargetEstimate, 1, &MonoPoseNodelet::fusedCallback, this);
+  fused_subscriber_ = nh_.subscribe(docking_msgs::topics::kTargetEstimate, 1, &MonoPoseNodelet::fusedCallback, this,
+                                    ros::TransportHints().tcpNoDelay());  // small and timely: no Nagle delay
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<MonoPoseConfig>>(reconfigure_mutex_, private_nh_);
   reconfigure_server_->setCallback([this](MonoPoseConfig& config, uint32_t level) { reconfigure(config, level); });
   NODELET_INFO("mono_pose (%s, %s): %s -> %s, debug image on %s", mode_name_.c_str(),

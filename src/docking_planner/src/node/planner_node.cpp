@@ -190,8 +190,11 @@ class PlannerNode {
     path_pub_ = nh.advertise<nav_msgs::Path>(docking_msgs::topics::kDockingPath, 1, true);
     // For display only (docking_viz): filled and sent only while someone subscribes.
     geometry_pub_ = nh.advertise<docking_msgs::PlannerGeometry>(docking_msgs::topics::kDockingGeometry, 1);
-    estimate_sub_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 10, &PlannerNode::onEstimateEvent, this);
-    odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometryEvent, this);
+    // TCP_NODELAY: small messages on the way to cmd_vel, not held back by Nagle's algorithm.
+    estimate_sub_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 10, &PlannerNode::onEstimateEvent, this,
+                                 ros::TransportHints().tcpNoDelay());
+    odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometryEvent, this,
+                             ros::TransportHints().tcpNoDelay());
 
     reset_service_ = pnh.advertiseService("reset", &PlannerNode::onReset, this);
 
