@@ -28,6 +28,7 @@ std::string validateInnerPatternParams(const InnerPatternParams& p) {
   if (p.min_points < 4) return "inner_pattern_min_points must be at least 4";
   if (!(p.cross_check_position_m > 0.0)) return "inner_pattern_cross_check_position_m must be positive";
   if (!(p.cross_check_angle_rad > 0.0)) return "inner_pattern_cross_check_angle_rad must be positive";
+  if (p.face_retry_every < 1 || p.face_retry_every > 100) return "inner_pattern_face_retry_every must be in [1, 100]";
   return "";
 }
 

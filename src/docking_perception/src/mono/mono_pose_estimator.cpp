@@ -189,6 +189,7 @@ void MonoPoseEstimator::setPositionHint(const Eigen::Vector3d& position_camera, 
 void MonoPoseEstimator::reset() {
   tracking_ = false;
   last_valid_range_m_ = INFINITY;
+  face_searches_skipped_left_ = 0;
   preferred_level_ = 0;
   filter_.reset();
   frame_difference_.reset();
@@ -662,6 +663,14 @@ void MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* r
   result->pnp_ambiguous = false;
 }
 
+void MonoPoseEstimator::updateFaceRetry(bool face_skipped, const MonoPoseResult& result) {
+  if (!result.valid) {
+    face_searches_skipped_left_ = 0;  // nothing to stand on: the next image searches the face again
+  } else if (!face_skipped && result.solver == kInnerPatternSolverName) {
+    face_searches_skipped_left_ = params_.inner_pattern.face_retry_every - 1;  // the face failed, the tag did not
+  }
+}
+
 MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) {
   const double start_ms = threadCpuTimeMs();
   MonoPoseResult result;
@@ -685,9 +694,18 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   if (!gray.empty()) {
     double face_width_px = 0.0;
     const cv::Rect region = predictedRegion(stamp_s, &face_width_px);
-    result.valid = params_.mode == MonoMode::kVisible ? estimateVisible(gray, region, face_width_px, &result)
-                                                      : estimateIr(gray, region, &result);
+    const bool skip_face = face_searches_skipped_left_ > 0;
+    if (skip_face) {
+      --face_searches_skipped_left_;
+      result.face_search_skipped = true;
+      result.status = "face search skipped: near contact the inner pattern gives the pose";
+      result.reject_reason = RejectReason::kNotFound;
+    } else {
+      result.valid = params_.mode == MonoMode::kVisible ? estimateVisible(gray, region, face_width_px, &result)
+                                                        : estimateIr(gray, region, &result);
+    }
     applyInnerPattern(gray, &result);
+    updateFaceRetry(skip_face, result);
   }
   if (result.valid) {
     result.status.clear();

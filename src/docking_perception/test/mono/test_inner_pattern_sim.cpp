@@ -191,6 +191,44 @@ TEST_F(InnerPatternSim, EstimatorKeepsThePoseToContact) {
   EXPECT_GE(within_3_sigma, static_cast<int>(0.95 * axes));
 }
 
+// Near contact the face no longer fits the image: once its search fails while the tag gives the pose, it
+// is searched again only every face_retry_every-th image, and the tag's pose stands in between (issue 15:
+// the failing face search was the chain's worst latency).
+TEST_F(InnerPatternSim, FaceSearchedEveryNthImageOnceTheTagCarriesThePose) {
+  for (const int every : {1, 5}) {
+    mono::MonoPoseParams params;
+    params.inner_pattern.enabled = true;
+    params.inner_pattern.face_retry_every = every;
+    mono::MonoPoseEstimator estimator(model_, intrinsics(), params);
+    int skipped = 0, from_tag = 0, frames = 0;
+    double stamp = 0.0;
+    // From 0.3 m of tip (the face's pose) to contact at 5 mm a frame (15 Hz): inside ~0.17 m of camera
+    // range the face fails.
+    double cpu_ms = 0.0;
+    for (double tip = 0.30; tip >= -1e-9; tip -= 0.005, stamp += 1.0 / 15.0) {
+      const Rendered r = render(tip, 0.004, 0.01, 1.0, 300 + frames);
+      const mono::MonoPoseResult result = estimator.process(r.gray, stamp);
+      ++frames;
+      ASSERT_TRUE(result.valid) << "every " << every << ", tip " << tip << ": " << result.status << " / "
+                                << result.inner_pattern_status;
+      EXPECT_LT(errorsOf(result.pose, r.camera_T_target).position_m, 0.03 * (0.08 + tip)) << "tip " << tip;
+      skipped += result.face_search_skipped ? 1 : 0;
+      from_tag += result.solver == mono::kInnerPatternSolverName ? 1 : 0;
+      cpu_ms += result.processing_time_ms;
+    }
+    std::printf("face_retry_every %d: %d frames, %d from the tag, %d face searches skipped, %.1f ms CPU a frame\n",
+                every, frames, from_tag, skipped, cpu_ms / frames);
+    if (every == 1) {
+      EXPECT_EQ(skipped, 0);
+    } else {
+      // Once the face fails for good, four of every five images skip it.
+      EXPECT_GE(skipped, (from_tag - every) * (every - 1) / every);
+      EXPECT_LT(skipped, from_tag);
+    }
+    EXPECT_GT(from_tag, 20) << "the approach must reach where the face fails";
+  }
+}
+
 // Without the hook (inner_pattern_enabled false) the face alone loses the target near contact: the
 // situation the inner pattern is for (if this ever passes, the blind zone moved and the test should too).
 TEST_F(InnerPatternSim, FaceAloneIsLostAtContact) {

@@ -102,6 +102,7 @@ struct MonoPoseResult {
   double reprojection_error_px = 0.0;  // RMS over the points the solver used
   double processing_time_ms = 0.0;     // CPU time of process()
   bool used_tracking_region = false;   // the predicted region gave the result (no full-frame search)
+  bool face_search_skipped = false;    // near contact, the face's search skipped (inner_pattern.face_retry_every)
   cv::Rect search_region;              // where detection ran last (full frame after a fallback)
   bool pnp_ambiguous = false;          // IPPE's two poses were close
   double ambiguity_deg = 0.0;          // visible: the undecided IPPE alternative's angle (0: decided)
@@ -169,6 +170,9 @@ class MonoPoseEstimator {
   bool directSearchDue();
   void noteDirectSearch(bool from_hint, bool found);
   // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
+  // After an image whose face was not found while the inner pattern gave the pose: skip the face's search
+  // for the next inner_pattern.face_retry_every - 1 images; any invalid image ends the skipping.
+  void updateFaceRetry(bool face_skipped, const MonoPoseResult& result);
   void applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
   cv::Rect predictedInnerPatternRegion(double stamp_s) const;
@@ -209,6 +213,7 @@ class MonoPoseEstimator {
   PoseWithCovariance last_pose_;
   std::unique_ptr<InnerPatternDetector> inner_pattern_;  // null without an inner pattern or in IR mode
   double last_valid_range_m_ = INFINITY;                 // of the last valid pose (any solver)
+  int face_searches_skipped_left_ = 0;  // images whose face search is skipped (inner_pattern.face_retry_every)
   double last_stamp_s_ = 0.0;
   FaceAppearance appearance_;
   int preferred_level_ = 0;  // the pyramid level that found the face last

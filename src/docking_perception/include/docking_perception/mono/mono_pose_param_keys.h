@@ -66,6 +66,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("inner_pattern_min_points", &p.inner_pattern.min_points);
   visit("inner_pattern_cross_check_position_m", &p.inner_pattern.cross_check_position_m);
   visit("inner_pattern_cross_check_angle_rad", &p.inner_pattern.cross_check_angle_rad);
+  visit("inner_pattern_face_retry_every", &p.inner_pattern.face_retry_every);
   // Issue 11: search under blur and clutter, consistency checks and the covariance model.
   visit("use_half_resolution", &p.use_half_resolution);
   visit("keypoint_grid", &p.features.keypoint_grid);
