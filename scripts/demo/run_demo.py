@@ -52,7 +52,7 @@ def run(args):
     master = f"http://127.0.0.1:{port}"
     env = dict(os.environ, ROS_MASTER_URI=master, ROS_HOME=str(out / "ros_home"))
     launch_args = [f"real_time_factor:={args.real_time_factor}", f"camera_rate_hz:={args.camera_rate_hz}",
-                   f"bag:={bag}", "output:=log"]
+                   f"bag:={bag}", "output:=log", f"sim_nice:={args.sim_nice}"]
     if args.scenario_file:
         launch_args.append(f"scenario_file:={pathlib.Path(args.scenario_file).resolve()}")
     else:
@@ -294,10 +294,13 @@ def main():
     ap.add_argument("--timeout", type=float, default=240.0, help="sim seconds")
     ap.add_argument("--wall-timeout", type=float, default=3600.0, help="wall seconds (safety net)")
     ap.add_argument("--startup-timeout", type=float, default=120.0, help="wall seconds to the first /clock")
-    ap.add_argument("--real-time-factor", type=float, default=float(os.environ.get("DEMO_RTF", 0.4)),
-                    help="sim s per wall s; perception must keep up (0.4 on a busy 2-core machine)")
+    ap.add_argument("--real-time-factor", type=float, default=float(os.environ.get("DEMO_RTF", 1.0)),
+                    help="sim s per wall s (real time; on a busy 2-core machine 0.4 keeps perception ahead)")
     ap.add_argument("--camera-rate-hz", type=float, default=float(os.environ.get("DEMO_CAMERA_RATE_HZ", 15.0)))
     ap.add_argument("--port", type=int, default=0, help="ROS master port (default: a free one)")
+    ap.add_argument("--sim-nice", type=int, default=10,
+                    help="the simulator's nice (sim.launch sim_nice): the instrument yields the CPU to the stack "
+                         "it measures (image -> cmd_vel p95 of campaign seeds at real time: 36 -> 30, 44 -> 35 ms)")
     ap.add_argument("--launch-arg", action="append", help="extra NAME:=VALUE for sim.launch")
     return run(ap.parse_args())
 
