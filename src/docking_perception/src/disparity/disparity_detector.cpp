@@ -416,6 +416,9 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
           "shape_tolerance_fraction", "must be in [0, 1)", p.shape_tolerance_fraction);
   require(std::isfinite(p.shape_tolerance_px) && p.shape_tolerance_px >= 0.0, "shape_tolerance_px",
           "must be >= 0", p.shape_tolerance_px);
+  require(std::isfinite(p.degraded_min_width_fraction) && p.degraded_min_width_fraction >= 0.0 &&
+              p.degraded_min_width_fraction <= 1.0,
+          "degraded_min_width_fraction", "must be in [0, 1] (0: any width)", p.degraded_min_width_fraction);
   require(std::isfinite(p.split_depth_step_m) && p.split_depth_step_m >= 0.0 && p.split_depth_step_m <= 2.0,
           "split_depth_step_m", "must be in [0, 2] (0: off)", p.split_depth_step_m);
   require(std::isfinite(p.max_centre_offset_y_m) && p.max_centre_offset_y_m >= 0.0,
@@ -668,6 +671,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
       candidate.misfit = shapeMismatch(candidate.shape, bounds, p, geometry.focal_px, cut);
       const bool degraded_target_size =
           !candidate.misfit.empty() && !cut &&
+          candidate.shape.width_m >= p.degraded_min_width_fraction * bounds.min_width_m &&
           shapeMismatch(candidate.shape, bounds, p, geometry.focal_px, /*cut=*/true).empty() &&
           heightMismatch(candidatePosition(candidate, geometry), p).empty();
       if (candidate.misfit.empty() && !cut) {

@@ -185,6 +185,7 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("min_fill_fraction", &Config::min_fill_fraction);
   read("max_centre_offset_y_m", &Config::max_centre_offset_y_m);
   read("stop_behind_target_sized", &Config::stop_behind_target_sized);
+  read("degraded_min_width_fraction", &Config::degraded_min_width_fraction);
   read("split_depth_step_m", &Config::split_depth_step_m);
   read("track_gate_enabled", &Config::track_gate_enabled);
   read("track_max_speed_mps", &Config::track_max_speed_mps);
@@ -271,6 +272,7 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.min_fill_fraction = c.min_fill_fraction;
   p.max_centre_offset_y_m = c.max_centre_offset_y_m;
   p.stop_behind_target_sized = c.stop_behind_target_sized;
+  p.degraded_min_width_fraction = c.degraded_min_width_fraction;
   p.split_depth_step_m = c.split_depth_step_m;
   p.target_shape = target_shape_;
   return p;

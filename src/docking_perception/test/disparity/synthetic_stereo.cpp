@@ -183,6 +183,7 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.min_fill_fraction = number("min_fill_fraction");
   p.max_centre_offset_y_m = number("max_centre_offset_y_m");
   p.stop_behind_target_sized = number("stop_behind_target_sized") != 0.0;
+  p.degraded_min_width_fraction = number("degraded_min_width_fraction");
   p.split_depth_step_m = number("split_depth_step_m");
   return p;
 }

@@ -324,6 +324,33 @@ TEST(DegradedTarget, ABlobOfTheMockupsSizeIsNotLookedBehind) {
   EXPECT_NEAR(after.shape.range_z_m, 2.0, 0.1) << "the reported blob is the degraded face";
 }
 
+// Issue 11, eval_far_3m_on: block matching's mismatched strip along the target's left edge, 16 px wide and
+// a little nearer than the face, is within the mockup's upper bounds and fails only its width: taken for a
+// degraded target it stopped the search in front of the target. Narrower than degraded_min_width_fraction
+// of the mockup's edge-on width, it is looked behind.
+TEST(DegradedTarget, AStripAlongAnOccludingEdgeIsLookedBehind) {
+  cv::Mat disparity = invalidImage();
+  paintMockup(&disparity, 0.2, 3.0);
+  const double strip_m = 16.0 * 2.4 / 550.0;  // 16 px at 2.4 m: 0.07 m, 0.23 of the edge-on 0.30 m
+  paintRect(&disparity, 0.2 - 0.48 - strip_m / 2, 0.0, 2.4, strip_m, 0.24);
+  DetectorParams params = checkingParams();
+  params.stop_behind_target_sized = true;
+  params.degraded_min_width_fraction = 0.0;  // before
+  const Detection before = DisparityDetector{params}.detect(disparity, ourGeometry());
+  EXPECT_FALSE(before.found) << "the scene no longer reproduces the failure: found at ("
+                             << before.position_m.transpose() << ")";
+  EXPECT_NEAR(before.shape.range_z_m, 2.4, 0.1) << "the search stopped at the strip";
+
+  params.degraded_min_width_fraction = 0.5;
+  ASSERT_TRUE(validateParams(params).empty());
+  const Detection after = DisparityDetector{params}.detect(disparity, ourGeometry());
+  ASSERT_TRUE(after.found) << after.reason;
+  EXPECT_NEAR(after.position_m.x(), 0.2, 0.05);
+  EXPECT_NEAR(after.position_m.z(), 3.0, 0.1);
+  params.degraded_min_width_fraction = 1.5;
+  EXPECT_FALSE(validateParams(params).empty());
+}
+
 TEST(DegradedTarget, LargerNearerObjectsAreStillLookedBehind) {
   // A cabinet (taller than the mockup) at 4 m: the target at 6 m behind it is still found.
   cv::Mat disparity = invalidImage();

@@ -125,6 +125,11 @@ struct DetectorParams {
   // the fill may be the target, degraded (glare, blur); the search then stops there (reported not
   // target-shaped) instead of looking behind it, where only other objects can be found.
   bool stop_behind_target_sized = true;
+  // ...provided the blob is at least this fraction of the mockup's narrowest width (edge-on) wide: a
+  // thinner one is a strip of mismatched disparity along an occluding edge, not a degraded target, and
+  // the search looks behind it (issue 11, eval_far_3m_on: a 16 px strip along the target's left edge
+  // stopped the search in front of the target). 0: any width.
+  double degraded_min_width_fraction = 0.0;
   // With the shape check: a blob larger than the mockup is searched for a nearer part that has the
   // mockup's shape and stands at least this far in front of what surrounds it (the target merged with
   // a box beside or behind it through block matching's smeared depth edges, issue 11); 0: off.
