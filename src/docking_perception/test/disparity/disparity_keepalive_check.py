@@ -10,16 +10,12 @@ on the monocular pose again, return to the keep-alive rate. Reads /diagnostics o
 """
 import os
 import signal
-import threading
-import time
 import unittest
-import xmlrpc.client
 
-import rosgraph
-import rosnode
 import rospy
 import rostest
-from diagnostic_msgs.msg import DiagnosticArray
+
+from diagnostics_watch import StatusWatch, pid_of
 
 PKG = "docking_perception"
 GUARD_STATUS = "image guard /stereo/right/image_raw"
@@ -27,11 +23,15 @@ ARBITER_NODE = "/arbiter"
 CALLER = "/disparity_keepalive_check"
 NEAR_RATE_HZ = 2.5   # perception.launch disparity_near_rate_hz
 FAR_RATE_HZ = 7.5    # perception.launch disparity_rate_hz
+CAP_KEY = "rate cap in force Hz (0: every frame)"
+FULL_KEY = "passed at the full rate"
 
 
-def pid_of(node):
-    uri = rosnode.get_api_uri(rosgraph.Master(CALLER), node)
-    return xmlrpc.client.ServerProxy(uri).getPid(CALLER)[2]
+def guard_reading(values, msg):
+    """(stamp s, cap in force Hz, frames passed, of them at the full rate), or None."""
+    if CAP_KEY not in values or FULL_KEY not in values:
+        return None
+    return (msg.header.stamp.to_sec(), float(values[CAP_KEY]), int(values["passed"]), int(values[FULL_KEY]))
 
 
 class DisparityKeepAlive(unittest.TestCase):
@@ -40,31 +40,13 @@ class DisparityKeepAlive(unittest.TestCase):
         rospy.init_node("disparity_keepalive_check")
 
     def setUp(self):
-        self.lock = threading.Lock()
-        self.status = None  # (stamp s, cap in force Hz, frames passed, of them at the full rate) of the guard's latest status
-        self.deadline = time.monotonic() + rospy.get_param("~timeout_s", 240.0)
-        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=50)
-
-    def on_diagnostics(self, msg):
-        for status in msg.status:
-            if GUARD_STATUS in status.name:
-                values = {kv.key: kv.value for kv in status.values}
-                if "rate cap in force Hz (0: every frame)" in values and "passed at the full rate" in values:
-                    with self.lock:
-                        self.status = (msg.header.stamp.to_sec(), float(values["rate cap in force Hz (0: every frame)"]),
-                                       int(values["passed"]), int(values["passed at the full rate"]))
-
-    def latest(self):
-        with self.lock:
-            return self.status
+        self.guard = StatusWatch(GUARD_STATUS, guard_reading, rospy.get_param("~timeout_s", 240.0))
 
     def wait_for(self, what, predicate):
-        while time.monotonic() < self.deadline and not rospy.is_shutdown():
-            status = self.latest()
-            if status is not None and predicate(status):
-                return status
-            time.sleep(0.2)
-        self.fail("timed out waiting until %s (last guard status: %s)" % (what, self.latest()))
+        reading = self.guard.wait_for(what, predicate)
+        if reading is None:
+            self.fail("timed out waiting until %s (last guard status: %s)" % (what, self.guard.latest()))
+        return reading
 
     def test_keepalive_near_full_rate_when_the_arbiter_stops(self):
         start = self.wait_for("the keep-alive cap is in force", lambda s: s[1] == NEAR_RATE_HZ)
@@ -79,7 +61,7 @@ class DisparityKeepAlive(unittest.TestCase):
 
         # The cap may be back at the keep-alive rate by the next status (the arbiter respawns within about
         # a second): frames passed at the full rate are the evidence that it was lifted.
-        os.kill(pid_of(ARBITER_NODE), signal.SIGKILL)
+        os.kill(pid_of(CALLER, ARBITER_NODE), signal.SIGKILL)
         lifted = self.wait_for("frames passed at the full rate (arbiter gone)", lambda s: s[3] > end[3])
         rospy.loginfo("%d frames passed at the full rate after the arbiter was killed", lifted[3] - end[3])
         again = self.wait_for("the keep-alive cap again (arbiter respawned)",

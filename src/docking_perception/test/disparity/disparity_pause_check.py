@@ -10,16 +10,12 @@ Reads /diagnostics only.
 """
 import os
 import signal
-import threading
-import time
 import unittest
-import xmlrpc.client
 
-import rosgraph
-import rosnode
 import rospy
 import rostest
-from diagnostic_msgs.msg import DiagnosticArray
+
+from diagnostics_watch import StatusWatch, pid_of
 
 PKG = "docking_perception"
 DETECTOR_STATUS = "disparity_detector"
@@ -27,9 +23,11 @@ ARBITER_NODE = "/arbiter"
 CALLER = "/disparity_pause_check"
 
 
-def pid_of(node):
-    uri = rosnode.get_api_uri(rosgraph.Master(CALLER), node)
-    return xmlrpc.client.ServerProxy(uri).getPid(CALLER)[2]
+def detector_reading(values, _msg):
+    """(paused, frames) of the detector's status, or None."""
+    if "paused" not in values or "frames" not in values:
+        return None
+    return (values["paused"] == "True", int(values["frames"]))
 
 
 class DisparityPause(unittest.TestCase):
@@ -38,30 +36,16 @@ class DisparityPause(unittest.TestCase):
         rospy.init_node("disparity_pause_check")
 
     def setUp(self):
-        self.lock = threading.Lock()
-        self.status = None  # (paused, frames) of the detector's latest status
-        self.deadline = time.monotonic() + rospy.get_param("~timeout_s", 240.0)
-        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics, queue_size=50)
-
-    def on_diagnostics(self, msg):
-        for status in msg.status:
-            if DETECTOR_STATUS in status.name:
-                values = {kv.key: kv.value for kv in status.values}
-                if "paused" in values and "frames" in values:
-                    with self.lock:
-                        self.status = (values["paused"] == "True", int(values["frames"]))
+        self.detector = StatusWatch(DETECTOR_STATUS, detector_reading, rospy.get_param("~timeout_s", 240.0))
 
     def latest(self):
-        with self.lock:
-            return self.status
+        return self.detector.latest()
 
     def wait_for(self, what, predicate):
-        while time.monotonic() < self.deadline and not rospy.is_shutdown():
-            status = self.latest()
-            if status is not None and predicate(status):
-                return status
-            time.sleep(0.2)
-        self.fail("timed out waiting until %s (last detector status: %s)" % (what, self.latest()))
+        reading = self.detector.wait_for(what, predicate)
+        if reading is None:
+            self.fail("timed out waiting until %s (last detector status: %s)" % (what, self.detector.latest()))
+        return reading
 
     def test_rests_near_and_wakes_when_the_arbiter_stops(self):
         paused_frames = self.wait_for("the detector is paused", lambda s: s[0])[1]
@@ -70,7 +54,7 @@ class DisparityPause(unittest.TestCase):
         self.assertTrue(still[0], "the detector resumed with the target still near: %s" % (still,))
         self.assertEqual(still[1], paused_frames, "disparity frames processed while paused")
 
-        os.kill(pid_of(ARBITER_NODE), signal.SIGKILL)
+        os.kill(pid_of(CALLER, ARBITER_NODE), signal.SIGKILL)
         woke = self.wait_for("the detector processes disparity again", lambda s: s[1] > paused_frames)
         rospy.loginfo("resumed: %d frames processed after the arbiter was killed", woke[1] - paused_frames)
         self.wait_for("the detector rests again (arbiter respawned)", lambda s: s[0] and s[1] > paused_frames)
