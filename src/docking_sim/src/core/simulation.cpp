@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <exception>
 #include <thread>
 #include <vector>
-
-#include <cmath>
 
 #include "docking_sim/config_error.h"
 
