@@ -286,9 +286,18 @@ class MessageFuzzCheck(unittest.TestCase):
         while rospy.get_time() == 0.0:
             self.assertLess(time.time() - start, 120.0, "no /clock from the simulator")
             time.sleep(0.1)
-        rospy.sleep(3.0)  # the chain is up and sees the target
-        pids = {n: pid_of(n) for n in CHAIN_NODES}
-        self.assertNotIn(None, pids.values(), "chain not up: %s" % pids)
+        # The chain is up and sees the target: every process answers and the planner reports the target
+        # visible (was a fixed 3 s of sim time, ~10 s wall at 0.3; the condition is observable sooner).
+        wall = time.time()
+        while True:
+            pids = {n: pid_of(n) for n in CHAIN_NODES}
+            with self.lock:
+                visible = bool(self.states) and self.states[-1].target_visible and bool(self.truth)
+            if None not in pids.values() and visible:
+                break
+            self.assertLess(time.time() - wall, 120.0, "chain not up or target not seen: pids %s, target "
+                            "visible %s" % (pids, visible))
+            time.sleep(0.2)
         with self.lock:
             truth0 = self.truth[-1]
         pubs = self.publishers()
