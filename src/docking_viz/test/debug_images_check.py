@@ -56,7 +56,8 @@ def pid_of(node):
 
 class DebugImages(unittest.TestCase):
     def setUp(self):
-        rospy.init_node("debug_images_check")
+        if not rospy.core.is_initialized():  # viz_sim_check.py runs it after another check
+            rospy.init_node("debug_images_check")
         self.min_frames = rospy.get_param("~min_frames", MIN_FRAMES_DEFAULT)
         self.lock = threading.Lock()
         self.diagnostics = {}  # status name part -> {key: value}

@@ -45,7 +45,8 @@ def numbers_of(marker):
 
 class MarkersInTheLoop(unittest.TestCase):
     def setUp(self):
-        rospy.init_node("markers_sim_check")
+        if not rospy.core.is_initialized():  # viz_sim_check.py runs it after another check
+            rospy.init_node("markers_sim_check")
         self.arrays = []
         self.geometry = None
         self.states = set()
