@@ -6,6 +6,8 @@
    names holding each camera's raw and compressed (JPEG, record.launch's default) frames.
 2. replay.launch lossless:=true replays it twice from the compressed frames (decoded by republish), once
    from the raw ones, and once with loop:=true passes:=2, each time recording what it made.
+   The four run two at a time (compressed1 beside raw, then compressed2 beside loop), each on a master
+   of its own.
 Asserts: the bag holds /stereo/left/image_raw and its /compressed (absolute); each replay processed all
 but at most ~max_lost_frames images per camera (the bag's first and last frames can be incomplete); the
 two compressed replays' estimators' estimates are identical (same stamps, validity and numbers; the
@@ -37,19 +39,37 @@ ESTIMATE_TOPICS = ("/perception/disparity/estimate", "/perception/mono_visible/e
 
 
 
-def roslaunch(args, timeout_s, log_path):
-    """Runs one roslaunch with a master of its own; returns its exit code."""
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port)
-    with open(log_path, "w") as log:
-        proc = subprocess.Popen(["roslaunch", "-p", str(port)] + args, env=env, stdout=log, stderr=subprocess.STDOUT,
-                                start_new_session=True)
-        try:
-            return proc.wait(timeout=timeout_s)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, 2)
-            proc.wait(timeout=30)
-            return None
+def roslaunch_all(launches, timeout_s):
+    """Runs roslaunches side by side, each (args, log_path) with a master of its own (distinct ports);
+    returns their exit codes (None: still running after timeout_s, then interrupted)."""
+    ports, procs, logs = [], [], []
+    try:
+        for args, log_path in launches:
+            port = free_port()
+            while port in ports:
+                port = free_port()
+            ports.append(port)
+            env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port)
+            logs.append(open(log_path, "w"))
+            procs.append(subprocess.Popen(["roslaunch", "-p", str(port)] + args, env=env, stdout=logs[-1],
+                                          stderr=subprocess.STDOUT, start_new_session=True))
+        deadline = time.time() + timeout_s
+        codes = []
+        for proc in procs:
+            try:
+                codes.append(proc.wait(timeout=max(deadline - time.time(), 0.0)))
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, 2)
+                proc.wait(timeout=30)
+                codes.append(None)
+        return codes
+    finally:
+        for proc in procs:
+            if proc.poll() is None:
+                os.killpg(proc.pid, 2)
+                proc.wait(timeout=30)
+        for log in logs:
+            log.close()
 
 
 def estimates(path):
@@ -111,15 +131,22 @@ class ReplayLossless(unittest.TestCase):
         self.assertGreater(frames, 20)
         self.assertEqual(counts["/stereo/left/image_raw/compressed"], frames)
 
+        # The four replays two at a time, each on a master of its own (was one after the other: ~15 s wall
+        # each, most of it starting and stopping launches). Lossless replays process every frame whatever
+        # the machine's speed: the two compressed ones run beside different replays and must still agree.
         runs = {}
-        for name, args in (("compressed1", ["images:=compressed"]), ("compressed2", ["images:=compressed"]),
-                           ("raw", ["images:=raw"]), ("loop", ["loop:=true", "passes:=2"])):
-            out = os.path.join(self.dir, name + ".bag")
-            log = os.path.join(self.dir, name + ".log")
-            rc = roslaunch([os.path.join(self.launch_dir, "replay.launch"), "bag:=" + bags[0], "out:=" + out,
-                            "lossless:=true", "dock:=false"] + args, 900, log)
-            self.assertEqual(rc, 0, "replay %s: %s" % (name, open(log).read()[-2000:]))
-            runs[name] = estimates(out)
+        for pair in ((("compressed1", ["images:=compressed"]), ("raw", ["images:=raw"])),
+                     (("compressed2", ["images:=compressed"]), ("loop", ["loop:=true", "passes:=2"]))):
+            launches = [([os.path.join(self.launch_dir, "replay.launch"), "bag:=" + bags[0],
+                          "out:=" + os.path.join(self.dir, name + ".bag"), "lossless:=true", "dock:=false"] + args,
+                         os.path.join(self.dir, name + ".log")) for name, args in pair]
+            codes = roslaunch_all(launches, 900)
+            for (name, _), rc in zip(pair, codes):
+                log = os.path.join(self.dir, name + ".log")
+                self.assertEqual(rc, 0, "replay %s: %s" % (name, open(log).read()[-2000:]))
+                summary = [line.strip() for line in open(log) if line.startswith("replay_paced:")]
+                print("replay_lossless_check: %s: %s" % (name, "; ".join(summary)), flush=True)
+                runs[name] = estimates(os.path.join(self.dir, name + ".bag"))
         outs = [runs["compressed1"], runs["compressed2"]]
 
         max_lost = rospy.get_param("~max_lost_frames", 2)
