@@ -39,6 +39,7 @@ DRAWN_KEY = "debug images drawn"
 DEBUG_CPU_KEY = "debug image CPU ms (mean)"
 MIN_FRAMES_DEFAULT = 15  # frames each phase spans, per estimator (~min_frames: more for a steadier CPU figure)
 MIN_DEBUG_IMAGES = 5  # debug images received per topic
+SETTLE_FRAMES = 3     # after the publisher dropped its last debug subscriber: frames in flight then are done
 WAIT_S = 400.0        # wall: generous, a busy machine runs the simulator slowly
 
 
@@ -54,6 +55,13 @@ def pid_of(node):
     return xmlrpc.client.ServerProxy(uri).getPid("/debug_images_check")[2]
 
 
+def outbound_topics_of(node):
+    """The topics on which the node has a subscriber connected (its own view: getBusInfo, direction o)."""
+    uri = rosnode.get_api_uri(rosgraph.Master("/debug_images_check"), node)
+    connections = xmlrpc.client.ServerProxy(uri).getBusInfo("/debug_images_check")[2]
+    return {c[4] for c in connections if len(c) > 4 and c[2] == "o"}
+
+
 class DebugImages(unittest.TestCase):
     def setUp(self):
         if not rospy.core.is_initialized():  # viz_sim_check.py runs it after another check
@@ -61,6 +69,7 @@ class DebugImages(unittest.TestCase):
         self.min_frames = rospy.get_param("~min_frames", MIN_FRAMES_DEFAULT)
         self.lock = threading.Lock()
         self.diagnostics = {}  # status name part -> {key: value}
+        self.updated = {}  # status name part -> wall time of its last diagnostics
         self.camera_sizes = {}  # camera_info topic -> (width, height)
         self.camera_stamps = {}  # camera_info topic -> set of stamps
         self.images = {topic: [] for topic in DEBUG_IMAGES}
@@ -76,6 +85,7 @@ class DebugImages(unittest.TestCase):
                 for part, _, _ in DEBUG_IMAGES.values():
                     if status.name.endswith(part):
                         self.diagnostics[part] = {kv.key: kv.value for kv in status.values}
+                        self.updated[part] = time.time()
 
     def on_camera_info(self, msg, topic):
         with self.lock:
@@ -102,10 +112,12 @@ class DebugImages(unittest.TestCase):
             self.assertLess(time.time(), deadline, what())
             time.sleep(0.5)
 
-    def wait_frames(self, start_frames, what):
+    def wait_frames(self, start_frames, what, frames=None):
+        frames = self.min_frames if frames is None else frames
+
         def enough():
             now = self.counters("frames")
-            return all(now[t] is not None and now[t] >= start_frames[t] + self.min_frames for t in DEBUG_IMAGES)
+            return all(now[t] is not None and now[t] >= start_frames[t] + frames for t in DEBUG_IMAGES)
         self.wait_for(enough, lambda: "%s: frames %s from %s" % (what, self.counters("frames"), start_frames))
         return self.counters("frames")
 
@@ -134,12 +146,25 @@ class DebugImages(unittest.TestCase):
         self.report(frames_0, frames_1, cpu_1 - cpu_0, frames_2, frames_3, cpu_3 - cpu_2)
 
         # Unsubscribed: the count stops. The publisher learns of the leaving when the connection closes, a
-        # moment after the master does: one phase of frames to settle, then not one image more in the next.
+        # moment after the master does: settled once the manager itself has no debug image connection left
+        # (getBusInfo) and each estimator has processed SETTLE_FRAMES more frames (was a whole phase of
+        # ~min_frames, ~20 s wall: the disparity detector's frames come at ~2.5 Hz sim); then not one image
+        # more in the next phase of ~min_frames.
+        connected = outbound_topics_of(MANAGER_NODE)
+        self.assertTrue(set(DEBUG_IMAGES) <= connected, "the perception manager's connections (getBusInfo) "
+                        "show no debug image subscriber: %s" % sorted(connected))
         for subscriber in subscribers:
             subscriber.unregister()
         self.wait_for(lambda: all(n == 0 for n in self.topic_subscriber_counts().values()),
                       lambda: "debug image subscribers left: %s" % self.topic_subscriber_counts())
-        frames_4 = self.wait_frames(self.counters("frames"), "after the debug subscribers left")
+        self.wait_for(lambda: not (outbound_topics_of(MANAGER_NODE) & set(DEBUG_IMAGES)),
+                      lambda: "the perception manager still connected on %s" % sorted(
+                          outbound_topics_of(MANAGER_NODE) & set(DEBUG_IMAGES)))
+        # Counted from diagnostics sent after that (the last ones may be up to a period older).
+        disconnected = time.time()
+        self.wait_for(lambda: all(self.updated.get(part, 0.0) > disconnected for part, _, _ in DEBUG_IMAGES.values()),
+                      lambda: "diagnostics after the disconnection: %s" % self.updated)
+        frames_4 = self.wait_frames(self.counters("frames"), "after the debug subscribers left", SETTLE_FRAMES)
         drawn_4 = self.counters(DRAWN_KEY)
         self.wait_frames(frames_4, "after the debug subscribers left, settled")
         drawn_5 = self.counters(DRAWN_KEY)
