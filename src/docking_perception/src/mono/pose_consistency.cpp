@@ -20,6 +20,79 @@ constexpr double kSaturatedLevel = 250.0;         // image pixels at or above: a
 constexpr double kMinCellStdDev = 4.0;            // template cells flatter than this carry no evidence
 const double kTemplateBlurs[] = {0.0, 1.0, 2.0, 3.5};  // px at the working scale
 
+// The appearance score's cells: whole cells of cw x ch px from the top left of the working image.
+struct CellGrid {
+  int cw;
+  int ch;
+  int columns;
+  int rows;
+};
+
+// Sums over the valid (mask != 0) pixels of one cell, in double as cv::meanStdDev keeps them.
+struct CellSums {
+  double n = 0.0;
+  double sum = 0.0;
+  double sum2 = 0.0;
+};
+
+std::vector<CellSums> imageCellSums(const cv::Mat& image, const cv::Mat& valid, const CellGrid& grid) {
+  std::vector<CellSums> sums(static_cast<size_t>(grid.columns * grid.rows));
+  for (int y = 0; y < grid.rows * grid.ch; ++y) {
+    const uint8_t* im = image.ptr<uint8_t>(y);
+    const uint8_t* m = valid.ptr<uint8_t>(y);
+    CellSums* row = &sums[static_cast<size_t>((y / grid.ch) * grid.columns)];
+    for (int x = 0; x < grid.columns * grid.cw; ++x) {
+      if (!m[x]) continue;
+      CellSums& c = row[x / grid.cw];
+      const double v = im[x];
+      c.n += 1.0;
+      c.sum += v;
+      c.sum2 += v * v;
+    }
+  }
+  return sums;
+}
+
+// The normalised cross-correlation of template and image over the valid pixels of each cell (the cells
+// at least half valid whose template is not flat); 0 for a flat image cell. One pass over the pixels
+// instead of a dozen small OpenCV calls a cell (the appearance check ran on every pose).
+std::vector<double> cellCorrelations(const cv::Mat& image, const cv::Mat& templ, const cv::Mat& valid,
+                                     const CellGrid& grid, const std::vector<CellSums>& image_sums) {
+  std::vector<CellSums> templ_sums(image_sums.size());
+  std::vector<double> cross(image_sums.size(), 0.0);
+  for (int y = 0; y < grid.rows * grid.ch; ++y) {
+    const uint8_t* im = image.ptr<uint8_t>(y);
+    const float* t = templ.ptr<float>(y);
+    const uint8_t* m = valid.ptr<uint8_t>(y);
+    const size_t first = static_cast<size_t>((y / grid.ch) * grid.columns);
+    for (int x = 0; x < grid.columns * grid.cw; ++x) {
+      if (!m[x]) continue;
+      const size_t cell = first + static_cast<size_t>(x / grid.cw);
+      const double tv = t[x];
+      templ_sums[cell].sum += tv;
+      templ_sums[cell].sum2 += tv * tv;
+      cross[cell] += tv * im[x];
+    }
+  }
+  std::vector<double> nccs;
+  const double cell_area = static_cast<double>(grid.cw) * grid.ch;
+  for (size_t cell = 0; cell < image_sums.size(); ++cell) {
+    const double n = image_sums[cell].n;
+    if (n < std::floor(cell_area / 2.0) || n <= 0.0) continue;
+    const double t_mean = templ_sums[cell].sum / n;
+    const double t_std = std::sqrt(std::max(0.0, templ_sums[cell].sum2 / n - t_mean * t_mean));
+    if (t_std < kMinCellStdDev) continue;
+    const double i_mean = image_sums[cell].sum / n;
+    const double i_std = std::sqrt(std::max(0.0, image_sums[cell].sum2 / n - i_mean * i_mean));
+    if (i_std <= 1e-6) {
+      nccs.push_back(0.0);
+      continue;
+    }
+    nccs.push_back((cross[cell] - n * t_mean * i_mean) / (n * t_std * i_std));
+  }
+  return nccs;
+}
+
 }  // namespace
 
 std::string validateConsistencyParams(const ConsistencyParams& p) {
@@ -94,12 +167,13 @@ AppearanceScore FaceAppearance::score(const cv::Mat& gray, const CameraIntrinsic
                       cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
   cv::erode(valid, valid, cv::Mat(), cv::Point(-1, -1), 2);
   valid.setTo(0, image >= kSaturatedLevel);
-  cv::Mat image_f;
-  image.convertTo(image_f, CV_32F);
   cv::Mat rendered_f;
   rendered.convertTo(rendered_f, CV_32F);
   const int cw = std::max(4, image.cols / kAppearanceCells);
   const int ch = std::max(4, image.rows / kAppearanceCells);
+  const CellGrid grid{cw, ch, image.cols / cw, image.rows / ch};
+  // The image's own cell sums do not depend on the template's blur: once.
+  const std::vector<CellSums> image_sums = imageCellSums(image, valid, grid);
   double best = -2.0;
   for (const double blur : kTemplateBlurs) {
     cv::Mat templ;
@@ -108,27 +182,7 @@ AppearanceScore FaceAppearance::score(const cv::Mat& gray, const CameraIntrinsic
     } else {
       templ = rendered_f;
     }
-    std::vector<double> nccs;
-    for (int cy = 0; cy + ch <= image.rows; cy += ch) {
-      for (int cx = 0; cx + cw <= image.cols; cx += cw) {
-        const cv::Rect cell(cx, cy, cw, ch);
-        const cv::Mat m = valid(cell);
-        if (cv::countNonZero(m) < cell.area() / 2) continue;
-        cv::Scalar ti_mean, ti_std, im_mean, im_std;
-        cv::meanStdDev(templ(cell), ti_mean, ti_std, m);
-        if (ti_std[0] < kMinCellStdDev) continue;
-        cv::meanStdDev(image_f(cell), im_mean, im_std, m);
-        if (im_std[0] <= 1e-6) {
-          nccs.push_back(0.0);
-          continue;
-        }
-        cv::Mat a = templ(cell) - ti_mean[0];
-        cv::Mat b = image_f(cell) - im_mean[0];
-        cv::Mat prod = a.mul(b);
-        const double n = cv::countNonZero(m);
-        nccs.push_back(cv::sum(prod.setTo(0, m == 0))[0] / (n * ti_std[0] * im_std[0]));
-      }
-    }
+    std::vector<double> nccs = cellCorrelations(image, templ, valid, grid, image_sums);
     if (nccs.empty()) continue;
     std::nth_element(nccs.begin(), nccs.begin() + static_cast<std::ptrdiff_t>(nccs.size() / 2), nccs.end());
     const double median = nccs[nccs.size() / 2];
