@@ -364,6 +364,7 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
       candidates.push_back(model_points_[static_cast<size_t>(row)]);
     }
   }
+  match->refine_candidates = static_cast<int>(candidates.size());
   if (!refinePass(gray, candidates, match)) return;
   for (int pass = 1; pass < params_.refine_passes; ++pass) {
     const std::vector<cv::Point2f> kept = match->inlier_texture_points;
@@ -555,28 +556,58 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
     return result;
   }
   result.homography = cv::Matx33d(homography);
-  const float w = static_cast<float>(texture_size_.width) - 0.5f;
-  const float h = static_cast<float>(texture_size_.height) - 0.5f;
-  const std::vector<cv::Point2f> corners = {{-0.5f, -0.5f}, {w, -0.5f}, {w, h}, {-0.5f, h}};
+  const std::vector<cv::Point2f> corners = textureCorners();
   cv::perspectiveTransform(corners, result.face_outline, homography);
-  // A real view of the face: a convex outline of plausible size, not mirrored.
-  const double area = signedArea(result.face_outline);
-  if (!cv::isContourConvex(result.face_outline)) {
-    result.status = "matched face outline is not convex";
-    return result;
-  }
-  if (area * signedArea(corners) <= 0.0) {
-    result.status = "matched face is mirrored";
-    return result;
-  }
-  if (std::abs(area) < params_.min_face_area_px) {
-    result.status = "matched face too small";
-    return result;
-  }
+  result.status = outlineProblem(result.face_outline);
+  if (!result.status.empty()) return result;
   if (params_.refine) {
     refine(gray, &result);
     cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
   }
+  result.found = true;
+  return result;
+}
+
+std::vector<cv::Point2f> FeatureMatcher::textureCorners() const {
+  const float w = static_cast<float>(texture_size_.width) - 0.5f;
+  const float h = static_cast<float>(texture_size_.height) - 0.5f;
+  return {{-0.5f, -0.5f}, {w, -0.5f}, {w, h}, {-0.5f, h}};
+}
+
+std::string FeatureMatcher::outlineProblem(const std::vector<cv::Point2f>& outline) const {
+  // A real view of the face: a convex outline of plausible size, not mirrored.
+  const double area = signedArea(outline);
+  if (!cv::isContourConvex(outline)) return "matched face outline is not convex";
+  if (area * signedArea(textureCorners()) <= 0.0) return "matched face is mirrored";
+  if (std::abs(area) < params_.min_face_area_px) return "matched face too small";
+  return "";
+}
+
+FaceMatch FeatureMatcher::matchAtPrediction(const cv::Mat& gray, const cv::Matx33d& predicted_homography,
+                                            double min_kept_fraction) const {
+  FaceMatch result;
+  result.from_prediction = true;
+  if (levels_.empty() || gray.empty() || gray.type() != CV_8UC1) {
+    result.status = levels_.empty() ? "no model features" : "image is not 8-bit gray";
+    return result;
+  }
+  result.homography = predicted_homography;
+  cv::perspectiveTransform(textureCorners(), result.face_outline, cv::Mat(predicted_homography));
+  result.status = outlineProblem(result.face_outline);
+  if (!result.status.empty()) return result;
+  refine(gray, &result);
+  const int needed = std::max(params_.min_inliers,
+                              static_cast<int>(std::ceil(min_kept_fraction * result.refine_candidates)));
+  result.inliers = static_cast<int>(result.inlier_image_points.size());
+  if (!result.refined || result.inliers < needed) {
+    result.status = "the predicted face kept " + std::to_string(result.inliers) + " of " +
+                    std::to_string(result.refine_candidates) + " refined points (need " + std::to_string(needed) + ")";
+    result.refined = false;
+    result.inlier_image_points.clear();
+    result.inlier_texture_points.clear();
+    return result;
+  }
+  cv::perspectiveTransform(textureCorners(), result.face_outline, cv::Mat(result.homography));
   result.found = true;
   return result;
 }

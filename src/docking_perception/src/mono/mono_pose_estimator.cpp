@@ -93,6 +93,9 @@ std::string validateParams(const MonoPoseParams& p) {
   for (const std::string& check : checks) {
     if (!check.empty()) return check;
   }
+  if (!(p.predicted_face_min_kept_fraction >= 0.0 && p.predicted_face_min_kept_fraction <= 1.0)) {
+    return "predicted_face_min_kept_fraction must be in [0, 1]";
+  }
   if (!(p.region_hint_max_age_s >= 0.0)) return "region_hint_max_age_s must not be negative";
   if (!(p.region_hint_radius_m > 0.0)) return "region_hint_radius_m must be positive";
   if (p.direct_yaw_hypotheses < 1 || p.direct_yaw_hypotheses > 15) return "direct_yaw_hypotheses must be 1..15";
@@ -207,13 +210,34 @@ const Eigen::Matrix3d* MonoPoseEstimator::previousRotation(double stamp_s, Eigen
   return storage;
 }
 
-cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_px) const {
-  *face_width_px = 0.0;
-  if (!params_.use_tracking_region || !tracking_) return cv::Rect();
+PoseWithCovariance MonoPoseEstimator::predictedPose(double stamp_s) const {
   PoseWithCovariance predicted = last_pose_;
   if (stamp_s > last_stamp_s_ && stamp_s - last_stamp_s_ <= params_.filter.max_gap_s) {
     filter_.predict(stamp_s, &predicted);
   }
+  return predicted;
+}
+
+FaceMatch MonoPoseEstimator::matchPredictedFace(const cv::Mat& gray, double stamp_s) const {
+  // The face is the plane x = 0 of the target frame: a face point (0, y, z) is at y r2 + z r3 + t in the
+  // camera, so texture pixel -> image pixel is K [r2 r3 t] (texture -> face).
+  const PoseWithCovariance pose = predictedPose(stamp_s);
+  Eigen::Matrix3d plane_to_camera;
+  plane_to_camera << pose.rotation.col(1), pose.rotation.col(2), pose.translation;
+  Eigen::Matrix3d intrinsics;
+  intrinsics << camera_.fx, 0.0, camera_.cx, 0.0, camera_.fy, camera_.cy, 0.0, 0.0, 1.0;
+  const Eigen::Matrix3d h = intrinsics * plane_to_camera * model_.textureToFace();
+  cv::Matx33d homography;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) homography(r, c) = h(r, c) / h(2, 2);
+  }
+  return matcher_.matchAtPrediction(gray, homography, params_.predicted_face_min_kept_fraction);
+}
+
+cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_px) const {
+  *face_width_px = 0.0;
+  if (!params_.use_tracking_region || !tracking_) return cv::Rect();
+  const PoseWithCovariance predicted = predictedPose(stamp_s);
   std::vector<Eigen::Vector3d> outline;
   if (params_.mode == MonoMode::kVisible) {
     outline = model_.faceCorners();
@@ -296,6 +320,24 @@ bool MonoPoseEstimator::solveFivePoint(const MarkerPixels& pixels, MonoPoseResul
 
 bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px,
                                         MonoPoseResult* result) {
+  // Tracking with a claimed orientation (the face's place and perspective are known): refine it there.
+  // A prediction that does not hold, or a pose failing a check, falls back to the feature search below
+  // from a clean result.
+  if (params_.predict_face_when_tracking && params_.solver == PoseSolverType::kPnp && region.area() > 0 &&
+      last_orientation_claimed_) {
+    const MonoPoseResult before = *result;
+    const FaceMatch predicted = matchPredictedFace(gray, result->stamp_s);
+    if (predicted.found) {
+      result->used_tracking_region = true;
+      result->used_predicted_face = true;
+      result->search_region = region;
+      result->feature_inliers = predicted.inliers;
+      result->inlier_points = predicted.inlier_image_points;
+      result->face_outline = predicted.face_outline;
+      if (poseFromMatch(gray, predicted, 0.0, result)) return true;
+      *result = before;
+    }
+  }
   std::vector<SearchRegion> priors = {{region, face_width_px}};
   const bool hint_fresh = hint_region_.area() > 0 && std::abs(result->stamp_s - hint_stamp_s_) <= params_.region_hint_max_age_s;
   if (hint_fresh && region.area() <= 0) priors.push_back({hint_region_, 0.0});

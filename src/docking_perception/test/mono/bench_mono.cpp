@@ -3,7 +3,9 @@
 //   bench_mono OUTPUT.json [TARGET_YAML] [--stages NAME,NAME,...]
 //
 // Stages: mono_full (visible, PnP, full-frame search on every frame), mono_tracking (the same with the
-// region predicted from the last pose), mono_full_paper_5point (the paper's solver, full frame) and
+// region predicted from the last pose, the face refined at its predicted place first: deployed),
+// mono_tracking_features (tracking by the feature search in the predicted region only, as before issue 15's
+// predict_face_when_tracking), mono_full_paper_5point (the paper's solver, full frame) and
 // mono_ir (LED pattern + 5-point solver). The frames are synthetic views of the target (the texture of
 // TARGET_YAML when given and readable, else a seeded synthetic texture), approaching from 1.4 m to
 // 0.6 m while yawing. ms_median is the CPU time of the estimator's thread (the machine is shared, so
@@ -43,6 +45,7 @@ struct StageFigures {
   double position_error_median_m = 0.0;
   double angle_error_median_deg = 0.0;
   double tracked_fraction = 0.0;
+  double predicted_fraction = 0.0;  // of the frames: the pose from the face refined at its predicted place
 };
 
 double median(std::vector<double> values) {
@@ -60,6 +63,7 @@ StageFigures runStage(const std::string& name, const TargetModel& model, const C
   std::vector<double> angle_errors;
   int valid = 0;
   int tracked = 0;
+  int predicted = 0;
   for (size_t i = 0; i < frames.size(); ++i) {
     const auto start = std::chrono::steady_clock::now();
     const MonoPoseResult result = estimator.process(frames[i].image, frames[i].stamp_s);
@@ -70,6 +74,7 @@ StageFigures runStage(const std::string& name, const TargetModel& model, const C
     if (result.valid) {
       ++valid;
       tracked += result.used_tracking_region ? 1 : 0;
+      predicted += result.used_predicted_face ? 1 : 0;
       position_errors.push_back((result.pose.translation - frames[i].translation).norm());
       angle_errors.push_back(rotationAngleBetween(result.pose.rotation, frames[i].rotation) * 180.0 / M_PI);
     }
@@ -80,6 +85,7 @@ StageFigures runStage(const std::string& name, const TargetModel& model, const C
   figures.wall_ms_median = median(wall);
   figures.detection_rate = cpu.empty() ? 0.0 : static_cast<double>(valid) / cpu.size();
   figures.tracked_fraction = cpu.empty() ? 0.0 : static_cast<double>(tracked) / cpu.size();
+  figures.predicted_fraction = cpu.empty() ? 0.0 : static_cast<double>(predicted) / cpu.size();
   figures.position_error_median_m = median(position_errors);
   figures.angle_error_median_deg = median(angle_errors);
   return figures;
@@ -153,6 +159,8 @@ int main(int argc, char** argv) {
   ir.mode = MonoMode::kIr;
   ir.solver = PoseSolverType::kPaperFivePoint;
 
+  MonoPoseParams tracking_features = tracking;  // predict_face_when_tracking off: the feature search every frame
+  tracking_features.predict_face_when_tracking = false;
   MonoPoseParams tracking_two_passes = tracking;  // refine_passes: 2 (not deployed; its cost)
   tracking_two_passes.features.refine_passes = 2;
   struct StagePlan {
@@ -163,6 +171,7 @@ int main(int argc, char** argv) {
   };
   const std::vector<StagePlan> plans = {{"mono_full", &full, &visible, false},
                                         {"mono_tracking", &tracking, &visible, true},
+                                        {"mono_tracking_features", &tracking_features, &visible, true},
                                         {"mono_full_paper_5point", &five_point, &visible, false},
                                         {"mono_tracking_2_passes", &tracking_two_passes, &visible, true},
                                         {"mono_ir", &ir, &infrared, false}};
@@ -177,12 +186,13 @@ int main(int argc, char** argv) {
   }
 
   std::printf("bench_mono: 640x480, 1 thread, %zu frames, %s\n", visible.size(), texture_source.c_str());
-  std::printf("%-24s %9s %8s %9s %9s %9s %9s %8s\n", "stage", "cpu ms", "Hz", "wall ms", "detect", "pos mm", "ang deg",
-              "tracked");
+  std::printf("%-24s %9s %8s %9s %9s %9s %9s %8s %9s\n", "stage", "cpu ms", "Hz", "wall ms", "detect", "pos mm",
+              "ang deg", "tracked", "predicted");
   for (const StageFigures& s : stages) {
-    std::printf("%-24s %9.2f %8.1f %9.2f %9.3f %9.2f %9.3f %8.2f\n", s.name.c_str(), s.cpu_ms_median,
+    std::printf("%-24s %9.2f %8.1f %9.2f %9.3f %9.2f %9.3f %8.2f %9.2f\n", s.name.c_str(), s.cpu_ms_median,
                 s.cpu_ms_median > 0.0 ? 1000.0 / s.cpu_ms_median : 0.0, s.wall_ms_median, s.detection_rate,
-                1000.0 * s.position_error_median_m, s.angle_error_median_deg, s.tracked_fraction);
+                1000.0 * s.position_error_median_m, s.angle_error_median_deg, s.tracked_fraction,
+                s.predicted_fraction);
   }
 
   std::ofstream out(output);

@@ -168,6 +168,60 @@ TEST(FeatureMatcher, SecondRefinementPassIsAtLeastAsAccurate) {
   EXPECT_LE(total_two, 1.1 * total_one) << "two passes " << total_two / 4.0 << " px, one pass " << total_one / 4.0 << " px";
 }
 
+// Tracking without features (issue 15): the homography of the true pose refines to the truth; one
+// predicted 6 px off (beyond the +-3 px correlation search) keeps too few points and is not found, so the
+// caller falls back to the feature search instead of trusting a wrong prediction.
+TEST(FeatureMatcher, RefinesAtAPredictedHomographyAndRefusesAWrongOne) {
+  const TargetModel model = synthetic::makeModel(4);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  const Eigen::Matrix3d r = synthetic::facingRotation(0.25, -0.05, 0.1);
+  const Eigen::Vector3d t(-0.03, 0.02, 0.9);
+  const cv::Mat image = synthetic::renderVisible(model, camera, r, t, 31);
+  FeatureMatcher matcher;
+  std::string reason;
+  ASSERT_TRUE(matcher.buildModel(model.textureGray(), &reason)) << reason;
+  // texture pixel -> image pixel of the pose: K [r2 r3 t] (texture -> face).
+  Eigen::Matrix3d plane;
+  plane << r.col(1), r.col(2), t;
+  Eigen::Matrix3d k;
+  k << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
+  const Eigen::Matrix3d h = k * plane * model.textureToFace();
+  cv::Matx33d truth_homography;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) truth_homography(i, j) = h(i, j) / h(2, 2);
+  }
+  // A prediction 1.5 px off (a tracked frame's usual error) still refines to the truth.
+  const cv::Matx33d shift_small(1.0, 0.0, 1.5, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0);
+  const FaceMatch match = matcher.matchAtPrediction(image, shift_small * truth_homography, 0.5);
+  ASSERT_TRUE(match.found) << match.status;
+  EXPECT_TRUE(match.refined);
+  EXPECT_TRUE(match.from_prediction);
+  EXPECT_EQ(match.keypoints, 0);  // no feature was detected
+  EXPECT_GE(match.inliers, 50);
+  EXPECT_GE(match.inliers, match.refine_candidates / 2);
+  double sum = 0.0;
+  for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
+    const Eigen::Vector2d truth = camera.project(r * model.texturePixelToPoint(match.inlier_texture_points[i]) + t);
+    sum += (Eigen::Vector2d(match.inlier_image_points[i].x, match.inlier_image_points[i].y) - truth).squaredNorm();
+  }
+  EXPECT_LT(std::sqrt(sum / match.inlier_texture_points.size()), 0.3);
+  // The kept fraction is enforced: asking for every point tried (some always fall off the face's edge or
+  // below min_correlation) refuses even this prediction.
+  ASSERT_LT(match.inliers, match.refine_candidates);
+  EXPECT_FALSE(matcher.matchAtPrediction(image, shift_small * truth_homography, 1.0).found);
+
+  const cv::Matx33d shift_large(1.0, 0.0, 6.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+  const FaceMatch wrong = matcher.matchAtPrediction(image, shift_large * truth_homography, 0.5);
+  EXPECT_FALSE(wrong.found);
+  EXPECT_TRUE(wrong.inlier_image_points.empty());
+  EXPECT_FALSE(wrong.status.empty());
+  // A prediction that mirrors the face is refused before any correlation.
+  const cv::Matx33d mirror(-1.0, 0.0, 2.0 * camera.cx, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+  const FaceMatch mirrored = matcher.matchAtPrediction(image, mirror * truth_homography, 0.5);
+  EXPECT_FALSE(mirrored.found);
+  EXPECT_EQ(mirrored.refine_candidates, 0);
+}
+
 // Matchers with the same BRISK parameters share one BRISK object (46 MB of pattern tables each), made
 // only when a model is built, and two threads matching through it at once get what one thread gets.
 TEST(FeatureMatcher, SharesOneBriskPerParametersAndMatchesConcurrently) {

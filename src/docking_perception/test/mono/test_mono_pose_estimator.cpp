@@ -99,6 +99,51 @@ TEST(MonoPoseEstimator, TrackingUsesThePredictedRegionAndGivesAVelocity) {
   EXPECT_LT((result.twist.linear - velocity).norm(), 0.05);
 }
 
+// Tracking without features (issue 15): after the first image, the face is refined where the filter
+// predicts it (no feature search) and the pose is as accurate; when the target jumps where the prediction
+// cannot follow, the feature search finds it in the same image; with the option off, every image searches.
+TEST(MonoPoseEstimator, TracksAtThePredictedFaceAndSearchesWhenThePredictionFails) {
+  const TargetModel model = synthetic::makeModel(2);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  MonoPoseParams params = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
+  params.filter.gate_chi2 = 0.0;  // the jump below is the point: no filter gate
+  MonoPoseEstimator estimator(model, camera, params);
+  params.predict_face_when_tracking = false;
+  MonoPoseEstimator searching(model, camera, params);
+  const Eigen::Vector3d velocity(0.03, 0.0, -0.06);
+  int predicted = 0;
+  for (int frame = 0; frame < 15; ++frame) {
+    const double t = frame / 30.0;
+    const Eigen::Vector3d position = Eigen::Vector3d(-0.02, 0.01, 1.0) + velocity * t;
+    const Eigen::Matrix3d rotation = synthetic::facingRotation(0.2 + 0.3 * t, 0.05);
+    const cv::Mat image = synthetic::renderVisible(model, camera, rotation, position, 400 + frame);
+    const MonoPoseResult result = estimator.process(image, 10.0 + t);
+    const MonoPoseResult reference = searching.process(image, 10.0 + t);
+    ASSERT_TRUE(result.valid) << "frame " << frame << ": " << result.status;
+    ASSERT_TRUE(reference.valid) << "frame " << frame << ": " << reference.status;
+    EXPECT_FALSE(reference.used_predicted_face);
+    if (frame == 0) {
+      EXPECT_FALSE(result.used_predicted_face);
+    }
+    predicted += result.used_predicted_face ? 1 : 0;
+    if (result.used_predicted_face) {
+      EXPECT_EQ(result.feature_matches, 0);  // no feature search ran
+      EXPECT_TRUE(result.used_tracking_region);
+    }
+    EXPECT_LT((result.pose.translation - position).norm(), 0.01 * position.norm()) << "frame " << frame;
+    EXPECT_LT(degrees(rotationAngleBetween(result.pose.rotation, rotation)), 1.0) << "frame " << frame;
+  }
+  EXPECT_GE(predicted, 12);
+  // The target 8 cm to the side at once (~44 px): the prediction does not hold, the search finds it.
+  const Eigen::Vector3d jumped = Eigen::Vector3d(0.06, 0.01, 0.97);
+  const Eigen::Matrix3d rotation = synthetic::facingRotation(0.35, 0.05);
+  const MonoPoseResult after_jump =
+      estimator.process(synthetic::renderVisible(model, camera, rotation, jumped, 499), 10.5);
+  ASSERT_TRUE(after_jump.valid) << after_jump.status;
+  EXPECT_FALSE(after_jump.used_predicted_face);
+  EXPECT_LT((after_jump.pose.translation - jumped).norm(), 0.01);
+}
+
 TEST(MonoPoseEstimator, ReportsWhyNothingWasFound) {
   const TargetModel model = synthetic::makeModel(1);
   const CameraIntrinsics camera = synthetic::defaultCamera();

@@ -60,6 +60,8 @@ struct FaceMatch {
   int pyramid_level = 0;            // the image level the keypoints came from (0 full, 1 half resolution)
   bool blurred_model = false;       // matched against the blurred model pyramid
   bool refined = false;             // the correspondences below are the refined ones
+  bool from_prediction = false;     // matchAtPrediction: no features, the refinement started from a prediction
+  int refine_candidates = 0;        // points the (first) refinement pass tried to correlate
   cv::Matx33d homography = cv::Matx33d::eye();  // texture pixel -> image pixel
   std::vector<cv::Point2f> matched_image_points;  // all ratio-test matches (for the debug image)
   // The correspondences for the pose: the homography inliers, or after refinement the refined points
@@ -94,6 +96,16 @@ class FeatureMatcher {
                   int pyramid_level = 0, bool blurred_model = false) const;
   bool hasBlurredModel() const { return params_.blurred_model_sigma_px > 0.0; }
 
+  // Tracking without features (issue 15): the face where a predicted homography (texture pixel -> image
+  // pixel, from the tracked pose) puts it; the model corners of the level nearest its apparent size are
+  // refined by NCC as after a feature match (up to max_refined_points, refine_passes). No FAST, BRISK or
+  // Hamming matching: a third of a feature search's instructions. found when the predicted outline is a
+  // plausible view and at least max(min_inliers, min_kept_fraction x the points tried) survive the
+  // correlation and the refinement's RANSAC; a prediction off by more than the NCC search (+-3 px) keeps
+  // few points and is not found (the caller then searches with features).
+  FaceMatch matchAtPrediction(const cv::Mat& gray, const cv::Matx33d& predicted_homography,
+                              double min_kept_fraction) const;
+
  private:
   struct ModelLevel {
     int width_px;
@@ -105,6 +117,10 @@ class FeatureMatcher {
   };
   void detect(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, int max_keypoints) const;
   void refine(const cv::Mat& gray, FaceMatch* match) const;
+  // Empty when the outline (texture corners mapped by the homography) is a plausible view of the face,
+  // else why not (not convex, mirrored, too small).
+  std::string outlineProblem(const std::vector<cv::Point2f>& outline) const;
+  std::vector<cv::Point2f> textureCorners() const;
   // One refinement pass over candidates (texture pixels) with match->homography; false (match
   // unchanged) when too few points survive.
   bool refinePass(const cv::Mat& gray, const std::vector<cv::Point2f>& candidates, FaceMatch* match) const;

@@ -56,6 +56,12 @@ struct MonoPoseParams {
   double max_range_m = 5.0;
   int max_pattern_candidates = 6;      // IR: candidate LED patterns tried, best first
   bool use_half_resolution = false;    // visible: also search the half-resolution image (blur)
+  // Tracking (visible): the face refined where the pose predicted by the velocity filter puts it, without
+  // the feature search (FeatureMatcher::matchAtPrediction), when the last image claimed its orientation;
+  // the feature search runs when fewer than predicted_face_min_kept_fraction of the refined points hold,
+  // or the pose fails a check.
+  bool predict_face_when_tracking = true;
+  double predicted_face_min_kept_fraction = 0.5;
   double region_hint_max_age_s = 0.2;  // an external region hint older than this (image time) is ignored
   double region_hint_radius_m = 0.2;   // a position hint's search region: this radius around it (the face's
                                        // half-diagonal is 0.19 m; tracking_margin_px covers the blob's offset)
@@ -102,6 +108,7 @@ struct MonoPoseResult {
   double reprojection_error_px = 0.0;  // RMS over the points the solver used
   double processing_time_ms = 0.0;     // CPU time of process()
   bool used_tracking_region = false;   // the predicted region gave the result (no full-frame search)
+  bool used_predicted_face = false;    // ... and the face was refined at its predicted place, without features
   bool face_search_skipped = false;    // near contact, the face's search skipped (inner_pattern.face_retry_every)
   cv::Rect search_region;              // where detection ran last (full frame after a fallback)
   bool pnp_ambiguous = false;          // IPPE's two poses were close
@@ -163,6 +170,12 @@ class MonoPoseEstimator {
   // The region where the target should appear (empty: search the whole image) and, in visible mode,
   // the face's predicted apparent width.
   cv::Rect predictedRegion(double stamp_s, double* face_width_px) const;
+  // The pose expected at stamp_s (the velocity filter's prediction from the last pose; the last pose
+  // itself after a gap longer than max_gap_s).
+  PoseWithCovariance predictedPose(double stamp_s) const;
+  // Tracking: the face at its predicted place (predict_face_when_tracking); found == false when the
+  // prediction does not hold.
+  FaceMatch matchPredictedFace(const cv::Mat& gray, double stamp_s) const;
   const Eigen::Matrix3d* previousRotation(double stamp_s, Eigen::Matrix3d* storage) const;
   void updateVelocities(MonoPoseResult* result);
   void scaleByInnovation(MonoPoseResult* result);

@@ -69,6 +69,9 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("inner_pattern_face_retry_every", &p.inner_pattern.face_retry_every);
   // Issue 11: search under blur and clutter, consistency checks and the covariance model.
   visit("use_half_resolution", &p.use_half_resolution);
+  // Issue 15: tracking without the feature search.
+  visit("predict_face_when_tracking", &p.predict_face_when_tracking);
+  visit("predicted_face_min_kept_fraction", &p.predicted_face_min_kept_fraction);
   visit("keypoint_grid", &p.features.keypoint_grid);
   visit("blurred_model_sigma_px", &p.features.blurred_model_sigma_px);
   visit("region_hint_max_age_s", &p.region_hint_max_age_s);
