@@ -131,6 +131,8 @@ def main():
             latency = s.get("image_to_cmd_vel_latency_wall") or {}
             row["latency_p95_ms"] = latency.get("p95_ms")
             row["latency_max_ms"] = latency.get("max_ms")
+            # p95 of the samples on each selected source (far: disparity; near: mono)
+            row["latency_p95_ms_by_source"] = {k: v.get("p95_ms") for k, v in (latency.get("by_source") or {}).items()}
             row["success"] = bool(s["docked"] and pos_ok and yaw_ok)
             if not row["success"]:
                 row["cause"] = (s.get("run_failure") or

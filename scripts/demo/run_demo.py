@@ -101,6 +101,9 @@ def run(args):
               f"p95 {lat['p95_ms']:.1f} ms, max {lat['max_ms']:.1f} ms; of which perception (image -> estimate) "
               f"median {lat['perception_median_ms']:.1f} / p95 {lat['perception_p95_ms']:.1f} ms, planner (estimate -> "
               f"cmd_vel) median {lat['planner_median_ms']:.1f} / p95 {lat['planner_p95_ms']:.1f} ms")
+        for source, v in (lat.get("by_source") or {}).items():
+            print(f"    on {source:12s} {v['count']:4d} estimates: median {v['median_ms']:.1f} ms, p95 {v['p95_ms']:.1f} ms, "
+                  f"max {v['max_ms']:.1f} ms")
     print(f"  bag {bag} ({summary['bag_size_mb']:.1f} MB), plots {out}/trajectory.png, {out}/timeline.png")
     return 1 if failure else 0
 
@@ -128,7 +131,10 @@ class LatencyProbe:
     on each estimate it takes), split at the estimate into perception (image -> estimate) and planner
     (estimate -> cmd_vel). Only estimates the planner acts on are counted: not while it finishes on
     odometry or is DOCKED (DockingState.target_visible false), when it ignores them on purpose. The
-    camera_info is subscribed as AnyMsg and only its header is read."""
+    camera_info is subscribed as AnyMsg and only its header is read. Each sample is also filed under the
+    source the arbiter selected (far: disparity; near: a monocular pose), whose costs differ."""
+
+    SOURCE_NAMES = {0: "disparity", 1: "mono_visible", 2: "mono_ir"}
 
     def __init__(self):
         import rospy
@@ -165,15 +171,16 @@ class LatencyProbe:
         if msg.valid:
             with self.lock:
                 if self.in_use:
-                    self.pending.append((msg.header.stamp.to_nsec(), wall))
+                    source = self.SOURCE_NAMES.get(msg.selected_source, str(msg.selected_source))
+                    self.pending.append((msg.header.stamp.to_nsec(), wall, source))
 
     def on_cmd(self, _msg):
         wall = time.time()
         with self.lock:
-            for stamp, estimate_wall in self.pending:
+            for stamp, estimate_wall, source in self.pending:
                 if stamp in self.image_wall:
                     image_wall = self.image_wall[stamp]
-                    self.samples.append((wall - image_wall, estimate_wall - image_wall, wall - estimate_wall))
+                    self.samples.append((wall - image_wall, estimate_wall - image_wall, wall - estimate_wall, source))
             self.pending = []
 
     def summary(self):
@@ -190,9 +197,14 @@ class LatencyProbe:
         median, p95, worst = stats([r[0] for r in rows])
         perception = stats([r[1] for r in rows])
         planner = stats([r[2] for r in rows])
+        by_source = {}
+        for source in sorted({r[3] for r in rows}):
+            totals = [r[0] for r in rows if r[3] == source]
+            m, p, w = stats(totals)
+            by_source[source] = {"count": len(totals), "median_ms": m, "p95_ms": p, "max_ms": w}
         return {"count": len(rows), "median_ms": median, "p95_ms": p95, "max_ms": worst,
                 "perception_median_ms": perception[0], "perception_p95_ms": perception[1],
-                "planner_median_ms": planner[0], "planner_p95_ms": planner[1]}
+                "planner_median_ms": planner[0], "planner_p95_ms": planner[1], "by_source": by_source}
 
 
 def monitor(launch, args, outcome):
