@@ -219,19 +219,9 @@ PoseWithCovariance MonoPoseEstimator::predictedPose(double stamp_s) const {
 }
 
 FaceMatch MonoPoseEstimator::matchPredictedFace(const cv::Mat& gray, double stamp_s) const {
-  // The face is the plane x = 0 of the target frame: a face point (0, y, z) is at y r2 + z r3 + t in the
-  // camera, so texture pixel -> image pixel is K [r2 r3 t] (texture -> face).
-  const PoseWithCovariance pose = predictedPose(stamp_s);
-  Eigen::Matrix3d plane_to_camera;
-  plane_to_camera << pose.rotation.col(1), pose.rotation.col(2), pose.translation;
-  Eigen::Matrix3d intrinsics;
-  intrinsics << camera_.fx, 0.0, camera_.cx, 0.0, camera_.fy, camera_.cy, 0.0, 0.0, 1.0;
-  const Eigen::Matrix3d h = intrinsics * plane_to_camera * model_.textureToFace();
-  cv::Matx33d homography;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) homography(r, c) = h(r, c) / h(2, 2);
-  }
-  return matcher_.matchAtPrediction(gray, homography, params_.predicted_face_min_kept_fraction);
+  const cv::Matx33d homography = faceHomography(model_, camera_, predictedPose(stamp_s));
+  return matcher_.matchAtPrediction(gray, homography * (1.0 / homography(2, 2)),
+                                    params_.predicted_face_min_kept_fraction);
 }
 
 cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_px) const {

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "docking_perception/mono/face_alignment.h"
 #include "docking_perception/mono/feature_matcher.h"
 #include "synthetic_scene.h"
 
@@ -180,16 +181,10 @@ TEST(FeatureMatcher, RefinesAtAPredictedHomographyAndRefusesAWrongOne) {
   FeatureMatcher matcher;
   std::string reason;
   ASSERT_TRUE(matcher.buildModel(model.textureGray(), &reason)) << reason;
-  // texture pixel -> image pixel of the pose: K [r2 r3 t] (texture -> face).
-  Eigen::Matrix3d plane;
-  plane << r.col(1), r.col(2), t;
-  Eigen::Matrix3d k;
-  k << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
-  const Eigen::Matrix3d h = k * plane * model.textureToFace();
-  cv::Matx33d truth_homography;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) truth_homography(i, j) = h(i, j) / h(2, 2);
-  }
+  PoseWithCovariance truth;
+  truth.rotation = r;
+  truth.translation = t;
+  const cv::Matx33d truth_homography = faceHomography(model, camera, truth);
   // A prediction 1.5 px off (a tracked frame's usual error) still refines to the truth.
   const cv::Matx33d shift_small(1.0, 0.0, 1.5, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0);
   const FaceMatch match = matcher.matchAtPrediction(image, shift_small * truth_homography, 0.5);
