@@ -3,6 +3,7 @@
 
 # ROS-free core: the paper's detector made robust (no ros:: here; gtests need no roscore).
 add_library(docking_perception_disparity_core
+  src/disparity/decimating_rectifier.cpp
   src/disparity/disparity_detector.cpp
   src/disparity/target_track_gate.cpp
 )
@@ -22,6 +23,7 @@ set(DISPARITY_CONFIG_DIR ${PROJECT_SOURCE_DIR}/../../config)
 # The library name is the one nodelet_plugins.xml declares.
 add_library(docking_perception_disparity_nodelet
   src/disparity/disparity_detector_nodelet.cpp
+  src/disparity/far_stereo_rectify_nodelet.cpp
 )
 add_dependencies(docking_perception_disparity_nodelet ${PROJECT_NAME}_gencfg ${catkin_EXPORTED_TARGETS})
 target_link_libraries(docking_perception_disparity_nodelet
@@ -64,7 +66,8 @@ if(CATKIN_ENABLE_TESTING)
 
   # The whole far-range pipeline on rendered stereo pairs: matcher with the launch file's settings,
   # then the detector.
-  catkin_add_gtest(test_disparity_pipeline test/disparity/test_disparity_pipeline.cpp)
+  catkin_add_gtest(test_disparity_pipeline test/disparity/test_disparity_pipeline.cpp
+    test/disparity/test_decimating_rectifier.cpp)
   if(TARGET test_disparity_pipeline)
     target_link_libraries(test_disparity_pipeline
       docking_perception_disparity_core docking_perception_disparity_synthetic ${OpenCV_LIBRARIES}

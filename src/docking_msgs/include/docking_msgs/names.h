@@ -27,7 +27,21 @@ constexpr const char kIrImageChecked[] = "ir/image_checked";
 constexpr const char kStereoLeftCameraInfoChecked[] = "stereo/left/camera_info_checked";
 constexpr const char kStereoRightCameraInfoChecked[] = "stereo/right/camera_info_checked";
 constexpr const char kIrCameraInfoChecked[] = "ir/camera_info_checked";
+// Grey, not rectified (image_proc/debayer's image_mono in perception.launch).
+constexpr const char kStereoLeftImageMono[] = "stereo/left/image_mono";
+constexpr const char kStereoRightImageMono[] = "stereo/right/image_mono";
 constexpr const char kStereoLeftImageRect[] = "stereo/left/image_rect";
+// The far stage's own rectified pairs (docking_perception/FarStereoRectifyNodelet, config/far_stereo.yaml),
+// grey: at full resolution while acquiring, area-averaged by the tracking decimation while tracking (its
+// camera_info with binning_x/y = decimation: image_geometry's reduced camera). One block matcher each.
+constexpr const char kStereoFarFullLeftImageRect[] = "stereo/far/full/left/image_rect";
+constexpr const char kStereoFarFullLeftCameraInfo[] = "stereo/far/full/left/camera_info";
+constexpr const char kStereoFarFullRightImageRect[] = "stereo/far/full/right/image_rect";
+constexpr const char kStereoFarFullRightCameraInfo[] = "stereo/far/full/right/camera_info";
+constexpr const char kStereoFarTrackingLeftImageRect[] = "stereo/far/tracking/left/image_rect";
+constexpr const char kStereoFarTrackingLeftCameraInfo[] = "stereo/far/tracking/left/camera_info";
+constexpr const char kStereoFarTrackingRightImageRect[] = "stereo/far/tracking/right/image_rect";
+constexpr const char kStereoFarTrackingRightCameraInfo[] = "stereo/far/tracking/right/camera_info";
 constexpr const char kStereoDisparity[] = "stereo/disparity";  // stereo_msgs/DisparityImage
 constexpr const char kIrImageRaw[] = "ir/image_raw";
 constexpr const char kIrImageRect[] = "ir/image_rect";

@@ -3,12 +3,15 @@
 //
 //   bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]
 //                   [--left RAW.png --right RAW.png] [--debug-image OUT.png]
-//                   [--disparity-out OUT.tiff] [--scale S] [--disparity-range N]
+//                   [--disparity-out OUT.tiff] [--decimation N] [--disparity-range N]
 //
-// --scale 0.5 measures a far-range stage at half resolution (issue 15, not what perception.launch runs
-// yet): the raw frames are rectified straight to the scaled size (the projection scaled), the matcher's
-// window, search range and speckle size and the detector's pixel thresholds scaled with it (areas by
-// S^2). --disparity-range overrides the matcher's range (after scaling; a multiple of 16).
+// The far stage as perception.launch runs it (config/far_stereo.yaml): each raw frame converted to grey,
+// area-averaged by the decimation and rectified to that size (DecimatingRectifier), block matching, the
+// detector's pixel settings scaled to that size. --decimation 1 (default): full resolution, the stage while
+// acquiring, matcher config/stereo_image_proc.yaml; --decimation = far_stereo.yaml's tracking_decimation:
+// the stage while tracking, matcher config/stereo_image_proc_tracking.yaml; another decimation: the full
+// matcher's window, range and speckle size scaled. --disparity-range overrides the matcher's range (a
+// multiple of 16).
 //
 // Without --left/--right the pair is rendered here (test/disparity/synthetic_stereo.h: the target
 // face-on at 3 m, its panels, a floor and a wall) and distorted with the calibration, so the
@@ -51,7 +54,7 @@ namespace testing = docking_perception::disparity::testing;
 
 const char* const kUsage =
     "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR] [--left RAW.png --right "
-    "RAW.png] [--debug-image OUT.png] [--disparity-out OUT.tiff] [--scale S] [--disparity-range N]\n";
+    "RAW.png] [--debug-image OUT.png] [--disparity-out OUT.tiff] [--decimation N] [--disparity-range N]\n";
 
 double medianOf(std::vector<double> values) {
   std::sort(values.begin(), values.end());
@@ -82,58 +85,31 @@ cv::Mat distort(const cv::Mat& rectified, const testing::CameraCalibration& cali
   return raw;
 }
 
-void rectifyMaps(const testing::CameraCalibration& calibration, cv::Size rectified_size, cv::Mat* map1,
-                 cv::Mat* map2) {
-  // image_geometry's rectification: fixed-point maps, bilinear remap (image_proc's default).
-  cv::initUndistortRectifyMap(calibration.camera_matrix, calibration.distortion,
-                              calibration.rectification, calibration.projection, rectified_size,
-                              CV_16SC2, *map1, *map2);
-}
-
-// What image_proc does to each camera of the pair: bgr8 to grey (debayer's image_mono), then rectify.
+// What perception.launch does to each camera of the pair: bgr8 to grey (debayer's image_mono), then the far
+// stage's rectification (far_stereo_rectify: area-averaged by the decimation, rectified to that size).
 // Not inlined: scripts/bench_instructions.py counts this step's instructions by its name under callgrind.
 __attribute__((noinline)) void rectifyPair(const cv::Mat& left_raw, const cv::Mat& right_raw,
-                                           const cv::Mat (&left_maps)[2], const cv::Mat (&right_maps)[2],
+                                           const docking_perception::disparity::DecimatingRectifier& left,
+                                           const docking_perception::disparity::DecimatingRectifier& right,
                                            cv::Mat* left_rect, cv::Mat* right_rect) {
   cv::Mat left_mono = left_raw, right_mono = right_raw;
   if (left_raw.channels() == 3) {
     cv::cvtColor(left_raw, left_mono, cv::COLOR_BGR2GRAY);
     cv::cvtColor(right_raw, right_mono, cv::COLOR_BGR2GRAY);
   }
-  cv::remap(left_mono, *left_rect, left_maps[0], left_maps[1], cv::INTER_LINEAR);
-  cv::remap(right_mono, *right_rect, right_maps[0], right_maps[1], cv::INTER_LINEAR);
+  left.rectify(left_mono, left_rect);
+  right.rectify(right_mono, right_rect);
 }
 
-// A calibration whose rectified image is `scale` times the size: the projection's pixel rows scaled (the
-// raw image and its distortion stay as they are).
-testing::CameraCalibration scaledRectification(testing::CameraCalibration calibration, double scale) {
-  calibration.projection = calibration.projection.clone();
-  calibration.projection.row(0) *= scale;
-  calibration.projection.row(1) *= scale;
-  return calibration;
-}
-
-// The matcher and detector for a disparity image `scale` times the size: lengths in pixels scaled,
-// areas by scale^2, the window kept odd and >= 5, the search range a multiple of 16.
-void scaleForResolution(double scale, testing::MatcherSettings* settings,
-                        docking_perception::disparity::DetectorParams* params) {
-  const auto scaled = [scale](double px) { return px * scale; };
-  const auto area = [scale](double px2) { return static_cast<int>(std::lround(px2 * scale * scale)); };
-  settings->correlation_window_size = std::max(5, static_cast<int>(std::lround(scaled(settings->correlation_window_size))) | 1);
-  settings->min_disparity = static_cast<int>(std::lround(scaled(settings->min_disparity)));
-  settings->disparity_range = std::max(16, static_cast<int>(std::lround(scaled(settings->disparity_range) / 16.0)) * 16);
-  settings->speckle_size = area(settings->speckle_size);
-  params->closest_min_pixels = area(params->closest_min_pixels);
-  params->threshold_margin_px = scaled(params->threshold_margin_px);
-  params->face_min_band_px = scaled(params->face_min_band_px);
-  params->min_blob_area_px = area(params->min_blob_area_px);
-  params->min_blob_thickness_px = scaled(params->min_blob_thickness_px);
-  params->border_margin_px = std::max(1, static_cast<int>(std::lround(scaled(params->border_margin_px))));
-  params->min_disparity_px = scaled(params->min_disparity_px);
-  params->max_disparity_px = scaled(params->max_disparity_px);
-  params->disparity_sigma_px = scaled(params->disparity_sigma_px);
-  params->centre_sigma_px = scaled(params->centre_sigma_px);
-  params->shape_tolerance_px = scaled(params->shape_tolerance_px);
+// The full-resolution matcher at another decimation: lengths scaled by the ratio, the window kept odd and
+// >= 5, the range a multiple of 16.
+void scaleMatcher(double ratio, testing::MatcherSettings* settings) {
+  settings->correlation_window_size =
+      std::max(5, static_cast<int>(std::lround(settings->correlation_window_size * ratio)) | 1);
+  settings->min_disparity = static_cast<int>(std::lround(settings->min_disparity * ratio));
+  settings->disparity_range =
+      std::max(16, static_cast<int>(std::lround(settings->disparity_range * ratio / 16.0)) * 16);
+  settings->speckle_size = static_cast<int>(std::lround(settings->speckle_size * ratio * ratio));
 }
 
 }  // namespace
@@ -142,7 +118,7 @@ int main(int argc, char** argv) {
   std::string output_path, left_path, right_path, debug_path, disparity_path;
   std::string config_dir = DISPARITY_CONFIG_DIR;
   int frames = 100;
-  double scale = 1.0;
+  int decimation = 1;
   int disparity_range_override = 0;  // 0: the configured (scaled) range
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -156,8 +132,8 @@ int main(int argc, char** argv) {
       right_path = argv[++i];
     } else if (arg == "--debug-image" && i + 1 < argc) {
       debug_path = argv[++i];
-    } else if (arg == "--scale" && i + 1 < argc) {
-      scale = std::atof(argv[++i]);
+    } else if (arg == "--decimation" && i + 1 < argc) {
+      decimation = std::atoi(argv[++i]);
     } else if (arg == "--disparity-range" && i + 1 < argc) {
       disparity_range_override = std::atoi(argv[++i]);
     } else if (arg == "--disparity-out" && i + 1 < argc) {
@@ -169,7 +145,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (output_path.empty() || left_path.empty() != right_path.empty() || !(scale > 0.1 && scale <= 1.0) ||
+  if (output_path.empty() || left_path.empty() != right_path.empty() || decimation < 1 ||
       disparity_range_override % 16 != 0 || disparity_range_override < 0) {
     std::cerr << kUsage;
     return 2;
@@ -180,14 +156,16 @@ int main(int argc, char** argv) {
     const auto left_calibration = testing::loadCameraCalibration(config_dir + "/cameras/stereo_left.yaml");
     const auto right_calibration =
         testing::loadCameraCalibration(config_dir + "/cameras/stereo_right.yaml");
-    auto settings = testing::loadMatcherSettings(config_dir + "/stereo_image_proc.yaml");
+    const int tracking_decimation = testing::loadTrackingDecimation(config_dir + "/far_stereo.yaml");
+    auto settings = testing::loadMatcherSettings(
+        config_dir + (decimation > 1 && decimation == tracking_decimation ? "/stereo_image_proc_tracking.yaml"
+                                                                          : "/stereo_image_proc.yaml"));
     auto params = testing::loadDetectorParams(config_dir + "/disparity_detector.yaml");
     params.target_shape =
         docking_perception::disparity::loadTargetShape(config_dir + "/target.yaml");
-    if (scale != 1.0) scaleForResolution(scale, &settings, &params);
+    if (decimation > 1 && decimation != tracking_decimation) scaleMatcher(1.0 / decimation, &settings);
+    params = docking_perception::disparity::detectorParamsAtDecimation(params, decimation);
     if (disparity_range_override > 0) settings.disparity_range = disparity_range_override;
-    const cv::Size rectified_size(static_cast<int>(std::lround(left_calibration.size.width * scale)),
-                                  static_cast<int>(std::lround(left_calibration.size.height * scale)));
 
     // The fixed scene: the target face-on at 3 m, slightly off-axis, floor and a wall at 8 m.
     const double truth_x = 0.3, truth_y = 0.0, truth_z = 3.0;
@@ -217,15 +195,17 @@ int main(int argc, char** argv) {
       }
     }
 
-    cv::Mat left_maps[2], right_maps[2];
-    rectifyMaps(scaledRectification(left_calibration, scale), rectified_size, &left_maps[0], &left_maps[1]);
-    rectifyMaps(scaledRectification(right_calibration, scale), rectified_size, &right_maps[0], &right_maps[1]);
+    const docking_perception::disparity::DecimatingRectifier left_rectifier(testing::pinholeOf(left_calibration),
+                                                                           decimation);
+    const docking_perception::disparity::DecimatingRectifier right_rectifier(
+        testing::pinholeOf(right_calibration), decimation);
+    const cv::Size rectified_size = left_rectifier.outputSize();
     auto matcher = testing::createMatcher(settings);
     const DisparityDetector detector(params);
     StereoGeometry geometry = testing::geometryOf(scene);
-    geometry.focal_px *= scale;
-    geometry.cx_px *= scale;
-    geometry.cy_px *= scale;
+    geometry.focal_px /= decimation;  // image_geometry's reduced camera for binning = decimation
+    geometry.cx_px /= decimation;
+    geometry.cy_px /= decimation;
     const int range = (settings.disparity_range / 16) * 16;
     const cv::Rect valid_region = testing::matcherValidRegion(settings, rectified_size);
 
@@ -245,7 +225,7 @@ int main(int argc, char** argv) {
     for (int frame = 0; frame < frames + warmup; ++frame) {
       const auto start = Clock::now();
       cv::Mat left_rect, right_rect;
-      rectifyPair(left_raw, right_raw, left_maps, right_maps, &left_rect, &right_rect);
+      rectifyPair(left_raw, right_raw, left_rectifier, right_rectifier, &left_rect, &right_rect);
       const double rectify_ms = ms_since(start);
       const auto disparity_start = Clock::now();
       const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
@@ -268,7 +248,7 @@ int main(int argc, char** argv) {
     double cpu_total_ms = 0.0;
     for (double ms : samples["disparity_total"]) cpu_total_ms += ms;
     std::cout << "bench_disparity: " << (left_path.empty() ? "synthetic grey pair" : left_path)
-              << ", " << rectified_size.width << "x" << rectified_size.height << " (scale " << scale
+              << ", " << rectified_size.width << "x" << rectified_size.height << " (decimation " << decimation
               << "), 1 thread, " << frames << " frames, matcher "
               << (settings.stereo_algorithm == 0 ? "StereoBM" : "StereoSGBM") << " range " << range
               << " window " << (settings.correlation_window_size | 1) << "\n";
@@ -297,7 +277,7 @@ int main(int argc, char** argv) {
               << " ms CPU: the difference is other load on the machine)\n";
     if (!debug_path.empty() || !disparity_path.empty()) {
       cv::Mat left_rect, right_rect;
-      rectifyPair(left_raw, right_raw, left_maps, right_maps, &left_rect, &right_rect);
+      rectifyPair(left_raw, right_raw, left_rectifier, right_rectifier, &left_rect, &right_rect);
       const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
       if (!debug_path.empty()) {
         cv::imwrite(debug_path,

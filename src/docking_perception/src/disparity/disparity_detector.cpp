@@ -386,6 +386,9 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
   require(std::isfinite(p.face_min_band_px) && p.face_min_band_px >= 0.0, "face_min_band_px",
           "must be >= 0", p.face_min_band_px);
   require(p.min_blob_area_px >= 1, "min_blob_area_px", "must be >= 1", p.min_blob_area_px);
+  require(p.reduced_min_blob_area_px >= 1, "reduced_min_blob_area_px", "must be >= 1", p.reduced_min_blob_area_px);
+  require(std::isfinite(p.reduced_min_blob_thickness_px) && p.reduced_min_blob_thickness_px >= 0.0,
+          "reduced_min_blob_thickness_px", "must be >= 0", p.reduced_min_blob_thickness_px);
   require(std::isfinite(p.min_blob_thickness_px) && p.min_blob_thickness_px >= 0.0,
           "min_blob_thickness_px", "must be >= 0", p.min_blob_thickness_px);
   require(std::isfinite(p.max_blob_area_fraction) && p.max_blob_area_fraction > 0.0 &&

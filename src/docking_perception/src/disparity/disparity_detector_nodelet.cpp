@@ -15,6 +15,8 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <sensor_msgs/image_encodings.h>
 
+#include "docking_perception/disparity/decimating_rectifier.h"
+
 namespace docking_perception {
 namespace {
 
@@ -166,6 +168,8 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("face_min_band_px", &Config::face_min_band_px);
   read("min_blob_area_px", &Config::min_blob_area_px);
   read("min_blob_thickness_px", &Config::min_blob_thickness_px);
+  read("reduced_min_blob_area_px", &Config::reduced_min_blob_area_px);
+  read("reduced_min_blob_thickness_px", &Config::reduced_min_blob_thickness_px);
   read("max_blob_area_fraction", &Config::max_blob_area_fraction);
   read("border_margin_px", &Config::border_margin_px);
   read("min_disparity_px", &Config::min_disparity_px);
@@ -254,6 +258,8 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.face_min_band_px = c.face_min_band_px;
   p.min_blob_area_px = c.min_blob_area_px;
   p.min_blob_thickness_px = c.min_blob_thickness_px;
+  p.reduced_min_blob_area_px = c.reduced_min_blob_area_px;
+  p.reduced_min_blob_thickness_px = c.reduced_min_blob_thickness_px;
   p.max_blob_area_fraction = c.max_blob_area_fraction;
   p.border_margin_px = c.border_margin_px;
   p.min_disparity_px = c.min_disparity_px;
@@ -311,21 +317,25 @@ void DisparityDetectorNodelet::updateSubscriptions() {
   if (wanted && !disparity_subscriber_) {
     disparity_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoDisparity, 1,
                                           &DisparityDetectorNodelet::onDisparity, this);
-    camera_info_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoLeftCameraInfoChecked, 1,
+    camera_info_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarFullLeftCameraInfo, 1,
                                             &DisparityDetectorNodelet::onCameraInfo, this);
+    camera_info_tracking_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarTrackingLeftCameraInfo, 1,
+                                                     &DisparityDetectorNodelet::onCameraInfo, this);
     NODELET_DEBUG("disparity_detector: subscribed to %s", disparity_subscriber_.getTopic().c_str());
   } else if (!wanted && disparity_subscriber_) {
     disparity_subscriber_.shutdown();
     camera_info_subscriber_.shutdown();
+    camera_info_tracking_subscriber_.shutdown();
     disparity_subscriber_ = ros::Subscriber();
     camera_info_subscriber_ = ros::Subscriber();
+    camera_info_tracking_subscriber_ = ros::Subscriber();
     NODELET_DEBUG("disparity_detector: unsubscribed from the disparity (near: %s)", duty::describe(near_state));
   }
 }
 
 void DisparityDetectorNodelet::onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
   std::lock_guard<std::mutex> lock(state_mutex_);
-  camera_info_ = info;
+  camera_info_by_binning_[std::max(1, static_cast<int>(info->binning_x))] = info;
 }
 
 void DisparityDetectorNodelet::publishInvalidInput(const stereo_msgs::DisparityImage& message,
@@ -391,44 +401,54 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
 
   Config config;
   disparity::DisparityDetector detector;
-  sensor_msgs::CameraInfoConstPtr camera_info;
+  std::map<int, sensor_msgs::CameraInfoConstPtr> camera_infos;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     config = config_;
     detector = detector_;
-    camera_info = camera_info_;
+    camera_infos = camera_info_by_binning_;
     last_input_error_.clear();
   }
 
-  // --- Rectified model: f and B from the message; the principal point from the left rectified
-  // camera_info (its P matrix), else the image centre.
+  // --- Rectified model: f and B from the message; the principal point and the decimation from the far
+  // stage's left camera_info (image_geometry's reduced camera: binning = decimation), else the image centre
+  // and full resolution. The detector's pixel settings are given at the calibrated resolution.
   disparity::StereoGeometry geometry;
   geometry.focal_px = message->f;
   geometry.baseline_m = message->T;
   geometry.cx_px = (image.width - 1) / 2.0;
   geometry.cy_px = (image.height - 1) / 2.0;
-  if (camera_info && camera_info->width == image.width && camera_info->height == image.height) {
-    image_geometry::PinholeCameraModel model;
-    if (model.fromCameraInfo(camera_info) && model.fx() > 0.0) {
-      geometry.cx_px = model.cx();
-      geometry.cy_px = model.cy();
-      if (std::abs(model.fx() - message->f) > 0.01 * message->f) {
-        NODELET_WARN_THROTTLE(30.0,
-                              "disparity_detector: left camera_info fx %.1f differs from the "
-                              "DisparityImage f %.1f; using f from the disparity",
-                              model.fx(), message->f);
-      }
+  int decimation = 1;
+  image_geometry::PinholeCameraModel model;
+  bool have_model = false;
+  for (const auto& entry : camera_infos) {  // the camera_info whose reduced size is the disparity's
+    have_model = entry.second && model.fromCameraInfo(entry.second) && model.fx() > 0.0 &&
+                 model.reducedResolution() == cv::Size(static_cast<int>(image.width), static_cast<int>(image.height));
+    if (have_model) break;
+  }
+  if (have_model) {
+    geometry.cx_px = model.cx();
+    geometry.cy_px = model.cy();
+    decimation = std::max(1, static_cast<int>(model.binningX()));
+    if (std::abs(model.fx() - message->f) > 0.01 * message->f) {
+      NODELET_WARN_THROTTLE(30.0,
+                            "disparity_detector: left camera_info fx %.1f differs from the "
+                            "DisparityImage f %.1f; using f from the disparity",
+                            model.fx(), message->f);
     }
   } else if (!warned_no_camera_info_) {
     warned_no_camera_info_ = true;
-    NODELET_WARN("disparity_detector: no matching camera_info on %s yet; using the image centre "
-                 "(%.1f, %.1f) as the principal point",
-                 camera_info_subscriber_.getTopic().c_str(), geometry.cx_px, geometry.cy_px);
+    NODELET_WARN("disparity_detector: no camera_info of the disparity's size (%ux%u) on %s or %s yet; using the "
+                 "image centre (%.1f, %.1f) as the principal point and the settings at full resolution",
+                 image.width, image.height, camera_info_subscriber_.getTopic().c_str(),
+                 camera_info_tracking_subscriber_.getTopic().c_str(), geometry.cx_px, geometry.cy_px);
   }
+  if (decimation > 1) detector.setParams(disparity::detectorParamsAtDecimation(detector.params(), decimation));
 
   // --- The matcher's blind left band (no match possible), and its own valid window if it set one.
   const int blind_columns =
-      std::max(0, static_cast<int>(std::ceil(message->max_disparity)) + config.blind_band_extra_px);
+      std::max(0, static_cast<int>(std::ceil(message->max_disparity)) +
+                      (config.blind_band_extra_px + decimation - 1) / decimation);
   cv::Rect valid_region(blind_columns, 0, static_cast<int>(image.width) - blind_columns,
                         static_cast<int>(image.height));
   if (message->valid_window.width > 0 && message->valid_window.height > 0) {
@@ -477,7 +497,7 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
     const double debug_start_ms = threadCpuMs();
     cv_bridge::CvImage debug(message->header, enc::BGR8,
                              disparity::renderDebugImage(disparity, detection,
-                                                         config.debug_display_max_disparity_px));
+                                                         config.debug_display_max_disparity_px / decimation));
     debug_publisher_.publish(debug.toImageMsg());
     recordDebugImage(threadCpuMs() - debug_start_ms);
   }

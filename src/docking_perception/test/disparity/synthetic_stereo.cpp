@@ -165,6 +165,8 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.face_min_band_px = number("face_min_band_px");
   p.min_blob_area_px = integer("min_blob_area_px");
   p.min_blob_thickness_px = number("min_blob_thickness_px");
+  p.reduced_min_blob_area_px = integer("reduced_min_blob_area_px");
+  p.reduced_min_blob_thickness_px = number("reduced_min_blob_thickness_px");
   p.max_blob_area_fraction = number("max_blob_area_fraction");
   p.border_margin_px = integer("border_margin_px");
   p.min_disparity_px = number("min_disparity_px");
@@ -315,6 +317,49 @@ StereoGeometry geometryOf(const SyntheticScene& scene) {
   geometry.cy_px = scene.cy_px;
   geometry.baseline_m = scene.baseline_m;
   return geometry;
+}
+
+PinholeCalibration pinholeOf(const CameraCalibration& calibration) {
+  PinholeCalibration out;
+  out.size = calibration.size;
+  out.camera_matrix = cv::Matx33d(calibration.camera_matrix);
+  out.rectification = cv::Matx33d(calibration.rectification);
+  out.projection = cv::Matx34d(calibration.projection);
+  const cv::Mat d = calibration.distortion.reshape(1, 1);
+  out.distortion.assign(d.ptr<double>(), d.ptr<double>() + d.total());
+  return out;
+}
+
+int loadTrackingDecimation(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw std::runtime_error("cannot read " + path);
+  std::string line;
+  while (std::getline(file, line)) {
+    const std::string key = "tracking_decimation:";
+    if (line.rfind(key, 0) == 0) return std::stoi(line.substr(key.size()));
+  }
+  throw std::runtime_error(path + ": missing field 'tracking_decimation'");
+}
+
+FarStagePair farStagePair(const SyntheticScene& scene, int decimation) {
+  cv::Mat left_full, right_full;
+  renderStereoPair(scene, &left_full, &right_full);
+  PinholeCalibration camera;
+  camera.size = cv::Size(scene.width, scene.height);
+  camera.camera_matrix = cv::Matx33d(scene.focal_px, 0.0, scene.cx_px, 0.0, scene.focal_px, scene.cy_px, 0.0, 0.0, 1.0);
+  camera.rectification = cv::Matx33d::eye();
+  camera.projection = cv::Matx34d(scene.focal_px, 0.0, scene.cx_px, 0.0, 0.0, scene.focal_px, scene.cy_px, 0.0,
+                                  0.0, 0.0, 1.0, 0.0);
+  PinholeCalibration right_camera = camera;
+  right_camera.projection(0, 3) = -scene.focal_px * scene.baseline_m;
+  FarStagePair pair;
+  DecimatingRectifier(camera, decimation).rectify(left_full, &pair.left);
+  DecimatingRectifier(right_camera, decimation).rectify(right_full, &pair.right);
+  pair.geometry = geometryOf(scene);
+  pair.geometry.focal_px /= decimation;
+  pair.geometry.cx_px /= decimation;
+  pair.geometry.cy_px /= decimation;
+  return pair;
 }
 
 }  // namespace testing

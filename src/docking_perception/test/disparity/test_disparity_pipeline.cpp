@@ -1,6 +1,8 @@
-// The far-range pipeline on rendered stereo pairs: the block matcher with the settings of
-// config/stereo_image_proc.yaml (what perception.launch runs), then the detector with
-// config/disparity_detector.yaml. Known truth: the port centre of the rendered target.
+// The far-range pipeline on rendered stereo pairs as perception.launch runs it (config/far_stereo.yaml):
+// acquiring, at full resolution with the matcher of config/stereo_image_proc.yaml; tracking inside 4 m,
+// the pair area-averaged to the tracking decimation (DecimatingRectifier) with the matcher of
+// config/stereo_image_proc_tracking.yaml; then the detector with config/disparity_detector.yaml's
+// settings scaled to that resolution. Known truth: the port centre of the rendered target.
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -35,16 +37,21 @@ testing::FrontoParallelRect boxOnTheFloor(double x, double z, double width, doub
   return box;
 }
 
-Detection detectInScene(const testing::SyntheticScene& scene, const DetectorParams& params) {
-  const auto settings = testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml");
-  cv::Mat left, right;
-  testing::renderStereoPair(scene, &left, &right);
+int trackingDecimation() { return testing::loadTrackingDecimation(kConfigDir + "/far_stereo.yaml"); }
+
+// The far stage at `decimation` (1: acquiring; trackingDecimation(): tracking). `params` at the calibrated
+// resolution, as config/disparity_detector.yaml gives them.
+Detection detectInScene(const testing::SyntheticScene& scene, const DetectorParams& params, int decimation = 1,
+                        StereoGeometry* geometry_used = nullptr) {
+  const auto settings = testing::loadMatcherSettings(
+      kConfigDir + (decimation > 1 ? "/stereo_image_proc_tracking.yaml" : "/stereo_image_proc.yaml"));
+  const testing::FarStagePair pair = testing::farStagePair(scene, decimation);
   auto matcher = testing::createMatcher(settings);
-  const cv::Mat disparity = testing::computeDisparity(*matcher, left, right);
+  const cv::Mat disparity = testing::computeDisparity(*matcher, pair.left, pair.right);
   const cv::Rect valid = testing::matcherValidRegion(settings, disparity.size());
-  return DisparityDetector(params).detect(disparity, testing::geometryOf(scene),
-                                          settings.min_disparity, testing::maxDisparity(settings),
-                                          valid);
+  if (geometry_used) *geometry_used = pair.geometry;
+  return DisparityDetector(detectorParamsAtDecimation(params, decimation))
+      .detect(disparity, pair.geometry, settings.min_disparity, testing::maxDisparity(settings), valid);
 }
 
 DetectorParams configuredParams() {
@@ -53,32 +60,20 @@ DetectorParams configuredParams() {
   return params;
 }
 
-PipelineResult runPipeline(double x, double y, double z) {
-  const auto settings = testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml");
-  const auto params = configuredParams();
+// The yardstick: a quarter pixel of disparity at the far stage's resolution (twice the range error at
+// half resolution: the cost of tracking at an eighth of the work).
+PipelineResult runPipeline(double x, double y, double z, int decimation) {
   const testing::SyntheticScene scene = testing::targetScene(x, y, z, 12.0);
-  cv::Mat left, right;
-  testing::renderStereoPair(scene, &left, &right);
-  auto matcher = testing::createMatcher(settings);
-  const cv::Mat disparity = testing::computeDisparity(*matcher, left, right);
-
-  const StereoGeometry geometry = testing::geometryOf(scene);
-  const cv::Rect valid = testing::matcherValidRegion(settings, disparity.size());
-
   PipelineResult result;
-  result.detection = DisparityDetector(params).detect(
-      disparity, geometry, settings.min_disparity, testing::maxDisparity(settings), valid);
+  StereoGeometry geometry;
+  result.detection = detectInScene(scene, configuredParams(), decimation, &geometry);
   result.stereo_limit_m = z * z * 0.25 / (geometry.focal_px * geometry.baseline_m);
   return result;
 }
 
-class FarRangePipeline : public ::testing::TestWithParam<std::tuple<double, double>> {};
-
-TEST_P(FarRangePipeline, PositionWithinTwiceTheStereoLimit) {
-  const double z = std::get<0>(GetParam());
-  const double x = std::get<1>(GetParam());
+void expectPositionWithinTwiceTheStereoLimit(double z, double x, int decimation) {
   const double y = 0.0;  // the port is at camera height on the test bed
-  const PipelineResult result = runPipeline(x, y, z);
+  const PipelineResult result = runPipeline(x, y, z, decimation);
   const Detection& d = result.detection;
   ASSERT_TRUE(d.found) << "z " << z << " x " << x << ": " << d.reason;
   const double tolerance = 2.0 * result.stereo_limit_m;
@@ -90,10 +85,28 @@ TEST_P(FarRangePipeline, PositionWithinTwiceTheStereoLimit) {
   EXPECT_LT(std::abs(d.position_m.z() - z), 4.0 * std::sqrt(d.covariance_m2(2, 2)) + 0.01 * z);
 }
 
+class FarRangePipeline : public ::testing::TestWithParam<std::tuple<double, double>> {};
+
+TEST_P(FarRangePipeline, PositionWithinTwiceTheStereoLimit) {
+  expectPositionWithinTwiceTheStereoLimit(std::get<0>(GetParam()), std::get<1>(GetParam()), 1);
+}
+
 INSTANTIATE_TEST_SUITE_P(OnAndOffAxis, FarRangePipeline,
                          ::testing::Values(std::make_tuple(2.0, 0.0), std::make_tuple(3.0, 0.0),
                                            std::make_tuple(3.0, 0.6), std::make_tuple(4.0, -0.5),
                                            std::make_tuple(6.0, 0.0), std::make_tuple(6.0, 1.0)));
+
+// Tracking inside 4 m (config/far_stereo.yaml tracking_range_m): the reduced pair.
+class TrackingPipeline : public ::testing::TestWithParam<std::tuple<double, double>> {};
+
+TEST_P(TrackingPipeline, PositionWithinTwiceTheStereoLimit) {
+  ASSERT_GT(trackingDecimation(), 1) << "config/far_stereo.yaml no longer reduces the pair while tracking";
+  expectPositionWithinTwiceTheStereoLimit(std::get<0>(GetParam()), std::get<1>(GetParam()), trackingDecimation());
+}
+
+INSTANTIATE_TEST_SUITE_P(InsideTheTrackingRange, TrackingPipeline,
+                         ::testing::Values(std::make_tuple(2.0, 0.0), std::make_tuple(3.0, 0.0),
+                                           std::make_tuple(3.0, 0.6), std::make_tuple(4.0, -0.5)));
 
 // Issue 11: a box of another size at the target's depth 1.5-2 m to the side, or nearer than the
 // target, must not be reported as the target; the target still is.
@@ -102,13 +115,10 @@ struct DistractorCase {
   double box_x, box_z, box_width, box_height;
 };
 
-class DistractorPipeline : public ::testing::TestWithParam<DistractorCase> {};
-
-TEST_P(DistractorPipeline, TheTargetIsReportedNotTheBox) {
-  const DistractorCase c = GetParam();
+void expectTheTargetNotTheBox(const DistractorCase& c, int decimation) {
   testing::SyntheticScene scene = testing::targetScene(c.target_x, 0.0, c.target_z, 12.0);
   scene.rects.push_back(boxOnTheFloor(c.box_x, c.box_z, c.box_width, c.box_height, 31));
-  const Detection d = detectInScene(scene, configuredParams());
+  const Detection d = detectInScene(scene, configuredParams(), decimation);
   ASSERT_TRUE(d.found) << d.reason;
   EXPECT_NEAR(d.position_m.x(), c.target_x, 0.05 + 0.01 * c.target_z);
   EXPECT_NEAR(d.position_m.z(), c.target_z, 0.25);
@@ -116,9 +126,13 @@ TEST_P(DistractorPipeline, TheTargetIsReportedNotTheBox) {
   // Without the target, the box alone is never the target.
   testing::SyntheticScene box_only = scene;
   box_only.rects.erase(box_only.rects.begin(), box_only.rects.begin() + 3);  // face and panels
-  const Detection alone = detectInScene(box_only, configuredParams());
+  const Detection alone = detectInScene(box_only, configuredParams(), decimation);
   EXPECT_FALSE(alone.found) << "box at (" << alone.position_m.transpose() << ") taken for the target";
 }
+
+class DistractorPipeline : public ::testing::TestWithParam<DistractorCase> {};
+
+TEST_P(DistractorPipeline, TheTargetIsReportedNotTheBox) { expectTheTargetNotTheBox(GetParam(), 1); }
 
 INSTANTIATE_TEST_SUITE_P(
     BoxesBesideAndNearer, DistractorPipeline,
@@ -129,6 +143,18 @@ INSTANTIATE_TEST_SUITE_P(
         // Nearer than the target: a box at 4 m in front of a target at 6 m, a workbench at 2.5 m.
         DistractorCase{6.0, 0.0, 1.5, 4.0, 0.6, 0.8}, DistractorCase{4.0, 0.4, -0.9, 2.5, 0.9, 0.6},
         DistractorCase{3.0, 0.0, 0.9, 2.0, 0.5, 0.7}, DistractorCase{2.0, 0.2, -0.7, 2.0, 0.4, 0.6}));
+
+// The same boxes around a target tracked inside 4 m, on the reduced pair.
+class TrackingDistractorPipeline : public ::testing::TestWithParam<DistractorCase> {};
+
+TEST_P(TrackingDistractorPipeline, TheTargetIsReportedNotTheBox) {
+  expectTheTargetNotTheBox(GetParam(), trackingDecimation());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    BoxesBesideAndNearer, TrackingDistractorPipeline,
+    ::testing::Values(DistractorCase{4.0, -0.4, 1.4, 4.0, 0.6, 0.9}, DistractorCase{4.0, 0.4, -0.9, 2.5, 0.9, 0.6},
+                      DistractorCase{3.0, 0.0, 0.9, 2.0, 0.5, 0.7}, DistractorCase{2.0, 0.2, -0.7, 2.0, 0.4, 0.6}));
 
 // Issue 11, eval_real_clutter_far_6m: the target merged with a box standing against its panel (one
 // blob the mockup cannot be), and a mockup-sized patch high on the far wall, 3.4 m to the side: the
@@ -179,7 +205,11 @@ TEST(FarRangePipeline, TheTargetMergedWithBoxesAroundItIsSplitOut) {
 }
 
 TEST(FarRangePipeline, ConfigFilesAreComplete) {
+  const int decimation = trackingDecimation();
+  EXPECT_GE(decimation, 1);
+  EXPECT_LE(decimation, 4);
   EXPECT_NO_THROW(testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml"));
+  EXPECT_NO_THROW(testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc_tracking.yaml"));
   const auto params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
   EXPECT_TRUE(validateParams(params).empty());
   EXPECT_THROW(testing::loadMatcherSettings(kConfigDir + "/no_such_file.yaml"), std::runtime_error);

@@ -86,6 +86,10 @@ struct DetectorParams {
   int min_blob_area_px = 400;             // fewer pixels: "blob too small" (looked behind)
   double min_blob_thickness_px = 16.0;    // thinner (largest inscribed disc): "blob too thin",
                                           // looked behind (mismatch strips at occlusion edges)
+  // The two above on the far stage's reduced pair (decimating_rectifier.h), in full-resolution pixels:
+  // its matcher's window is larger in those pixels (9 px at half = 18), and so are its mismatch strips.
+  int reduced_min_blob_area_px = 600;
+  double reduced_min_blob_thickness_px = 20.0;
   double max_blob_area_fraction = 0.5;    // more than this fraction of the region: "blob too large"
   int border_margin_px = 2;               // within this of the valid region's edge: "touches border"
   double min_disparity_px = 4.0;          // robust disparity below this: "too far"

@@ -15,6 +15,7 @@
 
 #include <deque>
 #include <memory>
+#include <map>
 #include <mutex>
 #include <string>
 
@@ -76,7 +77,8 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   ros::Publisher estimate_publisher_;
   image_transport::Publisher debug_publisher_;
   ros::Subscriber disparity_subscriber_;
-  ros::Subscriber camera_info_subscriber_;
+  // The far stage's left camera_info at full and at reduced resolution (config/far_stereo.yaml).
+  ros::Subscriber camera_info_subscriber_, camera_info_tracking_subscriber_;
   std::mutex connection_mutex_;
 
   // Resting near the target (issue 15): the arbiter's output, and a timer that resumes the stage when
@@ -100,7 +102,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   disparity::DisparityDetector detector_;
   disparity::TargetShape target_shape_;   // from ~target_yaml, read once at start-up
   disparity::TargetTrackGate track_gate_;
-  sensor_msgs::CameraInfoConstPtr camera_info_;
+  std::map<int, sensor_msgs::CameraInfoConstPtr> camera_info_by_binning_;  // the last of each binning
   bool warned_no_camera_info_ = false;
   std::deque<bool> recent_found_;  // detection outcome of the last diagnostic_window_frames frames
   std::string last_rejection_;

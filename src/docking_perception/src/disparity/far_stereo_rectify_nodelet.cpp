@@ -1,0 +1,330 @@
+// far_stereo_rectify: the far stage's own rectified pair (issue 15). Pairs the left and right grey images
+// (image_mono, with the guarded camera_info) by stamp and rectifies both (disparity/decimating_rectifier.h):
+//   - at full resolution while the target is being acquired or is beyond ~tracking_range_m, published on
+//     stereo/far/full/{left,right}/{image_rect,camera_info} for the full-resolution block matcher;
+//   - area-averaged by ~tracking_decimation and rectified straight to that size while the arbiter's fused
+//     estimate (target/estimate) is fresh, valid and inside ~tracking_range_m (duty::FusedRangeCondition,
+//     with hysteresis), published on stereo/far/tracking/... for the reduced matcher.
+// Each pair goes one way, so one matcher works on it. The camera_info published beside each image is the
+// rectified camera (K = P's 3x3, no distortion, R = I) at the calibrated size with binning_x = binning_y =
+// the decimation, which image_geometry (stereo_image_proc, the detector) reads as the reduced camera.
+// Only pairs are rectified: the left camera's other frames pass through the synchroniser untouched.
+// Lazy: subscribes while anything reads its output (the matchers, paused with the detector).
+// A bad image or camera_info (wrong encoding or size, uncalibrated, binned or cropped input) drops that pair
+// with a throttled error naming the problem, counted in diagnostics; the next pair is processed.
+// Parameters (config/far_stereo.yaml, all required): tracking_decimation (1..4), tracking_range_m (0: never
+// reduced), tracking_hysteresis_m, tracking_max_fused_age_s.
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <message_filters/subscriber.h>
+#include <message_filters/time_synchronizer.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include "docking_msgs/TargetEstimate.h"
+#include "docking_msgs/names.h"
+#include "docking_perception/duty/fused_range_condition.h"
+#include "docking_perception/disparity/decimating_rectifier.h"
+
+namespace docking_perception {
+namespace disparity {
+
+namespace {
+
+constexpr int kSyncQueue = 5;  // left frames (30 Hz) kept while their right partner is on its way
+
+// The camera of a guarded camera_info, or the reason it cannot be rectified.
+std::optional<PinholeCalibration> calibrationOf(const sensor_msgs::CameraInfo& info, std::string* problem) {
+  std::ostringstream why;
+  if (info.binning_x > 1 || info.binning_y > 1) {
+    why << "camera_info is already binned (" << info.binning_x << "x" << info.binning_y
+        << "): the far stage decimates the calibrated image";
+  } else if (info.roi.width != 0 && (info.roi.width != info.width || info.roi.height != info.height)) {
+    why << "camera_info has a region of interest; the far stage needs the full calibrated image";
+  } else if (!info.distortion_model.empty() && info.distortion_model != "plumb_bob" &&
+             info.distortion_model != "rational_polynomial") {
+    why << "distortion model '" << info.distortion_model << "' is not plumb_bob or rational_polynomial";
+  }
+  if (!why.str().empty()) {
+    *problem = why.str();
+    return std::nullopt;
+  }
+  PinholeCalibration calibration;
+  calibration.size = cv::Size(static_cast<int>(info.width), static_cast<int>(info.height));
+  for (int i = 0; i < 9; ++i) {
+    calibration.camera_matrix(i / 3, i % 3) = info.K[static_cast<std::size_t>(i)];
+    calibration.rectification(i / 3, i % 3) = info.R[static_cast<std::size_t>(i)];
+  }
+  for (int i = 0; i < 12; ++i) calibration.projection(i / 4, i % 4) = info.P[static_cast<std::size_t>(i)];
+  calibration.distortion = info.D;
+  return calibration;
+}
+
+bool sameCalibration(const sensor_msgs::CameraInfo& a, const sensor_msgs::CameraInfo& b) {
+  return a.width == b.width && a.height == b.height && a.K == b.K && a.D == b.D && a.R == b.R && a.P == b.P &&
+         a.distortion_model == b.distortion_model;
+}
+
+// The rectified, decimated camera as sensor_msgs/CameraInfo states it (see the file comment).
+sensor_msgs::CameraInfo rectifiedInfo(const sensor_msgs::CameraInfo& raw, int decimation) {
+  sensor_msgs::CameraInfo out;
+  out.header = raw.header;
+  out.width = raw.width;
+  out.height = raw.height;
+  out.distortion_model = "plumb_bob";
+  out.D.assign(5, 0.0);
+  out.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+  out.P = raw.P;
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) out.K[static_cast<std::size_t>(row * 3 + col)] = raw.P[static_cast<std::size_t>(row * 4 + col)];
+  }
+  out.binning_x = static_cast<std::uint32_t>(decimation);
+  out.binning_y = static_cast<std::uint32_t>(decimation);
+  return out;
+}
+
+}  // namespace
+
+class FarStereoRectifyNodelet : public nodelet::Nodelet {
+ public:
+  void onInit() override;
+
+ private:
+  // One camera at one resolution: its rectifier for the calibration it was built from, its outputs.
+  struct Side {
+    std::unique_ptr<DecimatingRectifier> rectifier;
+    sensor_msgs::CameraInfo calibration_info;  // what `rectifier` was built from
+    ros::Publisher image_publisher, info_publisher;
+  };
+  // The pair at one resolution.
+  struct Way {
+    int decimation = 1;
+    Side left, right;
+    std::uint64_t pairs = 0;
+  };
+  using Sync = message_filters::TimeSynchronizer<sensor_msgs::Image, sensor_msgs::CameraInfo, sensor_msgs::Image,
+                                                 sensor_msgs::CameraInfo>;
+
+  void readParameters();
+  void advertise(Way* way, const char* left_image, const char* left_info, const char* right_image,
+                 const char* right_info);
+  int subscribersOf(const Way& way) const;
+  void onConnection();
+  void onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused);
+  void onPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::CameraInfoConstPtr& left_info,
+              const sensor_msgs::ImageConstPtr& right, const sensor_msgs::CameraInfoConstPtr& right_info);
+  // The rectified image of one side, or nullptr and the problem that stops the pair.
+  sensor_msgs::ImagePtr rectifySide(const char* name, const sensor_msgs::Image& image,
+                                    const sensor_msgs::CameraInfo& info, int decimation, Side* side,
+                                    std::string* problem);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  Way full_, tracking_;
+  duty::FusedRangeConditionParams tracking_params_;
+  ros::NodeHandle nh_;
+  message_filters::Subscriber<sensor_msgs::Image> left_image_sub_, right_image_sub_;
+  message_filters::Subscriber<sensor_msgs::CameraInfo> left_info_sub_, right_info_sub_;
+  std::unique_ptr<Sync> sync_;
+  ros::Subscriber fused_subscriber_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::Timer diagnostics_timer_;
+
+  std::mutex mutex_;  // everything below: the pair callback, the fused estimate, diagnostics, connections
+  duty::FusedRangeCondition tracking_condition_{duty::RangeSide::kInside};
+  bool subscribed_{false};
+  std::uint64_t dropped_{0};
+  std::string last_problem_;
+};
+
+void FarStereoRectifyNodelet::readParameters() {
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  int decimation = 0;
+  std::ostringstream problems;
+  if (!pnh.getParam("tracking_decimation", decimation)) problems << " ~tracking_decimation is missing;";
+  if (!pnh.getParam("tracking_range_m", tracking_params_.range_m)) problems << " ~tracking_range_m is missing;";
+  if (!pnh.getParam("tracking_hysteresis_m", tracking_params_.hysteresis_m)) {
+    problems << " ~tracking_hysteresis_m is missing;";
+  }
+  if (!pnh.getParam("tracking_max_fused_age_s", tracking_params_.max_fused_age_s)) {
+    problems << " ~tracking_max_fused_age_s is missing;";
+  }
+  if (problems.str().empty()) {
+    if (decimation < 1 || decimation > 4) problems << " ~tracking_decimation must be 1..4 (got " << decimation << ");";
+    if (!(tracking_params_.range_m >= 0.0)) problems << " ~tracking_range_m must be >= 0;";
+    if (!(tracking_params_.hysteresis_m >= 0.0)) problems << " ~tracking_hysteresis_m must be >= 0;";
+    if (!(tracking_params_.max_fused_age_s > 0.0)) problems << " ~tracking_max_fused_age_s must be > 0;";
+  }
+  if (!problems.str().empty()) {
+    NODELET_FATAL("far_stereo_rectify: config/far_stereo.yaml:%s", problems.str().c_str());
+    throw std::runtime_error("far_stereo_rectify: invalid parameters:" + problems.str());
+  }
+  full_.decimation = 1;
+  tracking_.decimation = decimation;
+  tracking_condition_.setParams(tracking_params_);
+}
+
+void FarStereoRectifyNodelet::advertise(Way* way, const char* left_image, const char* left_info,
+                                        const char* right_image, const char* right_info) {
+  const auto connection = [this](const ros::SingleSubscriberPublisher&) { onConnection(); };
+  way->left.image_publisher = nh_.advertise<sensor_msgs::Image>(left_image, 1, connection, connection);
+  way->left.info_publisher = nh_.advertise<sensor_msgs::CameraInfo>(left_info, 1, connection, connection);
+  way->right.image_publisher = nh_.advertise<sensor_msgs::Image>(right_image, 1, connection, connection);
+  way->right.info_publisher = nh_.advertise<sensor_msgs::CameraInfo>(right_info, 1, connection, connection);
+}
+
+void FarStereoRectifyNodelet::onInit() {
+  nh_ = getNodeHandle();
+  readParameters();
+  namespace topics = docking_msgs::topics;
+  advertise(&full_, topics::kStereoFarFullLeftImageRect, topics::kStereoFarFullLeftCameraInfo,
+            topics::kStereoFarFullRightImageRect, topics::kStereoFarFullRightCameraInfo);
+  advertise(&tracking_, topics::kStereoFarTrackingLeftImageRect, topics::kStereoFarTrackingLeftCameraInfo,
+            topics::kStereoFarTrackingRightImageRect, topics::kStereoFarTrackingRightCameraInfo);
+  sync_ = std::make_unique<Sync>(left_image_sub_, left_info_sub_, right_image_sub_, right_info_sub_, kSyncQueue);
+  sync_->registerCallback(&FarStereoRectifyNodelet::onPair, this);
+  if (tracking_params_.range_m > 0.0 && tracking_.decimation > 1) {
+    fused_subscriber_ = nh_.subscribe(topics::kTargetEstimate, 1, &FarStereoRectifyNodelet::onFusedEstimate, this,
+                                      ros::TransportHints().tcpNoDelay());
+  }
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, getPrivateNodeHandle(), getName());
+  diagnostics_->setHardwareID("far_stereo_rectify");
+  diagnostics_->add("far stereo rectify", this, &FarStereoRectifyNodelet::diagnose);
+  diagnostics_timer_ = nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
+  NODELET_INFO("far_stereo_rectify: full resolution, 1/%d while the fused target is inside %.2f m; lazy",
+               tracking_.decimation, tracking_params_.range_m);
+}
+
+int FarStereoRectifyNodelet::subscribersOf(const Way& way) const {
+  return static_cast<int>(way.left.image_publisher.getNumSubscribers() + way.left.info_publisher.getNumSubscribers() +
+                          way.right.image_publisher.getNumSubscribers() + way.right.info_publisher.getNumSubscribers());
+}
+
+void FarStereoRectifyNodelet::onConnection() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const bool wanted = subscribersOf(full_) + subscribersOf(tracking_) > 0;
+  if (wanted == subscribed_) return;
+  namespace topics = docking_msgs::topics;
+  if (wanted) {
+    left_image_sub_.subscribe(nh_, topics::kStereoLeftImageMono, 1);
+    left_info_sub_.subscribe(nh_, topics::kStereoLeftCameraInfoChecked, 1);
+    right_image_sub_.subscribe(nh_, topics::kStereoRightImageMono, 1);
+    right_info_sub_.subscribe(nh_, topics::kStereoRightCameraInfoChecked, 1);
+  } else {
+    left_image_sub_.unsubscribe();
+    left_info_sub_.unsubscribe();
+    right_image_sub_.unsubscribe();
+    right_info_sub_.unsubscribe();
+  }
+  subscribed_ = wanted;
+}
+
+void FarStereoRectifyNodelet::onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  // Any source: the disparity track itself or a monocular pose both say where the target is.
+  tracking_condition_.onFusedEstimate(ros::Time::now().toSec(), fused->valid && fused->position_valid, true,
+                                      fused->range_m);
+}
+
+sensor_msgs::ImagePtr FarStereoRectifyNodelet::rectifySide(const char* name, const sensor_msgs::Image& image,
+                                                           const sensor_msgs::CameraInfo& info, int decimation,
+                                                           Side* side, std::string* problem) {
+  std::ostringstream why;
+  if (image.encoding != sensor_msgs::image_encodings::MONO8) {
+    why << name << " image encoding must be mono8 (image_mono), got '" << image.encoding << "'";
+  } else if (image.width != info.width || image.height != info.height) {
+    why << name << " image " << image.width << "x" << image.height << " differs from its camera_info's "
+        << info.width << "x" << info.height;
+  } else if (image.step < image.width || image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+    why << name << " image data too short for " << image.width << "x" << image.height;
+  }
+  if (!why.str().empty()) {
+    *problem = why.str();
+    return nullptr;
+  }
+  if (!side->rectifier || !sameCalibration(side->calibration_info, info)) {
+    std::string calibration_problem;
+    const auto calibration = calibrationOf(info, &calibration_problem);
+    const auto reasons = calibration ? validateDecimation(*calibration, decimation) : std::vector<std::string>{};
+    if (!calibration || !reasons.empty()) {
+      *problem = std::string(name) + " camera_info: " + (calibration ? reasons.front() : calibration_problem);
+      side->rectifier.reset();
+      return nullptr;
+    }
+    side->rectifier = std::make_unique<DecimatingRectifier>(*calibration, decimation);
+    side->calibration_info = info;
+  }
+  const cv::Mat grey(static_cast<int>(image.height), static_cast<int>(image.width), CV_8UC1,
+                     const_cast<std::uint8_t*>(image.data.data()), image.step);
+  cv::Mat rectified;
+  side->rectifier->rectify(grey, &rectified);
+  auto out = boost::make_shared<sensor_msgs::Image>();
+  out->header = image.header;
+  out->encoding = sensor_msgs::image_encodings::MONO8;
+  out->width = static_cast<std::uint32_t>(rectified.cols);
+  out->height = static_cast<std::uint32_t>(rectified.rows);
+  out->step = out->width;
+  out->data.assign(rectified.data, rectified.data + rectified.total());
+  return out;
+}
+
+void FarStereoRectifyNodelet::onPair(const sensor_msgs::ImageConstPtr& left,
+                                     const sensor_msgs::CameraInfoConstPtr& left_info,
+                                     const sensor_msgs::ImageConstPtr& right,
+                                     const sensor_msgs::CameraInfoConstPtr& right_info) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  // Reduced while tracking near enough, if its matcher listens; else full resolution.
+  Way* way = tracking_condition_.holds(ros::Time::now().toSec()) && subscribersOf(tracking_) > 0 ? &tracking_ : &full_;
+  std::string problem;
+  sensor_msgs::ImagePtr left_rect, right_rect;
+  try {
+    left_rect = rectifySide("left", *left, *left_info, way->decimation, &way->left, &problem);
+    if (left_rect) right_rect = rectifySide("right", *right, *right_info, way->decimation, &way->right, &problem);
+  } catch (const std::exception& e) {
+    problem = std::string("rectification failed: ") + e.what();
+  }
+  if (!left_rect || !right_rect) {
+    NODELET_ERROR_THROTTLE(5.0, "far_stereo_rectify: pair at %.3f dropped: %s", left->header.stamp.toSec(),
+                           problem.c_str());
+    ++dropped_;
+    last_problem_ = problem;
+    return;
+  }
+  way->left.image_publisher.publish(left_rect);
+  way->left.info_publisher.publish(rectifiedInfo(*left_info, way->decimation));
+  way->right.image_publisher.publish(right_rect);
+  way->right.info_publisher.publish(rectifiedInfo(*right_info, way->decimation));
+  ++way->pairs;
+}
+
+void FarStereoRectifyNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const duty::FusedRangeState tracking = tracking_condition_.state(ros::Time::now().toSec());
+  if (last_problem_.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK,
+                   !subscribed_ ? "idle (no subscriber)"
+                                : (tracking == duty::FusedRangeState::kHolds ? "reduced resolution (tracking)"
+                                                                             : "full resolution"));
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "pairs dropped: " + last_problem_);
+  }
+  status.add("tracking decimation", tracking_.decimation);
+  status.add("reduced resolution", duty::describe(tracking));
+  status.add("pairs at full resolution", full_.pairs);
+  status.add("pairs at reduced resolution", tracking_.pairs);
+  status.add("pairs dropped", dropped_);
+  status.add("subscribed", subscribed_);
+}
+
+}  // namespace disparity
+}  // namespace docking_perception
+
+PLUGINLIB_EXPORT_CLASS(docking_perception::disparity::FarStereoRectifyNodelet, nodelet::Nodelet)
