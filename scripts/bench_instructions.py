@@ -9,7 +9,9 @@ function that does the stage's work (--toggle-collect); the count is divided by 
   bench_instructions.py OUT.json --far-left L.png --far-right R.png --tagged-sequence DIR --tagged-target Y
 
 Writes {"stages": {NAME: {"instructions_per_frame_M": float, "frames": int}}}. Stages:
-  rectify, disparity, detection, disparity_total  bench_disparity on the rendered far pair (per pair)
+  rectify, disparity, detection, disparity_total  bench_disparity on the rendered far pair (per pair), full
+                                                  resolution (acquiring); tracking_*: the same at
+                                                  far_stereo.yaml's tracking_decimation (tracking inside 4 m)
   mono_full, mono_tracking,                       bench_mono's 90-frame approach (MonoPoseEstimator::process);
   mono_tracking_features, mono_ir                 mono_tracking_features: tracking by the feature search (before)
   apriltag, mono_full_same_frame,                 bench_apriltag on one frame of the target with a tag
@@ -64,16 +66,24 @@ def per_frame(instructions, frames):
     return {"instructions_per_frame_M": round(instructions / frames / 1e6, 2), "frames": frames}
 
 
+def tracking_decimation():
+    text = (ROOT / "config" / "far_stereo.yaml").read_text()
+    return int(re.search(r"^tracking_decimation:\s*(\d+)", text, flags=re.M).group(1))
+
+
 def count_disparity(args, workdir):
     stages = {}
     calls = DISPARITY_FRAMES + DISPARITY_WARMUP
-    command = [LIB / "bench_disparity", pathlib.Path(workdir) / "disparity.json", "--frames", DISPARITY_FRAMES,
-               "--config-dir", ROOT / "config", "--left", args.far_left, "--right", args.far_right]
-    for stage, function in DISPARITY_STAGE_FUNCTIONS.items():
-        instructions, _ = collected_instructions(command, function, workdir)
-        stages[stage] = per_frame(instructions, calls)
-    total = sum(stages[s]["instructions_per_frame_M"] for s in DISPARITY_STAGE_FUNCTIONS)
-    stages["disparity_total"] = {"instructions_per_frame_M": round(total, 2), "frames": calls}
+    decimations = [(1, "")] + ([(tracking_decimation(), "tracking_")] if tracking_decimation() > 1 else [])
+    for decimation, prefix in decimations:
+        command = [LIB / "bench_disparity", pathlib.Path(workdir) / "disparity.json", "--frames", DISPARITY_FRAMES,
+                   "--config-dir", ROOT / "config", "--left", args.far_left, "--right", args.far_right,
+                   "--decimation", decimation]
+        for stage, function in DISPARITY_STAGE_FUNCTIONS.items():
+            instructions, _ = collected_instructions(command, function, workdir)
+            stages[prefix + stage] = per_frame(instructions, calls)
+        total = sum(stages[prefix + s]["instructions_per_frame_M"] for s in DISPARITY_STAGE_FUNCTIONS)
+        stages[prefix + "disparity_total"] = {"instructions_per_frame_M": round(total, 2), "frames": calls}
     return stages
 
 

@@ -100,4 +100,6 @@ if(CATKIN_ENABLE_TESTING)
     add_dependencies(test_disparity_sim disparity_detector docking_perception_disparity_nodelet
       ${catkin_EXPORTED_TARGETS})
   endif()
+  # The same check with the whole closed loop: the far stage on its reduced pair while tracking.
+  add_rostest(test/disparity/far_tracking_still_3m.test DEPENDENCIES test_disparity_sim)
 endif()

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <stereo_msgs/DisparityImage.h>
 
 namespace {
 
@@ -27,10 +28,20 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
   const double max_error_fraction = private_nh.param("max_position_error_fraction", 0.05);
   const double min_detection_rate = private_nh.param("min_detection_rate", 0.9);
   const double wall_timeout_s = private_nh.param("wall_timeout_s", 300.0);
+  // The far stage's reduced pair while tracking (config/far_stereo.yaml): at least this many of the matched
+  // estimates come from a disparity image narrower than the calibrated width; 0: not checked.
+  const int min_reduced_frames = private_nh.param("min_reduced_frames", 0);
+  const int calibrated_width = private_nh.param("calibrated_width", 640);
 
   std::mutex mutex;
   std::map<ros::Time, nav_msgs::Odometry> truth_by_stamp;
   std::map<ros::Time, docking_msgs::TargetEstimate> estimates_by_stamp;
+  std::map<ros::Time, int> disparity_width_by_stamp;
+  ros::Subscriber disparity_subscriber = nh.subscribe<stereo_msgs::DisparityImage>(
+      docking_msgs::topics::kStereoDisparity, 10, [&](const stereo_msgs::DisparityImageConstPtr& disparity) {
+        std::lock_guard<std::mutex> lock(mutex);
+        disparity_width_by_stamp[disparity->header.stamp] = static_cast<int>(disparity->image.width);
+      });
   ros::Subscriber truth_subscriber = nh.subscribe<nav_msgs::Odometry>(
       docking_msgs::topics::kTruthStereoLeft, 100, [&](const nav_msgs::OdometryConstPtr& truth) {
         std::lock_guard<std::mutex> lock(mutex);
@@ -53,9 +64,19 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
     }
     return matched;
   };
+  // Matched estimates made on the reduced pair.
+  auto reduced = [&](const std::vector<Pair>& matched) {
+    std::lock_guard<std::mutex> lock(mutex);
+    int count = 0;
+    for (const Pair& pair : matched) {
+      const auto width = disparity_width_by_stamp.find(pair.estimate.header.stamp);
+      if (width != disparity_width_by_stamp.end() && width->second < calibrated_width) ++count;
+    }
+    return count;
+  };
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wall_timeout_s);
   while (ros::ok() && ros::WallTime::now() < deadline &&
-         static_cast<int>(pairs().size()) < min_frames) {
+         (static_cast<int>(pairs().size()) < min_frames || reduced(pairs()) < min_reduced_frames)) {
     ros::spinOnce();
     ros::WallDuration(0.05).sleep();
   }
@@ -64,6 +85,11 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
       << "only " << matched.size() << " estimates matched a truth stamp within " << wall_timeout_s
       << " s wall time (" << estimates_by_stamp.size() << " estimates, " << truth_by_stamp.size()
       << " truth messages)";
+
+  const int reduced_frames = reduced(matched);
+  EXPECT_GE(reduced_frames, min_reduced_frames)
+      << "only " << reduced_frames << " of " << matched.size()
+      << " estimates came from the reduced pair: did far_stereo_rectify switch while tracking?";
 
   int valid = 0;
   std::vector<double> range_errors;
@@ -88,8 +114,8 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
   }
   if (!range_errors.empty()) {
     std::sort(range_errors.begin(), range_errors.end());
-    std::cout << "disparity vs truth: " << valid << " of " << matched.size()
-              << " frames found, range error median " << 100.0 * range_errors[range_errors.size() / 2]
+    std::cout << "disparity vs truth: " << valid << " of " << matched.size() << " frames found ("
+              << reduced_frames << " on the reduced pair), range error median " << 100.0 * range_errors[range_errors.size() / 2]
               << " %, max " << 100.0 * range_errors.back() << " %\n";
   }
   const double rate = static_cast<double>(valid) / static_cast<double>(matched.size());
