@@ -10,8 +10,8 @@ function that does the stage's work (--toggle-collect); the count is divided by 
 
 Writes {"stages": {NAME: {"instructions_per_frame_M": float, "frames": int}}}. Stages:
   rectify, disparity, detection, disparity_total  bench_disparity on the rendered far pair (per pair), full
-                                                  resolution (acquiring); tracking_*: the same at
-                                                  far_stereo.yaml's tracking_decimation (tracking inside 4 m)
+                                                  resolution; tracking_*: the same on the reduced pair
+                                                  (far_stereo.yaml tracking_decimation 2, off by default)
   mono_full, mono_tracking,                       bench_mono's 90-frame approach (MonoPoseEstimator::process);
   mono_tracking_features, mono_ir                 mono_tracking_features: tracking by the feature search (before)
   apriltag, mono_full_same_frame,                 bench_apriltag on one frame of the target with a tag
@@ -66,15 +66,13 @@ def per_frame(instructions, frames):
     return {"instructions_per_frame_M": round(instructions / frames / 1e6, 2), "frames": frames}
 
 
-def tracking_decimation():
-    text = (ROOT / "config" / "far_stereo.yaml").read_text()
-    return int(re.search(r"^tracking_decimation:\s*(\d+)", text, flags=re.M).group(1))
+REDUCED_DECIMATION = 2  # the reduced pair of config/stereo_image_proc_tracking.yaml (far_stereo.yaml)
 
 
 def count_disparity(args, workdir):
     stages = {}
     calls = DISPARITY_FRAMES + DISPARITY_WARMUP
-    decimations = [(1, "")] + ([(tracking_decimation(), "tracking_")] if tracking_decimation() > 1 else [])
+    decimations = [(1, ""), (REDUCED_DECIMATION, "tracking_")]
     for decimation, prefix in decimations:
         command = [LIB / "bench_disparity", pathlib.Path(workdir) / "disparity.json", "--frames", DISPARITY_FRAMES,
                    "--config-dir", ROOT / "config", "--left", args.far_left, "--right", args.far_right,

@@ -18,12 +18,9 @@ devel/lib/docking_sim/sim_render --config config --scenario eval_far_3m_on --tim
 echo "== bench_disparity (rectify + disparity + detection on the rendered pair: full resolution, acquiring)"
 "$lib/bench_disparity" "$out/parts/disparity.json" --config-dir config \
   --left "$out/frames/far3m_stereo_left.png" --right "$out/frames/far3m_stereo_right.png" || status=1
-tracking_decimation=$(sed -n 's/^tracking_decimation: *\([0-9]*\).*/\1/p' config/far_stereo.yaml)
-if [ "${tracking_decimation:-1}" -gt 1 ]; then
-  echo "== bench_disparity --decimation $tracking_decimation (the far stage while tracking inside 4 m: tracking_*)"
-  "$lib/bench_disparity" "$out/parts/disparity_tracking.json" --config-dir config --decimation "$tracking_decimation" \
-    --left "$out/frames/far3m_stereo_left.png" --right "$out/frames/far3m_stereo_right.png" || status=1
-fi
+echo "== bench_disparity --decimation 2 (the reduced pair, config/far_stereo.yaml tracking_decimation 2: tracking_*)"
+"$lib/bench_disparity" "$out/parts/disparity_tracking.json" --config-dir config --decimation 2 \
+  --left "$out/frames/far3m_stereo_left.png" --right "$out/frames/far3m_stereo_right.png" || status=1
 echo "== bench_mono (detection + pose, full frame and tracking)"
 "$lib/bench_mono" "$out/parts/mono.json" config/target.yaml || status=1
 if [ -x "$lib/bench_apriltag" ]; then

@@ -7,10 +7,11 @@
 //
 // The far stage as perception.launch runs it (config/far_stereo.yaml): each raw frame converted to grey,
 // area-averaged by the decimation and rectified to that size (DecimatingRectifier), block matching, the
-// detector's pixel settings scaled to that size. --decimation 1 (default): full resolution, the stage while
-// acquiring, matcher config/stereo_image_proc.yaml; --decimation = far_stereo.yaml's tracking_decimation:
-// the stage while tracking, matcher config/stereo_image_proc_tracking.yaml; another decimation: the full
-// matcher's window, range and speckle size scaled. --disparity-range overrides the matcher's range (a
+// detector's pixel settings scaled to that size. --decimation 1 (default): full resolution (the stage as
+// launched by default), matcher config/stereo_image_proc.yaml; --decimation 2: the reduced pair that
+// far_stereo.yaml's tracking_decimation 2 switches on while tracking, matcher
+// config/stereo_image_proc_tracking.yaml (stages named tracking_*); another decimation: the full matcher's
+// window, range and speckle size scaled. --disparity-range overrides the matcher's range (a
 // multiple of 16).
 //
 // Without --left/--right the pair is rendered here (test/disparity/synthetic_stereo.h: the target
@@ -51,6 +52,9 @@ using docking_perception::disparity::DisparityDetector;
 using docking_perception::disparity::Detection;
 using docking_perception::disparity::StereoGeometry;
 namespace testing = docking_perception::disparity::testing;
+
+// The decimation config/stereo_image_proc_tracking.yaml's matcher is set for (the reduced pair).
+constexpr int kReducedDecimation = 2;
 
 const char* const kUsage =
     "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR] [--left RAW.png --right "
@@ -156,14 +160,14 @@ int main(int argc, char** argv) {
     const auto left_calibration = testing::loadCameraCalibration(config_dir + "/cameras/stereo_left.yaml");
     const auto right_calibration =
         testing::loadCameraCalibration(config_dir + "/cameras/stereo_right.yaml");
-    const int tracking_decimation = testing::loadTrackingDecimation(config_dir + "/far_stereo.yaml");
+    std::cout << "bench_disparity: config/far_stereo.yaml tracking_decimation "
+              << testing::loadTrackingDecimation(config_dir + "/far_stereo.yaml") << " (as launched)\n";
     auto settings = testing::loadMatcherSettings(
-        config_dir + (decimation > 1 && decimation == tracking_decimation ? "/stereo_image_proc_tracking.yaml"
-                                                                          : "/stereo_image_proc.yaml"));
+        config_dir + (decimation == kReducedDecimation ? "/stereo_image_proc_tracking.yaml" : "/stereo_image_proc.yaml"));
     auto params = testing::loadDetectorParams(config_dir + "/disparity_detector.yaml");
     params.target_shape =
         docking_perception::disparity::loadTargetShape(config_dir + "/target.yaml");
-    if (decimation > 1 && decimation != tracking_decimation) scaleMatcher(1.0 / decimation, &settings);
+    if (decimation > 1 && decimation != kReducedDecimation) scaleMatcher(1.0 / decimation, &settings);
     params = docking_perception::disparity::detectorParamsAtDecimation(params, decimation);
     if (disparity_range_override > 0) settings.disparity_range = disparity_range_override;
 
@@ -263,8 +267,8 @@ int main(int argc, char** argv) {
     bool first = true;
     // The stage while tracking (the reduced pair) is named apart: make bench runs both.
     const std::string prefix = decimation == 1 ? ""
-                               : decimation == tracking_decimation ? "tracking_"
-                                                                   : "decimation" + std::to_string(decimation) + "_";
+                               : decimation == kReducedDecimation ? "tracking_"
+                                                                  : "decimation" + std::to_string(decimation) + "_";
     for (const char* stage : {"rectify", "disparity", "detection", "disparity_total"}) {
       const double ms = medianOf(samples[stage]);
       const double hz = ms > 0.0 ? 1000.0 / ms : 0.0;
