@@ -4,6 +4,7 @@
 # ROS-free core: the paper's detector made robust (no ros:: here; gtests need no roscore).
 add_library(docking_perception_disparity_core
   src/disparity/decimating_rectifier.cpp
+  src/disparity/footprint_fit.cpp
   src/disparity/disparity_detector.cpp
   src/disparity/target_track_gate.cpp
 )
@@ -67,7 +68,7 @@ if(CATKIN_ENABLE_TESTING)
   # The whole far-range pipeline on rendered stereo pairs: matcher with the launch file's settings,
   # then the detector.
   catkin_add_gtest(test_disparity_pipeline test/disparity/test_disparity_pipeline.cpp
-    test/disparity/test_decimating_rectifier.cpp)
+    test/disparity/test_decimating_rectifier.cpp test/disparity/test_footprint_fit.cpp)
   if(TARGET test_disparity_pipeline)
     target_link_libraries(test_disparity_pipeline
       docking_perception_disparity_core docking_perception_disparity_synthetic ${OpenCV_LIBRARIES}

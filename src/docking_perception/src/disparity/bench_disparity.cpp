@@ -302,7 +302,10 @@ int main(int argc, char** argv) {
                 << " near objects skipped, " << detection.not_target_shaped_skipped
                 << " not target-shaped; blob " << detection.shape.width_m << " x "
                 << detection.shape.height_m << " m, fill " << detection.shape.fill << ", depth extent "
-                << detection.shape.depth_extent_m << " m; outcome "
+                << detection.shape.depth_extent_m << " m; footprint "
+                << (detection.footprint_fitted ? "fitted" : "not fitted") << ", yaw "
+                << detection.footprint_yaw_rad * 180.0 / 3.14159265358979 << " deg, on outline "
+                << detection.footprint_inlier_fraction << "; outcome "
                 << docking_perception::disparity::outcomeName(detection.outcome) << "\n";
       std::cout << "  wrote " << output_path << "\n";
       return 0;

@@ -1,4 +1,5 @@
 #include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/disparity/footprint_fit.h"
 
 #include <algorithm>
 #include <cmath>
@@ -279,6 +280,43 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
 
 // Extent of the mockup's outline across the line of sight at `yaw` (0: face-on): the box's columns at
 // full height, the panels' at theirs. Returns width and fill (mean column height / box height).
+// The port from the mockup's footprint fitted to the blob's column profile (footprint_fit.h): sets the
+// detection's centre (the port's image point; its row the blob's median row, the mockup being as high
+// above the port as below) and disparity, so that reproject() gives the port and its covariance.
+// Returns why the blob is not the mockup (empty: it fits).
+std::string portFromFootprint(const std::vector<cv::Point>& points, const std::vector<float>& disparities,
+                              const StereoGeometry& geometry, const DetectorParams& p, Detection* result) {
+  std::vector<int> columns, rows;
+  columns.reserve(points.size());
+  rows.reserve(points.size());
+  for (const cv::Point& point : points) {
+    columns.push_back(point.x);
+    rows.push_back(point.y);
+  }
+  FootprintFitParams fit_params;
+  fit_params.inlier_distance_m = p.footprint_inlier_distance_m;
+  const FootprintFit fit = fitFootprint(columnProfile(columns, disparities, geometry), p.target_shape,
+                                        geometry, fit_params);
+  if (!fit.valid) {
+    return "footprint fit: only " + std::to_string(fit.profile_points) + " image columns with depth (need " +
+           std::to_string(kMinProfilePoints) + ")";
+  }
+  result->footprint_yaw_rad = fit.yaw_rad;
+  result->footprint_inlier_fraction = fit.inlier_fraction;
+  if (fit.inlier_fraction < p.footprint_min_inlier_fraction) {
+    return "footprint fit: " + formatNumber(fit.inlier_fraction) +
+           " of the blob's depth profile on the mockup's outline < footprint_min_inlier_fraction " +
+           formatNumber(p.footprint_min_inlier_fraction);
+  }
+  auto middle = rows.begin() + static_cast<std::ptrdiff_t>(rows.size() / 2);
+  std::nth_element(rows.begin(), middle, rows.end());
+  const double z = fit.port_xz.y();
+  result->centre_px = cv::Point2d(geometry.cx_px + geometry.focal_px * fit.port_xz.x() / z, *middle);
+  result->disparity_px = geometry.focal_px * geometry.baseline_m / z;
+  result->footprint_fitted = true;
+  return "";
+}
+
 void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill) {
   const double c = std::cos(yaw), s = std::sin(yaw);
   // Projection of a point (x forward out of the face, y to the side) on the image's horizontal.
@@ -356,6 +394,21 @@ TargetShape loadTargetShape(const std::string& path) {
   if (target["solar_panels"]) {
     shape.panel_span_m = number(target["solar_panels"]["span_m"], "target.solar_panels.span_m");
     shape.panel_height_m = number(target["solar_panels"]["height_m"], "target.solar_panels.height_m");
+    // offset_x_m is the panels' x in frame `target` (<= 0: behind the face); absent: mid-depth.
+    const YAML::Node offset = target["solar_panels"]["offset_x_m"];
+    shape.panel_offset_behind_face_m = 0.5 * shape.body_depth_m;
+    if (offset) {
+      double x = 1.0;
+      try {
+        x = offset.as<double>();
+      } catch (const std::exception&) {
+        throw std::runtime_error(path + ": field 'target.solar_panels.offset_x_m' is not a number");
+      }
+      if (!(std::isfinite(x) && x <= 0.0 && -x <= shape.body_depth_m)) {
+        throw std::runtime_error(path + ": field 'target.solar_panels.offset_x_m' must be in [-body.depth_m, 0]");
+      }
+      shape.panel_offset_behind_face_m = -x;
+    }
   }
   if (!(shape.face_width_m > 0.0 && shape.face_height_m > 0.0)) {
     throw std::runtime_error(path + ": target.face width_m and height_m must be > 0");
@@ -426,6 +479,12 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
           "split_depth_step_m", "must be in [0, 2] (0: off)", p.split_depth_step_m);
   require(std::isfinite(p.max_centre_offset_y_m) && p.max_centre_offset_y_m >= 0.0,
           "max_centre_offset_y_m", "must be >= 0 (0: off)", p.max_centre_offset_y_m);
+  require(std::isfinite(p.footprint_inlier_distance_m) && p.footprint_inlier_distance_m > 0.0 &&
+              p.footprint_inlier_distance_m <= 1.0,
+          "footprint_inlier_distance_m", "must be in (0, 1]", p.footprint_inlier_distance_m);
+  require(std::isfinite(p.footprint_min_inlier_fraction) && p.footprint_min_inlier_fraction >= 0.0 &&
+              p.footprint_min_inlier_fraction <= 1.0,
+          "footprint_min_inlier_fraction", "must be in [0, 1]", p.footprint_min_inlier_fraction);
   const TargetShape& t = p.target_shape;
   require(std::isfinite(t.face_width_m) && t.face_width_m > 0.0, "target_shape.face_width_m",
           "must be > 0", t.face_width_m);
@@ -434,6 +493,10 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
   require(std::isfinite(t.body_depth_m) && t.body_depth_m >= 0.0 && std::isfinite(t.panel_span_m) &&
               t.panel_span_m >= 0.0 && std::isfinite(t.panel_height_m) && t.panel_height_m >= 0.0,
           "target_shape", "body depth and panel sizes must be >= 0", t.body_depth_m);
+  require(std::isfinite(t.panel_offset_behind_face_m) && t.panel_offset_behind_face_m >= 0.0 &&
+              t.panel_offset_behind_face_m <= t.body_depth_m,
+          "target_shape.panel_offset_behind_face_m", "must be in [0, body depth]",
+          t.panel_offset_behind_face_m);
   if (errors.empty()) {
     // A fill bound above what the mockup itself shows at some yaw would reject the real target.
     const double mockup_fill = shapeBounds(t).min_fill;
@@ -472,6 +535,7 @@ const char* outcomeName(Outcome outcome) {
     case Outcome::kDisparityOutOfRange: return "disparity_out_of_range";
     case Outcome::kNotTargetShaped: return "not_target_shaped";
     case Outcome::kOffTrack: return "off_track";
+    case Outcome::kFootprintMisfit: return "footprint_misfit";
   }
   return "unknown";
 }
@@ -777,7 +841,9 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
   }
   result.blob_pixels = static_cast<int>(blob_disparities.size());
 
-  // --- The visible face: the blob's nearest depth layer (the panels and body sides lie behind it).
+  // --- The visible face: the blob's nearest depth layer (the panels and body sides lie behind it);
+  // with the footprint fit, the port read off the mockup's footprint fitted to the blob instead.
+  std::string footprint_misfit;
   if (!blob_disparities.empty()) {
     std::vector<float> sorted = blob_disparities;
     const double reference = percentile(&sorted, p.face_percentile);
@@ -797,6 +863,9 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     const double face_count = static_cast<double>(face_disparities.size());
     result.centre_px = cv::Point2d(sum_u / face_count, sum_v / face_count);
     result.disparity_px = median(&face_disparities);
+    if (p.footprint_fit_enabled) {
+      footprint_misfit = portFromFootprint(blob_points, blob_disparities, geometry, p, &result);
+    }
     reproject(geometry, result.centre_px, result.disparity_px, p.centre_sigma_px,
               p.disparity_sigma_px, &result.position_m, &result.covariance_m2);
     // The estimate stands for the port, but the blob's centre is where the visible parts of the mockup
@@ -814,6 +883,9 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
   if (!misfit_reason.empty()) {
     result.outcome = Outcome::kNotTargetShaped;
     result.reason = "not the target: " + misfit_reason;
+  } else if (!footprint_misfit.empty()) {
+    result.outcome = Outcome::kFootprintMisfit;
+    result.reason = "not the target: " + footprint_misfit;
   } else if (result.blob_pixels < p.min_blob_area_px) {
     result.outcome = Outcome::kBlobTooSmall;
     result.reason = "blob too small: " + std::to_string(result.blob_pixels) + " px < min_blob_area_px " +

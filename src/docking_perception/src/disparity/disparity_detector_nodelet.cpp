@@ -191,6 +191,9 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("stop_behind_target_sized", &Config::stop_behind_target_sized);
   read("degraded_min_width_fraction", &Config::degraded_min_width_fraction);
   read("split_depth_step_m", &Config::split_depth_step_m);
+  read("footprint_fit_enabled", &Config::footprint_fit_enabled);
+  read("footprint_inlier_distance_m", &Config::footprint_inlier_distance_m);
+  read("footprint_min_inlier_fraction", &Config::footprint_min_inlier_fraction);
   read("track_gate_enabled", &Config::track_gate_enabled);
   read("track_max_speed_mps", &Config::track_max_speed_mps);
   read("track_min_gate_m", &Config::track_min_gate_m);
@@ -280,6 +283,9 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.stop_behind_target_sized = c.stop_behind_target_sized;
   p.degraded_min_width_fraction = c.degraded_min_width_fraction;
   p.split_depth_step_m = c.split_depth_step_m;
+  p.footprint_fit_enabled = c.footprint_fit_enabled;
+  p.footprint_inlier_distance_m = c.footprint_inlier_distance_m;
+  p.footprint_min_inlier_fraction = c.footprint_min_inlier_fraction;
   p.target_shape = target_shape_;
   return p;
 }

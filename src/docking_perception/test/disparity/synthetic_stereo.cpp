@@ -187,6 +187,9 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.stop_behind_target_sized = number("stop_behind_target_sized") != 0.0;
   p.degraded_min_width_fraction = number("degraded_min_width_fraction");
   p.split_depth_step_m = number("split_depth_step_m");
+  p.footprint_fit_enabled = number("footprint_fit_enabled") != 0.0;
+  p.footprint_inlier_distance_m = number("footprint_inlier_distance_m");
+  p.footprint_min_inlier_fraction = number("footprint_min_inlier_fraction");
   return p;
 }
 

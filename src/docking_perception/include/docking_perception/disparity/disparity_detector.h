@@ -48,6 +48,7 @@ struct TargetShape {
   double body_depth_m = 0.30;     // box, behind the face
   double panel_span_m = 0.30;     // each panel, beyond the box side
   double panel_height_m = 0.16;
+  double panel_offset_behind_face_m = 0.15;  // panels' plane behind the face (solar_panels.offset_x_m)
 };
 
 // Reads target.face.{width_m,height_m}, target.body.depth_m and target.solar_panels.{span_m,height_m}
@@ -138,6 +139,13 @@ struct DetectorParams {
   // mockup's shape and stands at least this far in front of what surrounds it (the target merged with
   // a box beside or behind it through block matching's smeared depth edges, issue 11); 0: off.
   double split_depth_step_m = 0.0;
+  // The port from the mockup's footprint fitted to the blob's depth profile (footprint_fit.h) instead
+  // of the centroid of the blob's nearest layer, which a turned target moves 0.1-0.4 m aside (a panel
+  // tip or the face's near edge is nearest). A fit with fewer than footprint_min_inlier_fraction of the
+  // profile on the footprint is not the mockup (merged with something else): "footprint misfit".
+  bool footprint_fit_enabled = false;
+  double footprint_inlier_distance_m = 0.05;   // at zero range; grows with the depth noise
+  double footprint_min_inlier_fraction = 0.5;
   TargetShape target_shape;         // from config/target.yaml, not from the detector's file
 };
 
@@ -158,6 +166,7 @@ enum class Outcome {
   kNotTargetShaped,      // every blob in reach has a width, height or fill the mockup cannot show
   kOffTrack,             // target-shaped, but a jump from the tracked target not yet confirmed
                          // (set by TargetTrackGate, never by detect())
+  kFootprintMisfit,      // the blob's depth profile does not fit the mockup's footprint
 };
 
 // Short stable name of an outcome ("found", "blob_too_small", ...), for diagnostics keys and counters.
@@ -197,6 +206,9 @@ struct Detection {
   bool outside_hint = false;         // chosen although outside the hint's gate (no blob inside it)
   int merged_blobs_split = 0;        // blobs larger than the mockup in which a target-shaped part was
                                      // found (split_depth_step_m)
+  bool footprint_fitted = false;     // the estimate is the fitted footprint's port (footprint_fit_enabled)
+  double footprint_yaw_rad = 0.0;    // its yaw (face normal from the line of sight)
+  double footprint_inlier_fraction = 0.0;
 
   // The chosen blob (filled whenever a blob was chosen, also when it was then rejected).
   std::vector<cv::Point> contour;  // outer contour of the blob, image pixels
