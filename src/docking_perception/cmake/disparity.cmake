@@ -86,6 +86,9 @@ if(CATKIN_ENABLE_TESTING)
       ${catkin_EXPORTED_TARGETS})
   endif()
 
+  # Issue 15: far_stereo_rectify alone on pairs of the check's making: bad ones dropped with a reason.
+  add_rostest(test/disparity/far_stereo_rectify_bad_input.test
+    DEPENDENCIES docking_perception_disparity_nodelet)
   # Issue 15: near the target the stage rests; it wakes when the arbiter stops (~1-2 min wall).
   add_rostest(test/disparity/disparity_pause.test
     DEPENDENCIES perception_host arbiter docking_perception_disparity_nodelet)

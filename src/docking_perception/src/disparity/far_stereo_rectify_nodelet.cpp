@@ -11,7 +11,8 @@
 // Only pairs are rectified: the left camera's other frames pass through the synchroniser untouched.
 // Lazy: subscribes while anything reads its output (the matchers, paused with the detector).
 // A bad image or camera_info (wrong encoding or size, uncalibrated, binned or cropped input) drops that pair
-// with a throttled error naming the problem, counted in diagnostics; the next pair is processed.
+// with a throttled error naming the problem, counted in diagnostics (WARN while pairs are being dropped,
+// with the reason); the next pair is processed.
 // Parameters (config/far_stereo.yaml, all required): tracking_decimation (1..4), tracking_range_m (0: never
 // reduced), tracking_hysteresis_m, tracking_max_fused_age_s.
 #include <memory>
@@ -69,9 +70,13 @@ std::optional<PinholeCalibration> calibrationOf(const sensor_msgs::CameraInfo& i
   return calibration;
 }
 
+// Everything calibrationOf() reads or checks: a camera_info that changes only its binning or region of
+// interest must be checked again, not rectified with the cached maps.
 bool sameCalibration(const sensor_msgs::CameraInfo& a, const sensor_msgs::CameraInfo& b) {
   return a.width == b.width && a.height == b.height && a.K == b.K && a.D == b.D && a.R == b.R && a.P == b.P &&
-         a.distortion_model == b.distortion_model;
+         a.distortion_model == b.distortion_model && a.binning_x == b.binning_x && a.binning_y == b.binning_y &&
+         a.roi.x_offset == b.roi.x_offset && a.roi.y_offset == b.roi.y_offset && a.roi.width == b.roi.width &&
+         a.roi.height == b.roi.height;
 }
 
 // The rectified, decimated camera as sensor_msgs/CameraInfo states it (see the file comment).
@@ -142,6 +147,7 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
   duty::FusedRangeCondition tracking_condition_{duty::RangeSide::kInside};
   bool subscribed_{false};
   std::uint64_t dropped_{0};
+  std::uint64_t dropped_at_last_report_{0};  // WARN only while pairs are being dropped, OK once they pass
   std::string last_problem_;
 };
 
@@ -308,7 +314,9 @@ void FarStereoRectifyNodelet::onPair(const sensor_msgs::ImageConstPtr& left,
 void FarStereoRectifyNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
   const duty::FusedRangeState tracking = tracking_condition_.state(ros::Time::now().toSec());
-  if (last_problem_.empty()) {
+  const bool dropping = dropped_ > dropped_at_last_report_;
+  dropped_at_last_report_ = dropped_;
+  if (!dropping) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK,
                    !subscribed_ ? "idle (no subscriber)"
                                 : (tracking == duty::FusedRangeState::kHolds ? "reduced resolution (tracking)"
@@ -321,6 +329,7 @@ void FarStereoRectifyNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapp
   status.add("pairs at full resolution", full_.pairs);
   status.add("pairs at reduced resolution", tracking_.pairs);
   status.add("pairs dropped", dropped_);
+  status.add("last drop reason", last_problem_.empty() ? "(none)" : last_problem_);
   status.add("subscribed", subscribed_);
 }
 
