@@ -45,6 +45,11 @@ REPORT_SCENARIOS = ["eval_far_2m_on", "eval_far_2m_off", "eval_far_3m_on", "eval
 DEFAULT_CANDIDATES = {"full": {"decimation": 1}, "tracking": {"decimation": 2}}
 
 
+def median(values):
+    values = sorted(values)
+    return values[len(values) // 2] if values else None
+
+
 def config_for(name, changes, folder):
     """A copy of config/ with `changes` ({file: {key: value}}) applied, each key found exactly once."""
     config = folder / f"config_{name}"
@@ -147,7 +152,11 @@ def main():
         res = [r["results"][name] for r in rows]
         summary[name] = {"correct": sum(1 for r in res if r["found"] and r["error_m"] <= CORRECT_M),
                          "wrong": sum(1 for r in res if r["found"] and r["error_m"] > CORRECT_M),
-                         "not_found": sum(1 for r in res if not r["found"]), "scenes": len(res)}
+                         "not_found": sum(1 for r in res if not r["found"]), "scenes": len(res),
+                         # issue 11's bar: a valid estimate off by more than 5 % of the range is wrong
+                         "within_5pct_of_range": sum(1 for r, row in zip(res, rows)
+                                                     if r["found"] and r["error_m"] <= 0.05 * row["range_m"]),
+                         "median_error_m": median([r["error_m"] for r in res if r["found"]])}
         print(f"{name}: {summary[name]}")
     out_path.parent.mkdir(parents=True, exist_ok=True)
     out_path.write_text(json.dumps({"set": args.set, "candidates": candidates, "summary": summary,
