@@ -10,6 +10,7 @@
 
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/footprint_fit.h"
+#include "painted_disparity.h"
 #include "synthetic_stereo.h"
 
 namespace docking_perception {
@@ -19,14 +20,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 const std::string kConfigDir = DISPARITY_CONFIG_DIR;
 
-StereoGeometry geometry640() {
-  StereoGeometry g;
-  g.focal_px = 550.0;
-  g.cx_px = 319.5;
-  g.cy_px = 239.5;
-  g.baseline_m = 0.10;
-  return g;
-}
+StereoGeometry geometry640() { return test::ourGeometry(); }
 
 // One part of the mockup seen from above, with the rows it covers (half its height) and whether block
 // matching finds texture on it (the box walls are plain).
