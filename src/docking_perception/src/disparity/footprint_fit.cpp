@@ -101,10 +101,13 @@ Placement placeAtYaw(const std::vector<Eigen::Vector2d>& profile, const TargetSh
         ++inliers;
       }
     }
-    placement.cost = cost / static_cast<double>(profile.size()) + unsupportedFace(profile, segments.front(), tau);
+    placement.cost = cost / static_cast<double>(profile.size());
     placement.inliers = inliers;
     placement.inlier_sum2 = inlier_sum2;
-    if (iteration == iterations || inliers == 0) break;
+    if (iteration == iterations || inliers == 0) {
+      placement.cost += unsupportedFace(profile, segments.front(), tau);  // only the final placement's counts
+      break;
+    }
     placement.port += shift / static_cast<double>(inliers);
   }
   return placement;
