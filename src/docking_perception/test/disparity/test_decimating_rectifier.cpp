@@ -143,8 +143,10 @@ TEST(DetectorParamsAtDecimation, ScalesLengthsAndAreasAndTakesTheReducedBlobLimi
   full.shape_tolerance_px = 8.0;
   full.border_margin_px = 2;
   full.target_depth_m = 0.5;
+  full.footprint_fit_enabled = true;
   const DetectorParams same = detectorParamsAtDecimation(full, 1);
   EXPECT_EQ(same.min_blob_area_px, 400);
+  EXPECT_TRUE(same.footprint_fit_enabled);
   EXPECT_DOUBLE_EQ(same.min_blob_thickness_px, 16.0);
   const DetectorParams half = detectorParamsAtDecimation(full, 2);
   EXPECT_EQ(half.closest_min_pixels, 38);
@@ -155,6 +157,7 @@ TEST(DetectorParamsAtDecimation, ScalesLengthsAndAreasAndTakesTheReducedBlobLimi
   EXPECT_DOUBLE_EQ(half.shape_tolerance_px, 4.0);
   EXPECT_EQ(half.border_margin_px, 1);
   EXPECT_DOUBLE_EQ(half.target_depth_m, 0.5);  // metres stay metres
+  EXPECT_FALSE(half.footprint_fit_enabled);     // too coarse a depth for it (far_tracking_still_3m)
   EXPECT_TRUE(validateParams(half).empty());
 }
 
