@@ -7,6 +7,7 @@ add_library(docking_perception_disparity_core
   src/disparity/footprint_fit.cpp
   src/disparity/disparity_detector.cpp
   src/disparity/target_track_gate.cpp
+  src/disparity/tracking_window.cpp
 )
 target_include_directories(docking_perception_disparity_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR})
 target_link_libraries(docking_perception_disparity_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES})
@@ -68,7 +69,8 @@ if(CATKIN_ENABLE_TESTING)
   # The whole far-range pipeline on rendered stereo pairs: matcher with the launch file's settings,
   # then the detector.
   catkin_add_gtest(test_disparity_pipeline test/disparity/test_disparity_pipeline.cpp
-    test/disparity/test_decimating_rectifier.cpp test/disparity/test_footprint_fit.cpp)
+    test/disparity/test_decimating_rectifier.cpp test/disparity/test_footprint_fit.cpp
+    test/disparity/test_tracking_window.cpp)
   if(TARGET test_disparity_pipeline)
     target_link_libraries(test_disparity_pipeline
       docking_perception_disparity_core docking_perception_disparity_synthetic ${OpenCV_LIBRARIES}
@@ -106,4 +108,6 @@ if(CATKIN_ENABLE_TESTING)
   endif()
   # The same check with the whole closed loop: the far stage on its reduced pair while tracking.
   add_rostest(test/disparity/far_tracking_still_3m.test DEPENDENCIES test_disparity_sim)
+  # The tracking window (the default) while the chaser turns at 4 m: windows follow the target.
+  add_rostest(test/disparity/far_window_motion_4m.test DEPENDENCIES test_disparity_sim)
 endif()

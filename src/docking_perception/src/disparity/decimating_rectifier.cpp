@@ -90,6 +90,17 @@ cv::Matx34d DecimatingRectifier::outputProjection() const {
 }
 
 void DecimatingRectifier::rectify(const cv::Mat& grey, cv::Mat* rectified) const {
+  rectifyWindow(grey, cv::Rect(cv::Point(0, 0), output_size_), rectified);
+}
+
+void DecimatingRectifier::rectifyWindow(const cv::Mat& grey, const cv::Rect& window, cv::Mat* rectified) const {
+  if (window.area() <= 0 || (window & cv::Rect(cv::Point(0, 0), output_size_)) != window) {
+    std::ostringstream problem;
+    problem << "DecimatingRectifier: window " << window.width << "x" << window.height << " at (" << window.x
+            << ", " << window.y << ") is not inside the " << output_size_.width << "x" << output_size_.height
+            << " output";
+    throw std::invalid_argument(problem.str());
+  }
   if (grey.type() != CV_8UC1 || grey.size() != calibration_.size) {
     std::ostringstream problem;
     problem << "DecimatingRectifier: expected an 8-bit grey image of " << calibration_.size.width << "x"
@@ -99,7 +110,8 @@ void DecimatingRectifier::rectify(const cv::Mat& grey, cv::Mat* rectified) const
   }
   cv::Mat averaged = grey;
   if (factor_ > 1) cv::resize(grey, averaged, output_size_, 0.0, 0.0, cv::INTER_AREA);
-  cv::remap(averaged, *rectified, map_fixed_, map_fraction_, cv::INTER_LINEAR);
+  // The maps give each output pixel its source point, so their window rectifies the window alone.
+  cv::remap(averaged, *rectified, map_fixed_(window), map_fraction_(window), cv::INTER_LINEAR);
 }
 
 DetectorParams detectorParamsAtDecimation(DetectorParams params, int factor) {

@@ -144,6 +144,30 @@ bool touchesBorder(const cv::Rect& box, const cv::Rect& region, int margin) {
          box.y <= region.y + margin || box.y + box.height >= region.y + region.height - margin;
 }
 
+// The area the blob-size limit is a fraction of: the searched region, or for a window about the region the
+// full image would have had (the same blind band and matcher border), so that a window does not shrink it.
+int searchedArea(const cv::Rect& region, cv::Size image_size, const ImageWindow& window) {
+  if (!window.isWindow()) return region.area();
+  return std::max(0, window.full_size.width - region.x) *
+         std::max(0, window.full_size.height - (image_size.height - region.height));
+}
+
+// Whether `box` reaches an edge of `region` that is an edge of the tracking window, not of the full image
+// (`image_size`: the disparity image's size; the region's left edge is the matcher's blind band, a window
+// edge only when the window does not start at the image's left edge).
+bool crossesWindowEdge(const cv::Rect& box, const cv::Rect& region, int margin, const ImageWindow& window,
+                       cv::Size image_size) {
+  if (!window.isWindow()) return false;
+  const bool left_is_window = window.offset.x > 0;
+  const bool right_is_window = window.offset.x + image_size.width < window.full_size.width;
+  const bool top_is_window = window.offset.y > 0;
+  const bool bottom_is_window = window.offset.y + image_size.height < window.full_size.height;
+  return (left_is_window && box.x <= region.x + margin) ||
+         (right_is_window && box.x + box.width >= region.x + region.width - margin) ||
+         (top_is_window && box.y <= region.y + margin) ||
+         (bottom_is_window && box.y + box.height >= region.y + region.height - margin);
+}
+
 // Empty when the blob can be the mockup; otherwise what does not fit, with the numbers. A blob cut by
 // the border (`cut`) is only held to the upper bounds: the target partly out of view must stop the
 // search (and be reported as touching the border), not be looked behind.
@@ -570,7 +594,8 @@ void reproject(const StereoGeometry& g, const cv::Point2d& centre_px, double dis
 
 Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeometry& geometry,
                                     double search_min_px, double search_max_px,
-                                    cv::Rect valid_region, const SearchHint& hint) const {
+                                    cv::Rect valid_region, const SearchHint& hint,
+                                    const ImageWindow& window) const {
   Detection result;
   const DetectorParams& p = params_;
 
@@ -590,11 +615,13 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     return result;
   }
 
-  // --- Region of interest: the matcher's valid window, cut to the configured rows.
+  // --- Region of interest: the matcher's valid window, cut to the configured rows (of the full image).
   const cv::Rect image_rect(0, 0, disparity.cols, disparity.rows);
   cv::Rect region = valid_region.area() > 0 ? (valid_region & image_rect) : image_rect;
-  const int roi_top = static_cast<int>(std::lround(p.roi_top_fraction * disparity.rows));
-  const int roi_bottom = static_cast<int>(std::lround(p.roi_bottom_fraction * disparity.rows));
+  const int full_rows = window.isWindow() ? window.full_size.height : disparity.rows;
+  const int row_offset = window.isWindow() ? window.offset.y : 0;
+  const int roi_top = static_cast<int>(std::lround(p.roi_top_fraction * full_rows)) - row_offset;
+  const int roi_bottom = static_cast<int>(std::lround(p.roi_bottom_fraction * full_rows)) - row_offset;
   region &= cv::Rect(0, roi_top, disparity.cols, std::max(0, roi_bottom - roi_top));
   if (region.area() <= 0) {
     result.reason = "empty region of interest (valid window and roi_top/bottom_fraction do not overlap)";
@@ -734,6 +761,22 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
         break;
       }
       candidate.shape = measureBlobShape(candidate, clean, geometry);
+      if (crossesWindowEdge(candidate.box, region, p.border_margin_px, window, disparity.size())) {
+        // The window is centred on the tracked target with room around it: what crosses its edge is a
+        // neighbour, or the target merged with one (look inside it), never the target cut by the border.
+        BlobCandidate part = p.split_depth_step_m > 0.0
+                                 ? splitMergedBlob(candidate, filtered, clean, geometry, bounds, p, region,
+                                                   threshold)
+                                 : BlobCandidate();
+        if (!part.valid) {
+          candidate.misfit = "crosses the tracking window's edge";
+          ++result.not_target_shaped_skipped;
+          if (!first_misfit.valid) first_misfit = std::move(candidate);
+          continue;
+        }
+        candidate = std::move(part);
+        ++result.merged_blobs_split;
+      }
       const bool cut = touchesBorder(candidate.box, region, p.border_margin_px);
       candidate.misfit = shapeMismatch(candidate.shape, bounds, p, geometry.focal_px, cut);
       const bool degraded_target_size =
@@ -902,11 +945,11 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     if (touches_top) sides += " top";
     if (touches_bottom) sides += " bottom";
     result.reason = "blob touches the border of the valid region:" + sides;
-  } else if (blob_area > p.max_blob_area_fraction * region.area()) {
+  } else if (blob_area > p.max_blob_area_fraction * searchedArea(region, disparity.size(), window)) {
     result.outcome = Outcome::kBlobTooLarge;
     result.reason = "blob too large: " + std::to_string(blob_area) + " px > max_blob_area_fraction " +
-                    formatNumber(p.max_blob_area_fraction) + " of " + std::to_string(region.area()) +
-                    " px";
+                    formatNumber(p.max_blob_area_fraction) + " of " +
+                    std::to_string(searchedArea(region, disparity.size(), window)) + " px";
   } else if (result.disparity_px < p.min_disparity_px || result.disparity_px > p.max_disparity_px) {
     result.outcome = Outcome::kDisparityOutOfRange;
     result.reason = "blob disparity " + formatNumber(result.disparity_px) + " px outside [" +

@@ -22,6 +22,22 @@ namespace {
 
 using docking_msgs::threadCpuMs;
 
+// A camera_info of a window of the image (far_stereo_rectify's tracking window: image_geometry's region
+// of interest, the principal point shifted by its offset).
+bool isWindow(const sensor_msgs::CameraInfo& info) {
+  return info.roi.width != 0 && info.roi.height != 0 &&
+         (info.roi.width != info.width || info.roi.height != info.height);
+}
+
+// The window camera_info published with the pair a disparity image came from: the same stamp and size.
+sensor_msgs::CameraInfoConstPtr windowInfoOf(const std::deque<sensor_msgs::CameraInfoConstPtr>& infos,
+                                             const ros::Time& stamp, std::uint32_t width, std::uint32_t height) {
+  for (auto it = infos.rbegin(); it != infos.rend(); ++it) {
+    if ((*it)->header.stamp == stamp && (*it)->roi.width == width && (*it)->roi.height == height) return *it;
+  }
+  return nullptr;
+}
+
 // Variance of the components a disparity estimate does not measure (TargetEstimate.msg: >= 1e6).
 constexpr double kUnknownVariance = 1e6;
 
@@ -341,6 +357,12 @@ void DisparityDetectorNodelet::updateSubscriptions() {
 
 void DisparityDetectorNodelet::onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
   std::lock_guard<std::mutex> lock(state_mutex_);
+  if (isWindow(*info)) {
+    recent_window_infos_.push_back(info);
+    while (recent_window_infos_.size() > kRecentWindowInfos) recent_window_infos_.pop_front();
+    last_window_info_arrival_s_ = ros::Time::now().toSec();
+    return;
+  }
   camera_info_by_binning_[std::max(1, static_cast<int>(info->binning_x))] = info;
 }
 
@@ -408,12 +430,22 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   Config config;
   disparity::DisparityDetector detector;
   std::map<int, sensor_msgs::CameraInfoConstPtr> camera_infos;
+  sensor_msgs::CameraInfoConstPtr window_info;
+  bool windows_recently = false;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     config = config_;
     detector = detector_;
     camera_infos = camera_info_by_binning_;
+    window_info = windowInfoOf(recent_window_infos_, message->header.stamp, image.width, image.height);
+    windows_recently = last_window_info_arrival_s_ >= 0.0 &&
+                       ros::Time::now().toSec() - last_window_info_arrival_s_ < kWindowInfoMemoryS;
     last_input_error_.clear();
+  }
+  if (window_info) {
+    camera_infos = {{1, window_info}};
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    ++window_frames_;
   }
 
   // --- Rectified model: f and B from the message; the principal point and the decimation from the far
@@ -442,6 +474,14 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
                             "DisparityImage f %.1f; using f from the disparity",
                             model.fx(), message->f);
     }
+  } else if (windows_recently) {
+    // The far stage is sending windows: a disparity of no known size is one whose camera_info has not
+    // arrived (or was lost). Read with the image centre it would be placed wrongly: dropped instead.
+    std::ostringstream missing;
+    missing << "no camera_info for the " << image.width << "x" << image.height << " disparity image at "
+            << message->header.stamp << " (the far stage's tracking window's camera_info has not arrived)";
+    publishInvalidInput(*message, missing.str(), cpu_start_ms);
+    return;
   } else if (!warned_no_camera_info_) {
     warned_no_camera_info_ = true;
     NODELET_WARN("disparity_detector: no camera_info of the disparity's size (%ux%u) on %s or %s yet; using the "
@@ -472,9 +512,14 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
     std::lock_guard<std::mutex> lock(state_mutex_);
     hint = track_gate_.hint(stamp_s);
   }
+  disparity::ImageWindow window;
+  if (window_info) {
+    window.offset = cv::Point(static_cast<int>(window_info->roi.x_offset), static_cast<int>(window_info->roi.y_offset));
+    window.full_size = cv::Size(static_cast<int>(window_info->width), static_cast<int>(window_info->height));
+  }
   disparity::Detection detection =
       detector.detect(disparity, geometry, message->min_disparity, message->max_disparity + 1.0,
-                      valid_region, hint);
+                      valid_region, hint, window);
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     detection = track_gate_.apply(stamp_s, detection);
@@ -562,6 +607,7 @@ void DisparityDetectorNodelet::produceDiagnostics(
           : static_cast<double>(std::count(recent_found_.begin(), recent_found_.end(), true)) /
                 static_cast<double>(recent_found_.size());
   status.add("frames", frames_);
+  status.add("frames in a tracking window", window_frames_);
   status.add("detections", detections_);
   status.add("detection rate (last frames)", rate);
   status.add("window frames", recent_found_.size());

@@ -5,6 +5,13 @@
 //   - area-averaged by ~tracking_decimation and rectified straight to that size while the arbiter's fused
 //     estimate (target/estimate) is fresh, valid and inside ~tracking_range_m (duty::FusedRangeCondition,
 //     with hysteresis), published on stereo/far/tracking/... for the reduced matcher.
+//   - at full resolution but only a window around the target (disparity/tracking_window.h) while the fused
+//     estimate is fresh and valid (window_enabled; not while the reduced pair is used): published on the
+//     full-resolution topics, its camera_info saying where the window lies (image_geometry's region of
+//     interest: roi = the window, the principal point shifted by its offset), so that the matcher and the
+//     detector work on the window as on a smaller camera. The window's left side leaves room for the
+//     matcher's search range (~matcher/{min_disparity,disparity_range,correlation_window_size}, loaded
+//     from config/stereo_image_proc.yaml, the matcher's own file).
 // Each pair goes one way, so one matcher works on it. The camera_info published beside each image is the
 // rectified camera (K = P's 3x3, no distortion, R = I) at the calibrated size with binning_x = binning_y =
 // the decimation, which image_geometry (stereo_image_proc, the detector) reads as the reduced camera.
@@ -14,7 +21,9 @@
 // with a throttled error naming the problem, counted in diagnostics (WARN while pairs are being dropped,
 // with the reason); the next pair is processed.
 // Parameters (config/far_stereo.yaml, all required): tracking_decimation (1..4), tracking_range_m (0: never
-// reduced), tracking_hysteresis_m, tracking_max_fused_age_s.
+// reduced), tracking_hysteresis_m, tracking_max_fused_age_s, window_enabled, window_half_width_m,
+// window_half_height_m, window_min_half_size_px, window_max_area_fraction, window_max_prediction_s; and
+// matcher/{min_disparity,disparity_range,correlation_window_size}.
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -35,6 +44,7 @@
 #include "docking_msgs/names.h"
 #include "docking_perception/duty/fused_range_condition.h"
 #include "docking_perception/disparity/decimating_rectifier.h"
+#include "docking_perception/disparity/tracking_window.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -79,8 +89,10 @@ bool sameCalibration(const sensor_msgs::CameraInfo& a, const sensor_msgs::Camera
          a.roi.height == b.roi.height;
 }
 
-// The rectified, decimated camera as sensor_msgs/CameraInfo states it (see the file comment).
-sensor_msgs::CameraInfo rectifiedInfo(const sensor_msgs::CameraInfo& raw, int decimation) {
+// The rectified, decimated camera as sensor_msgs/CameraInfo states it (see the file comment); with a
+// window (in output pixels), the window's region of interest.
+sensor_msgs::CameraInfo rectifiedInfo(const sensor_msgs::CameraInfo& raw, int decimation,
+                                      const std::optional<cv::Rect>& window = std::nullopt) {
   sensor_msgs::CameraInfo out;
   out.header = raw.header;
   out.width = raw.width;
@@ -94,6 +106,12 @@ sensor_msgs::CameraInfo rectifiedInfo(const sensor_msgs::CameraInfo& raw, int de
   }
   out.binning_x = static_cast<std::uint32_t>(decimation);
   out.binning_y = static_cast<std::uint32_t>(decimation);
+  if (window) {
+    out.roi.x_offset = static_cast<std::uint32_t>(window->x * decimation);
+    out.roi.y_offset = static_cast<std::uint32_t>(window->y * decimation);
+    out.roi.width = static_cast<std::uint32_t>(window->width * decimation);
+    out.roi.height = static_cast<std::uint32_t>(window->height * decimation);
+  }
   return out;
 }
 
@@ -115,11 +133,24 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
     int decimation = 1;
     Side left, right;
     std::uint64_t pairs = 0;
+    std::uint64_t windowed_pairs = 0;
+  };
+  // The arbiter's last fused estimate, for the tracking window.
+  struct FusedPort {
+    bool usable = false;            // valid with a position
+    double arrival_s = 0.0;         // ROS time
+    ros::Time stamp;                // of the image it came from
+    std::string frame_id;
+    Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
   };
   using Sync = message_filters::TimeSynchronizer<sensor_msgs::Image, sensor_msgs::CameraInfo, sensor_msgs::Image,
                                                  sensor_msgs::CameraInfo>;
 
   void readParameters();
+  void readWindowParameters(std::ostringstream* problems);
+  // The window to rectify for a pair at `stamp` in `frame_id`, or none (the whole image).
+  std::optional<cv::Rect> windowFor(const ros::Time& stamp, const std::string& frame_id, const Side& side) const;
   void advertise(Way* way, const char* left_image, const char* left_info, const char* right_image,
                  const char* right_info);
   int subscribersOf(const Way& way) const;
@@ -130,11 +161,14 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
   // The rectified image of one side, or nullptr and the problem that stops the pair.
   sensor_msgs::ImagePtr rectifySide(const char* name, const sensor_msgs::Image& image,
                                     const sensor_msgs::CameraInfo& info, int decimation, Side* side,
-                                    std::string* problem);
+                                    const std::optional<cv::Rect>& window, std::string* problem);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   Way full_, tracking_;
   duty::FusedRangeConditionParams tracking_params_;
+  bool window_enabled_ = false;
+  TrackingWindowParams window_params_;
+  MatcherReach matcher_reach_;
   ros::NodeHandle nh_;
   message_filters::Subscriber<sensor_msgs::Image> left_image_sub_, right_image_sub_;
   message_filters::Subscriber<sensor_msgs::CameraInfo> left_info_sub_, right_info_sub_;
@@ -149,6 +183,8 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
   std::uint64_t dropped_{0};
   std::uint64_t dropped_at_last_report_{0};  // WARN only while pairs are being dropped, OK once they pass
   std::string last_problem_;
+  FusedPort fused_port_;
+  std::string last_window_;  // for diagnostics
 };
 
 void FarStereoRectifyNodelet::readParameters() {
@@ -173,9 +209,34 @@ void FarStereoRectifyNodelet::readParameters() {
     NODELET_FATAL("far_stereo_rectify: config/far_stereo.yaml:%s", problems.str().c_str());
     throw std::runtime_error("far_stereo_rectify: invalid parameters:" + problems.str());
   }
+  readWindowParameters(&problems);
+  if (!problems.str().empty()) {
+    NODELET_FATAL("far_stereo_rectify: config/far_stereo.yaml, config/stereo_image_proc.yaml:%s",
+                  problems.str().c_str());
+    throw std::runtime_error("far_stereo_rectify: invalid parameters:" + problems.str());
+  }
   full_.decimation = 1;
   tracking_.decimation = decimation;
   tracking_condition_.setParams(tracking_params_);
+}
+
+void FarStereoRectifyNodelet::readWindowParameters(std::ostringstream* problems) {
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  const auto need = [&](const char* name, auto* value) {
+    if (!pnh.getParam(name, *value)) *problems << " ~" << name << " is missing;";
+  };
+  need("window_enabled", &window_enabled_);
+  need("window_half_width_m", &window_params_.half_width_m);
+  need("window_half_height_m", &window_params_.half_height_m);
+  need("window_min_half_size_px", &window_params_.min_half_size_px);
+  need("window_max_area_fraction", &window_params_.max_area_fraction);
+  need("window_max_prediction_s", &window_params_.max_prediction_s);
+  need("matcher/min_disparity", &matcher_reach_.min_disparity);
+  need("matcher/disparity_range", &matcher_reach_.disparity_range);
+  need("matcher/correlation_window_size", &matcher_reach_.correlation_window_px);
+  if (!problems->str().empty()) return;
+  for (const auto& error : validateTrackingWindowParams(window_params_)) *problems << " " << error << ";";
+  for (const auto& error : validateMatcherReach(matcher_reach_)) *problems << " " << error << ";";
 }
 
 void FarStereoRectifyNodelet::advertise(Way* way, const char* left_image, const char* left_info,
@@ -197,7 +258,7 @@ void FarStereoRectifyNodelet::onInit() {
             topics::kStereoFarTrackingRightImageRect, topics::kStereoFarTrackingRightCameraInfo);
   sync_ = std::make_unique<Sync>(left_image_sub_, left_info_sub_, right_image_sub_, right_info_sub_, kSyncQueue);
   sync_->registerCallback(&FarStereoRectifyNodelet::onPair, this);
-  if (tracking_params_.range_m > 0.0 && tracking_.decimation > 1) {
+  if ((tracking_params_.range_m > 0.0 && tracking_.decimation > 1) || window_enabled_) {
     fused_subscriber_ = nh_.subscribe(topics::kTargetEstimate, 1, &FarStereoRectifyNodelet::onFusedEstimate, this,
                                       ros::TransportHints().tcpNoDelay());
   }
@@ -205,8 +266,9 @@ void FarStereoRectifyNodelet::onInit() {
   diagnostics_->setHardwareID("far_stereo_rectify");
   diagnostics_->add("far stereo rectify", this, &FarStereoRectifyNodelet::diagnose);
   diagnostics_timer_ = nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
-  NODELET_INFO("far_stereo_rectify: full resolution, 1/%d while the fused target is inside %.2f m; lazy",
-               tracking_.decimation, tracking_params_.range_m);
+  NODELET_INFO("far_stereo_rectify: full resolution%s, 1/%d while the fused target is inside %.2f m; lazy",
+               window_enabled_ ? " (a window around the tracked target)" : "", tracking_.decimation,
+               tracking_params_.range_m);
 }
 
 int FarStereoRectifyNodelet::subscribersOf(const Way& way) const {
@@ -236,13 +298,36 @@ void FarStereoRectifyNodelet::onConnection() {
 void FarStereoRectifyNodelet::onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused) {
   std::lock_guard<std::mutex> lock(mutex_);
   // Any source: the disparity track itself or a monocular pose both say where the target is.
-  tracking_condition_.onFusedEstimate(ros::Time::now().toSec(), fused->valid && fused->position_valid, true,
-                                      fused->range_m);
+  const double now_s = ros::Time::now().toSec();
+  tracking_condition_.onFusedEstimate(now_s, fused->valid && fused->position_valid, true, fused->range_m);
+  fused_port_.usable = fused->valid && fused->position_valid;
+  fused_port_.arrival_s = now_s;
+  fused_port_.stamp = fused->header.stamp;
+  fused_port_.frame_id = fused->header.frame_id;
+  const auto& p = fused->pose.pose.position;
+  fused_port_.position_m = Eigen::Vector3d(p.x, p.y, p.z);
+  const auto& v = fused->twist.twist.linear;
+  fused_port_.velocity_mps = fused->twist_valid ? Eigen::Vector3d(v.x, v.y, v.z) : Eigen::Vector3d::Zero();
+}
+
+std::optional<cv::Rect> FarStereoRectifyNodelet::windowFor(const ros::Time& stamp, const std::string& frame_id,
+                                                           const Side& side) const {
+  // Only a fresh, valid estimate in the left camera's own frame (the arbiter's output_frame) places it;
+  // anything else, and the port predicted out of view, is matched on the whole image.
+  if (!window_enabled_ || !fused_port_.usable || !side.rectifier || fused_port_.frame_id != frame_id ||
+      ros::Time::now().toSec() - fused_port_.arrival_s > tracking_params_.max_fused_age_s) {
+    return std::nullopt;
+  }
+  const Eigen::Vector3d port = predictPort(fused_port_.position_m, fused_port_.velocity_mps,
+                                           (stamp - fused_port_.stamp).toSec(), window_params_);
+  return trackingWindow(side.rectifier->outputProjection(), port, side.rectifier->outputSize(), matcher_reach_,
+                        window_params_);
 }
 
 sensor_msgs::ImagePtr FarStereoRectifyNodelet::rectifySide(const char* name, const sensor_msgs::Image& image,
                                                            const sensor_msgs::CameraInfo& info, int decimation,
-                                                           Side* side, std::string* problem) {
+                                                           Side* side, const std::optional<cv::Rect>& window,
+                                                           std::string* problem) {
   std::ostringstream why;
   if (image.encoding != sensor_msgs::image_encodings::MONO8) {
     why << name << " image encoding must be mono8 (image_mono), got '" << image.encoding << "'";
@@ -271,7 +356,11 @@ sensor_msgs::ImagePtr FarStereoRectifyNodelet::rectifySide(const char* name, con
   const cv::Mat grey(static_cast<int>(image.height), static_cast<int>(image.width), CV_8UC1,
                      const_cast<std::uint8_t*>(image.data.data()), image.step);
   cv::Mat rectified;
-  side->rectifier->rectify(grey, &rectified);
+  if (window) {
+    side->rectifier->rectifyWindow(grey, *window, &rectified);
+  } else {
+    side->rectifier->rectify(grey, &rectified);
+  }
   auto out = boost::make_shared<sensor_msgs::Image>();
   out->header = image.header;
   out->encoding = sensor_msgs::image_encodings::MONO8;
@@ -288,12 +377,20 @@ void FarStereoRectifyNodelet::onPair(const sensor_msgs::ImageConstPtr& left,
                                      const sensor_msgs::CameraInfoConstPtr& right_info) {
   std::lock_guard<std::mutex> lock(mutex_);
   // Reduced while tracking near enough, if its matcher listens; else full resolution.
-  Way* way = tracking_condition_.holds(ros::Time::now().toSec()) && subscribersOf(tracking_) > 0 ? &tracking_ : &full_;
+  const bool reduced = tracking_.decimation > 1 && tracking_condition_.holds(ros::Time::now().toSec()) &&
+                       subscribersOf(tracking_) > 0;
+  Way* way = reduced ? &tracking_ : &full_;
   std::string problem;
   sensor_msgs::ImagePtr left_rect, right_rect;
+  // The window (full resolution only) from the left side's rectifier as last built: a calibration change
+  // rebuilds it below, and the window of the old one is still inside the image (same size checked there).
+  const std::optional<cv::Rect> window =
+      way == &full_ ? windowFor(left->header.stamp, left->header.frame_id, way->left) : std::nullopt;
   try {
-    left_rect = rectifySide("left", *left, *left_info, way->decimation, &way->left, &problem);
-    if (left_rect) right_rect = rectifySide("right", *right, *right_info, way->decimation, &way->right, &problem);
+    left_rect = rectifySide("left", *left, *left_info, way->decimation, &way->left, window, &problem);
+    if (left_rect) {
+      right_rect = rectifySide("right", *right, *right_info, way->decimation, &way->right, window, &problem);
+    }
   } catch (const std::exception& e) {
     problem = std::string("rectification failed: ") + e.what();
   }
@@ -304,11 +401,18 @@ void FarStereoRectifyNodelet::onPair(const sensor_msgs::ImageConstPtr& left,
     last_problem_ = problem;
     return;
   }
+  // camera_info first: the detector matches a window's disparity to its camera_info by stamp.
+  way->left.info_publisher.publish(rectifiedInfo(*left_info, way->decimation, window));
+  way->right.info_publisher.publish(rectifiedInfo(*right_info, way->decimation, window));
   way->left.image_publisher.publish(left_rect);
-  way->left.info_publisher.publish(rectifiedInfo(*left_info, way->decimation));
   way->right.image_publisher.publish(right_rect);
-  way->right.info_publisher.publish(rectifiedInfo(*right_info, way->decimation));
   ++way->pairs;
+  if (window) {
+    ++way->windowed_pairs;
+    std::ostringstream text;
+    text << window->width << "x" << window->height << " at (" << window->x << ", " << window->y << ")";
+    last_window_ = text.str();
+  }
 }
 
 void FarStereoRectifyNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
@@ -319,8 +423,9 @@ void FarStereoRectifyNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapp
   if (!dropping) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK,
                    !subscribed_ ? "idle (no subscriber)"
-                                : (tracking == duty::FusedRangeState::kHolds ? "reduced resolution (tracking)"
-                                                                             : "full resolution"));
+                                : (tracking_.decimation > 1 && tracking == duty::FusedRangeState::kHolds
+                                       ? "reduced resolution (tracking)"
+                                       : "full resolution"));
   } else {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "pairs dropped: " + last_problem_);
   }
@@ -329,6 +434,9 @@ void FarStereoRectifyNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapp
   status.add("pairs at full resolution", full_.pairs);
   status.add("pairs at reduced resolution", tracking_.pairs);
   status.add("pairs dropped", dropped_);
+  status.add("tracking window", window_enabled_ ? "enabled" : "disabled");
+  status.add("pairs in a tracking window", full_.windowed_pairs);
+  status.add("last tracking window", last_window_.empty() ? "(none)" : last_window_);
   status.add("last drop reason", last_problem_.empty() ? "(none)" : last_problem_);
   status.add("subscribed", subscribed_);
 }

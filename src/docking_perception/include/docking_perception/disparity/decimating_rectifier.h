@@ -38,6 +38,10 @@ class DecimatingRectifier {
 
   // grey: CV_8UC1 at the calibrated size. Throws std::invalid_argument otherwise.
   void rectify(const cv::Mat& grey, cv::Mat* rectified) const;
+  // Only `window` (in output pixels) of the rectified image: the same pixels as rectify()'s output cut
+  // to it, at the cost of the window alone (the tracking window, tracking_window.h). Throws
+  // std::invalid_argument on a bad image or a window not inside outputSize().
+  void rectifyWindow(const cv::Mat& grey, const cv::Rect& window, cv::Mat* rectified) const;
 
   int factor() const { return factor_; }
   cv::Size outputSize() const { return output_size_; }

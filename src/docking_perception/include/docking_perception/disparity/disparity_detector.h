@@ -189,6 +189,17 @@ struct SearchHint {
   double radius_m = 0.0;
 };
 
+// Where the disparity image lies in the camera's full image, when it is a window of it (the far stage's
+// tracking window, far_stereo_rectify: camera_info roi). Edges of the window that are not the full
+// image's are not the target's edge: a blob crossing one is a neighbour of the tracked target (or the
+// target merged with one), never reported as the target cut by the border. Rows given as fractions of
+// the image (roi_top/bottom_fraction) stay fractions of the full image. Default: not a window.
+struct ImageWindow {
+  cv::Point offset{0, 0};  // the window's top-left pixel in the full image
+  cv::Size full_size;      // the full image; empty: the disparity image is the full image
+  bool isWindow() const { return full_size.area() > 0; }
+};
+
 struct Detection {
   bool found = false;
   Outcome outcome = Outcome::kBadInput;
@@ -241,9 +252,12 @@ class DisparityDetector {
   // width ~ the search range is blind); empty: the whole image. The border test uses its edges.
   // Never throws on bad input: returns found = false with outcome kBadInput and the reason.
   // `hint` (optional): the tracked target's predicted position, see SearchHint.
+  // `window` (optional): the disparity image is a window of the full image, see ImageWindow; `geometry`
+  // is then the window's (principal point shifted by its offset).
   Detection detect(const cv::Mat& disparity, const StereoGeometry& geometry,
                    double search_min_px = 0.0, double search_max_px = 1e9,
-                   cv::Rect valid_region = cv::Rect(), const SearchHint& hint = SearchHint()) const;
+                   cv::Rect valid_region = cv::Rect(), const SearchHint& hint = SearchHint(),
+                   const ImageWindow& window = ImageWindow()) const;
 
  private:
   DetectorParams params_;

@@ -102,7 +102,14 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   disparity::DisparityDetector detector_;
   disparity::TargetShape target_shape_;   // from ~target_yaml, read once at start-up
   disparity::TargetTrackGate track_gate_;
-  std::map<int, sensor_msgs::CameraInfoConstPtr> camera_info_by_binning_;  // the last of each binning
+  std::map<int, sensor_msgs::CameraInfoConstPtr> camera_info_by_binning_;  // the last full image of each binning
+  // The far stage's tracking windows (camera_info with a region of interest): the last few, matched to a
+  // disparity image by stamp; a window disparity without its own is dropped, never read with another's.
+  static constexpr std::size_t kRecentWindowInfos = 8;
+  static constexpr double kWindowInfoMemoryS = 2.0;  // windows seen this recently: unmatched ones are dropped
+  std::deque<sensor_msgs::CameraInfoConstPtr> recent_window_infos_;
+  double last_window_info_arrival_s_ = -1.0;
+  unsigned long window_frames_ = 0;
   bool warned_no_camera_info_ = false;
   std::deque<bool> recent_found_;  // detection outcome of the last diagnostic_window_frames frames
   std::string last_rejection_;

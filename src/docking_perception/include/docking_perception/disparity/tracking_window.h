@@ -1,0 +1,59 @@
+// The far stage's tracking window (issue 15; ROS-free): while the target is tracked, block matching runs
+// at full resolution only on a window of the rectified pair around where the target is predicted, not on
+// the whole 640x480 image. Block matching costs pixels x disparities and the target at 2-6 m covers a
+// small part of the image, so the window cuts the far stage's work several times without coarsening the
+// depth (the reduced pair's problem, docs/PERFORMANCE.md), and keeps objects far beside the target out of
+// the search.
+//
+// The window covers the mockup's extent around the predicted port (half_width_m, half_height_m, at least
+// min_half_size_px), plus what the matcher needs to give those pixels a disparity: on the left the search
+// range (a left pixel at column u matches right pixels down to u - min_disparity - disparity_range + 1)
+// and half the correlation window on every side. Both images are cut to the same window, so the pair
+// stays rectified (the principal points shift together: image_geometry's region of interest).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+namespace docking_perception {
+namespace disparity {
+
+struct TrackingWindowParams {
+  double half_width_m = 0.8;        // across the line of sight, around the port (the mockup: 0.45 m)
+  double half_height_m = 0.45;      // up and down (the mockup: 0.12 m up; its robot below, to the floor)
+  int min_half_size_px = 48;        // never smaller (a far target: the matcher's and blob's own margins)
+  double max_area_fraction = 0.7;   // a window larger than this share of the image: the whole image
+  double max_prediction_s = 0.5;    // the estimate's velocity is extrapolated at most this far
+};
+
+// Every invalid field, each message naming it; empty: usable.
+std::vector<std::string> validateTrackingWindowParams(const TrackingWindowParams& params);
+
+// What the block matcher needs around a pixel to give it a disparity (config/stereo_image_proc.yaml).
+struct MatcherReach {
+  int min_disparity = 0;
+  int disparity_range = 96;
+  int correlation_window_px = 15;
+};
+
+// Every invalid field (a range that is not a positive multiple of 16, an even or non-positive window).
+std::vector<std::string> validateMatcherReach(const MatcherReach& reach);
+
+// Where the port is expected at the image's time: `position_m` (rectified camera frame, at the estimate's
+// time) moved by `velocity_mps` for `elapsed_s`, clamped to [0, max_prediction_s].
+Eigen::Vector3d predictPort(const Eigen::Vector3d& position_m, const Eigen::Vector3d& velocity_mps,
+                            double elapsed_s, const TrackingWindowParams& params);
+
+// The window of the rectified image (size `image_size`, projection `projection`: the rectified camera's P)
+// to block-match for a port at `port_m` (rectified camera frame); nullopt when the whole image should be
+// matched instead: the port behind the camera or outside the image, or the window nearly the whole image.
+std::optional<cv::Rect> trackingWindow(const cv::Matx34d& projection, const Eigen::Vector3d& port_m,
+                                       cv::Size image_size, const MatcherReach& reach,
+                                       const TrackingWindowParams& params);
+
+}  // namespace disparity
+}  // namespace docking_perception
