@@ -11,7 +11,9 @@ function that does the stage's work (--toggle-collect); the count is divided by 
 Writes {"stages": {NAME: {"instructions_per_frame_M": float, "frames": int}}}. Stages:
   rectify, disparity, detection, disparity_total  bench_disparity on the rendered far pair (per pair), full
                                                   resolution; tracking_*: the same on the reduced pair
-                                                  (far_stereo.yaml tracking_decimation 2, off by default)
+                                                  (far_stereo.yaml tracking_decimation 2, off by default);
+                                                  window_*: full resolution on the tracking window alone
+                                                  (far_stereo.yaml window_*, the default while tracking)
   mono_full, mono_tracking,                       bench_mono's 90-frame approach (MonoPoseEstimator::process);
   mono_tracking_features, mono_ir                 mono_tracking_features: tracking by the feature search (before)
   apriltag, mono_full_same_frame,                 bench_apriltag on one frame of the target with a tag
@@ -82,6 +84,26 @@ def count_disparity(args, workdir):
             stages[prefix + stage] = per_frame(instructions, calls)
         total = sum(stages[prefix + s]["instructions_per_frame_M"] for s in DISPARITY_STAGE_FUNCTIONS)
         stages[prefix + "disparity_total"] = {"instructions_per_frame_M": round(total, 2), "frames": calls}
+    stages.update(count_disparity_window(args, workdir))
+    return stages
+
+
+def count_disparity_window(args, workdir):
+    """The stage on the tracking window. bench_disparity --window places the window with one untimed pass
+    over the whole image, which calls the same functions: two runs of different lengths, and the difference
+    of their counts over the difference of their calls, leave that pass out exactly."""
+    stages = {}
+    short, long = DISPARITY_FRAMES, 2 * DISPARITY_FRAMES
+    for stage, function in DISPARITY_STAGE_FUNCTIONS.items():
+        counts = []
+        for frames in (short, long):
+            command = [LIB / "bench_disparity", pathlib.Path(workdir) / "disparity.json", "--frames", frames,
+                       "--config-dir", ROOT / "config", "--left", args.far_left, "--right", args.far_right,
+                       "--window"]
+            counts.append(collected_instructions(command, function, workdir)[0])
+        stages["window_" + stage] = per_frame(counts[1] - counts[0], long - short)
+    total = sum(stages["window_" + s]["instructions_per_frame_M"] for s in DISPARITY_STAGE_FUNCTIONS)
+    stages["window_disparity_total"] = {"instructions_per_frame_M": round(total, 2), "frames": long - short}
     return stages
 
 

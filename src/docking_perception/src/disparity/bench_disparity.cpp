@@ -3,7 +3,7 @@
 //
 //   bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]
 //                   [--left RAW.png --right RAW.png] [--debug-image OUT.png]
-//                   [--disparity-out OUT.tiff] [--decimation N] [--disparity-range N]
+//                   [--disparity-out OUT.tiff] [--decimation N] [--disparity-range N] [--window]
 //
 // The far stage as perception.launch runs it (config/far_stereo.yaml): each raw frame converted to grey,
 // area-averaged by the decimation and rectified to that size (DecimatingRectifier), block matching, the
@@ -12,7 +12,9 @@
 // far_stereo.yaml's tracking_decimation 2 switches on while tracking, matcher
 // config/stereo_image_proc_tracking.yaml (stages named tracking_*); another decimation: the full matcher's
 // window, range and speckle size scaled. --disparity-range overrides the matcher's range (a
-// multiple of 16).
+// multiple of 16). --window: the full-resolution stage on the tracking window alone (config/far_stereo.yaml
+// window_*, the default while the target is tracked; stages named window_*), placed around the port that
+// an untimed pass over the whole image finds, as far_stereo_rectify places it around the fused estimate.
 //
 // Without --left/--right the pair is rendered here (test/disparity/synthetic_stereo.h: the target
 // face-on at 3 m, its panels, a floor and a wall) and distorted with the calibration, so the
@@ -58,7 +60,8 @@ constexpr int kReducedDecimation = 2;
 
 const char* const kUsage =
     "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR] [--left RAW.png --right "
-    "RAW.png] [--debug-image OUT.png] [--disparity-out OUT.tiff] [--decimation N] [--disparity-range N]\n";
+    "RAW.png] [--debug-image OUT.png] [--disparity-out OUT.tiff] [--decimation N] [--disparity-range N] "
+    "[--window]\n";
 
 double medianOf(std::vector<double> values) {
   std::sort(values.begin(), values.end());
@@ -92,17 +95,41 @@ cv::Mat distort(const cv::Mat& rectified, const testing::CameraCalibration& cali
 // What perception.launch does to each camera of the pair: bgr8 to grey (debayer's image_mono), then the far
 // stage's rectification (far_stereo_rectify: area-averaged by the decimation, rectified to that size).
 // Not inlined: scripts/bench_instructions.py counts this step's instructions by its name under callgrind.
+// `window`: only that part of the rectified images (the tracking window); empty: all of them.
 __attribute__((noinline)) void rectifyPair(const cv::Mat& left_raw, const cv::Mat& right_raw,
                                            const docking_perception::disparity::DecimatingRectifier& left,
                                            const docking_perception::disparity::DecimatingRectifier& right,
-                                           cv::Mat* left_rect, cv::Mat* right_rect) {
+                                           const cv::Rect& window, cv::Mat* left_rect, cv::Mat* right_rect) {
   cv::Mat left_mono = left_raw, right_mono = right_raw;
   if (left_raw.channels() == 3) {
     cv::cvtColor(left_raw, left_mono, cv::COLOR_BGR2GRAY);
     cv::cvtColor(right_raw, right_mono, cv::COLOR_BGR2GRAY);
   }
-  left.rectify(left_mono, left_rect);
-  right.rectify(right_mono, right_rect);
+  const cv::Rect area = window.area() > 0 ? window : cv::Rect(cv::Point(0, 0), left.outputSize());
+  left.rectifyWindow(left_mono, area, left_rect);
+  right.rectifyWindow(right_mono, area, right_rect);
+}
+
+// The tracking window as far_stereo_rectify places it: around the port an (untimed) pass over the whole
+// image finds, standing in for the fused estimate. Throws when the target is not found or no window fits.
+cv::Rect placeWindow(const cv::Mat& left_raw, const cv::Mat& right_raw,
+                     const docking_perception::disparity::DecimatingRectifier& left,
+                     const docking_perception::disparity::DecimatingRectifier& right, cv::StereoMatcher& matcher,
+                     const DisparityDetector& detector, const StereoGeometry& geometry,
+                     const testing::MatcherSettings& settings,
+                     const docking_perception::disparity::TrackingWindowParams& params) {
+  cv::Mat left_rect, right_rect;
+  rectifyPair(left_raw, right_raw, left, right, cv::Rect(), &left_rect, &right_rect);
+  const cv::Mat disparity = testing::computeDisparity(matcher, left_rect, right_rect);
+  const Detection whole = detector.detect(disparity, geometry, settings.min_disparity, testing::maxDisparity(settings),
+                                          testing::matcherValidRegion(settings, disparity.size()));
+  if (!whole.found) throw std::runtime_error("--window: the whole image does not find the target: " + whole.reason);
+  const cv::Matx34d projection(geometry.focal_px, 0.0, geometry.cx_px, 0.0, 0.0, geometry.focal_px, geometry.cy_px,
+                               0.0, 0.0, 0.0, 1.0, 0.0);
+  const auto window = docking_perception::disparity::trackingWindow(projection, whole.position_m, disparity.size(),
+                                                                    testing::matcherReachOf(settings), params);
+  if (!window) throw std::runtime_error("--window: no tracking window fits the port found");
+  return *window;
 }
 
 // The full-resolution matcher at another decimation: lengths scaled by the ratio, the window kept odd and
@@ -124,6 +151,7 @@ int main(int argc, char** argv) {
   int frames = 100;
   int decimation = 1;
   int disparity_range_override = 0;  // 0: the configured (scaled) range
+  bool use_window = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--frames" && i + 1 < argc) {
@@ -140,6 +168,8 @@ int main(int argc, char** argv) {
       decimation = std::atoi(argv[++i]);
     } else if (arg == "--disparity-range" && i + 1 < argc) {
       disparity_range_override = std::atoi(argv[++i]);
+    } else if (arg == "--window") {
+      use_window = true;
     } else if (arg == "--disparity-out" && i + 1 < argc) {
       disparity_path = argv[++i];  // float disparity of the last frame, px, for offline analysis
     } else if (!arg.empty() && arg[0] != '-' && output_path.empty()) {
@@ -150,7 +180,7 @@ int main(int argc, char** argv) {
     }
   }
   if (output_path.empty() || left_path.empty() != right_path.empty() || decimation < 1 ||
-      disparity_range_override % 16 != 0 || disparity_range_override < 0) {
+      disparity_range_override % 16 != 0 || disparity_range_override < 0 || (use_window && decimation != 1)) {
     std::cerr << kUsage;
     return 2;
   }
@@ -211,7 +241,21 @@ int main(int argc, char** argv) {
     geometry.cx_px /= decimation;
     geometry.cy_px /= decimation;
     const int range = (settings.disparity_range / 16) * 16;
-    const cv::Rect valid_region = testing::matcherValidRegion(settings, rectified_size);
+    cv::Rect window;  // empty: the whole image
+    if (use_window) {
+      window = placeWindow(left_raw, right_raw, left_rectifier, right_rectifier, *matcher, detector, geometry, settings,
+                           testing::loadTrackingWindow(config_dir + "/far_stereo.yaml"));
+    }
+    docking_perception::disparity::ImageWindow image_window;
+    StereoGeometry window_geometry = geometry;
+    if (use_window) {
+      image_window.offset = window.tl();
+      image_window.full_size = rectified_size;
+      window_geometry.cx_px -= window.x;
+      window_geometry.cy_px -= window.y;
+    }
+    const cv::Size matched_size = use_window ? window.size() : rectified_size;
+    const cv::Rect valid_region = testing::matcherValidRegion(settings, matched_size);
 
     // CPU time of this thread: on a shared machine, wall time measures the other users too.
     struct Clock {
@@ -229,14 +273,14 @@ int main(int argc, char** argv) {
     for (int frame = 0; frame < frames + warmup; ++frame) {
       const auto start = Clock::now();
       cv::Mat left_rect, right_rect;
-      rectifyPair(left_raw, right_raw, left_rectifier, right_rectifier, &left_rect, &right_rect);
+      rectifyPair(left_raw, right_raw, left_rectifier, right_rectifier, window, &left_rect, &right_rect);
       const double rectify_ms = ms_since(start);
       const auto disparity_start = Clock::now();
       const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
       const double disparity_ms = ms_since(disparity_start);
       const auto detection_start = Clock::now();
-      detection = detector.detect(disparity, geometry, settings.min_disparity,
-                                  testing::maxDisparity(settings), valid_region);
+      detection = detector.detect(disparity, window_geometry, settings.min_disparity,
+                                  testing::maxDisparity(settings), valid_region, {}, image_window);
       const double detection_ms = ms_since(detection_start);
       const double total_ms = ms_since(start);
       if (frame < warmup) continue;
@@ -252,7 +296,11 @@ int main(int argc, char** argv) {
     double cpu_total_ms = 0.0;
     for (double ms : samples["disparity_total"]) cpu_total_ms += ms;
     std::cout << "bench_disparity: " << (left_path.empty() ? "synthetic grey pair" : left_path)
-              << ", " << rectified_size.width << "x" << rectified_size.height << " (decimation " << decimation
+ << ", " << rectified_size.width << "x" << rectified_size.height << " (decimation " << decimation
+              << (use_window ? "; tracking window " + std::to_string(window.width) + "x" +
+                                   std::to_string(window.height) + " at (" + std::to_string(window.x) + ", " +
+                                   std::to_string(window.y) + ")"
+                             : std::string())
               << "), 1 thread, " << frames << " frames, matcher "
               << (settings.stereo_algorithm == 0 ? "StereoBM" : "StereoSGBM") << " range " << range
               << " window " << (settings.correlation_window_size | 1) << "\n";
@@ -266,7 +314,8 @@ int main(int argc, char** argv) {
          << "\", \"threads\": 1, \"stages\": {";
     bool first = true;
     // The stage while tracking (the reduced pair) is named apart: make bench runs both.
-    const std::string prefix = decimation == 1 ? ""
+    const std::string prefix = use_window ? "window_"
+                               : decimation == 1 ? ""
                                : decimation == kReducedDecimation ? "tracking_"
                                                                   : "decimation" + std::to_string(decimation) + "_";
     for (const char* stage : {"rectify", "disparity", "detection", "disparity_total"}) {
@@ -285,7 +334,7 @@ int main(int argc, char** argv) {
               << " ms CPU: the difference is other load on the machine)\n";
     if (!debug_path.empty() || !disparity_path.empty()) {
       cv::Mat left_rect, right_rect;
-      rectifyPair(left_raw, right_raw, left_rectifier, right_rectifier, &left_rect, &right_rect);
+      rectifyPair(left_raw, right_raw, left_rectifier, right_rectifier, window, &left_rect, &right_rect);
       const cv::Mat disparity = testing::computeDisparity(*matcher, left_rect, right_rect);
       if (!debug_path.empty()) {
         cv::imwrite(debug_path,

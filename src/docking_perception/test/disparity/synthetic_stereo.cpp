@@ -344,6 +344,26 @@ int loadTrackingDecimation(const std::string& path) {
   throw std::runtime_error(path + ": missing field 'tracking_decimation'");
 }
 
+TrackingWindowParams loadTrackingWindow(const std::string& path) {
+  const auto fields = readFlatYaml(path);
+  auto number = [&](const char* name) { return readNumber(fields, path, name); };
+  TrackingWindowParams params;
+  params.half_width_m = number("window_half_width_m");
+  params.half_height_m = number("window_half_height_m");
+  params.min_half_size_px = static_cast<int>(number("window_min_half_size_px"));
+  params.max_area_fraction = number("window_max_area_fraction");
+  params.max_prediction_s = number("window_max_prediction_s");
+  return params;
+}
+
+MatcherReach matcherReachOf(const MatcherSettings& settings) {
+  MatcherReach reach;
+  reach.min_disparity = settings.min_disparity;
+  reach.disparity_range = settings.disparity_range;
+  reach.correlation_window_px = settings.correlation_window_size;
+  return reach;
+}
+
 FarStagePair farStagePair(const SyntheticScene& scene, int decimation) {
   cv::Mat left_full, right_full;
   renderStereoPair(scene, &left_full, &right_full);

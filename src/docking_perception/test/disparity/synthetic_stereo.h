@@ -13,6 +13,7 @@
 #include "docking_perception/disparity/decimating_rectifier.h"
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/target_track_gate.h"
+#include "docking_perception/disparity/tracking_window.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -91,6 +92,10 @@ PinholeCalibration pinholeOf(const CameraCalibration& calibration);
 
 // The far stage's reduced resolution while tracking (config/far_stereo.yaml's `tracking_decimation`).
 int loadTrackingDecimation(const std::string& path);
+// The tracking window's settings (config/far_stereo.yaml's `window_*`), and what the matcher of `settings`
+// needs around a pixel (far_stereo_rectify reads the same from config/stereo_image_proc.yaml).
+TrackingWindowParams loadTrackingWindow(const std::string& path);
+MatcherReach matcherReachOf(const MatcherSettings& settings);
 
 // A rendered (rectified, full-resolution) pair as the far stage sees it at `decimation`: each image
 // through DecimatingRectifier (area-averaged; the scene's cameras have no distortion), and the

@@ -10,7 +10,6 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "docking_perception/disparity/decimating_rectifier.h"
 #include "docking_perception/disparity/disparity_detector.h"
@@ -23,27 +22,9 @@ namespace {
 
 const std::string kConfigDir = DISPARITY_CONFIG_DIR;
 
-// config/far_stereo.yaml's window_* keys (the launched values).
-TrackingWindowParams configuredWindow() {
-  const YAML::Node yaml = YAML::LoadFile(kConfigDir + "/far_stereo.yaml");
-  TrackingWindowParams params;
-  params.half_width_m = yaml["window_half_width_m"].as<double>();
-  params.half_height_m = yaml["window_half_height_m"].as<double>();
-  params.min_half_size_px = yaml["window_min_half_size_px"].as<int>();
-  params.max_area_fraction = yaml["window_max_area_fraction"].as<double>();
-  params.max_prediction_s = yaml["window_max_prediction_s"].as<double>();
-  return params;
-}
+TrackingWindowParams configuredWindow() { return testing::loadTrackingWindow(kConfigDir + "/far_stereo.yaml"); }
 
 testing::MatcherSettings fullMatcher() { return testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml"); }
-
-MatcherReach reachOf(const testing::MatcherSettings& settings) {
-  MatcherReach reach;
-  reach.min_disparity = settings.min_disparity;
-  reach.disparity_range = settings.disparity_range;
-  reach.correlation_window_px = settings.correlation_window_size;
-  return reach;
-}
 
 DetectorParams configuredParams() {
   DetectorParams params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
@@ -85,7 +66,7 @@ Detection detectOn(const testing::FarStagePair& pair, const std::optional<cv::Re
 }
 
 cv::Rect windowAround(const testing::FarStagePair& pair, const Eigen::Vector3d& port) {
-  const auto window = trackingWindow(projectionOf(pair.geometry), port, pair.left.size(), reachOf(fullMatcher()),
+  const auto window = trackingWindow(projectionOf(pair.geometry), port, pair.left.size(), testing::matcherReachOf(fullMatcher()),
                                      configuredWindow());
   EXPECT_TRUE(window.has_value()) << "no window for a port at " << port.transpose();
   return window.value_or(cv::Rect());
@@ -175,7 +156,7 @@ TEST(TrackingWindow, InvalidSettingsAreNamed) {
   reach.disparity_range = 90;
   reach.correlation_window_px = 14;
   EXPECT_EQ(validateMatcherReach(reach).size(), 2u);
-  EXPECT_TRUE(validateMatcherReach(reachOf(fullMatcher())).empty());
+  EXPECT_TRUE(validateMatcherReach(testing::matcherReachOf(fullMatcher())).empty());
 }
 
 TEST(TrackingWindow, RectifyingAWindowGivesTheWholeImagesPixels) {
