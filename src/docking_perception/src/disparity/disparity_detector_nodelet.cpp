@@ -438,8 +438,11 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
     detector = detector_;
     camera_infos = camera_info_by_binning_;
     window_info = windowInfoOf(recent_window_infos_, message->header.stamp, image.width, image.height);
-    windows_recently = last_window_info_arrival_s_ >= 0.0 &&
-                       ros::Time::now().toSec() - last_window_info_arrival_s_ < kWindowInfoMemoryS;
+    // A disparity of the full image's size is not a window: it may be read without a camera_info.
+    const auto& last_window = recent_window_infos_.empty() ? nullptr : recent_window_infos_.back();
+    windows_recently = last_window && last_window_info_arrival_s_ >= 0.0 &&
+                       ros::Time::now().toSec() - last_window_info_arrival_s_ < kWindowInfoMemoryS &&
+                       (image.width != last_window->width || image.height != last_window->height);
     last_input_error_.clear();
   }
   if (window_info) {
@@ -475,8 +478,9 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
                             model.fx(), message->f);
     }
   } else if (windows_recently) {
-    // The far stage is sending windows: a disparity of no known size is one whose camera_info has not
-    // arrived (or was lost). Read with the image centre it would be placed wrongly: dropped instead.
+    // The far stage is sending windows: a disparity smaller than the image, of no known size, is one whose
+    // camera_info has not arrived (or was lost). Read with the image centre it would be placed wrongly:
+    // dropped instead.
     std::ostringstream missing;
     missing << "no camera_info for the " << image.width << "x" << image.height << " disparity image at "
             << message->header.stamp << " (the far stage's tracking window's camera_info has not arrived)";

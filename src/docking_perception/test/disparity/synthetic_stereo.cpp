@@ -123,6 +123,30 @@ double readNumber(const std::map<std::string, std::string>& fields, const std::s
 
 }  // namespace
 
+FrontoParallelRect boxOnTheFloor(double x, double z, double width, double height, std::uint32_t seed) {
+  FrontoParallelRect box;
+  box.x_m = x;
+  box.z_m = z;
+  box.width_m = width;
+  box.height_m = height;
+  box.y_m = 0.25 - height / 2.0;
+  box.texture_cell_m = 0.04;
+  box.texture_seed = seed;
+  return box;
+}
+
+PinholeCalibration distortedWebcam() {
+  PinholeCalibration c;
+  c.size = cv::Size(640, 480);
+  c.camera_matrix = cv::Matx33d(560.0, 0.0, 322.0, 0.0, 558.0, 236.0, 0.0, 0.0, 1.0);
+  c.distortion = {-0.12, 0.05, 0.001, -0.0005, 0.0};
+  cv::Mat rotation;
+  cv::Rodrigues(cv::Vec3d(0.004, -0.01, 0.002), rotation);
+  c.rectification = cv::Matx33d(rotation);
+  c.projection = cv::Matx34d(550.0, 0.0, 318.0, 0.0, 0.0, 550.0, 241.0, 0.0, 0.0, 0.0, 1.0, 0.0);
+  return c;
+}
+
 void renderStereoPair(const SyntheticScene& scene, cv::Mat* left, cv::Mat* right) {
   std::mt19937 rng(scene.noise_seed);
   *left = renderView(scene, 0.0, &rng);

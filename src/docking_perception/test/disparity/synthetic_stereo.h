@@ -39,6 +39,13 @@ struct SyntheticScene {
   std::uint32_t noise_seed = 7;
 };
 
+// A textured box standing on the test bed's floor (0.25 m below the cameras), fronto-parallel, its centre
+// `x` m to the side at depth `z`.
+FrontoParallelRect boxOnTheFloor(double x, double z, double width, double height, std::uint32_t seed);
+
+// A webcam-like camera: 640x480, barrel distortion, a small rectifying rotation (for the rectifier's tests).
+PinholeCalibration distortedWebcam();
+
 // Renders the rectified left and right images (CV_8UC1, 2x2 supersampled). The right camera sits
 // baseline_m along +x, so a point at depth Z appears f B / Z pixels further left in the right image.
 void renderStereoPair(const SyntheticScene& scene, cv::Mat* left, cv::Mat* right);

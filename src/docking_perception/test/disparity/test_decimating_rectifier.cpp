@@ -10,23 +10,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "docking_perception/disparity/decimating_rectifier.h"
+#include "synthetic_stereo.h"
 
 namespace docking_perception {
 namespace disparity {
 namespace {
-
-// A webcam-like camera: 640x480, barrel distortion, a small rectifying rotation.
-PinholeCalibration distortedCamera() {
-  PinholeCalibration c;
-  c.size = cv::Size(640, 480);
-  c.camera_matrix = cv::Matx33d(560.0, 0.0, 322.0, 0.0, 558.0, 236.0, 0.0, 0.0, 1.0);
-  c.distortion = {-0.12, 0.05, 0.001, -0.0005, 0.0};
-  cv::Mat rotation;
-  cv::Rodrigues(cv::Vec3d(0.004, -0.01, 0.002), rotation);
-  c.rectification = cv::Matx33d(rotation);
-  c.projection = cv::Matx34d(550.0, 0.0, 318.0, 0.0, 0.0, 550.0, 241.0, 0.0, 0.0, 0.0, 1.0, 0.0);
-  return c;
-}
 
 // The raw image of small bright discs whose rays are `rays` (rectified frame), on a dark background.
 cv::Mat rawImageOfDiscs(const PinholeCalibration& c, const std::vector<cv::Point3d>& rays) {
@@ -68,7 +56,7 @@ cv::Point2d centroidNear(const cv::Mat& image, cv::Point2d guess, int radius) {
 }
 
 TEST(DecimatingRectifier, PutsEachRayWhereTheReducedProjectionSays) {
-  const PinholeCalibration camera = distortedCamera();
+  const PinholeCalibration camera = testing::distortedWebcam();
   const std::vector<cv::Point3d> rays = {{0.0, 0.0, 1.0}, {-0.4, -0.3, 1.0}, {0.45, 0.28, 1.0}, {0.3, -0.32, 1.0}};
   const cv::Mat raw = rawImageOfDiscs(camera, rays);
   for (int factor : {1, 2}) {
@@ -111,7 +99,7 @@ TEST(DecimatingRectifier, AveragesInsteadOfSampling) {
 }
 
 TEST(DecimatingRectifier, RefusesWhatItCannotRectify) {
-  PinholeCalibration camera = distortedCamera();
+  PinholeCalibration camera = testing::distortedWebcam();
   EXPECT_TRUE(validateDecimation(camera, 2).empty());
   EXPECT_FALSE(validateDecimation(camera, 0).empty());
   EXPECT_FALSE(validateDecimation(camera, 5).empty());

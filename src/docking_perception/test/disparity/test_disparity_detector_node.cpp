@@ -1,5 +1,6 @@
 // rostest: the disparity_detector node end to end on synthetic stereo_msgs/DisparityImage messages.
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <string>
 
@@ -49,6 +50,20 @@ stereo_msgs::DisparityImage makeDisparity(double x, double y, double z, const ro
   return message;
 }
 
+// The part `window` of a disparity image (the far stage's tracking window).
+stereo_msgs::DisparityImage cropDisparity(const stereo_msgs::DisparityImage& whole, int x, int y, int width, int height) {
+  stereo_msgs::DisparityImage cut = whole;
+  cut.image.width = static_cast<std::uint32_t>(width);
+  cut.image.height = static_cast<std::uint32_t>(height);
+  cut.image.step = cut.image.width * sizeof(float);
+  cut.image.data.assign(cut.image.step * cut.image.height, 0);
+  for (int v = 0; v < height; ++v) {
+    std::memcpy(&cut.image.data[v * cut.image.step], &whole.image.data[(v + y) * whole.image.step + x * sizeof(float)],
+                cut.image.step);
+  }
+  return cut;
+}
+
 sensor_msgs::CameraInfo makeCameraInfo() {
   sensor_msgs::CameraInfo info;
   info.header.frame_id = docking_msgs::frames::kStereoLeftOptical;
@@ -89,9 +104,14 @@ class DisparityDetectorNode : public ::testing::Test {
   }
 
   // Publishes `message` (re-sending while unanswered) and returns the estimate with its stamp.
-  bool exchange(stereo_msgs::DisparityImage message, docking_msgs::TargetEstimate* estimate) {
+  bool exchange(const stereo_msgs::DisparityImage& message, docking_msgs::TargetEstimate* estimate) {
     static int sequence = 0;
-    message.header.stamp = ros::Time(1000 + ++sequence, 0);
+    return exchangeAt(message, ros::Time(1000 + ++sequence, 0), estimate);
+  }
+
+  // The same with the stamp given (for a camera_info sent with it).
+  bool exchangeAt(stereo_msgs::DisparityImage message, const ros::Time& stamp, docking_msgs::TargetEstimate* estimate) {
+    message.header.stamp = stamp;
     message.image.header.stamp = message.header.stamp;
     for (int attempt = 0; attempt < 10; ++attempt) {
       disparity_publisher_.publish(message);
@@ -171,6 +191,36 @@ TEST_F(DisparityDetectorNode, BadImagesAreReportedAndTheNodeKeepsWorking) {
       << "the node stopped answering after bad input";
   EXPECT_TRUE(estimate.valid) << estimate.status;
   EXPECT_NEAR(estimate.pose.pose.position.z, 4.0, 0.02);
+}
+
+// Issue 15: a window of the far pair (far_stereo_rectify's tracking window) is read with the camera_info of
+// its stamp, whose region of interest says where it lies; one whose camera_info never came is dropped with
+// that reason, not read with the window's centre as the principal point (0.11 m off here).
+TEST_F(DisparityDetectorNode, AWindowIsReadWithItsOwnCameraInfoAndDroppedWithoutIt) {
+  ros::Publisher window_info =
+      nh_.advertise<sensor_msgs::CameraInfo>(docking_msgs::topics::kStereoFarFullLeftCameraInfo, 5);
+  ASSERT_TRUE(waitFor([&] { return window_info.getNumSubscribers() > 0; }, 30.0));
+  const stereo_msgs::DisparityImage cut = cropDisparity(makeDisparity(0.2, -0.05, 3.0, ros::Time()), 150, 120, 300, 240);
+  const ros::Time stamp(5000, 0);
+  sensor_msgs::CameraInfo info = makeCameraInfo();
+  info.header.stamp = stamp;
+  info.roi.x_offset = 150;
+  info.roi.y_offset = 120;
+  info.roi.width = 300;
+  info.roi.height = 240;
+  window_info.publish(info);
+  waitFor([] { return false; }, 0.3);  // let it arrive first, as far_stereo_rectify's does
+
+  docking_msgs::TargetEstimate estimate;
+  ASSERT_TRUE(exchangeAt(cut, stamp, &estimate));
+  EXPECT_TRUE(estimate.valid) << estimate.status;
+  EXPECT_NEAR(estimate.pose.pose.position.x, 0.2, 0.01);
+  EXPECT_NEAR(estimate.pose.pose.position.y, -0.05, 0.01);
+  EXPECT_NEAR(estimate.pose.pose.position.z, 3.0, 0.01);
+
+  ASSERT_TRUE(exchangeAt(cut, ros::Time(5001, 0), &estimate));
+  EXPECT_FALSE(estimate.valid) << "read at " << estimate.pose.pose.position.x;
+  EXPECT_NE(estimate.status.find("no camera_info"), std::string::npos) << estimate.status;
 }
 
 TEST_F(DisparityDetectorNode, DebugImageShowsTheDetection) {

@@ -23,20 +23,6 @@ struct PipelineResult {
   double stereo_limit_m = 0.0;  // Z^2 * 0.25 px / (f B): the yardstick
 };
 
-// A box standing on the test bed's floor (0.25 m below the cameras), fronto-parallel.
-testing::FrontoParallelRect boxOnTheFloor(double x, double z, double width, double height,
-                                          std::uint32_t seed) {
-  testing::FrontoParallelRect box;
-  box.x_m = x;
-  box.z_m = z;
-  box.width_m = width;
-  box.height_m = height;
-  box.y_m = 0.25 - height / 2.0;
-  box.texture_cell_m = 0.04;
-  box.texture_seed = seed;
-  return box;
-}
-
 int trackingDecimation() { return testing::loadTrackingDecimation(kConfigDir + "/far_stereo.yaml"); }
 // The reduced pair config/stereo_image_proc_tracking.yaml is set for (far_stereo.yaml tracking_decimation 2,
 // off by default): tested whether or not it is switched on.
@@ -119,7 +105,7 @@ struct DistractorCase {
 
 void expectTheTargetNotTheBox(const DistractorCase& c, int decimation) {
   testing::SyntheticScene scene = testing::targetScene(c.target_x, 0.0, c.target_z, 12.0);
-  scene.rects.push_back(boxOnTheFloor(c.box_x, c.box_z, c.box_width, c.box_height, 31));
+  scene.rects.push_back(testing::boxOnTheFloor(c.box_x, c.box_z, c.box_width, c.box_height, 31));
   const Detection d = detectInScene(scene, configuredParams(), decimation);
   ASSERT_TRUE(d.found) << d.reason;
   EXPECT_NEAR(d.position_m.x(), c.target_x, 0.05 + 0.01 * c.target_z);
@@ -164,8 +150,8 @@ INSTANTIATE_TEST_SUITE_P(
 // (max_centre_offset_y_m 0, as before) it is.
 TEST(FarRangePipeline, APatchHighBehindTheTargetMergedWithABoxIsNotReported) {
   testing::SyntheticScene scene = testing::targetScene(0.0, 0.0, 6.0, 12.0);
-  scene.rects.insert(scene.rects.begin(), boxOnTheFloor(0.65, 6.2, 0.40, 1.0, 37));
-  testing::FrontoParallelRect patch = boxOnTheFloor(3.4, 6.8, 0.45, 0.35, 41);
+  scene.rects.insert(scene.rects.begin(), testing::boxOnTheFloor(0.65, 6.2, 0.40, 1.0, 37));
+  testing::FrontoParallelRect patch = testing::boxOnTheFloor(3.4, 6.8, 0.45, 0.35, 41);
   patch.y_m = -0.85;
   scene.rects.insert(scene.rects.begin(), patch);
   DetectorParams before = configuredParams();
@@ -189,8 +175,8 @@ TEST(FarRangePipeline, APatchHighBehindTheTargetMergedWithABoxIsNotReported) {
 // config/disparity_detector.yaml it is split out and reported at the port.
 TEST(FarRangePipeline, TheTargetMergedWithBoxesAroundItIsSplitOut) {
   testing::SyntheticScene scene = testing::targetScene(0.0, 0.0, 4.0, 12.0);
-  scene.rects.insert(scene.rects.begin(), boxOnTheFloor(-0.25, 4.4, 0.8, 1.2, 43));
-  scene.rects.insert(scene.rects.begin(), boxOnTheFloor(-0.8, 3.9, 0.4, 1.0, 47));
+  scene.rects.insert(scene.rects.begin(), testing::boxOnTheFloor(-0.25, 4.4, 0.8, 1.2, 43));
+  scene.rects.insert(scene.rects.begin(), testing::boxOnTheFloor(-0.8, 3.9, 0.4, 1.0, 47));
   DetectorParams before = configuredParams();
   before.split_depth_step_m = 0.0;
   const Detection merged = detectInScene(scene, before);

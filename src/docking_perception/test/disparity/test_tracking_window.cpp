@@ -72,19 +72,6 @@ cv::Rect windowAround(const testing::FarStagePair& pair, const Eigen::Vector3d& 
   return window.value_or(cv::Rect());
 }
 
-// A box standing on the test bed's floor (0.25 m below the cameras), fronto-parallel.
-testing::FrontoParallelRect boxOnTheFloor(double x, double z, double width, double height, std::uint32_t seed) {
-  testing::FrontoParallelRect box;
-  box.x_m = x;
-  box.z_m = z;
-  box.width_m = width;
-  box.height_m = height;
-  box.y_m = 0.25 - height / 2.0;
-  box.texture_cell_m = 0.04;
-  box.texture_seed = seed;
-  return box;
-}
-
 TEST(TrackingWindow, SpansTheMockupAndTheMatchersReach) {
   const cv::Matx34d p(550.0, 0.0, 319.5, 0.0, 0.0, 550.0, 239.5, 0.0, 0.0, 0.0, 1.0, 0.0);
   const MatcherReach reach;  // 96 disparities, 15 px window
@@ -160,14 +147,7 @@ TEST(TrackingWindow, InvalidSettingsAreNamed) {
 }
 
 TEST(TrackingWindow, RectifyingAWindowGivesTheWholeImagesPixels) {
-  PinholeCalibration c;
-  c.size = cv::Size(640, 480);
-  c.camera_matrix = cv::Matx33d(560.0, 0.0, 322.0, 0.0, 558.0, 236.0, 0.0, 0.0, 1.0);
-  c.distortion = {-0.12, 0.05, 0.001, -0.0005, 0.0};
-  cv::Mat rotation;
-  cv::Rodrigues(cv::Vec3d(0.004, -0.01, 0.002), rotation);
-  c.rectification = cv::Matx33d(rotation);
-  c.projection = cv::Matx34d(550.0, 0.0, 318.0, 0.0, 0.0, 550.0, 241.0, 0.0, 0.0, 0.0, 1.0, 0.0);
+  const PinholeCalibration c = testing::distortedWebcam();
   cv::Mat raw(c.size, CV_8UC1);
   cv::randu(raw, 0, 256);
   const DecimatingRectifier rectifier(c, 1);
@@ -210,7 +190,7 @@ INSTANTIATE_TEST_SUITE_P(Ranges, WindowPipeline,
 // matcher's own border leaves it a target-sized piece clear of the edge): what the ImageWindow prevents.
 TEST(WindowPipeline, ABoxCrossingTheWindowsEdgeIsLookedBehind) {
   testing::SyntheticScene scene = testing::targetScene(0.0, 0.0, 4.0, 12.0);
-  scene.rects.insert(scene.rects.begin(), boxOnTheFloor(0.75, 3.4, 0.5, 0.3, 53));
+  scene.rects.insert(scene.rects.begin(), testing::boxOnTheFloor(0.75, 3.4, 0.5, 0.3, 53));
   const testing::FarStagePair pair = testing::farStagePair(scene, 1);
   const cv::Rect window = windowAround(pair, Eigen::Vector3d(0.0, 0.0, 4.0));
   const Detection untold = detectOn(pair, window, /*tell_detector_it_is_a_window=*/false);
