@@ -184,7 +184,7 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
   std::uint64_t dropped_at_last_report_{0};  // WARN only while pairs are being dropped, OK once they pass
   std::string last_problem_;
   FusedPort fused_port_;
-  std::string last_window_;  // for diagnostics
+  std::optional<cv::Rect> last_window_;  // for diagnostics
 };
 
 void FarStereoRectifyNodelet::readParameters() {
@@ -409,9 +409,7 @@ void FarStereoRectifyNodelet::onPair(const sensor_msgs::ImageConstPtr& left,
   ++way->pairs;
   if (window) {
     ++way->windowed_pairs;
-    std::ostringstream text;
-    text << window->width << "x" << window->height << " at (" << window->x << ", " << window->y << ")";
-    last_window_ = text.str();
+    last_window_ = window;
   }
 }
 
@@ -436,7 +434,12 @@ void FarStereoRectifyNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapp
   status.add("pairs dropped", dropped_);
   status.add("tracking window", window_enabled_ ? "enabled" : "disabled");
   status.add("pairs in a tracking window", full_.windowed_pairs);
-  status.add("last tracking window", last_window_.empty() ? "(none)" : last_window_);
+  std::ostringstream window;
+  if (last_window_) {
+    window << last_window_->width << "x" << last_window_->height << " at (" << last_window_->x << ", "
+           << last_window_->y << ")";
+  }
+  status.add("last tracking window", last_window_ ? window.str() : std::string("(none)"));
   status.add("last drop reason", last_problem_.empty() ? "(none)" : last_problem_);
   status.add("subscribed", subscribed_);
 }
