@@ -124,9 +124,8 @@ cv::Rect placeWindow(const cv::Mat& left_raw, const cv::Mat& right_raw,
   const Detection whole = detector.detect(disparity, geometry, settings.min_disparity, testing::maxDisparity(settings),
                                           testing::matcherValidRegion(settings, disparity.size()));
   if (!whole.found) throw std::runtime_error("--window: the whole image does not find the target: " + whole.reason);
-  const cv::Matx34d projection(geometry.focal_px, 0.0, geometry.cx_px, 0.0, 0.0, geometry.focal_px, geometry.cy_px,
-                               0.0, 0.0, 0.0, 1.0, 0.0);
-  const auto window = docking_perception::disparity::trackingWindow(projection, whole.position_m, disparity.size(),
+  const auto window = docking_perception::disparity::trackingWindow(testing::projectionOf(geometry), whole.position_m,
+                                                                    disparity.size(),
                                                                     testing::matcherReachOf(settings), params);
   if (!window) throw std::runtime_error("--window: no tracking window fits the port found");
   return *window;

@@ -438,18 +438,15 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
     detector = detector_;
     camera_infos = camera_info_by_binning_;
     window_info = windowInfoOf(recent_window_infos_, message->header.stamp, image.width, image.height);
+    if (window_info) ++window_frames_;
     // A disparity of the full image's size is not a window: it may be read without a camera_info.
     const auto& last_window = recent_window_infos_.empty() ? nullptr : recent_window_infos_.back();
-    windows_recently = last_window && last_window_info_arrival_s_ >= 0.0 &&
+    windows_recently = last_window &&
                        ros::Time::now().toSec() - last_window_info_arrival_s_ < kWindowInfoMemoryS &&
                        (image.width != last_window->width || image.height != last_window->height);
     last_input_error_.clear();
   }
-  if (window_info) {
-    camera_infos = {{1, window_info}};
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    ++window_frames_;
-  }
+  if (window_info) camera_infos = {{1, window_info}};
 
   // --- Rectified model: f and B from the message; the principal point and the decimation from the far
   // stage's left camera_info (image_geometry's reduced camera: binning = decimation), else the image centre

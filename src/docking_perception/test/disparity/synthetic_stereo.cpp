@@ -346,6 +346,10 @@ StereoGeometry geometryOf(const SyntheticScene& scene) {
   return geometry;
 }
 
+cv::Matx34d projectionOf(const StereoGeometry& g) {
+  return cv::Matx34d(g.focal_px, 0.0, g.cx_px, 0.0, 0.0, g.focal_px, g.cy_px, 0.0, 0.0, 0.0, 1.0, 0.0);
+}
+
 PinholeCalibration pinholeOf(const CameraCalibration& calibration) {
   PinholeCalibration out;
   out.size = calibration.size;

@@ -121,6 +121,9 @@ SyntheticScene targetScene(double x_m, double y_m, double z_m, double wall_z_m);
 // The rectified stereo geometry the scene was rendered with.
 StereoGeometry geometryOf(const SyntheticScene& scene);
 
+// The left rectified camera's projection P of a geometry (what far_stereo_rectify places windows with).
+cv::Matx34d projectionOf(const StereoGeometry& geometry);
+
 }  // namespace testing
 }  // namespace disparity
 }  // namespace docking_perception

@@ -32,10 +32,6 @@ DetectorParams configuredParams() {
   return params;
 }
 
-cv::Matx34d projectionOf(const StereoGeometry& g) {
-  return cv::Matx34d(g.focal_px, 0.0, g.cx_px, 0.0, 0.0, g.focal_px, g.cy_px, 0.0, 0.0, 0.0, 1.0, 0.0);
-}
-
 // The region the detector nodelet searches: the matcher's blind left band and stereo_image_proc's valid
 // window (half the correlation window off the other three sides), as the DisparityImage states it.
 cv::Rect nodeletRegion(const testing::MatcherSettings& settings, cv::Size size) {
@@ -66,7 +62,7 @@ Detection detectOn(const testing::FarStagePair& pair, const std::optional<cv::Re
 }
 
 cv::Rect windowAround(const testing::FarStagePair& pair, const Eigen::Vector3d& port) {
-  const auto window = trackingWindow(projectionOf(pair.geometry), port, pair.left.size(), testing::matcherReachOf(fullMatcher()),
+  const auto window = trackingWindow(testing::projectionOf(pair.geometry), port, pair.left.size(), testing::matcherReachOf(fullMatcher()),
                                      configuredWindow());
   EXPECT_TRUE(window.has_value()) << "no window for a port at " << port.transpose();
   return window.value_or(cv::Rect());

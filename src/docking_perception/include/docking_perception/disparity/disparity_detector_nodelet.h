@@ -108,7 +108,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   static constexpr std::size_t kRecentWindowInfos = 8;
   static constexpr double kWindowInfoMemoryS = 2.0;  // windows seen this recently: unmatched ones are dropped
   std::deque<sensor_msgs::CameraInfoConstPtr> recent_window_infos_;
-  double last_window_info_arrival_s_ = -1.0;
+  double last_window_info_arrival_s_ = 0.0;  // of the last of recent_window_infos_
   unsigned long window_frames_ = 0;
   bool warned_no_camera_info_ = false;
   std::deque<bool> recent_found_;  // detection outcome of the last diagnostic_window_frames frames
