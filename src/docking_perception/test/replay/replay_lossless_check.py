@@ -155,7 +155,8 @@ class ReplayLossless(unittest.TestCase):
             self.assertGreaterEqual(len(first.get(topic, {})), frames - max_lost,
                                     "%s: %d estimates for %d frames" % (topic, len(first.get(topic, {})), frames))
         for topic in ESTIMATE_TOPICS[:3]:  # the estimators; the arbiter fuses in arrival order (reported)
-            self.assertEqual(first.get(topic), second.get(topic), "%s differs between two lossless replays" % topic)
+            self.assertEqual(first.get(topic), second.get(topic), "%s differs between two lossless replays: %s" % (
+                topic, first_difference(first.get(topic, {}), second.get(topic, {}))))
         fused = [s for s in set(first.get(ESTIMATE_TOPICS[3], {})) & set(second.get(ESTIMATE_TOPICS[3], {}))
                  if first[ESTIMATE_TOPICS[3]][s] != second[ESTIMATE_TOPICS[3]][s]]
 
@@ -193,6 +194,18 @@ class ReplayLossless(unittest.TestCase):
                   medians["raw"], raw_vs_compressed(runs["raw"], first), valid_first, valid_second,
                   len(fused_second), len(fused)),
               flush=True)
+
+
+def first_difference(a, b):
+    """Where two replays' estimates of one topic part: stamps only one has, and the first differing one."""
+    only_a, only_b = sorted(set(a) - set(b)), sorted(set(b) - set(a))
+    differing = sorted(s for s in set(a) & set(b) if a[s] != b[s])
+    text = "%d stamps only in the first (first %s), %d only in the second (first %s), %d differing" % (
+        len(only_a), only_a[:1], len(only_b), only_b[:1], len(differing))
+    if differing:
+        s = differing[0]
+        text += ", first at %d of %d stamps (stamp %d): %s vs %s" % (sorted(a).index(s), len(a), s, a[s], b[s])
+    return text
 
 
 def raw_vs_compressed(raw, compressed):
