@@ -40,6 +40,8 @@ DISPARITY_STAGE_FUNCTIONS = {
     "rectify": "*rectifyPair*",
     "disparity": "docking_perception::disparity::testing::computeDisparity*",
     "detection": "docking_perception::disparity::DisparityDetector::detect*",
+    # The face print looked for where the blob puts the port (face_appearance.h): part of the detection.
+    "appearance": "docking_perception::disparity::confirmByAppearance*",
 }
 MONO_FUNCTION = "docking_perception::mono::MonoPoseEstimator::process*"
 APRILTAG_FUNCTION = "docking_perception::mono::TagDetector::detect*"

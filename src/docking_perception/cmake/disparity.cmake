@@ -4,6 +4,7 @@
 # ROS-free core: the paper's detector made robust (no ros:: here; gtests need no roscore).
 add_library(docking_perception_disparity_core
   src/disparity/decimating_rectifier.cpp
+  src/disparity/face_appearance.cpp
   src/disparity/footprint_fit.cpp
   src/disparity/disparity_detector.cpp
   src/disparity/target_track_gate.cpp
@@ -29,7 +30,8 @@ add_library(docking_perception_disparity_nodelet
 )
 add_dependencies(docking_perception_disparity_nodelet ${PROJECT_NAME}_gencfg ${catkin_EXPORTED_TARGETS})
 target_link_libraries(docking_perception_disparity_nodelet
-  docking_perception_disparity_core docking_perception_duty_core ${catkin_LIBRARIES} ${OpenCV_LIBRARIES})
+  docking_perception_disparity_core docking_perception_duty_core docking_perception_mono_core ${catkin_LIBRARIES}
+  ${OpenCV_LIBRARIES})
 
 # Standalone node: loads the nodelet in-process (pluginlib finds it through nodelet_plugins.xml).
 add_executable(disparity_detector src/disparity/disparity_detector_node.cpp)
@@ -44,7 +46,8 @@ install(TARGETS docking_perception_disparity_nodelet disparity_detector
 # Benchmark (a program that prints figures, never a test): rectify + disparity + detection.
 add_executable(bench_disparity src/disparity/bench_disparity.cpp)
 target_link_libraries(bench_disparity
-  docking_perception_disparity_core docking_perception_disparity_synthetic ${OpenCV_LIBRARIES})
+  docking_perception_disparity_core docking_perception_disparity_synthetic docking_perception_mono_core
+  ${OpenCV_LIBRARIES})
 target_include_directories(bench_disparity PRIVATE test/disparity)
 target_compile_definitions(bench_disparity PRIVATE
   DISPARITY_CONFIG_DIR="${DISPARITY_CONFIG_DIR}")
@@ -57,9 +60,9 @@ install(DIRECTORY include/${PROJECT_NAME}/disparity/
   DESTINATION ${CATKIN_PACKAGE_INCLUDE_DESTINATION}/disparity)
 
 if(CATKIN_ENABLE_TESTING)
-  # The detector on synthetic disparity images with known answers.
+  # The detector on synthetic disparity images with known answers; the appearance check on drawn faces.
   catkin_add_gtest(test_disparity_detector test/disparity/test_disparity_detector.cpp
-    test/disparity/test_target_confirmation.cpp)
+    test/disparity/test_target_confirmation.cpp test/disparity/test_face_appearance.cpp)
   if(TARGET test_disparity_detector)
     target_link_libraries(test_disparity_detector docking_perception_disparity_core gtest_main)
     target_compile_definitions(test_disparity_detector PRIVATE
@@ -98,6 +101,9 @@ if(CATKIN_ENABLE_TESTING)
   add_rostest(test/disparity/disparity_keepalive.test
     DEPENDENCIES perception_host arbiter docking_perception_image_guard_nodelet)
 
+  # Issue 11: a box of the mockup's size and shape, the target out of view: refused by its appearance (~1 min).
+  add_rostest(test/disparity/disparity_decoy.test
+    DEPENDENCIES perception_host arbiter docking_perception_disparity_nodelet)
   # Against the simulator's truth at 3 m (needs docking_sim, omni_base and the camera frames node).
   add_rostest_gtest(test_disparity_sim test/disparity/disparity_sim_still_3m.test
     test/disparity/test_disparity_sim.cpp)

@@ -46,6 +46,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/disparity/face_appearance.h"
+#include "docking_perception/mono/target_model.h"
 #include "synthetic_stereo.h"
 
 namespace {
@@ -235,6 +237,11 @@ int main(int argc, char** argv) {
     const cv::Size rectified_size = left_rectifier.outputSize();
     auto matcher = testing::createMatcher(settings);
     const DisparityDetector detector(params);
+    // The appearance check the node runs on a found blob (face_appearance.h), part of the detection's cost.
+    const auto target_model = docking_perception::mono::TargetModel::loadFromYaml(config_dir + "/target.yaml");
+    const docking_perception::disparity::FaceAppearanceCheck appearance_check(
+        target_model.textureGray(), target_model.faceWidth(), target_model.faceHeight());
+    docking_perception::disparity::AppearanceResult appearance;
     StereoGeometry geometry = testing::geometryOf(scene);
     geometry.focal_px /= decimation;  // image_geometry's reduced camera for binning = decimation
     geometry.cx_px /= decimation;
@@ -280,6 +287,10 @@ int main(int argc, char** argv) {
       const auto detection_start = Clock::now();
       detection = detector.detect(disparity, window_geometry, settings.min_disparity,
                                   testing::maxDisparity(settings), valid_region, {}, image_window);
+      if (params.appearance_check_enabled) {
+        appearance = docking_perception::disparity::confirmByAppearance(appearance_check, left_rect, window_geometry,
+                                                                        params.appearance, &detection);
+      }
       const double detection_ms = ms_since(detection_start);
       const double total_ms = ms_since(start);
       if (frame < warmup) continue;
@@ -353,7 +364,9 @@ int main(int argc, char** argv) {
                 << detection.shape.depth_extent_m << " m; footprint "
                 << (detection.footprint_fitted ? "fitted" : "not fitted") << ", yaw "
                 << detection.footprint_yaw_rad * 180.0 / 3.14159265358979 << " deg, on outline "
-                << detection.footprint_inlier_fraction << "; outcome "
+                << detection.footprint_inlier_fraction << "; appearance "
+                << docking_perception::disparity::appearanceVerdictName(appearance.verdict) << " score "
+                << appearance.score << "; outcome "
                 << docking_perception::disparity::outcomeName(detection.outcome) << "\n";
       std::cout << "  wrote " << output_path << "\n";
       return 0;

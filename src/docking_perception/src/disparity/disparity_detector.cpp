@@ -530,6 +530,21 @@ std::vector<std::string> validateParams(const DetectorParams& p) {
             "must be in [0, " + formatNumber(mockup_fill) + "] (the mockup's own lowest fill)",
             p.min_fill_fraction);
   }
+  const FaceAppearanceParams& a = p.appearance;
+  require(std::isfinite(a.min_score) && a.min_score >= -1.0 && a.min_score <= 1.0, "appearance_min_score",
+          "must be in [-1, 1]", a.min_score);
+  require(std::isfinite(a.search_radius_m) && a.search_radius_m >= 0.0 && a.search_radius_m <= 1.0,
+          "appearance_search_radius_m", "must be in [0, 1]", a.search_radius_m);
+  require(std::isfinite(a.max_working_width_px) && a.max_working_width_px >= 16.0 &&
+              a.max_working_width_px <= kMaxAppearanceWorkingWidthPx,
+          "appearance_max_working_width_px", "must be in [16, 48]", a.max_working_width_px);
+  require(a.saturated_level_dn >= 1 && a.saturated_level_dn <= 255, "appearance_saturated_level_dn",
+          "must be in [1, 255]", a.saturated_level_dn);
+  require(std::isfinite(a.max_saturated_fraction) && a.max_saturated_fraction >= 0.0 &&
+              a.max_saturated_fraction <= 1.0,
+          "appearance_max_saturated_fraction", "must be in [0, 1]", a.max_saturated_fraction);
+  require(std::isfinite(a.min_mean_dn) && a.min_mean_dn >= 0.0 && a.min_mean_dn <= 255.0, "appearance_min_mean_dn",
+          "must be in [0, 255]", a.min_mean_dn);
   return errors;
 }
 
@@ -560,6 +575,7 @@ const char* outcomeName(Outcome outcome) {
     case Outcome::kNotTargetShaped: return "not_target_shaped";
     case Outcome::kOffTrack: return "off_track";
     case Outcome::kFootprintMisfit: return "footprint_misfit";
+    case Outcome::kAppearanceMismatch: return "appearance_mismatch";
   }
   return "unknown";
 }

@@ -16,6 +16,7 @@
 #include <sensor_msgs/image_encodings.h>
 
 #include "docking_perception/disparity/decimating_rectifier.h"
+#include "docking_perception/mono/target_model.h"
 
 namespace docking_perception {
 namespace {
@@ -36,6 +37,17 @@ sensor_msgs::CameraInfoConstPtr windowInfoOf(const std::deque<sensor_msgs::Camer
     if ((*it)->header.stamp == stamp && (*it)->roi.width == width && (*it)->roi.height == height) return *it;
   }
   return nullptr;
+}
+
+// The message's reject code of a detector outcome: what a consumer may act on without reading the status.
+std::uint8_t rejectReasonOf(disparity::Outcome outcome) {
+  using Estimate = docking_msgs::TargetEstimate;
+  switch (outcome) {
+    case disparity::Outcome::kFound: return Estimate::REJECT_NONE;
+    case disparity::Outcome::kBadInput: return Estimate::REJECT_BAD_INPUT;
+    case disparity::Outcome::kAppearanceMismatch: return Estimate::REJECT_APPEARANCE;
+    default: return Estimate::REJECT_NOT_FOUND;  // no blob, or none the mockup's size, shape or track
+  }
 }
 
 // Variance of the components a disparity estimate does not measure (TargetEstimate.msg: >= 1e6).
@@ -210,6 +222,14 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("footprint_fit_enabled", &Config::footprint_fit_enabled);
   read("footprint_inlier_distance_m", &Config::footprint_inlier_distance_m);
   read("footprint_min_inlier_fraction", &Config::footprint_min_inlier_fraction);
+  read("appearance_check_enabled", &Config::appearance_check_enabled);
+  read("appearance_min_score", &Config::appearance_min_score);
+  read("appearance_search_radius_m", &Config::appearance_search_radius_m);
+  read("appearance_max_working_width_px", &Config::appearance_max_working_width_px);
+  read("appearance_saturated_level_dn", &Config::appearance_saturated_level_dn);
+  read("appearance_max_saturated_fraction", &Config::appearance_max_saturated_fraction);
+  read("appearance_min_mean_dn", &Config::appearance_min_mean_dn);
+  read("appearance_refine_port", &Config::appearance_refine_port);
   read("track_gate_enabled", &Config::track_gate_enabled);
   read("track_max_speed_mps", &Config::track_max_speed_mps);
   read("track_min_gate_m", &Config::track_min_gate_m);
@@ -229,6 +249,10 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   } else {
     try {
       target_shape_ = disparity::loadTargetShape(target_yaml);
+      // The face print for the appearance check: the texture mono_pose matches and the simulator prints.
+      const mono::TargetModel model = mono::TargetModel::loadFromYaml(target_yaml);
+      appearance_check_ = std::make_unique<disparity::FaceAppearanceCheck>(model.textureGray(), model.faceWidth(),
+                                                                          model.faceHeight());
     } catch (const std::exception& error) {
       errors.push_back(std::string("parameter ") + ns + "/target_yaml: " + error.what());
     }
@@ -302,6 +326,14 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.footprint_fit_enabled = c.footprint_fit_enabled;
   p.footprint_inlier_distance_m = c.footprint_inlier_distance_m;
   p.footprint_min_inlier_fraction = c.footprint_min_inlier_fraction;
+  p.appearance_check_enabled = c.appearance_check_enabled;
+  p.appearance.min_score = c.appearance_min_score;
+  p.appearance.search_radius_m = c.appearance_search_radius_m;
+  p.appearance.max_working_width_px = c.appearance_max_working_width_px;
+  p.appearance.saturated_level_dn = c.appearance_saturated_level_dn;
+  p.appearance.max_saturated_fraction = c.appearance_max_saturated_fraction;
+  p.appearance.min_mean_dn = c.appearance_min_mean_dn;
+  p.appearance.refine_port = c.appearance_refine_port;
   p.target_shape = target_shape_;
   return p;
 }
@@ -343,14 +375,22 @@ void DisparityDetectorNodelet::updateSubscriptions() {
                                             &DisparityDetectorNodelet::onCameraInfo, this);
     camera_info_tracking_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarTrackingLeftCameraInfo, 1,
                                                      &DisparityDetectorNodelet::onCameraInfo, this);
+    left_image_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarFullLeftImageRect, 1,
+                                           &DisparityDetectorNodelet::onLeftImage, this);
+    left_image_tracking_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarTrackingLeftImageRect, 1,
+                                                    &DisparityDetectorNodelet::onLeftImage, this);
     NODELET_DEBUG("disparity_detector: subscribed to %s", disparity_subscriber_.getTopic().c_str());
   } else if (!wanted && disparity_subscriber_) {
     disparity_subscriber_.shutdown();
     camera_info_subscriber_.shutdown();
     camera_info_tracking_subscriber_.shutdown();
+    left_image_subscriber_.shutdown();
+    left_image_tracking_subscriber_.shutdown();
     disparity_subscriber_ = ros::Subscriber();
     camera_info_subscriber_ = ros::Subscriber();
     camera_info_tracking_subscriber_ = ros::Subscriber();
+    left_image_subscriber_ = ros::Subscriber();
+    left_image_tracking_subscriber_ = ros::Subscriber();
     NODELET_DEBUG("disparity_detector: unsubscribed from the disparity (near: %s)", duty::describe(near_state));
   }
 }
@@ -366,11 +406,52 @@ void DisparityDetectorNodelet::onCameraInfo(const sensor_msgs::CameraInfoConstPt
   camera_info_by_binning_[std::max(1, static_cast<int>(info->binning_x))] = info;
 }
 
+void DisparityDetectorNodelet::onLeftImage(const sensor_msgs::ImageConstPtr& image) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  recent_left_images_.push_back(image);
+  while (recent_left_images_.size() > kRecentLeftImages) recent_left_images_.pop_front();
+}
+
+void DisparityDetectorNodelet::confirmAppearance(const stereo_msgs::DisparityImage& message,
+                                                 const disparity::DetectorParams& params,
+                                                 const disparity::StereoGeometry& geometry,
+                                                 disparity::Detection* detection) {
+  if (!params.appearance_check_enabled || !detection->found || !appearance_check_) return;
+  sensor_msgs::ImageConstPtr left;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    for (auto it = recent_left_images_.rbegin(); it != recent_left_images_.rend(); ++it) {
+      if ((*it)->header.stamp == message.header.stamp && (*it)->width == message.image.width &&
+          (*it)->height == message.image.height) {
+        left = *it;
+        break;
+      }
+    }
+  }
+  cv::Mat left_grey;
+  if (left && left->encoding == sensor_msgs::image_encodings::MONO8) {
+    left_grey = cv_bridge::toCvShare(left, sensor_msgs::image_encodings::MONO8)->image;
+  }
+  if (left_grey.empty()) {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    ++appearance_without_image_;
+    last_appearance_ = "no mono8 left image of the disparity's stamp and size: appearance not checked";
+    return;
+  }
+  const disparity::AppearanceResult result =
+      disparity::confirmByAppearance(*appearance_check_, left_grey, geometry, params.appearance, detection);
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  if (result.verdict == disparity::AppearanceVerdict::kNotTheTarget) ++appearance_rejections_;
+  if (disparity::isUnjudged(result.verdict)) ++appearance_unjudged_;
+  last_appearance_ = result.reason;
+}
+
 void DisparityDetectorNodelet::publishInvalidInput(const stereo_msgs::DisparityImage& message,
                                                    const std::string& status, double cpu_start_ms) {
   NODELET_ERROR_THROTTLE(5.0, "disparity_detector: %s", status.c_str());
   docking_msgs::TargetEstimate estimate = blankEstimate(message.header);
   estimate.status = status;
+  estimate.reject_reason = docking_msgs::TargetEstimate::REJECT_BAD_INPUT;
   estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
@@ -521,6 +602,7 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   disparity::Detection detection =
       detector.detect(disparity, geometry, message->min_disparity, message->max_disparity + 1.0,
                       valid_region, hint, window);
+  confirmAppearance(*message, detector.params(), geometry, &detection);
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     detection = track_gate_.apply(stamp_s, detection);
@@ -530,6 +612,7 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   estimate.valid = detection.found;
   estimate.position_valid = detection.found;
   estimate.status = detection.found ? std::string() : detection.reason;
+  estimate.reject_reason = rejectReasonOf(detection.outcome);
   if (detection.found) {
     estimate.pose.pose.position.x = detection.position_m.x();
     estimate.pose.pose.position.y = detection.position_m.y();
@@ -614,6 +697,10 @@ void DisparityDetectorNodelet::produceDiagnostics(
   status.add("window frames", recent_found_.size());
   status.add("last rejection reason", last_rejection_.empty() ? "(none)" : last_rejection_);
   status.add("last range m", last_range_m_);
+  status.add("appearance rejections", appearance_rejections_);
+  status.add("appearance not judged (glare, dark)", appearance_unjudged_);
+  status.add("appearance without a left image", appearance_without_image_);
+  status.add("last appearance check", last_appearance_.empty() ? "(none)" : last_appearance_);
   status.add("last processing ms (CPU)", last_processing_ms_);
   status.add("subscribed", static_cast<bool>(disparity_subscriber_));
   duty::FusedRangeState near_state;

@@ -214,6 +214,14 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.footprint_fit_enabled = number("footprint_fit_enabled") != 0.0;
   p.footprint_inlier_distance_m = number("footprint_inlier_distance_m");
   p.footprint_min_inlier_fraction = number("footprint_min_inlier_fraction");
+  p.appearance_check_enabled = number("appearance_check_enabled") != 0.0;
+  p.appearance.min_score = number("appearance_min_score");
+  p.appearance.search_radius_m = number("appearance_search_radius_m");
+  p.appearance.max_working_width_px = number("appearance_max_working_width_px");
+  p.appearance.saturated_level_dn = static_cast<int>(number("appearance_saturated_level_dn"));
+  p.appearance.max_saturated_fraction = number("appearance_max_saturated_fraction");
+  p.appearance.min_mean_dn = number("appearance_min_mean_dn");
+  p.appearance.refine_port = number("appearance_refine_port") != 0.0;
   return p;
 }
 

@@ -66,6 +66,22 @@ struct ShapeBounds {
 };
 ShapeBounds shapeBounds(const TargetShape& shape);
 
+// The face print looked for where a found blob puts the port (face_appearance.h).
+constexpr double kMaxAppearanceWorkingWidthPx = 48.0;  // max_working_width_px's upper bound
+struct FaceAppearanceParams {
+  double min_score = 0.45;            // best normalised correlation below this: not the target's face
+  double search_radius_m = 0.25;      // slide the print this far either side of the detected port (half
+                                      // of it up and down)
+  double max_working_width_px = 24.0; // reduce image and print so the face is at most this wide
+  int saturated_level_dn = 250;       // grey at or above this: saturated (glare)
+  double max_saturated_fraction = 0.3;  // more of the face saturated: cannot be judged (glare)
+  double min_mean_dn = 25.0;          // the face's surroundings darker on average: cannot be judged
+  // A matched print moves the port across the line of sight to the print's centre (same depth): the
+  // footprint fit puts a turned target's port up to ~0.2 m aside (campaign seed 7515 at 2.5-3 m).
+  bool refine_port = true;
+};
+
+
 // Tuning of the detector. Defaults are only for tests; the node takes every value from
 // config/disparity_detector.yaml.
 struct DetectorParams {
@@ -146,6 +162,11 @@ struct DetectorParams {
   bool footprint_fit_enabled = false;
   double footprint_inlier_distance_m = 0.05;   // at zero range; grows with the depth noise
   double footprint_min_inlier_fraction = 0.5;
+  // The face print of config/target.yaml looked for in the left rectified image where a found blob puts
+  // the port (face_appearance.h); a blob whose face does not match is rejected (appearance mismatch).
+  // Applied by the node after detect() (it needs the left image), off by default here.
+  bool appearance_check_enabled = false;
+  FaceAppearanceParams appearance;
   TargetShape target_shape;         // from config/target.yaml, not from the detector's file
 };
 
@@ -167,6 +188,8 @@ enum class Outcome {
   kOffTrack,             // target-shaped, but a jump from the tracked target not yet confirmed
                          // (set by TargetTrackGate, never by detect())
   kFootprintMisfit,      // the blob's depth profile does not fit the mockup's footprint
+  kAppearanceMismatch,   // target-shaped, but the face print is not where the port is
+                         // (set by confirmByAppearance, face_appearance.h, never by detect())
 };
 
 // Short stable name of an outcome ("found", "blob_too_small", ...), for diagnostics keys and counters.
@@ -220,6 +243,8 @@ struct Detection {
   bool footprint_fitted = false;     // the estimate is the fitted footprint's port (footprint_fit_enabled)
   double footprint_yaw_rad = 0.0;    // its yaw (face normal from the line of sight)
   double footprint_inlier_fraction = 0.0;
+  bool appearance_judged = false;    // the face print was looked for (face_appearance.h) and judged
+  double appearance_score = 0.0;     // its best match then (normalised correlation)
 
   // The chosen blob (filled whenever a blob was chosen, also when it was then rejected).
   std::vector<cv::Point> contour;  // outer contour of the blob, image pixels

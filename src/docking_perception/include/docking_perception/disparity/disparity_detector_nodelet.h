@@ -3,6 +3,9 @@
 // Subscribes (lazily, only while an output has subscribers and the stage is not paused):
 //   stereo/disparity           stereo_msgs/DisparityImage (stereo_image_proc)
 //   stereo/left/camera_info    sensor_msgs/CameraInfo: the rectified principal point
+//   stereo/far/{full,tracking}/left/image_rect  sensor_msgs/Image mono8: the left image each disparity was
+//                              computed from, matched by stamp and size, for the appearance check
+//                              (face_appearance.h)
 // and always
 //   target/estimate            docking_msgs/TargetEstimate, the arbiter's: near and monocular pauses the
 //                              stage (duty/fused_range_condition.h)
@@ -27,10 +30,12 @@
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <stereo_msgs/DisparityImage.h>
 
 #include "docking_perception/DisparityDetectorConfig.h"
 #include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/disparity/face_appearance.h"
 #include "docking_perception/duty/fused_range_condition.h"
 #include "docking_perception/disparity/target_track_gate.h"
 
@@ -59,6 +64,11 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   void updateSubscriptions();
   void onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused);
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info);
+  void onLeftImage(const sensor_msgs::ImageConstPtr& image);
+  // The appearance check on a found detection (face_appearance.h), with the left image of the disparity's
+  // stamp and size; without one the detection is kept and counted (diagnostics).
+  void confirmAppearance(const stereo_msgs::DisparityImage& message, const disparity::DetectorParams& params,
+                         const disparity::StereoGeometry& geometry, disparity::Detection* detection);
   // Catches what processDisparity throws: the message is reported as invalid input, the node goes on.
   void onDisparity(const stereo_msgs::DisparityImageConstPtr& message);
   void processDisparity(const stereo_msgs::DisparityImageConstPtr& message);
@@ -79,6 +89,8 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   ros::Subscriber disparity_subscriber_;
   // The far stage's left camera_info at full and at reduced resolution (config/far_stereo.yaml).
   ros::Subscriber camera_info_subscriber_, camera_info_tracking_subscriber_;
+  // ...and its left rectified images (the appearance check).
+  ros::Subscriber left_image_subscriber_, left_image_tracking_subscriber_;
   std::mutex connection_mutex_;
 
   // Resting near the target (issue 15): the arbiter's output, and a timer that resumes the stage when
@@ -108,6 +120,14 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   static constexpr std::size_t kRecentWindowInfos = 8;
   static constexpr double kWindowInfoMemoryS = 2.0;  // windows seen this recently: unmatched ones are dropped
   std::deque<sensor_msgs::CameraInfoConstPtr> recent_window_infos_;
+  // The far stage's last left images, matched to a disparity image by stamp and size.
+  static constexpr std::size_t kRecentLeftImages = 8;
+  std::deque<sensor_msgs::ImageConstPtr> recent_left_images_;
+  std::unique_ptr<disparity::FaceAppearanceCheck> appearance_check_;  // the print of ~target_yaml, read at start-up
+  unsigned long appearance_rejections_ = 0;   // found blobs whose face did not show the print
+  unsigned long appearance_unjudged_ = 0;     // ...whose face could not be judged (glare, dark, outside)
+  unsigned long appearance_without_image_ = 0;  // ...checked without a left image of their stamp
+  std::string last_appearance_;               // the last check's reason
   double last_window_info_arrival_s_ = 0.0;  // of the last of recent_window_infos_
   unsigned long window_frames_ = 0;
   bool warned_no_camera_info_ = false;
