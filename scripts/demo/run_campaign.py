@@ -32,6 +32,11 @@ LIGHTING = ["nominal"] * 6 + ["dark"] * 2 + ["glare"] * 2
 # Clutter stays this far from the target robot's centre (its search orbit is 1.3 m) and from the chaser's
 # start, so that no box stands where a robot drives.
 CLUTTER_CLEARANCE_M = 1.8
+# ...and this far from the line between the chaser's start and the target robot, the way the chaser drives and
+# looks: a box there hid the whole target from the start and stood on the approach path (seed 7515: the
+# chaser could only find the target by chasing a look-alike box stack, which the appearance check now
+# refuses). Half a box's largest diagonal (0.64 m) plus a robot's half-width (0.25 m).
+DRIVE_CORRIDOR_HALF_WIDTH_M = 0.9
 ROOM_X_M, ROOM_Y_M = (-2.0, 8.0), (-3.0, 3.0)  # inside sim.yaml's walls, with a margin for the box size
 BUSY_MATERIALS = ("busy", "photo", "wood", "cardboard")
 
@@ -49,9 +54,18 @@ def draw_camera(rng):
     return {"visible": block}, {"focus_distance_m": focus, "blur_sigma_px": residual, "exposure_time_s": exposure}
 
 
+def distance_to_segment(point, a, b):
+    """Distance from `point` to the segment a-b (2-D)."""
+    ax, ay = a
+    dx, dy = b[0] - ax, b[1] - ay
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0.0 else max(0.0, min(1.0, ((point[0] - ax) * dx + (point[1] - ay) * dy) / length2))
+    return math.hypot(point[0] - (ax + t * dx), point[1] - (ay + t * dy))
+
+
 def draw_clutter(rng, target_xy, count):
     """`count` busy boxes around the target's depth, none nearer than CLUTTER_CLEARANCE_M to either
-    robot's start, inside the room."""
+    robot's start nor DRIVE_CORRIDOR_HALF_WIDTH_M to the line between them, inside the room."""
     boxes, attempts = [], 0
     while len(boxes) < count and attempts < 200:
         attempts += 1
@@ -61,6 +75,8 @@ def draw_clutter(rng, target_xy, count):
         if not (ROOM_X_M[0] < x < ROOM_X_M[1] and ROOM_Y_M[0] < y < ROOM_Y_M[1]):
             continue
         if math.hypot(x, y) < CLUTTER_CLEARANCE_M:  # the chaser starts at the origin
+            continue
+        if distance_to_segment((x, y), (0.0, 0.0), target_xy) < DRIVE_CORRIDOR_HALF_WIDTH_M:
             continue
         size = [round(rng.uniform(0.3, 0.9), 2), round(rng.uniform(0.3, 0.9), 2), round(rng.uniform(0.4, 1.4), 2)]
         grey = rng.randint(110, 200)
