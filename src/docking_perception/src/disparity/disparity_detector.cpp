@@ -1,5 +1,6 @@
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/footprint_fit.h"
+#include "number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -41,14 +42,6 @@ std::string joinErrors(const std::vector<std::string>& errors) {
     joined += (joined.empty() ? "" : "; ") + error;
   }
   return joined;
-}
-
-template <typename T>
-std::string formatNumber(T value) {
-  std::ostringstream stream;
-  stream.precision(4);
-  stream << value;
-  return stream.str();
 }
 
 // Median of `values` (reorders them). `values` must not be empty.

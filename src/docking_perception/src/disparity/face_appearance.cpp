@@ -3,10 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <sstream>
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
+
+#include "number_text.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -20,13 +21,6 @@ constexpr double kVerticalSearchFraction = 0.5;  // of search_radius_m, up and d
 // Smallest print the correlation is meaningful on (pixels, at the working scale).
 constexpr int kMinTemplateWidthPx = 8;
 constexpr int kMinTemplateHeightPx = 6;
-
-std::string formatNumber(double value) {
-  std::ostringstream out;
-  out.precision(3);
-  out << value;
-  return out.str();
-}
 
 double saturatedFraction(const cv::Mat& grey, int level) {
   if (grey.empty()) return 0.0;

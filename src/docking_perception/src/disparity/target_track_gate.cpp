@@ -7,6 +7,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "number_text.h"
+
 namespace docking_perception {
 namespace disparity {
 namespace {
@@ -15,12 +17,7 @@ namespace {
 // disparity depth noise at 6 m is ~0.16 m per frame, so a single difference is mostly noise.
 constexpr double kVelocityGain = 0.2;
 
-std::string format(double value) {
-  std::ostringstream stream;
-  stream.precision(3);
-  stream << value;
-  return stream.str();
-}
+std::string format(double value) { return disparity::formatNumber(value, 3); }
 
 }  // namespace
 

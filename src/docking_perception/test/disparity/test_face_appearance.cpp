@@ -11,6 +11,7 @@
 
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/face_appearance.h"
+#include "painted_disparity.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -19,14 +20,7 @@ namespace {
 const std::string kConfigDir = DISPARITY_CONFIG_DIR;
 constexpr double kFaceWidthM = 0.30, kFaceHeightM = 0.24;  // config/target.yaml
 
-StereoGeometry ourCamera() {
-  StereoGeometry g;
-  g.focal_px = 550.0;
-  g.cx_px = 319.5;
-  g.cy_px = 239.5;
-  g.baseline_m = 0.10;
-  return g;
-}
+StereoGeometry ourCamera() { return test::ourGeometry(); }
 
 cv::Mat shippedPrint() {
   const cv::Mat print = cv::imread(kConfigDir + "/textures/target_face.png", cv::IMREAD_GRAYSCALE);
