@@ -288,7 +288,7 @@ int main(int argc, char** argv) {
       detection = detector.detect(disparity, window_geometry, settings.min_disparity,
                                   testing::maxDisparity(settings), valid_region, {}, image_window);
       if (params.appearance_check_enabled) {
-        appearance = docking_perception::disparity::confirmByAppearance(appearance_check, left_rect, window_geometry,
+        appearance = docking_perception::disparity::confirmByAppearance(appearance_check, left_rect, disparity, window_geometry,
                                                                         params.appearance, &detection);
       }
       const double detection_ms = ms_since(detection_start);

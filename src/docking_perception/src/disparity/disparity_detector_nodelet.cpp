@@ -412,7 +412,7 @@ void DisparityDetectorNodelet::onLeftImage(const sensor_msgs::ImageConstPtr& ima
   while (recent_left_images_.size() > kRecentLeftImages) recent_left_images_.pop_front();
 }
 
-void DisparityDetectorNodelet::confirmAppearance(const stereo_msgs::DisparityImage& message,
+void DisparityDetectorNodelet::confirmAppearance(const stereo_msgs::DisparityImage& message, const cv::Mat& disparity,
                                                  const disparity::DetectorParams& params,
                                                  const disparity::StereoGeometry& geometry,
                                                  disparity::Detection* detection) {
@@ -439,7 +439,8 @@ void DisparityDetectorNodelet::confirmAppearance(const stereo_msgs::DisparityIma
     return;
   }
   const disparity::AppearanceResult result =
-      disparity::confirmByAppearance(*appearance_check_, left_grey, geometry, params.appearance, detection);
+      disparity::confirmByAppearance(*appearance_check_, left_grey, disparity, geometry, params.appearance,
+                                     detection);
   std::lock_guard<std::mutex> lock(state_mutex_);
   if (result.verdict == disparity::AppearanceVerdict::kNotTheTarget) ++appearance_rejections_;
   if (disparity::isUnjudged(result.verdict)) ++appearance_unjudged_;
@@ -602,7 +603,7 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   disparity::Detection detection =
       detector.detect(disparity, geometry, message->min_disparity, message->max_disparity + 1.0,
                       valid_region, hint, window);
-  confirmAppearance(*message, detector.params(), geometry, &detection);
+  confirmAppearance(*message, disparity, detector.params(), geometry, &detection);
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     detection = track_gate_.apply(stamp_s, detection);

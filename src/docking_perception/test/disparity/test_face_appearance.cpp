@@ -108,7 +108,7 @@ TEST(FaceAppearance, AMatchedPrintMovesThePortAcrossTheLineOfSightToThePrintsCen
       detection.outcome = Outcome::kFound;
       // A turned target's footprint fit: the port 0.2 m aside (campaign seed 7515: up to 0.23 m at 2.7 m).
       detection.position_m = port + Eigen::Vector3d(0.2, -0.04, 0.03);
-      confirmByAppearance(check, image, ourCamera(), shippedParams(), &detection);
+      confirmByAppearance(check, image, cv::Mat(), ourCamera(), shippedParams(), &detection);
       ASSERT_TRUE(detection.found) << detection.reason;
       // Within ~1 px of the working scale (the face reduced to 24 px: 1.2 cm at 2 m, 1.1 cm at 6 m).
       EXPECT_NEAR(detection.position_m.x(), port.x(), 0.025) << "z " << z << " yaw " << yaw_deg;
@@ -124,9 +124,51 @@ TEST(FaceAppearance, AMatchedPrintMovesThePortAcrossTheLineOfSightToThePrintsCen
   Detection detection;
   detection.found = true;
   detection.position_m = port + Eigen::Vector3d(0.1, 0.0, 0.0);
-  confirmByAppearance(check, scene(print, port, 0.0, 1.0, 4.0), ourCamera(), keep, &detection);
+  confirmByAppearance(check, scene(print, port, 0.0, 1.0, 4.0), cv::Mat(), ourCamera(), keep, &detection);
   EXPECT_TRUE(detection.found);
   EXPECT_DOUBLE_EQ(detection.position_m.x(), 0.3);
+}
+
+TEST(FaceAppearance, AMatchedPrintTakesThePortsDepthFromTheFacesOwnDisparity) {
+  const cv::Mat print = shippedPrint();
+  const FaceAppearanceCheck check(print, kFaceWidthM, kFaceHeightM);
+  const Eigen::Vector3d port(0.3, 0.0, 2.2);
+  const cv::Mat image = scene(print, port, 0.0, 1.0, 4.0);
+  // The face at its depth, a wall 1 m behind it around.
+  cv::Mat disparity(image.size(), CV_32FC1, cv::Scalar(static_cast<float>(test::disparityAt(3.2))));
+  const double u = 319.5 + 550.0 * port.x() / port.z(), half_w = 550.0 * kFaceWidthM / port.z() / 2.0;
+  const double half_h = 550.0 * kFaceHeightM / port.z() / 2.0;
+  disparity(cv::Rect(cv::Point(static_cast<int>(u - half_w), static_cast<int>(239.5 - half_h)),
+                     cv::Point(static_cast<int>(u + half_w), static_cast<int>(239.5 + half_h))))
+      .setTo(static_cast<float>(test::disparityAt(port.z())));
+  Detection detection;
+  detection.found = true;
+  detection.position_m = port + Eigen::Vector3d(0.1, 0.0, 0.12);  // the footprint fit's swing at 2.2 m
+  detection.covariance_m2 = Eigen::Matrix3d::Identity() * 0.046 * 0.046;  // the detector's sigma there
+  confirmByAppearance(check, image, disparity, ourCamera(), shippedParams(), &detection);
+  ASSERT_TRUE(detection.found) << detection.reason;
+  EXPECT_NEAR(detection.position_m.z(), port.z(), 0.005);
+  EXPECT_NEAR(detection.position_m.x(), port.x(), 0.025);
+  EXPECT_NEAR(detection.disparity_px, test::disparityAt(port.z()), 1e-4);
+
+  // Too few valid disparities on the face: its depth is kept.
+  cv::Mat holes(image.size(), CV_32FC1, cv::Scalar(-1.0f));
+  Detection kept;
+  kept.found = true;
+  kept.position_m = port + Eigen::Vector3d(0.0, 0.0, 0.12);
+  kept.covariance_m2 = detection.covariance_m2;
+  confirmByAppearance(check, image, holes, ourCamera(), shippedParams(), &kept);
+  ASSERT_TRUE(kept.found);
+  EXPECT_DOUBLE_EQ(kept.position_m.z(), port.z() + 0.12);
+
+  // Agreeing within twice the depth sigma: the detection's depth stands (the steadier far away).
+  Detection agreeing;
+  agreeing.found = true;
+  agreeing.position_m = port + Eigen::Vector3d(0.0, 0.0, 0.05);
+  agreeing.covariance_m2 = detection.covariance_m2;
+  confirmByAppearance(check, image, disparity, ourCamera(), shippedParams(), &agreeing);
+  ASSERT_TRUE(agreeing.found);
+  EXPECT_DOUBLE_EQ(agreeing.position_m.z(), port.z() + 0.05);
 }
 
 TEST(FaceAppearance, GainAndOffsetDoNotMatter) {
@@ -169,7 +211,7 @@ TEST(FaceAppearance, AMismatchTurnsAFoundDetectionIntoARejectionWithItsScore) {
   detection.found = true;
   detection.outcome = Outcome::kFound;
   detection.position_m = port;
-  const AppearanceResult result = confirmByAppearance(check, image, ourCamera(), shippedParams(), &detection);
+  const AppearanceResult result = confirmByAppearance(check, image, cv::Mat(), ourCamera(), shippedParams(), &detection);
   EXPECT_EQ(result.verdict, AppearanceVerdict::kNotTheTarget);
   EXPECT_FALSE(detection.found);
   EXPECT_EQ(detection.outcome, Outcome::kAppearanceMismatch);
@@ -184,7 +226,7 @@ TEST(FaceAppearance, AMismatchTurnsAFoundDetectionIntoARejectionWithItsScore) {
   kept.found = true;
   kept.outcome = Outcome::kFound;
   kept.position_m = port;
-  confirmByAppearance(check, target, ourCamera(), shippedParams(), &kept);
+  confirmByAppearance(check, target, cv::Mat(), ourCamera(), shippedParams(), &kept);
   EXPECT_TRUE(kept.found) << kept.reason;
   EXPECT_GE(kept.appearance_score, 0.6);
 }
@@ -201,7 +243,7 @@ TEST(FaceAppearance, AFaceSaturatedByGlareOrInTheDarkIsNotJudgedAndTheDetectionK
   detection.found = true;
   detection.outcome = Outcome::kFound;
   detection.position_m = port;
-  const AppearanceResult glare_result = confirmByAppearance(check, glare, ourCamera(), shippedParams(), &detection);
+  const AppearanceResult glare_result = confirmByAppearance(check, glare, cv::Mat(), ourCamera(), shippedParams(), &detection);
   EXPECT_EQ(glare_result.verdict, AppearanceVerdict::kGlare) << glare_result.reason;
   EXPECT_GT(glare_result.saturated_fraction, 0.5);
   EXPECT_TRUE(detection.found);

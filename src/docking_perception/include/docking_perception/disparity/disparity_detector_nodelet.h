@@ -67,7 +67,8 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   void onLeftImage(const sensor_msgs::ImageConstPtr& image);
   // The appearance check on a found detection (face_appearance.h), with the left image of the disparity's
   // stamp and size; without one the detection is kept and counted (diagnostics).
-  void confirmAppearance(const stereo_msgs::DisparityImage& message, const disparity::DetectorParams& params,
+  void confirmAppearance(const stereo_msgs::DisparityImage& message, const cv::Mat& disparity,
+                         const disparity::DetectorParams& params,
                          const disparity::StereoGeometry& geometry, disparity::Detection* detection);
   // Catches what processDisparity throws: the message is reported as invalid input, the node goes on.
   void onDisparity(const stereo_msgs::DisparityImageConstPtr& message);

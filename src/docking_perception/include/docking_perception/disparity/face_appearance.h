@@ -48,6 +48,7 @@ struct AppearanceResult {
   double score = 0.0;               // best normalised correlation (-1..1); 0 when not judged
   double squeeze = 1.0;             // the print's horizontal squeeze at the best score (cos of the yaw)
   cv::Point2d matched_centre_px{0.0, 0.0};  // the print's centre at the best score, full-image pixels
+  cv::Size2d matched_size_px{0.0, 0.0};     // the print's size there (squeezed width, height)
   double saturated_fraction = 0.0;  // of the expected face rectangle
   double mean_dn = 0.0;             // of the searched region
   std::string reason;               // numbers that decided, for the detector's status
@@ -83,10 +84,14 @@ class FaceAppearanceCheck {
 // match turns it into a rejection (kAppearanceMismatch, found = false, the reason with the score); a
 // face that cannot be judged leaves it found. Sets appearance_judged and appearance_score. A detection
 // not found is left alone (and not checked). With params.refine_port, a matched print moves the port
-// (position_m, x and y) to the print's centre at the detection's depth.
+// to the print's centre: across the line of sight, and in depth to the median of `disparity` (CV_32F, the
+// image the detection came from; empty: depth kept) over the middle half of the matched print (when at
+// least a quarter of it is valid, > 0) if that depth and the detection's differ by more than twice the
+// detection's depth sigma. The footprint fit's depth of a turned target's port jumps by ~0.1 m between
+// frames (campaign seed 7605 at 2.2 m); the face's own disparity does not, but it is the noisier far away.
 AppearanceResult confirmByAppearance(const FaceAppearanceCheck& check, const cv::Mat& left_rect,
-                                     const StereoGeometry& geometry, const FaceAppearanceParams& params,
-                                     Detection* detection);
+                                     const cv::Mat& disparity, const StereoGeometry& geometry,
+                                     const FaceAppearanceParams& params, Detection* detection);
 
 // The print's horizontal squeezes tried: cos of yaws 0, 30, 45 and 60 deg.
 const std::vector<double>& appearanceSqueezes();
