@@ -9,8 +9,8 @@ function that does the stage's work (--toggle-collect); the count is divided by 
   bench_instructions.py OUT.json --far-left L.png --far-right R.png --tagged-sequence DIR --tagged-target Y
 
 Writes {"stages": {NAME: {"instructions_per_frame_M": float, "frames": int}}}. Stages:
-  rectify, disparity, detection, disparity_total  bench_disparity on the rendered far pair (per pair), full
-                                                  resolution; tracking_*: the same on the reduced pair
+  rectify, disparity, detection, appearance,      bench_disparity on the rendered far pair (per pair), full
+  disparity_total (the four summed)               resolution; tracking_*: the same on the reduced pair
                                                   (far_stereo.yaml tracking_decimation 2, off by default);
                                                   window_*: full resolution on the tracking window alone
                                                   (far_stereo.yaml window_*, the default while tracking)
