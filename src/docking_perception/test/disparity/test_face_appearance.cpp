@@ -75,6 +75,16 @@ cv::Mat scene(const cv::Mat& face_picture, const Eigen::Vector3d& port, double y
 
 FaceAppearanceParams shippedParams() { return FaceAppearanceParams(); }
 
+// A detection the detector found at `position_m`, with `covariance_m2` (default: none).
+Detection foundAt(const Eigen::Vector3d& position_m, const Eigen::Matrix3d& covariance_m2 = Eigen::Matrix3d::Zero()) {
+  Detection detection;
+  detection.found = true;
+  detection.outcome = Outcome::kFound;
+  detection.position_m = position_m;
+  detection.covariance_m2 = covariance_m2;
+  return detection;
+}
+
 TEST(FaceAppearance, ThePrintIsFoundFromTwoToSixMetresTurnedAndWithThePortOffByTheDetectorsError) {
   const cv::Mat print = shippedPrint();
   const FaceAppearanceCheck check(print, kFaceWidthM, kFaceHeightM);
@@ -103,11 +113,8 @@ TEST(FaceAppearance, AMatchedPrintMovesThePortAcrossTheLineOfSightToThePrintsCen
     for (double yaw_deg : {0.0, 35.0, -50.0}) {
       const Eigen::Vector3d port(-0.4, 0.01, z);
       const cv::Mat image = scene(print, port, yaw_deg * M_PI / 180.0, 1.0, 4.0);
-      Detection detection;
-      detection.found = true;
-      detection.outcome = Outcome::kFound;
       // A turned target's footprint fit: the port 0.2 m aside (campaign seed 7515: up to 0.23 m at 2.7 m).
-      detection.position_m = port + Eigen::Vector3d(0.2, -0.04, 0.03);
+      Detection detection = foundAt(port + Eigen::Vector3d(0.2, -0.04, 0.03));
       confirmByAppearance(check, image, cv::Mat(), ourCamera(), shippedParams(), &detection);
       ASSERT_TRUE(detection.found) << detection.reason;
       // Within ~1 px of the working scale (the face reduced to 24 px: 1.2 cm at 2 m, 1.1 cm at 6 m).
@@ -121,9 +128,7 @@ TEST(FaceAppearance, AMatchedPrintMovesThePortAcrossTheLineOfSightToThePrintsCen
   FaceAppearanceParams keep = shippedParams();
   keep.refine_port = false;
   const Eigen::Vector3d port(0.2, 0.0, 3.0);
-  Detection detection;
-  detection.found = true;
-  detection.position_m = port + Eigen::Vector3d(0.1, 0.0, 0.0);
+  Detection detection = foundAt(port + Eigen::Vector3d(0.1, 0.0, 0.0));
   confirmByAppearance(check, scene(print, port, 0.0, 1.0, 4.0), cv::Mat(), ourCamera(), keep, &detection);
   EXPECT_TRUE(detection.found);
   EXPECT_DOUBLE_EQ(detection.position_m.x(), 0.3);
@@ -141,10 +146,8 @@ TEST(FaceAppearance, AMatchedPrintTakesThePortsDepthFromTheFacesOwnDisparity) {
   disparity(cv::Rect(cv::Point(static_cast<int>(u - half_w), static_cast<int>(239.5 - half_h)),
                      cv::Point(static_cast<int>(u + half_w), static_cast<int>(239.5 + half_h))))
       .setTo(static_cast<float>(test::disparityAt(port.z())));
-  Detection detection;
-  detection.found = true;
-  detection.position_m = port + Eigen::Vector3d(0.1, 0.0, 0.12);  // the footprint fit's swing at 2.2 m
-  detection.covariance_m2 = Eigen::Matrix3d::Identity() * 0.046 * 0.046;  // the detector's sigma there
+  // The footprint fit's swing at 2.2 m, with the detector's depth sigma there.
+  Detection detection = foundAt(port + Eigen::Vector3d(0.1, 0.0, 0.12), Eigen::Matrix3d::Identity() * 0.046 * 0.046);
   confirmByAppearance(check, image, disparity, ourCamera(), shippedParams(), &detection);
   ASSERT_TRUE(detection.found) << detection.reason;
   EXPECT_NEAR(detection.position_m.z(), port.z(), 0.005);
@@ -153,19 +156,13 @@ TEST(FaceAppearance, AMatchedPrintTakesThePortsDepthFromTheFacesOwnDisparity) {
 
   // Too few valid disparities on the face: its depth is kept.
   cv::Mat holes(image.size(), CV_32FC1, cv::Scalar(-1.0f));
-  Detection kept;
-  kept.found = true;
-  kept.position_m = port + Eigen::Vector3d(0.0, 0.0, 0.12);
-  kept.covariance_m2 = detection.covariance_m2;
+  Detection kept = foundAt(port + Eigen::Vector3d(0.0, 0.0, 0.12), detection.covariance_m2);
   confirmByAppearance(check, image, holes, ourCamera(), shippedParams(), &kept);
   ASSERT_TRUE(kept.found);
   EXPECT_DOUBLE_EQ(kept.position_m.z(), port.z() + 0.12);
 
   // Agreeing within twice the depth sigma: the detection's depth stands (the steadier far away).
-  Detection agreeing;
-  agreeing.found = true;
-  agreeing.position_m = port + Eigen::Vector3d(0.0, 0.0, 0.05);
-  agreeing.covariance_m2 = detection.covariance_m2;
+  Detection agreeing = foundAt(port + Eigen::Vector3d(0.0, 0.0, 0.05), detection.covariance_m2);
   confirmByAppearance(check, image, disparity, ourCamera(), shippedParams(), &agreeing);
   ASSERT_TRUE(agreeing.found);
   EXPECT_DOUBLE_EQ(agreeing.position_m.z(), port.z() + 0.05);
@@ -207,10 +204,7 @@ TEST(FaceAppearance, AMismatchTurnsAFoundDetectionIntoARejectionWithItsScore) {
   const FaceAppearanceCheck check(print, kFaceWidthM, kFaceHeightM);
   const Eigen::Vector3d port(0.1, 0.0, 5.0);
   const cv::Mat image = scene(cellTexture(print.size(), 25, 4), port, 0.0, 1.0, 3.0);
-  Detection detection;
-  detection.found = true;
-  detection.outcome = Outcome::kFound;
-  detection.position_m = port;
+  Detection detection = foundAt(port);
   const AppearanceResult result = confirmByAppearance(check, image, cv::Mat(), ourCamera(), shippedParams(), &detection);
   EXPECT_EQ(result.verdict, AppearanceVerdict::kNotTheTarget);
   EXPECT_FALSE(detection.found);
@@ -222,10 +216,7 @@ TEST(FaceAppearance, AMismatchTurnsAFoundDetectionIntoARejectionWithItsScore) {
 
   // The print itself there: kept, with its score.
   const cv::Mat target = scene(print, port, 0.0, 1.0, 3.0);
-  Detection kept;
-  kept.found = true;
-  kept.outcome = Outcome::kFound;
-  kept.position_m = port;
+  Detection kept = foundAt(port);
   confirmByAppearance(check, target, cv::Mat(), ourCamera(), shippedParams(), &kept);
   EXPECT_TRUE(kept.found) << kept.reason;
   EXPECT_GE(kept.appearance_score, 0.6);
@@ -239,10 +230,7 @@ TEST(FaceAppearance, AFaceSaturatedByGlareOrInTheDarkIsNotJudgedAndTheDetectionK
   cv::Mat glare = scene(print, port, 0.0, 1.0, 2.0);
   const int face_w = static_cast<int>(550.0 * kFaceWidthM / 3.0), face_h = static_cast<int>(550.0 * kFaceHeightM / 3.0);
   glare(cv::Rect(320 - face_w / 2 - 5, 240 - face_h / 2 - 5, face_w * 6 / 10 + 5, face_h + 10)).setTo(255);
-  Detection detection;
-  detection.found = true;
-  detection.outcome = Outcome::kFound;
-  detection.position_m = port;
+  Detection detection = foundAt(port);
   const AppearanceResult glare_result = confirmByAppearance(check, glare, cv::Mat(), ourCamera(), shippedParams(), &detection);
   EXPECT_EQ(glare_result.verdict, AppearanceVerdict::kGlare) << glare_result.reason;
   EXPECT_GT(glare_result.saturated_fraction, 0.5);
