@@ -124,3 +124,31 @@ TEST(DirectFaceAlignment, RefusesUnusablePriors) {
   EXPECT_FALSE(tiny.found);
   EXPECT_NE(tiny.status.find("too small"), std::string::npos) << tiny.status;
 }
+
+// A face turned 53 deg at 3.4 m is 29 px wide: too few pixels for the homography's scale (seed 7699's
+// campaign frames aligned 6 % small). From a prior turned 43 deg (35 px wide, accepted) the alignment
+// is refused. The same face at 2 m (49 px wide) aligns, its corners within 2.5 % of its width.
+TEST(DirectFaceAlignment, RefusesAFaceTooNarrowForItsScaleButNotOneInTheMonocularRange) {
+  const mono::DirectFaceAligner aligner(model(), visibleParams().direct);
+  Eigen::Matrix3d facing;
+  facing.col(0) = Eigen::Vector3d(0, 0, -1);  // face normal (target x) towards the camera
+  facing.col(1) = Eigen::Vector3d(1, 0, 0);
+  facing.col(2) = Eigen::Vector3d(0, -1, 0);
+  for (const double range : {3.4, 2.0}) {
+    stress::TrialPose truth;
+    truth.rotation = facing * Eigen::AngleAxisd(53.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    truth.translation = Eigen::Vector3d(0.0, 0.0, range);
+    const stress::StressFrame frame = renderer().render(condition("clean"), truth, kFirstSeed, kFirstSeed * 16);
+    mono::PoseWithCovariance prior;
+    prior.rotation = facing * Eigen::AngleAxisd(43.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    prior.translation = truth.translation;
+    const mono::DirectAlignment result = aligner.align(frame.gray, renderer().camera(), prior);
+    const double face_width_px = renderer().camera().fx * model().faceWidth() / range;
+    if (range > 3.0) {
+      EXPECT_FALSE(result.found) << "correlation " << result.correlation;
+    } else {
+      ASSERT_TRUE(result.found) << result.status;
+      EXPECT_LT(cornerError(result.homography, truth), 0.025 * face_width_px);
+    }
+  }
+}
