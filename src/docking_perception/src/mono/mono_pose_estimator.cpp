@@ -738,6 +738,7 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
     }
     applyInnerPattern(gray, &result);
     updateFaceRetry(skip_face, result);
+    if (result.valid) result.valid = agreesWithPositionHint(&result);
   }
   if (result.valid) {
     result.status.clear();
@@ -757,6 +758,19 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   }
   result.processing_time_ms = threadCpuTimeMs() - start_ms;
   return result;
+}
+
+bool MonoPoseEstimator::agreesWithPositionHint(MonoPoseResult* result) const {
+  const double limit = params_.consistency.max_hint_disagreement_fraction;
+  if (limit <= 0.0 || !hint_has_position_) return true;
+  if (std::abs(result->stamp_s - hint_stamp_s_) > params_.region_hint_max_age_s) return true;
+  const double range = result->pose.translation.norm();
+  const double apart = (result->pose.translation - hint_position_).norm();
+  if (apart <= limit * range) return true;
+  result->reject_reason = RejectReason::kHintDisagreement;
+  result->status = "position " + std::to_string(apart) + " m from the disparity estimate, more than " +
+                   "max_hint_disagreement_fraction of the range " + std::to_string(range) + " m";
+  return false;
 }
 
 bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& match,

@@ -106,6 +106,9 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.max_rotation_sigma_deg > 0.0)) return "max_rotation_sigma_deg must be positive";
   if (!(p.innovation_window_frames >= 0.0)) return "innovation_window_frames must not be negative (0: off)";
   if (!(p.max_rotation_innovation_chi2 >= 0.0)) return "max_rotation_innovation_chi2 must not be negative (0: off)";
+  if (!(p.max_hint_disagreement_fraction >= 0.0 && p.max_hint_disagreement_fraction < 1.0)) {
+    return "max_hint_disagreement_fraction must be in [0, 1) (0: off)";
+  }
   if (!(p.max_dot_offset_factor > 0.0)) return "max_dot_offset_factor must be positive";
   if (!(p.max_solver_disagreement_deg > 0.0)) return "max_solver_disagreement_deg must be positive";
   if (!(p.max_led_area_ratio > 1.0)) return "max_led_area_ratio must exceed 1";

@@ -19,6 +19,7 @@ const char* toString(RejectReason reason) {
     case RejectReason::kAmbiguous: return "ambiguous";
     case RejectReason::kLedBlobShape: return "led_blob_shape";
     case RejectReason::kDotAppearance: return "dot_appearance";
+    case RejectReason::kHintDisagreement: return "hint_disagreement";
   }
   return "unknown";
 }

@@ -144,6 +144,42 @@ TEST(MonoPoseEstimator, TracksAtThePredictedFaceAndSearchesWhenThePredictionFail
   EXPECT_LT((after_jump.pose.translation - jumped).norm(), 0.01);
 }
 
+// The disparity detector's position of the same target (the position hint) checks the pose while fresh:
+// a pose 8 % of the range away from it is not valid (the code says why), one at the hint is, and a stale
+// hint checks nothing. Synthetic view at 1.2 m; max_hint_disagreement_fraction 0.04.
+TEST(MonoPoseEstimator, APoseThatDisagreesWithAFreshPositionHintIsNotValid) {
+  const TargetModel model = synthetic::makeModel(4);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  MonoPoseParams params = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
+  params.consistency.max_hint_disagreement_fraction = 0.04;
+  params.region_hint_max_age_s = 0.2;
+  const Eigen::Vector3d t(0.05, -0.02, 1.2);
+  const Eigen::Matrix3d r = synthetic::facingRotation(0.2, 0.0);
+  const cv::Mat image = synthetic::renderVisible(model, camera, r, t, 140);
+  struct HintCase {
+    Eigen::Vector3d position;
+    double age_s;
+    bool valid;
+  };
+  const std::vector<HintCase> cases = {{t, 0.07, true},              // the stereo range agrees
+                                       {1.08 * t, 0.07, false},      // 8 % farther along the ray
+                                       {t + Eigen::Vector3d(0.07, 0.0, 0.0), 0.07, false},  // 6 % to the side
+                                       {1.08 * t, 0.5, true}};       // older than region_hint_max_age_s
+  for (size_t i = 0; i < cases.size(); ++i) {
+    MonoPoseEstimator estimator(model, camera, params);
+    estimator.setPositionHint(cases[i].position, 2.0 - cases[i].age_s);
+    const MonoPoseResult result = estimator.process(image, 2.0);
+    EXPECT_EQ(result.valid, cases[i].valid) << "case " << i << ": " << result.status;
+    EXPECT_EQ(result.reject_reason, cases[i].valid ? RejectReason::kNone : RejectReason::kHintDisagreement) << "case " << i;
+  }
+  params.consistency.max_hint_disagreement_fraction = 0.0;  // off
+  MonoPoseEstimator unchecked(model, camera, params);
+  unchecked.setPositionHint(1.08 * t, 1.93);
+  EXPECT_TRUE(unchecked.process(image, 2.0).valid);
+  params.consistency.max_hint_disagreement_fraction = 1.0;
+  EXPECT_NE(validateParams(params).find("max_hint_disagreement_fraction"), std::string::npos);
+}
+
 TEST(MonoPoseEstimator, ReportsWhyNothingWasFound) {
   const TargetModel model = synthetic::makeModel(1);
   const CameraIntrinsics camera = synthetic::defaultCamera();

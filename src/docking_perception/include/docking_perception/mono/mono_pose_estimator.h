@@ -159,7 +159,8 @@ class MonoPoseEstimator {
   void setRegionHint(const cv::Rect& region, double stamp_s);
   // The same from a 3D position of the target in this camera's frame (the disparity detector's estimate,
   // same optical frame): the square of region_hint_radius_m around it, projected, plus the tracking
-  // margin. A position behind the camera or not finite clears the hint.
+  // margin. A position behind the camera or not finite clears the hint. While fresh it also checks the
+  // pose: see ConsistencyParams::max_hint_disagreement_fraction.
   void setPositionHint(const Eigen::Vector3d& position_camera, double stamp_s);
 
  private:
@@ -167,6 +168,9 @@ class MonoPoseEstimator {
   bool estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
   bool solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason, RejectReason* code) const;
   bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
+  // False (with the code and reason in *result) when a fresh position hint and the pose's position are
+  // farther apart than consistency.max_hint_disagreement_fraction of the range.
+  bool agreesWithPositionHint(MonoPoseResult* result) const;
   // The region where the target should appear (empty: search the whole image) and, in visible mode,
   // the face's predicted apparent width.
   cv::Rect predictedRegion(double stamp_s, double* face_width_px) const;

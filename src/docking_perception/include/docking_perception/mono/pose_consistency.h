@@ -56,6 +56,12 @@ struct ConsistencyParams {
   // chi^2 (3 dof, both covariances; 16.27 = 99.9 %) has its orientation withheld: a one-frame outlier
   // moves a running mean too little to cover it. 0 turns the check off.
   double max_rotation_innovation_chi2 = 16.27;
+  // A pose farther than this fraction of its range from a fresh position hint (the disparity detector's
+  // estimate of the same target in the same camera, at most region_hint_max_age_s old) is not valid
+  // (kHintDisagreement). Stereo measures a far target's range directly, the pose from the face's apparent
+  // size, and a small face (far, turned) aligned 5-6 % off in scale without a residual to show it (seed
+  // 7699 at 2.7-3.8 m). 0 turns the check off.
+  double max_hint_disagreement_fraction = 0.04;
 };
 
 // Empty when usable, else a message naming the parameter (config key).

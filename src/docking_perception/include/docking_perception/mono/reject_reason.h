@@ -21,6 +21,9 @@ enum class RejectReason {
   kAmbiguous,              // (no longer given: an undecided IPPE pose keeps its position, orientation withheld)
   kLedBlobShape,           // IR: an LED blob merged / elongated / the wrong size for its range
   kDotAppearance,          // paper_5point: a located dot does not look like a printed dot
+  // (12 is the arbiter's REJECT_SOURCES_SILENT, not an estimator's)
+  kHintDisagreement = 13,  // visible: the position disagrees with the disparity detector's estimate of the
+                           // same target (the position hint) by more than max_hint_disagreement_fraction
 };
 
 // Short stable name ("inlier_spread"), for tables and logs.
