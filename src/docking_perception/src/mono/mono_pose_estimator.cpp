@@ -764,6 +764,7 @@ bool MonoPoseEstimator::agreesWithPositionHint(MonoPoseResult* result) const {
   const double limit = params_.consistency.max_hint_disagreement_fraction;
   if (limit <= 0.0 || !hint_has_position_) return true;
   if (std::abs(result->stamp_s - hint_stamp_s_) > params_.region_hint_max_age_s) return true;
+  if (hint_position_.norm() < params_.consistency.hint_check_min_range_m) return true;
   const double range = result->pose.translation.norm();
   const double apart = (result->pose.translation - hint_position_).norm();
   if (apart <= limit * range) return true;

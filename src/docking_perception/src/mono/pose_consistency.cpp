@@ -109,6 +109,7 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.max_hint_disagreement_fraction >= 0.0 && p.max_hint_disagreement_fraction < 1.0)) {
     return "max_hint_disagreement_fraction must be in [0, 1) (0: off)";
   }
+  if (!(p.hint_check_min_range_m >= 0.0)) return "hint_check_min_range_m must not be negative";
   if (!(p.max_dot_offset_factor > 0.0)) return "max_dot_offset_factor must be positive";
   if (!(p.max_solver_disagreement_deg > 0.0)) return "max_solver_disagreement_deg must be positive";
   if (!(p.max_led_area_ratio > 1.0)) return "max_led_area_ratio must exceed 1";

@@ -144,15 +144,18 @@ TEST(MonoPoseEstimator, TracksAtThePredictedFaceAndSearchesWhenThePredictionFail
   EXPECT_LT((after_jump.pose.translation - jumped).norm(), 0.01);
 }
 
-// The disparity detector's position of the same target (the position hint) checks the pose while fresh:
-// a pose 8 % of the range away from it is not valid (the code says why), one at the hint is, and a stale
-// hint checks nothing. Synthetic view at 1.2 m; max_hint_disagreement_fraction 0.04.
+// The disparity detector's position of the same target (the position hint) checks the pose while fresh
+// and in the stereo range: a pose 8 % of the range away from it is not valid (the code says why), one at
+// the hint is, and a stale hint, or one nearer than hint_check_min_range_m, checks nothing. Synthetic view
+// at 1.2 m; max_hint_disagreement_fraction 0.04, hint_check_min_range_m set below the view's range (the
+// default, 2 m, is the stereo range's start).
 TEST(MonoPoseEstimator, APoseThatDisagreesWithAFreshPositionHintIsNotValid) {
   const TargetModel model = synthetic::makeModel(4);
   const CameraIntrinsics camera = synthetic::defaultCamera();
   MonoPoseParams params = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
   params.consistency.max_hint_disagreement_fraction = 0.04;
   params.region_hint_max_age_s = 0.2;
+  params.consistency.hint_check_min_range_m = 1.0;
   const Eigen::Vector3d t(0.05, -0.02, 1.2);
   const Eigen::Matrix3d r = synthetic::facingRotation(0.2, 0.0);
   const cv::Mat image = synthetic::renderVisible(model, camera, r, t, 140);
@@ -172,6 +175,10 @@ TEST(MonoPoseEstimator, APoseThatDisagreesWithAFreshPositionHintIsNotValid) {
     EXPECT_EQ(result.valid, cases[i].valid) << "case " << i << ": " << result.status;
     EXPECT_EQ(result.reject_reason, cases[i].valid ? RejectReason::kNone : RejectReason::kHintDisagreement) << "case " << i;
   }
+  params.consistency.hint_check_min_range_m = 2.0;  // the hint (1.3 m) is nearer: no check
+  MonoPoseEstimator near(model, camera, params);
+  near.setPositionHint(1.08 * t, 1.93);
+  EXPECT_TRUE(near.process(image, 2.0).valid);
   params.consistency.max_hint_disagreement_fraction = 0.0;  // off
   MonoPoseEstimator unchecked(model, camera, params);
   unchecked.setPositionHint(1.08 * t, 1.93);

@@ -284,8 +284,7 @@ TEST(MonoStress, PositionHintFromTheStereoEstimateFindsTheTargetOverClutter) {
     full_frame_found += unhinted.process(frame.gray, 0.0).valid ? 1 : 0;
     mono::MonoPoseEstimator hinted(model(), renderer().camera(), p);
     // The disparity detector's port: placed by the face print's match since issue 11, within 4.4 cm of
-    // the truth on the rendered far scenes (before, the blob's centre, ~13 cm behind the port, which the
-    // pose would now contradict: max_hint_disagreement_fraction).
+    // the truth on the rendered far scenes (before, the blob's centre, ~13 cm behind the port).
     const Eigen::Vector3d stereo_port = pose.translation + Eigen::Vector3d(0.03, -0.02, 0.02);
     hinted.setPositionHint(stereo_port, 0.0);
     const mono::MonoPoseResult result = hinted.process(frame.gray, 0.0);

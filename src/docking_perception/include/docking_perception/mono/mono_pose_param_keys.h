@@ -87,6 +87,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("innovation_window_frames", &p.consistency.innovation_window_frames);
   visit("max_rotation_innovation_chi2", &p.consistency.max_rotation_innovation_chi2);
   visit("max_hint_disagreement_fraction", &p.consistency.max_hint_disagreement_fraction);
+  visit("hint_check_min_range_m", &p.consistency.hint_check_min_range_m);
   visit("max_dot_offset_factor", &p.consistency.max_dot_offset_factor);
   visit("max_solver_disagreement_deg", &p.consistency.max_solver_disagreement_deg);
   visit("max_led_area_ratio", &p.consistency.max_led_area_ratio);
