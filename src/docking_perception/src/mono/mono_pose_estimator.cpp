@@ -329,7 +329,7 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
     }
   }
   std::vector<SearchRegion> priors = {{region, face_width_px}};
-  const bool hint_fresh = hint_region_.area() > 0 && std::abs(result->stamp_s - hint_stamp_s_) <= params_.region_hint_max_age_s;
+  const bool hint_fresh = hintFresh(result->stamp_s);
   if (hint_fresh && region.area() <= 0) priors.push_back({hint_region_, 0.0});
   const FaceSearchOutcome search = searchFace(matcher_, gray, priors, params_.use_half_resolution, &preferred_level_);
   FaceMatch match = search.match;
@@ -760,10 +760,13 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   return result;
 }
 
+bool MonoPoseEstimator::hintFresh(double stamp_s) const {
+  return hint_region_.area() > 0 && std::abs(stamp_s - hint_stamp_s_) <= params_.region_hint_max_age_s;
+}
+
 bool MonoPoseEstimator::agreesWithPositionHint(MonoPoseResult* result) const {
   const double limit = params_.consistency.max_hint_disagreement_fraction;
-  if (limit <= 0.0 || !hint_has_position_) return true;
-  if (std::abs(result->stamp_s - hint_stamp_s_) > params_.region_hint_max_age_s) return true;
+  if (limit <= 0.0 || !hint_has_position_ || !hintFresh(result->stamp_s)) return true;
   if (hint_position_.norm() < params_.consistency.hint_check_min_range_m) return true;
   const double range = result->pose.translation.norm();
   const double apart = (result->pose.translation - hint_position_).norm();

@@ -171,6 +171,8 @@ class MonoPoseEstimator {
   // False (with the code and reason in *result) when a fresh position hint and the pose's position are
   // farther apart than consistency.max_hint_disagreement_fraction of the range.
   bool agreesWithPositionHint(MonoPoseResult* result) const;
+  // An external hint is set and at most region_hint_max_age_s from this image's stamp.
+  bool hintFresh(double stamp_s) const;
   // The region where the target should appear (empty: search the whole image) and, in visible mode,
   // the face's predicted apparent width.
   cv::Rect predictedRegion(double stamp_s, double* face_width_px) const;
