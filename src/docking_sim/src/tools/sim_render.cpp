@@ -3,9 +3,9 @@
 //
 //   sim_render --config DIR --scenario NAME [--time S] [--out PREFIX]     save PREFIX_{stereo_left,...}.png
 //   sim_render --config DIR --scenario NAME --bench N                      CPU ms per frame, per camera
-//   sim_render --config DIR --scenario NAME --sequence N [--dt S] [--time T0] --out FOLDER
-//       N frames of the left camera at T0, T0 + dt, ... as the visible mono_pose instance sees them
-//       (stereo/left/image_rect: grey, rectified): FOLDER/left_rect_NNNN.png and FOLDER/sequence.json
+//   sim_render --config DIR --scenario NAME --sequence N [--dt S] [--time T0] [--camera C] --out FOLDER
+//       N frames of camera C (stereo_left, the default, or ir) at T0, T0 + dt, ... as its mono_pose instance
+//       sees them (image_rect: grey, rectified): FOLDER/<C>_rect_NNNN.png and FOLDER/sequence.json
 //       (intrinsics of the rectified image, and per frame the stamp, the pose of the docking port in the
 //       rectified optical frame and its linear and angular velocity in that frame).
 //   --target FILE   another target model instead of DIR/target.yaml (e.g. config/target_tagged.yaml)
@@ -41,7 +41,7 @@ double cpuSeconds() {
 int usage() {
   std::cerr << "usage: sim_render --config DIR --scenario NAME [--target FILE] [--time S] [--out PREFIX] [--bench N]\n"
                "       sim_render --config DIR --scenario NAME [--target FILE] --sequence N [--dt S] [--time T0] "
-               "--out FOLDER\n";
+               "[--camera stereo_left|ir] --out FOLDER\n";
   return 2;
 }
 
@@ -120,15 +120,15 @@ std::string describe(const docking_sim::Simulation& sim, int cam) {
   return buf;
 }
 
-/// The sequence mode: the left camera's frames rectified as image_proc does it on the robot
+/// The sequence mode: one camera's frames rectified as image_proc does it on the robot
 /// (image_proc/debayer: bgr8 -> mono8 with cvtColor; image_proc/rectify: cv::remap of the
 /// initUndistortRectifyMap(K, D, R, P) maps, bilinear), with the truth in the rectified frame.
 int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, const std::string& target_file,
-                   int frames, double dt_s, const std::string& folder) {
-  const int cam = docking_sim::RobotModel::kStereoLeft;
+                   int cam, int frames, double dt_s, const std::string& folder) {
+  const std::string camera_name = cam == docking_sim::RobotModel::kIr ? "ir" : "stereo_left";
   const docking_sim::CameraCalibration& cal = sim.robot().cameras[cam].calibration;
   // R: the rectification rotation (rectified <- raw optical frame), from the calibration file (the loader
-  // keeps K, D, P only); P's left 3x3: the rectified intrinsics. Our left camera has R = I, P = K.
+  // keeps K, D, P only); P's left 3x3: the rectified intrinsics. Our left and IR cameras have R = I, P = K.
   cv::Matx33d rect_R = cv::Matx33d::eye();
   try {
     const YAML::Node r = YAML::LoadFile(cal.file)["rectification_matrix"]["data"];
@@ -144,10 +144,10 @@ int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, co
   ::mkdir(folder.c_str(), 0755);
   std::ostringstream json;
   json << "{\n  \"scenario\": " << jsonString(scenario) << ",\n  \"target\": " << jsonString(target_file)
-       << ",\n  \"camera\": \"stereo_left\",\n"
+       << ",\n  \"camera\": " << jsonString(camera_name) << ",\n"
        << "  \"rectification\": \"rendered with the calibration's plumb_bob distortion, converted to grey and "
           "rectified with cv::initUndistortRectifyMap(K, D, R, P) + bilinear cv::remap, as image_proc does\",\n"
-       << "  \"frame_id\": \"stereo_left_optical_frame\",\n"
+       << "  \"frame_id\": " << jsonString(camera_name + "_optical_frame") << ",\n"
        << "  \"intrinsics\": {\"width\": " << cal.width << ", \"height\": " << cal.height << ", \"fx\": "
        << num(new_K(0, 0)) << ", \"fy\": " << num(new_K(1, 1)) << ", \"cx\": " << num(new_K(0, 2))
        << ", \"cy\": " << num(new_K(1, 2)) << "},\n"
@@ -163,7 +163,7 @@ int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, co
     else gray = raw;
     cv::remap(gray, rect, map1, map2, cv::INTER_LINEAR);
     char name[64];
-    std::snprintf(name, sizeof(name), "left_rect_%04d.png", k);
+    std::snprintf(name, sizeof(name), "%s_rect_%04d.png", cam == docking_sim::RobotModel::kIr ? "ir" : "left", k);
     if (!cv::imwrite(folder + "/" + name, rect)) {
       std::cerr << "cannot write " << folder << "/" << name << "\n";
       return 1;
@@ -202,7 +202,7 @@ int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, co
 int main(int argc, char** argv) {
   std::string config_dir, scenario = "default", out = "frame", target_file;
   double time_s = 0.0, dt_s = 1.0 / 30.0;
-  int bench = 0, sequence = 0;
+  int bench = 0, sequence = 0, sequence_camera = docking_sim::RobotModel::kStereoLeft;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (i + 1 >= argc) return usage();
@@ -215,6 +215,8 @@ int main(int argc, char** argv) {
     else if (arg == "--sequence") sequence = std::stoi(value);
     else if (arg == "--dt") dt_s = std::stod(value);
     else if (arg == "--target") target_file = value;
+    else if (arg == "--camera" && (value == "stereo_left" || value == "ir"))
+      sequence_camera = value == "ir" ? docking_sim::RobotModel::kIr : docking_sim::RobotModel::kStereoLeft;
     else return usage();
   }
   if (config_dir.empty() || sequence < 0 || !(dt_s > 0.0)) return usage();
@@ -229,7 +231,7 @@ int main(int argc, char** argv) {
   try {
     docking_sim::Simulation sim(files);
     while (sim.time() < time_s - 1e-9) sim.advance(std::min(0.005, time_s - sim.time()));
-    if (sequence > 0) return renderSequence(sim, scenario, files.target_config, sequence, dt_s, out);
+    if (sequence > 0) return renderSequence(sim, scenario, files.target_config, sequence_camera, sequence, dt_s, out);
     const char* names[3] = {"stereo_left", "stereo_right", "ir"};
     if (bench > 0) {
       std::cout << "scenario " << scenario << ", " << bench << " frames per camera, 640x480\n";
