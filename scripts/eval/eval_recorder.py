@@ -193,10 +193,12 @@ class EvalRecorder:
     @staticmethod
     def raw_row(est, truth):
         """One estimate for diagnosis: validity, the arbiter's choice, the reject code, the errors and the
-        per-axis errors in units of the estimate's own sigma (None where not claimed)."""
+        per-axis errors in units of the estimate's own sigma (None where not claimed), its status and its sigmas."""
         row = {"t": est.header.stamp.to_sec(), "valid": bool(est.valid), "selected_source": est.selected_source,
                "reject_reason": est.reject_reason, "true_range": None, "position_error": None,
-               "orientation_error": None, "z": None}
+               "orientation_error": None, "z": None, "status": est.status,
+               "sigma": [math.sqrt(v) if 0.0 < v < NOT_ESTIMATED_VARIANCE else None
+                         for v in (est.pose.covariance[7 * i] for i in range(6))]}
         if truth is None:
             return row
         pe, pt = est.pose.pose.position, truth.pose.pose.position
