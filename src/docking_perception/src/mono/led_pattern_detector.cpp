@@ -32,9 +32,16 @@ LedPatternDetector::LedPatternDetector(const MarkerPoints& markers, const LedDet
 
 namespace {
 
-// Ratio of the principal axes (square root of the second-moment eigenvalues) of one labelled component;
-// a round LED spot gives ~1, an LED merged with a reflection beside it 2 or more.
-double componentElongation(const cv::Mat& labels, int label, const cv::Rect& box) {
+struct ComponentShape {
+  double elongation = 1.0;
+  double streak_sigma_px = 0.0;
+};
+
+// The shape of one labelled component from its second moments. Elongation: the ratio of the principal
+// axes (square roots of the eigenvalues); a round LED spot gives ~1, an LED merged with a reflection
+// beside it 2 or more. Streak: sqrt(largest - smallest eigenvalue), what a motion streak of length L adds
+// along its direction (L / sqrt(12), the sigma of a box of that length); ~0 for a round spot.
+ComponentShape componentShape(const cv::Mat& labels, int label, const cv::Rect& box) {
   double n = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
   for (int y = box.y; y < box.y + box.height; ++y) {
     const int* row = labels.ptr<int>(y);
@@ -48,17 +55,32 @@ double componentElongation(const cv::Mat& labels, int label, const cv::Rect& box
       sxy += static_cast<double>(x) * y;
     }
   }
-  if (n < 2.0) return 1.0;
+  if (n < 2.0) return ComponentShape();
   // Pixel extent (1/12 per axis) keeps a 1-2 pixel blob from reading as a line.
   const double cxx = sxx / n - (sx / n) * (sx / n) + 1.0 / 12.0;
   const double cyy = syy / n - (sy / n) * (sy / n) + 1.0 / 12.0;
   const double cxy = sxy / n - (sx / n) * (sy / n);
   const double mean = 0.5 * (cxx + cyy);
   const double spread = std::sqrt(0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy);
-  return std::sqrt((mean + spread) / std::max(1e-9, mean - spread));
+  ComponentShape shape;
+  shape.elongation = std::sqrt((mean + spread) / std::max(1e-9, mean - spread));
+  shape.streak_sigma_px = std::sqrt(2.0 * spread);
+  return shape;
 }
 
 }  // namespace
+
+double medianStreakSigma(const std::vector<LedBlob>& blobs, const LedPatternCandidate& candidate) {
+  std::vector<double> streaks;
+  for (const int index : candidate.blob_indices) {
+    if (index >= 0 && static_cast<size_t>(index) < blobs.size()) {
+      streaks.push_back(blobs[static_cast<size_t>(index)].streak_sigma_px);
+    }
+  }
+  if (streaks.empty()) return 0.0;
+  std::nth_element(streaks.begin(), streaks.begin() + static_cast<long>(streaks.size() / 2), streaks.end());
+  return streaks[streaks.size() / 2];
+}
 
 std::vector<LedBlob> LedPatternDetector::detectBlobs(const cv::Mat& gray, const cv::Rect& roi_in) const {
   std::vector<LedBlob> blobs;
@@ -116,8 +138,10 @@ std::vector<LedBlob> LedPatternDetector::detectBlobs(const cv::Mat& gray, const 
     // crosses the threshold is not.
     if (peak - background < params_.min_contrast) continue;
     LedBlob blob;
-    blob.elongation = componentElongation(labels, label, cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT),
-                                                                  stats.at<int>(label, cv::CC_STAT_TOP), w, h));
+    const ComponentShape shape = componentShape(
+        labels, label, cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP), w, h));
+    blob.elongation = shape.elongation;
+    blob.streak_sigma_px = shape.streak_sigma_px;
     blob.centroid = {sum_x / sum_w + roi.x, sum_y / sum_w + roi.y};
     blob.area_px = area;
     blob.peak = peak;

@@ -535,12 +535,19 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
       MonoPoseResult trial = *result;
       RejectReason code = RejectReason::kNone;
       if (!solveFivePoint(pixels, &trial, &reason, &code)) continue;
+      // Motion smears each LED into a streak whose centroid the blur moves by a fraction of a pixel
+      // that the residual of five points cannot show: the covariance grows with the streaks' length.
+      const double streak = medianStreakSigma(blobs, candidates[static_cast<size_t>(c)]);
+      const double still = params_.consistency.led_still_streak_px;
+      trial.blur_sigma_px = std::sqrt(std::max(0.0, streak * streak - still * still));
       if (params_.solver == PoseSolverType::kPnp) {
         const std::vector<Eigen::Vector3d> model(model_.markers().begin(), model_.markers().end());
         const std::vector<Eigen::Vector2d> image(pixels.begin(), pixels.end());
         Eigen::Matrix3d previous_storage;
-        const Eigen::Matrix3d* previous = previousRotation(result->stamp_s, &previous_storage);
-        if (previous == nullptr) previous = &trial.pose.rotation;  // no history: the 5-point pose decides
+        const Eigen::Matrix3d* claimed_previous = previousRotation(result->stamp_s, &previous_storage);
+        // No claimed history: the 5-point pose picks the IPPE branch, but from the same five points, so
+        // its pick is no evidence: an alternative that fits as well stays in the covariance (below).
+        const Eigen::Matrix3d* previous = claimed_previous != nullptr ? claimed_previous : &trial.pose.rotation;
         PlanarPnpSolution solution;
         if (!pnp_solver_.solve(camera_, model, image, previous, &solution, &reason)) continue;
         if (solution.reprojection_rms_px > params_.max_reprojection_px || !checkPose(solution.pose, &reason)) continue;
@@ -548,7 +555,19 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
         trial.reprojection_error_px = solution.reprojection_rms_px;
         trial.pnp_ambiguous = solution.ambiguous;
         trial.pose.covariance = honestCovariance(camera_, trial.pose, model, trial.reprojection_error_px,
-                                                 params_.pnp.min_pixel_sigma, 0.0, params_.consistency);
+                                                 params_.pnp.min_pixel_sigma, trial.blur_sigma_px,
+                                                 params_.consistency);
+        trial.ambiguity_deg = undecidedAlternativeDeg(
+            solution, claimed_previous, model.size(),
+            solution.reprojection_rms_px, std::max(solution.reprojection_rms_px, params_.pnp.min_pixel_sigma),
+            trial.pose.rotation, params_.consistency);
+        if (trial.ambiguity_deg > 0.0) {
+          addAlternative(trial.pose, solution.alternative_rotation, solution.alternative_translation,
+                         &trial.pose.covariance);
+        }
+      } else {
+        const double blur_factor = 1.0 + params_.consistency.blur_gain * trial.blur_sigma_px;
+        trial.pose.covariance *= blur_factor * blur_factor;
       }
       *result = trial;
       result->feature_inliers = kMarkerCount;
@@ -792,17 +811,15 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
                                                    " of the face (min_inlier_spread)");
   }
   // IPPE's flag compares raw RMS values; with a hundred refined points an alternative at 0.4 px against
-  // 0.1 px is clearly worse. Ambiguous here: the alternative's extra squared residual, in units of the
-  // pixel variance, is below ambiguity_chi2 (both fit within the noise) and no previous pose decided.
+  // 0.1 px is clearly worse. A previous orientation decides only when it was claimed.
   double ambiguity_deg = 0.0;
-  if (pnp != nullptr && pnp->has_alternative && !pnp->chosen_by_previous_pose) {
-    const double n = static_cast<double>(model_points.size());
-    const double sigma = std::max(pixel_sigma_px, params_.pnp.min_pixel_sigma);
-    const double excess = n * (pnp->alternative_rms_px * pnp->alternative_rms_px -
-                               result->reprojection_error_px * result->reprojection_error_px) / (sigma * sigma);
-    if (excess < c.ambiguity_chi2) {
-      ambiguity_deg = rotationAngleBetween(pnp->alternative_rotation, result->pose.rotation) * 180.0 / M_PI;
-    }
+  if (pnp != nullptr) {
+    Eigen::Matrix3d previous_storage;
+    ambiguity_deg = undecidedAlternativeDeg(*pnp, previousRotation(result->stamp_s, &previous_storage),
+                                            model_points.size(),
+                                            result->reprojection_error_px,
+                                            std::max(pixel_sigma_px, params_.pnp.min_pixel_sigma),
+                                            result->pose.rotation, c);
     // Both solutions share nearly one position: beyond max_ambiguity_deg the orientation is withheld
     // (process()), the position stays; the covariance below covers both solutions either way.
     result->ambiguity_deg = ambiguity_deg;
@@ -831,6 +848,7 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
       result->pose.covariance(3 + i, 3 + i) += rotation_floor * rotation_floor;
     }
   }
+  addFaceScaleBias(camera_, model_.faceCorners(), c.face_scale_bias_px, &result->pose);
   return true;
 }
 

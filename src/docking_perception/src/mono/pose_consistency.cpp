@@ -114,6 +114,8 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.max_solver_disagreement_deg > 0.0)) return "max_solver_disagreement_deg must be positive";
   if (!(p.max_led_area_ratio > 1.0)) return "max_led_area_ratio must exceed 1";
   if (!(p.max_led_elongation >= 1.0)) return "max_led_elongation must be at least 1";
+  if (!(p.led_still_streak_px >= 0.0)) return "led_still_streak_px must not be negative";
+  if (!(p.face_scale_bias_px >= 0.0)) return "face_scale_bias_px must not be negative (0: off)";
   return "";
 }
 
@@ -268,6 +270,38 @@ void InnovationCovarianceScale::apply(Matrix6d* covariance) const {
 void InnovationCovarianceScale::reset() {
   position_mean_ = 1.0;
   rotation_mean_ = 1.0;
+}
+
+double undecidedAlternativeDeg(const PlanarPnpSolution& pnp, const Eigen::Matrix3d* claimed_previous,
+                               size_t point_count, double rms_px, double pixel_sigma_px,
+                               const Eigen::Matrix3d& rotation, const ConsistencyParams& params) {
+  if (!pnp.has_alternative || !(pixel_sigma_px > 0.0)) return 0.0;
+  if (claimed_previous != nullptr && rotationAngleBetween(rotation, *claimed_previous) <
+                                         rotationAngleBetween(pnp.alternative_rotation, *claimed_previous)) {
+    return 0.0;
+  }
+  const double excess = static_cast<double>(point_count) * (pnp.alternative_rms_px * pnp.alternative_rms_px - rms_px * rms_px) /
+                        (pixel_sigma_px * pixel_sigma_px);
+  if (excess >= params.ambiguity_chi2) return 0.0;
+  return rotationAngleBetween(pnp.alternative_rotation, rotation) * 180.0 / M_PI;
+}
+
+void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
+                      double scale_bias_px, PoseWithCovariance* pose) {
+  if (!(scale_bias_px > 0.0) || face_corners.size() < 3) return;
+  std::vector<cv::Point2f> outline;
+  for (const Eigen::Vector3d& corner : face_corners) {
+    const Eigen::Vector3d in_camera = pose->rotation * corner + pose->translation;
+    if (!(in_camera.z() > 0.0)) return;  // a face behind the camera has no apparent size
+    const Eigen::Vector2d pixel = camera.project(in_camera);
+    outline.emplace_back(static_cast<float>(pixel.x()), static_cast<float>(pixel.y()));
+  }
+  const double area_px = std::abs(cv::contourArea(outline));
+  const double range = pose->translation.norm();
+  if (!(area_px > 0.0) || !(range > 0.0)) return;
+  const double sigma = scale_bias_px / std::sqrt(area_px) * range;
+  const Eigen::Vector3d line_of_sight = pose->translation / range;
+  pose->covariance.topLeftCorner<3, 3>() += sigma * sigma * line_of_sight * line_of_sight.transpose();
 }
 
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,

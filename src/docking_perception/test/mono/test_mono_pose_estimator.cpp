@@ -228,6 +228,49 @@ TEST(MonoPoseEstimator, IrModeFindsTheLedsInTheDark) {
   }
 }
 
+// Motion smears each LED into a streak whose centroid moves by an amount the five points' residual cannot
+// show (eval_real_motion9px_1m: one IR frame 7.6 deg off with a 1.3 deg sigma): the streaks beyond a still
+// spot's scale the covariance, as the visible blur does.
+TEST(MonoPoseEstimator, IrCovarianceGrowsWithTheLedStreaks) {
+  const TargetModel model = synthetic::makeModel(1);
+  CameraIntrinsics camera = synthetic::defaultCamera();
+  camera.fx = camera.fy = 520.0;
+  const Eigen::Matrix3d r = synthetic::facingRotation(-0.3, 0.1, 0.05);
+  const Eigen::Vector3d t(0.03, 0.01, 0.9);
+  // One exposure: the LEDs swept across the image by a turn of the camera about its y axis, summed over
+  // sub-frames and clipped (an LED saturates the sensor).
+  auto exposure = [&](double smear_px) {
+    constexpr int kSteps = 9;
+    cv::Mat sum(camera.height, camera.width, CV_32F, cv::Scalar(0.0));
+    for (int k = 0; k < kSteps; ++k) {
+      const double angle = smear_px / camera.fx * (k / (kSteps - 1.0) - 0.5);
+      const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
+      std::vector<Eigen::Vector3d> points;
+      for (const auto& m : model.markers()) points.push_back(turn * (r * m + t));
+      cv::Mat frame;
+      synthetic::renderLedSpots(camera, points, 0.005, 7).convertTo(frame, CV_32F);
+      sum += frame;
+    }
+    cv::Mat image;
+    sum.convertTo(image, CV_8U, 3.0 / kSteps);
+    return image;
+  };
+  const MonoPoseParams params = paramsFor(MonoMode::kIr, PoseSolverType::kPnp);
+  MonoPoseEstimator sharp_estimator(model, camera, params);
+  MonoPoseEstimator smeared_estimator(model, camera, params);
+  const MonoPoseResult sharp = sharp_estimator.process(exposure(0.0), 1.0);
+  const MonoPoseResult smeared = smeared_estimator.process(exposure(6.0), 1.0);
+  ASSERT_TRUE(sharp.valid) << sharp.status;
+  ASSERT_TRUE(smeared.valid) << smeared.status;
+  EXPECT_EQ(sharp.blur_sigma_px, 0.0);
+  // A 6 px streak: 6 / sqrt(12) = 1.7 px (a wide spot's sweep reads more), less the still 0.8 px in quadrature.
+  EXPECT_GT(smeared.blur_sigma_px, 1.2);
+  EXPECT_LT(smeared.blur_sigma_px, 3.2);
+  const double sharp_rotation = sharp.pose.covariance.bottomRightCorner<3, 3>().trace();
+  const double smeared_rotation = smeared.pose.covariance.bottomRightCorner<3, 3>().trace();
+  EXPECT_GT(smeared_rotation, 3.0 * sharp_rotation) << smeared.blur_sigma_px;
+}
+
 TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
   MonoPoseParams params;
   params.features.ratio = 1.5;

@@ -267,6 +267,94 @@ TEST(PoseConsistency, MergedLedBlobIsElongated) {
   }
 }
 
+// Motion smears an LED spot along one direction: the streak sigma grows with its length L (L / sqrt(12)
+// for a thin spot; the thresholded sweep of a spot of radius R reads up to (L + 2R) / sqrt(12)), a round
+// spot reads under the still spot's 0.8 px, and the median over a pattern ignores one odd blob.
+TEST(PoseConsistency, LedStreakMeasuresTheMotionSmear) {
+  cv::Mat image(120, 200, CV_8U, cv::Scalar(10));
+  cv::circle(image, cv::Point(40, 60), 4, cv::Scalar(255), cv::FILLED);
+  for (int dx = 0; dx <= 12; ++dx) cv::circle(image, cv::Point(110 + dx, 60), 4, cv::Scalar(255), cv::FILLED);
+  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.0);
+  mono::LedDetectorParams p;
+  p.threshold = 140;
+  p.max_aspect_ratio = 5.0;
+  const mono::LedPatternDetector detector(model().markers(), p);
+  const std::vector<mono::LedBlob> blobs = detector.detectBlobs(image);
+  ASSERT_EQ(blobs.size(), 2u);
+  const mono::LedBlob& streak = blobs[0].centroid.x() > 80 ? blobs[0] : blobs[1];
+  const mono::LedBlob& spot = blobs[0].centroid.x() > 80 ? blobs[1] : blobs[0];
+  EXPECT_LT(spot.streak_sigma_px, 0.8);
+  EXPECT_GT(streak.streak_sigma_px, 12.0 / std::sqrt(12.0));
+  EXPECT_LT(streak.streak_sigma_px, (12.0 + 2.0 * 5.0) / std::sqrt(12.0));
+  mono::LedPatternCandidate candidate;
+  const int streak_index = blobs[0].centroid.x() > 80 ? 0 : 1;
+  candidate.blob_indices = {streak_index, 1 - streak_index, 1 - streak_index, 1 - streak_index, 1 - streak_index};
+  EXPECT_DOUBLE_EQ(mono::medianStreakSigma(blobs, candidate), spot.streak_sigma_px);
+  candidate.blob_indices = {streak_index, streak_index, streak_index, 1 - streak_index, 1 - streak_index};
+  EXPECT_DOUBLE_EQ(mono::medianStreakSigma(blobs, candidate), streak.streak_sigma_px);
+}
+
+// IPPE's other solution counts when the points cannot reject it and no claimed orientation is nearer the
+// chosen one; a claimed orientation nearer the other solution does not decide for the chosen one.
+TEST(PoseConsistency, AnAlternativeTheDataCannotRejectIsUndecided) {
+  const mono::ConsistencyParams c;  // ambiguity_chi2 16
+  mono::PlanarPnpSolution pnp;
+  const Eigen::Matrix3d chosen = Eigen::Matrix3d::Identity();
+  pnp.has_alternative = true;
+  pnp.alternative_rotation = mono::rotationExp(Eigen::Vector3d(0.0, 10.0 * M_PI / 180.0, 0.0));
+  pnp.alternative_rms_px = 0.12;
+  // 5 points, rms 0.10 vs 0.12 at sigma 0.3: extra chi^2 0.24, far below 16.
+  EXPECT_NEAR(mono::undecidedAlternativeDeg(pnp, nullptr, 5, 0.10, 0.3, chosen, c), 10.0, 1e-6);
+  EXPECT_EQ(mono::undecidedAlternativeDeg(pnp, &chosen, 5, 0.10, 0.3, chosen, c), 0.0);
+  EXPECT_NEAR(mono::undecidedAlternativeDeg(pnp, &pnp.alternative_rotation, 5, 0.10, 0.3, chosen, c), 10.0, 1e-6);
+  pnp.alternative_rms_px = 1.0;  // extra chi^2 55: the points reject it
+  EXPECT_EQ(mono::undecidedAlternativeDeg(pnp, nullptr, 5, 0.10, 0.3, chosen, c), 0.0);
+  pnp.has_alternative = false;
+  EXPECT_EQ(mono::undecidedAlternativeDeg(pnp, nullptr, 5, 0.10, 0.3, chosen, c), 0.0);
+}
+
+// A face-size bias all points share moves the pose along the line of sight: the floor grows there as
+// range / sqrt(face area), and nowhere else.
+TEST(PoseConsistency, FaceScaleBiasWidensTheRangeAlongTheLineOfSight) {
+  mono::CameraIntrinsics camera;
+  camera.fx = camera.fy = 550.0;
+  camera.cx = 319.5;
+  camera.cy = 239.5;
+  camera.width = 640;
+  camera.height = 480;
+  // The face (0.30 x 0.24 m, normal along the target's x) facing the camera 4 m ahead, 0.5 m to the side.
+  mono::PoseWithCovariance pose;
+  pose.rotation << 0, -1, 0, 0, 0, -1, -1, 0, 0;  // target x -> camera -z, y -> -x, z -> -y
+  pose.translation = Eigen::Vector3d(0.5, 0.0, 4.0);
+  pose.covariance = mono::Matrix6d::Zero();
+  const std::vector<Eigen::Vector3d> corners = model().faceCorners();
+  mono::addFaceScaleBias(camera, corners, 0.3, &pose);
+  const double range = pose.translation.norm();
+  const Eigen::Vector3d line_of_sight = pose.translation / range;
+  // ~0.30 x 0.24 m at ~4 m: ~41 x 33 px.
+  const double area_px = (0.30 * 550.0 / 4.0) * (0.24 * 550.0 / 4.0);
+  const double expected_sigma = 0.3 / std::sqrt(area_px) * range;
+  const double along = line_of_sight.dot(pose.covariance.topLeftCorner<3, 3>() * line_of_sight);
+  EXPECT_NEAR(std::sqrt(along), expected_sigma, 0.05 * expected_sigma);
+  const Eigen::Vector3d across = line_of_sight.cross(Eigen::Vector3d::UnitY()).normalized();
+  EXPECT_NEAR(across.dot(pose.covariance.topLeftCorner<3, 3>() * across), 0.0, 1e-12);
+  EXPECT_TRUE((pose.covariance.bottomRightCorner<3, 3>().isZero()));
+  // Twice as far: the face covers a quarter of the pixels, the range sigma grows four times.
+  mono::PoseWithCovariance far = pose;
+  far.translation *= 2.0;
+  far.covariance = mono::Matrix6d::Zero();
+  mono::addFaceScaleBias(camera, corners, 0.3, &far);
+  EXPECT_NEAR(std::sqrt(far.covariance.topLeftCorner<3, 3>().trace()), 4.0 * std::sqrt(along), 0.05 * std::sqrt(along));
+  // Off, or a face behind the camera: nothing added.
+  mono::PoseWithCovariance off = pose;
+  off.covariance = mono::Matrix6d::Zero();
+  mono::addFaceScaleBias(camera, corners, 0.0, &off);
+  EXPECT_TRUE(off.covariance.isZero());
+  off.translation.z() = -4.0;
+  mono::addFaceScaleBias(camera, corners, 0.3, &off);
+  EXPECT_TRUE(off.covariance.isZero());
+}
+
 // The node's hint: the disparity detector's 3D estimate (the blob's centre, a few cm off the port),
 // projected by setPositionHint. Over clutter at 1.4-2 m it must find what the whole frame misses.
 TEST(MonoStress, PositionHintFromTheStereoEstimateFindsTheTargetOverClutter) {

@@ -43,6 +43,8 @@ struct LedBlob {
   double area_px = 0.0;
   double peak = 0.0;
   double elongation = 1.0;  // ratio of the thresholded component's principal axes
+  double streak_sigma_px = 0.0;  // motion streak: sqrt(major - minor second moment), ~0 for a round spot,
+                                 // ~L / sqrt(12) for a streak of length L (more for a wide spot's sweep)
 };
 
 struct LedPatternCandidate {
@@ -50,6 +52,9 @@ struct LedPatternCandidate {
   std::array<int, kMarkerCount> blob_indices{};
   double score = 0.0;      // sum of normalised collinearity and midpoint residuals (lower is better)
 };
+
+// The median streak_sigma_px of a candidate's five blobs: the motion blur the LEDs show.
+double medianStreakSigma(const std::vector<LedBlob>& blobs, const LedPatternCandidate& candidate);
 
 class LedPatternDetector {
  public:

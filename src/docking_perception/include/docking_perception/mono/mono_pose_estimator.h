@@ -112,12 +112,12 @@ struct MonoPoseResult {
   bool face_search_skipped = false;    // near contact, the face's search skipped (inner_pattern.face_retry_every)
   cv::Rect search_region;              // where detection ran last (full frame after a fallback)
   bool pnp_ambiguous = false;          // IPPE's two poses were close
-  double ambiguity_deg = 0.0;          // visible: the undecided IPPE alternative's angle (0: decided)
+  double ambiguity_deg = 0.0;          // the undecided IPPE alternative's angle (0: decided)
   bool used_region_hint = false;       // the external region hint gave the result
   int pyramid_level = 0;               // visible: image level of the keypoints (0 full, 1 half resolution)
   double inlier_spread = 0.0;          // visible: hull of the pose points / face area
   double appearance_ncc = -1.0;        // visible: the model at the pose vs the image (median cell NCC)
-  double blur_sigma_px = 0.0;          // visible: the image blur that matched the model best
+  double blur_sigma_px = 0.0;          // visible: the image blur that matched the model best; IR: the LED streaks
   // The covariance's scale (variance) from the poses' scatter about the filter (InnovationCovarianceScale).
   double covariance_scale_position = 1.0;
   double rotation_innovation_chi2 = 0.0;  // this frame's orientation vs the filter's prediction (3 dof)

@@ -92,6 +92,8 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("max_solver_disagreement_deg", &p.consistency.max_solver_disagreement_deg);
   visit("max_led_area_ratio", &p.consistency.max_led_area_ratio);
   visit("max_led_elongation", &p.consistency.max_led_elongation);
+  visit("led_still_streak_px", &p.consistency.led_still_streak_px);
+  visit("face_scale_bias_px", &p.consistency.face_scale_bias_px);
   // Issue 11: direct (ECC) alignment of the face when the features fail (face_alignment.h).
   visit("use_direct_alignment", &p.use_direct_alignment);
   visit("direct_yaw_hypotheses", &p.direct_yaw_hypotheses);

@@ -45,6 +45,16 @@ struct ConsistencyParams {
   double max_solver_disagreement_deg = 5.0;  // paper_5point vs homography-inlier PnP orientation
   double max_led_area_ratio = 2.5;       // IR: a pattern blob larger than this times the median of the five
   double max_led_elongation = 1.8;       // IR: ratio of a blob's principal axes (second moments)
+  // IR: the streak sigma (LedBlob::streak_sigma_px) a still LED spot shows from the pixel grid and a
+  // turned face's ellipse (0.4-0.77 px in the still eval scenes); the median streak of the five blobs
+  // beyond it, in quadrature, is the motion blur that scales the covariance (blur_gain).
+  double led_still_streak_px = 0.8;
+  // Visible: a bias in the face's apparent size that all its points share (blur, the print's edges, a
+  // lens's residual distortion) moves the pose along the line of sight, and no residual shows it. The
+  // range sigma is at least this / sqrt(face area in px) x range, along the line of sight: at 4 m (a face
+  // ~37 px across) the pose came out 1.7 % too far for seconds against a 0.6 % range sigma
+  // (eval_real_clutter_far_4m). 0 turns it off.
+  double face_scale_bias_px = 0.3;
   // An orientation whose largest rotation sigma is above this is not claimed (the position still is):
   // 3.3 deg puts 3 sigma at 10 deg, the error that makes an estimate wrong. Five LEDs under motion blur
   // gave 10-28 deg errors with honest sigmas of 4-7 deg (eval_real_motion9px_1m); those are withheld.
@@ -128,6 +138,19 @@ class InnovationCovarianceScale {
   double position_mean_ = 1.0;
   double rotation_mean_ = 1.0;
 };
+
+// The angle (deg) from a PnP pose (rotation) to IPPE's other solution when nothing tells the two apart:
+// the other's extra squared residual over all points, in units of the pixel variance, is below
+// params.ambiguity_chi2, and no claimed orientation tracked to this frame (claimed_previous, may be null)
+// is nearer the chosen solution than the other. 0 when decided. pixel_sigma_px: the points' noise (floored).
+double undecidedAlternativeDeg(const PlanarPnpSolution& pnp, const Eigen::Matrix3d* claimed_previous,
+                               size_t point_count, double rms_px, double pixel_sigma_px,
+                               const Eigen::Matrix3d& rotation, const ConsistencyParams& params);
+
+// Adds (scale_bias_px / sqrt(projected face area, px^2) x range)^2 along the line of sight to the pose's
+// position covariance (ConsistencyParams::face_scale_bias_px). face_corners in the target frame.
+void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
+                      double scale_bias_px, PoseWithCovariance* pose);
 
 // Adds the outer product of the difference to another pose (IPPE's other solution) to a covariance.
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,
