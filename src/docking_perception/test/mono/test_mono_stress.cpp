@@ -39,6 +39,16 @@ cv::Rect faceBox(const stress::TrialPose& pose, int margin) {
   return cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin);
 }
 
+// LED blobs of a hand-drawn image of white discs: blurred by 1 px, detected at threshold 140.
+std::vector<mono::LedBlob> ledBlobsOf(cv::Mat image) {
+  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.0);
+  mono::LedDetectorParams p;
+  p.threshold = 140;
+  p.max_aspect_ratio = 5.0;
+  const mono::LedPatternDetector detector(model().markers(), p);
+  return detector.detectBlobs(image);
+}
+
 }  // namespace
 
 // Over a busy background the old whole-frame budget (300 strongest corners) goes to the clutter; the
@@ -251,12 +261,7 @@ TEST(PoseConsistency, MergedLedBlobIsElongated) {
   cv::circle(image, cv::Point(40, 60), 4, cv::Scalar(255), cv::FILLED);
   cv::circle(image, cv::Point(110, 60), 4, cv::Scalar(255), cv::FILLED);
   cv::circle(image, cv::Point(117, 62), 4, cv::Scalar(255), cv::FILLED);
-  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.0);
-  mono::LedDetectorParams p;
-  p.threshold = 140;
-  p.max_aspect_ratio = 5.0;
-  const mono::LedPatternDetector detector(model().markers(), p);
-  const std::vector<mono::LedBlob> blobs = detector.detectBlobs(image);
+  const std::vector<mono::LedBlob> blobs = ledBlobsOf(image);
   ASSERT_EQ(blobs.size(), 2u);
   for (const mono::LedBlob& blob : blobs) {
     if (blob.centroid.x() < 80) {
@@ -274,12 +279,7 @@ TEST(PoseConsistency, LedStreakMeasuresTheMotionSmear) {
   cv::Mat image(120, 200, CV_8U, cv::Scalar(10));
   cv::circle(image, cv::Point(40, 60), 4, cv::Scalar(255), cv::FILLED);
   for (int dx = 0; dx <= 12; ++dx) cv::circle(image, cv::Point(110 + dx, 60), 4, cv::Scalar(255), cv::FILLED);
-  cv::GaussianBlur(image, image, cv::Size(0, 0), 1.0);
-  mono::LedDetectorParams p;
-  p.threshold = 140;
-  p.max_aspect_ratio = 5.0;
-  const mono::LedPatternDetector detector(model().markers(), p);
-  const std::vector<mono::LedBlob> blobs = detector.detectBlobs(image);
+  const std::vector<mono::LedBlob> blobs = ledBlobsOf(image);
   ASSERT_EQ(blobs.size(), 2u);
   const mono::LedBlob& streak = blobs[0].centroid.x() > 80 ? blobs[0] : blobs[1];
   const mono::LedBlob& spot = blobs[0].centroid.x() > 80 ? blobs[1] : blobs[0];
@@ -316,12 +316,7 @@ TEST(PoseConsistency, AnAlternativeTheDataCannotRejectIsUndecided) {
 // A face-size bias all points share moves the pose along the line of sight: the floor grows there as
 // range / sqrt(face area), and nowhere else.
 TEST(PoseConsistency, FaceScaleBiasWidensTheRangeAlongTheLineOfSight) {
-  mono::CameraIntrinsics camera;
-  camera.fx = camera.fy = 550.0;
-  camera.cx = 319.5;
-  camera.cy = 239.5;
-  camera.width = 640;
-  camera.height = 480;
+  const mono::CameraIntrinsics& camera = renderer().camera();
   // The face (0.30 x 0.24 m, normal along the target's x) facing the camera 4 m ahead, 0.5 m to the side.
   mono::PoseWithCovariance pose;
   pose.rotation << 0, -1, 0, 0, 0, -1, -1, 0, 0;  // target x -> camera -z, y -> -x, z -> -y
@@ -332,7 +327,7 @@ TEST(PoseConsistency, FaceScaleBiasWidensTheRangeAlongTheLineOfSight) {
   const double range = pose.translation.norm();
   const Eigen::Vector3d line_of_sight = pose.translation / range;
   // ~0.30 x 0.24 m at ~4 m: ~41 x 33 px.
-  const double area_px = (0.30 * 550.0 / 4.0) * (0.24 * 550.0 / 4.0);
+  const double area_px = (0.30 * camera.fx / 4.0) * (0.24 * camera.fy / 4.0);
   const double expected_sigma = 0.3 / std::sqrt(area_px) * range;
   const double along = line_of_sight.dot(pose.covariance.topLeftCorner<3, 3>() * line_of_sight);
   EXPECT_NEAR(std::sqrt(along), expected_sigma, 0.05 * expected_sigma);
