@@ -535,39 +535,8 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
       MonoPoseResult trial = *result;
       RejectReason code = RejectReason::kNone;
       if (!solveFivePoint(pixels, &trial, &reason, &code)) continue;
-      // Motion smears each LED into a streak whose centroid the blur moves by a fraction of a pixel
-      // that the residual of five points cannot show: the covariance grows with the streaks' length.
-      const double streak = medianStreakSigma(blobs, candidates[static_cast<size_t>(c)]);
-      const double still = params_.consistency.led_still_streak_px;
-      trial.blur_sigma_px = std::sqrt(std::max(0.0, streak * streak - still * still));
-      if (params_.solver == PoseSolverType::kPnp) {
-        const std::vector<Eigen::Vector3d> model(model_.markers().begin(), model_.markers().end());
-        const std::vector<Eigen::Vector2d> image(pixels.begin(), pixels.end());
-        Eigen::Matrix3d previous_storage;
-        const Eigen::Matrix3d* claimed_previous = previousRotation(result->stamp_s, &previous_storage);
-        // No claimed history: the 5-point pose picks the IPPE branch, but from the same five points, so
-        // its pick is no evidence: an alternative that fits as well stays in the covariance (below).
-        const Eigen::Matrix3d* previous = claimed_previous != nullptr ? claimed_previous : &trial.pose.rotation;
-        PlanarPnpSolution solution;
-        if (!pnp_solver_.solve(camera_, model, image, previous, &solution, &reason)) continue;
-        if (solution.reprojection_rms_px > params_.max_reprojection_px || !checkPose(solution.pose, &reason)) continue;
-        trial.pose = solution.pose;
-        trial.reprojection_error_px = solution.reprojection_rms_px;
-        trial.pnp_ambiguous = solution.ambiguous;
-        trial.pose.covariance = honestCovariance(camera_, trial.pose, model, trial.reprojection_error_px,
-                                                 params_.pnp.min_pixel_sigma, trial.blur_sigma_px,
-                                                 params_.consistency);
-        trial.ambiguity_deg = undecidedAlternativeDeg(
-            solution, claimed_previous, model.size(),
-            solution.reprojection_rms_px, std::max(solution.reprojection_rms_px, params_.pnp.min_pixel_sigma),
-            trial.pose.rotation, params_.consistency);
-        if (trial.ambiguity_deg > 0.0) {
-          addAlternative(trial.pose, solution.alternative_rotation, solution.alternative_translation,
-                         &trial.pose.covariance);
-        }
-      } else {
-        const double blur_factor = 1.0 + params_.consistency.blur_gain * trial.blur_sigma_px;
-        trial.pose.covariance *= blur_factor * blur_factor;
+      if (!refineIrPose(pixels, medianStreakSigma(blobs, candidates[static_cast<size_t>(c)]), &trial, &reason)) {
+        continue;
       }
       *result = trial;
       result->feature_inliers = kMarkerCount;
@@ -589,6 +558,42 @@ bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, 
   result->status = reason.empty() ? "LED pattern not found" : reason;
   result->reject_reason = blob_rejected ? RejectReason::kLedBlobShape : RejectReason::kNotFound;
   return false;
+}
+
+bool MonoPoseEstimator::refineIrPose(const MarkerPixels& pixels, double median_streak_px, MonoPoseResult* trial,
+                                     std::string* reason) const {
+  // Motion smears each LED into a streak whose centroid the blur moves by a fraction of a pixel that the
+  // residual of five points cannot show: the covariance grows with the streaks beyond a still spot's.
+  const double still = params_.consistency.led_still_streak_px;
+  trial->blur_sigma_px = std::sqrt(std::max(0.0, median_streak_px * median_streak_px - still * still));
+  if (params_.solver != PoseSolverType::kPnp) {
+    const double blur_factor = 1.0 + params_.consistency.blur_gain * trial->blur_sigma_px;
+    trial->pose.covariance *= blur_factor * blur_factor;
+    return true;
+  }
+  const std::vector<Eigen::Vector3d> model(model_.markers().begin(), model_.markers().end());
+  const std::vector<Eigen::Vector2d> image(pixels.begin(), pixels.end());
+  Eigen::Matrix3d previous_storage;
+  const Eigen::Matrix3d* claimed_previous = previousRotation(trial->stamp_s, &previous_storage);
+  // No claimed history: the 5-point pose picks the IPPE branch, but from the same five points, so its
+  // pick is no evidence: an alternative that fits as well stays in the covariance (below).
+  const Eigen::Matrix3d* previous = claimed_previous != nullptr ? claimed_previous : &trial->pose.rotation;
+  PlanarPnpSolution solution;
+  if (!pnp_solver_.solve(camera_, model, image, previous, &solution, reason)) return false;
+  if (solution.reprojection_rms_px > params_.max_reprojection_px || !checkPose(solution.pose, reason)) return false;
+  trial->pose = solution.pose;
+  trial->reprojection_error_px = solution.reprojection_rms_px;
+  trial->pnp_ambiguous = solution.ambiguous;
+  trial->pose.covariance = honestCovariance(camera_, trial->pose, model, trial->reprojection_error_px,
+                                            params_.pnp.min_pixel_sigma, trial->blur_sigma_px, params_.consistency);
+  trial->ambiguity_deg = undecidedAlternativeDeg(
+      solution, claimed_previous, model.size(), solution.reprojection_rms_px,
+      std::max(solution.reprojection_rms_px, params_.pnp.min_pixel_sigma), trial->pose.rotation, params_.consistency);
+  if (trial->ambiguity_deg > 0.0) {
+    addAlternative(trial->pose, solution.alternative_rotation, solution.alternative_translation,
+                   &trial->pose.covariance);
+  }
+  return true;
 }
 
 bool MonoPoseEstimator::claimOrientation(MonoPoseResult& result) const {

@@ -280,8 +280,8 @@ double undecidedAlternativeDeg(const PlanarPnpSolution& pnp, const Eigen::Matrix
                                          rotationAngleBetween(pnp.alternative_rotation, *claimed_previous)) {
     return 0.0;
   }
-  const double excess = static_cast<double>(point_count) * (pnp.alternative_rms_px * pnp.alternative_rms_px - rms_px * rms_px) /
-                        (pixel_sigma_px * pixel_sigma_px);
+  const double extra_squared = pnp.alternative_rms_px * pnp.alternative_rms_px - rms_px * rms_px;
+  const double excess = static_cast<double>(point_count) * extra_squared / (pixel_sigma_px * pixel_sigma_px);
   if (excess >= params.ambiguity_chi2) return 0.0;
   return rotationAngleBetween(pnp.alternative_rotation, rotation) * 180.0 / M_PI;
 }

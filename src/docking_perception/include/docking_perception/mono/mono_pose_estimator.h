@@ -211,6 +211,11 @@ class MonoPoseEstimator {
   bool vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
                         const std::vector<Eigen::Vector3d>& model_points, const std::vector<Eigen::Vector2d>& image_points,
                         MonoPoseResult* result) const;
+  // IR: the pose of an identified pattern after its 5-point solve (trial->pose): the blur from the LEDs'
+  // streaks, then (pnp) the PnP pose with its covariance and IPPE's undecided alternative. False with the
+  // reason when PnP fails or its pose is implausible.
+  bool refineIrPose(const MarkerPixels& pixels, double median_streak_px, MonoPoseResult* trial,
+                    std::string* reason) const;
   // IR: the LED blobs of a pattern must look like single LEDs.
   bool vetLedBlobs(const std::vector<LedBlob>& blobs, const LedPatternCandidate& candidate, std::string* reason) const;
 
