@@ -5,7 +5,7 @@
 //   sim_render --config DIR --scenario NAME --bench N                      CPU ms per frame, per camera
 //   sim_render --config DIR --scenario NAME --sequence N [--dt S] [--time T0] [--camera C] --out FOLDER
 //       N frames of camera C (stereo_left, the default, or ir) at T0, T0 + dt, ... as its mono_pose instance
-//       sees them (image_rect: grey, rectified): FOLDER/<C>_rect_NNNN.png and FOLDER/sequence.json
+//       sees them (image_rect: grey, rectified): FOLDER/left_rect_NNNN.png (ir: ir_rect_NNNN.png) and FOLDER/sequence.json
 //       (intrinsics of the rectified image, and per frame the stamp, the pose of the docking port in the
 //       rectified optical frame and its linear and angular velocity in that frame).
 //   --target FILE   another target model instead of DIR/target.yaml (e.g. config/target_tagged.yaml)
@@ -125,7 +125,9 @@ std::string describe(const docking_sim::Simulation& sim, int cam) {
 /// initUndistortRectifyMap(K, D, R, P) maps, bilinear), with the truth in the rectified frame.
 int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, const std::string& target_file,
                    int cam, int frames, double dt_s, const std::string& folder) {
-  const std::string camera_name = cam == docking_sim::RobotModel::kIr ? "ir" : "stereo_left";
+  const bool ir = cam == docking_sim::RobotModel::kIr;
+  const std::string camera_name = ir ? "ir" : "stereo_left";
+  const char* file_prefix = ir ? "ir" : "left";
   const docking_sim::CameraCalibration& cal = sim.robot().cameras[cam].calibration;
   // R: the rectification rotation (rectified <- raw optical frame), from the calibration file (the loader
   // keeps K, D, P only); P's left 3x3: the rectified intrinsics. Our left and IR cameras have R = I, P = K.
@@ -163,7 +165,7 @@ int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, co
     else gray = raw;
     cv::remap(gray, rect, map1, map2, cv::INTER_LINEAR);
     char name[64];
-    std::snprintf(name, sizeof(name), "%s_rect_%04d.png", cam == docking_sim::RobotModel::kIr ? "ir" : "left", k);
+    std::snprintf(name, sizeof(name), "%s_rect_%04d.png", file_prefix, k);
     if (!cv::imwrite(folder + "/" + name, rect)) {
       std::cerr << "cannot write " << folder << "/" << name << "\n";
       return 1;
