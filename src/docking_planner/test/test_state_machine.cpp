@@ -177,6 +177,59 @@ TEST_F(StateMachineTest, LostTooLongOutsideTheCircleSearches) {
   EXPECT_TRUE(isZero(out.command));  // SEARCH starts by standing still
 }
 
+// A target lost at 3 m (its face turned away, the detector blind to its side): after the standing
+// wait, SEARCH goes to the search orbit around where it was and round it, the cameras on it; once it
+// has not been seen for search_orbit_memory_s, it turns in place as for a target never seen.
+TEST_F(StateMachineTest, SearchLooksWhereTheTargetWasLastSeen) {
+  const PlannerConfig& c = planner_.config();
+  ASSERT_GT(c.search_orbit_memory_s, c.estimate_timeout_s + c.hold_timeout_s + c.search_wait_s + 1.0);
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  const double lost_at = t_;
+  PlannerOutput out = runFor(c.estimate_timeout_s + c.hold_timeout_s + 0.2, kFar, false);
+  ASSERT_EQ(out.state, DockingPhase::kSearch) << out.reason;
+  out = runFor(c.search_wait_s + 0.2, kFar, false);
+  ASSERT_EQ(out.state, DockingPhase::kSearch) << out.reason;
+  EXPECT_NE(out.reason.find("looking where it was"), std::string::npos) << out.reason;
+  // Towards the held port (the chaser faces it: +x in base_link), to the orbit, not to the safe circle.
+  EXPECT_GT(out.command.vx, 0.1);
+  EXPECT_NEAR(out.goal_distance_m, std::hypot(kFar.x, kFar.y) - c.search_orbit_radius_m, 0.05);
+
+  // On the orbit: along it, counter-clockwise (+y at this point), turning towards the port.
+  const Pose2D on_orbit{c.search_orbit_radius_m, 0.0, M_PI + 0.3};
+  out = step(on_orbit, false);
+  EXPECT_EQ(out.state, DockingPhase::kSearch);
+  const double vy_odom = std::sin(on_orbit.yaw) * out.command.vx + std::cos(on_orbit.yaw) * out.command.vy;
+  EXPECT_GT(vy_odom, 0.9 * c.orbit_speed_mps);
+  EXPECT_LT(out.command.wz, 0.0);
+
+  // Not seen for longer than the memory: turns in place.
+  out = runFor(lost_at + c.search_orbit_memory_s + 0.5 - t_, kFar, false);
+  ASSERT_EQ(out.state, DockingPhase::kSearch) << out.reason;
+  EXPECT_EQ(out.command.vx, 0.0);
+  EXPECT_EQ(out.command.vy, 0.0);
+  EXPECT_DOUBLE_EQ(out.command.wz, c.search_yaw_rate_radps);
+}
+
+TEST(DockingPlannerConfig, SearchOrbitMemoryZeroAlwaysTurnsInPlace) {
+  PlannerConfig c;
+  c.search_orbit_memory_s = -1.0;
+  EXPECT_THROW(DockingPlanner{c}, std::invalid_argument);
+  c.search_orbit_memory_s = 0.0;
+  DockingPlanner planner{c};
+  double t = 10.0;
+  ASSERT_TRUE(planner.start(t, DockingLimits{}, nullptr));
+  planner.addObservation(portAt(t, Pose2D{0.0, 0.0, 0.0}));
+  PlannerOutput out;
+  for (; t < 10.0 + c.estimate_timeout_s + c.hold_timeout_s + c.search_wait_s + 1.0; t += kDt) {
+    planner.notePerception(t, false);
+    out = planner.update(t, odomAt(t, kFar));
+  }
+  ASSERT_EQ(out.state, DockingPhase::kSearch) << out.reason;
+  EXPECT_EQ(out.command.vx, 0.0);
+  EXPECT_DOUBLE_EQ(out.command.wz, c.search_yaw_rate_radps);
+}
+
 TEST_F(StateMachineTest, LostTooLongInsideTheCircleAbortsBacksOffThenSearches) {
   // Get into FINAL, just inside the circle: 0.54 m from the port (inside 0.6 - 0.05), probe tip
   // 0.36 m from it (beyond the 0.35 m blind range, so a lost target is a HOLD, not odometry).

@@ -3,7 +3,8 @@
 //
 //   IDLE     no docking asked for (the start-up state): zero velocity, whatever the cameras see;
 //            estimates still go into the track, so a docking can start on a target already in view
-//   SEARCH   no target: stop; after search_wait_s turn slowly in place to look for it
+//   SEARCH   no target: stop; after search_wait_s orbit where it was last seen (if within
+//            search_orbit_memory_s), else turn slowly in place to look for it
 //   APPROACH straight to the safe circle (see safe_circle_approach.h)
 //   ALIGN    along the safe circle to the port axis
 //   FINAL    along the port axis to contact; near contact, on odometry (the target pose held in odom)
@@ -104,6 +105,10 @@ struct PlannerConfig {
   /// >= safe_radius_m; the stereo detector still sees the target well at this range.
   double search_orbit_radius_m{1.3};
   double orbit_speed_mps{0.2};             ///< speed along that orbit
+  /// SEARCH for a target seen within this long: after search_wait_s, go to that orbit around where it
+  /// was last seen and orbit it, instead of turning in place (a target turning its face away, campaign
+  /// seed 7827). Older (or never seen): turn in place. 0: always turn in place.
+  double search_orbit_memory_s{60.0};
   /// While a port orientation is held (a monocular pose within orientation_timeout_s), a position-only
   /// estimate near the held target only counts as "seen": it does not move the held port. It locates
   /// the stereo blob's centre, a decimetre or more off the port; taken into the track between two
@@ -197,6 +202,10 @@ class DockingPlanner {
   std::string lostReason(double now_s) const;
   /// Why an estimate inside the odometry-only range is not used (empty: it is; see contact_estimate_gate_m).
   std::string contactEstimateRejection(const TargetObservation& observation) const;
+  /// Position only: to the search orbit around `port` (its yaw facing the chaser), then round it
+  /// counter-clockwise with the cameras on it. `why` prefixes the reason.
+  PlannerOutput orbitForTheFace(PlannerOutput out, const Pose2D& chaser, const PortState& port,
+                                const std::string& why) const;
 
   PlannerConfig config_;
   SafeCircleApproach law_;

@@ -139,6 +139,9 @@ void validate(const PlannerConfig& c) {
     throw std::invalid_argument("search_orbit_radius_m must be a number >= safe_radius_m");
   }
   requirePositive(c.orbit_speed_mps, "orbit_speed_mps");
+  if (!std::isfinite(c.search_orbit_memory_s) || c.search_orbit_memory_s < 0.0) {
+    throw std::invalid_argument("search_orbit_memory_s must be a number >= 0");
+  }
   if (!std::isfinite(c.position_only_gate_m) || c.position_only_gate_m < 0.0) {
     throw std::invalid_argument("position_only_gate_m must be a number >= 0");
   }
@@ -314,6 +317,36 @@ PlannerOutput DockingPlanner::stop(PlannerOutput out, const std::string& reason)
   return out;
 }
 
+PlannerOutput DockingPlanner::orbitForTheFace(PlannerOutput out, const Pose2D& chaser, const PortState& port,
+                                              const std::string& why) const {
+  const double r_orbit = config_.search_orbit_radius_m;
+  const double range_m = (port.pose.position() - chaser.position()).norm();
+  if (range_m > r_orbit + 4.0 * config_.circle_tolerance_m) {
+    const LawCommand to_orbit = orbit_law_.command(Phase::kApproach, chaser, port);
+    out.command = to_orbit.twist;
+    out.goal_distance_m = to_orbit.goal_distance_m;
+    out.goal = to_orbit.goal;
+    out.path = orbit_law_.plannedPath(Phase::kApproach, chaser, port.pose);
+    out.reason = why + fmt("approaching on position only (port orientation unknown) to %.2f m", r_orbit);
+    return out;
+  }
+  // The ALIGN law around an axis kept a fixed angle ahead of the chaser moves it along the orbit; the
+  // heading points the cameras at the target (the law's would keep it at the edge of the view).
+  PortState lead = port;
+  lead.pose.yaw = wrapAngle(port.pose.yaw + kOrbitLeadRad);
+  const LawCommand cmd = orbit_law_.command(Phase::kAlign, chaser, lead);
+  const double line_of_sight = std::atan2(port.pose.y - chaser.y, port.pose.x - chaser.x);
+  const double orbit_rate = range_m > 1e-3 ? config_.orbit_speed_mps / range_m : 0.0;
+  out.command = cmd.twist;
+  out.command.wz = clampAbs(orbit_rate + config_.law.yaw_gain * wrapAngle(line_of_sight - chaser.yaw),
+                            config_.law.max_yaw_rate_radps);
+  out.goal_distance_m = cmd.goal_distance_m;
+  out.goal = cmd.goal;
+  out.path = orbit_law_.plannedPath(Phase::kAlign, chaser, lead.pose);
+  out.reason = why + fmt("orbiting the target at %.2f m to find the port face", r_orbit);
+  return out;
+}
+
 PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdometry>& odometry) {
   PlannerOutput out;
   if (!std::isfinite(now_s)) {
@@ -439,6 +472,15 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
                      fmt("no target for %.0f s of search", search_timeout_s) + " (" + lostReason(now_s) + ")");
         }
         if (in_state_s < config_.search_wait_s) return finish(stop(out, lostReason(now_s) + ": waiting"));
+        if (out.has_target && now_s - last_seen_s_ <= config_.search_orbit_memory_s) {
+          // Seen not long ago: it is most likely still there with its face turned away (a turning
+          // target), or just outside the view. Turning in place would look away from it 5 s in 6;
+          // orbiting where it was keeps it in view and brings the face round.
+          PortState last_seen = port;
+          last_seen.pose.yaw = std::atan2(chaser.y - port.pose.y, chaser.x - port.pose.x);
+          last_seen.yaw_rate = 0.0;
+          return finish(orbitForTheFace(out, chaser, last_seen, lostReason(now_s) + ": looking where it was; "));
+        }
         out.command = BodyTwist{0.0, 0.0, config_.search_yaw_rate_radps};
         out.reason = lostReason(now_s) + ": turning to look for it";
         return finish(out);
@@ -504,39 +546,10 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
         out.on_odometry = on_odometry;
 
         if (state_ == DockingPhase::kApproach) {
-          if (!orientation_known) {
-            // Position only (stereo far away, or the face turned away): go to the search orbit, not to
-            // the safe circle (the stereo detector does not see the target well inside it), and orbit
-            // there, always the same way (counter-clockwise), until a camera sees the face.
-            const double r_orbit = config_.search_orbit_radius_m;
-            const LawCommand to_orbit = orbit_law_.command(Phase::kApproach, chaser, port);
-            if (g.range_m > r_orbit + 4.0 * config_.circle_tolerance_m) {
-              PlannerOutput o = out;
-              o.command = to_orbit.twist;
-              o.goal_distance_m = to_orbit.goal_distance_m;
-              o.goal = to_orbit.goal;
-              o.path = orbit_law_.plannedPath(Phase::kApproach, chaser, port.pose);
-              o.reason = fmt("approaching on position only (port orientation unknown) to %.2f m", r_orbit);
-              return finish(o);
-            }
-            // The ALIGN law around an axis kept a fixed angle ahead of the chaser moves it along the
-            // orbit; the heading points the cameras at the target (the law's would keep it at the
-            // edge of the view).
-            PortState lead = port;
-            lead.pose.yaw = wrapAngle(port.pose.yaw + kOrbitLeadRad);
-            const LawCommand cmd = orbit_law_.command(Phase::kAlign, chaser, lead);
-            const double line_of_sight = std::atan2(port.pose.y - chaser.y, port.pose.x - chaser.x);
-            const double orbit_rate = g.range_m > 1e-3 ? config_.orbit_speed_mps / g.range_m : 0.0;
-            PlannerOutput o = out;
-            o.command = cmd.twist;
-            o.command.wz = clampAbs(orbit_rate + config_.law.yaw_gain * wrapAngle(line_of_sight - chaser.yaw),
-                                    config_.law.max_yaw_rate_radps);
-            o.goal_distance_m = cmd.goal_distance_m;
-            o.goal = cmd.goal;
-            o.path = orbit_law_.plannedPath(Phase::kAlign, chaser, lead.pose);
-            o.reason = fmt("orbiting the target at %.2f m to find the port face", r_orbit);
-            return finish(o);
-          }
+          // Position only (stereo far away, or the face turned away): go to the search orbit, not to
+          // the safe circle (the stereo detector does not see the target well inside it), and orbit
+          // there, always the same way (counter-clockwise), until a camera sees the face.
+          if (!orientation_known) return finish(orbitForTheFace(out, chaser, port, ""));
           const LawCommand cmd = law_.command(Phase::kApproach, chaser, port);
           if (cmd.goal_distance_m < config_.approach_goal_tolerance_m) {
             enter(DockingPhase::kAlign, now_s,

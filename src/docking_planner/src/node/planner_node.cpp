@@ -124,6 +124,7 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   c.max_blind_s = requireDouble(p, "max_blind_s");
   c.search_orbit_radius_m = requireDouble(p, "search_orbit_radius_m");
   c.orbit_speed_mps = requireDouble(p, "orbit_speed_mps");
+  c.search_orbit_memory_s = requireDouble(p, "search_orbit_memory_s");
   c.position_only_gate_m = requireDouble(p, "position_only_gate_m");
   try {
     validate(c);  // messages start with the field name, which is the parameter name
