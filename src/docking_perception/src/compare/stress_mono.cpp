@@ -113,6 +113,7 @@ int main(int argc, char** argv) {
       p->consistency.max_rotation_sigma_deg = 1e6;
       p->consistency.innovation_window_frames = 0.0;
       p->consistency.max_rotation_innovation_chi2 = 0.0;
+      p->consistency.confirm_new_orientation = false;
     }
   }
   for (int i = 1; i + 1 < argc; ++i) {

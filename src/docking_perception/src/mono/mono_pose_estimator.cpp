@@ -608,6 +608,10 @@ bool MonoPoseEstimator::claimOrientation(MonoPoseResult& result) const {
                     std::to_string(result.rotation_innovation_chi2) + " > max_rotation_innovation_chi2)";
     return false;
   }
+  if (params_.consistency.confirm_new_orientation && !result.rotation_innovation_checked) {
+    result.status = "orientation withheld: a first pose, nothing to confirm it yet (confirm_new_orientation)";
+    return false;
+  }
   return orientationClaimed(result.pose, params_.consistency, &result.status);
 }
 
@@ -617,6 +621,7 @@ void MonoPoseEstimator::scaleByInnovation(MonoPoseResult* result) {
   if (filter_.initialized() && result->stamp_s > filter_.lastStamp() &&
       result->stamp_s - filter_.lastStamp() <= params_.filter.max_gap_s && filter_.predict(result->stamp_s, &predicted)) {
     result->rotation_innovation_chi2 = innovation_scale_.update(result->pose, predicted);
+    result->rotation_innovation_checked = true;
   }
   innovation_scale_.apply(&result->pose.covariance);
   result->covariance_scale_position = innovation_scale_.positionScale();

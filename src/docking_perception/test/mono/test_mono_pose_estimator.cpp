@@ -75,6 +75,39 @@ TEST(MonoPoseEstimator, VisibleViewsGiveThePoseWithBothSolvers) {
   }
 }
 
+// confirm_new_orientation: the first pose of a track claims its position only; the next frame, checked
+// against it, claims its orientation. After a gap longer than the filter's, the next pose is a first
+// pose again. Off, the first pose claims its orientation at once.
+TEST(MonoPoseEstimator, AFirstOrientationIsClaimedOnlyOnceTheNextFrameConfirmsIt) {
+  const TargetModel model = synthetic::makeModel(2);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  const Eigen::Matrix3d rotation = synthetic::facingRotation(0.2);
+  const Eigen::Vector3d position(0.02, 0.0, 0.9);
+  const cv::Mat image = synthetic::renderVisible(model, camera, rotation, position, 310);
+  MonoPoseParams params = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
+  ASSERT_TRUE(params.consistency.confirm_new_orientation);  // the default
+  MonoPoseEstimator estimator(model, camera, params);
+  const MonoPoseResult first = estimator.process(image, 10.0);
+  ASSERT_TRUE(first.valid) << first.status;
+  EXPECT_FALSE(first.orientation_valid);
+  EXPECT_FALSE(first.rotation_innovation_checked);
+  EXPECT_NE(first.status.find("confirm_new_orientation"), std::string::npos) << first.status;
+  const MonoPoseResult second = estimator.process(image, 10.0 + 1.0 / 30.0);
+  ASSERT_TRUE(second.valid) << second.status;
+  EXPECT_TRUE(second.rotation_innovation_checked);
+  EXPECT_TRUE(second.orientation_valid) << second.status;
+  EXPECT_LT(degrees(rotationAngleBetween(second.pose.rotation, rotation)), 1.0);
+  const MonoPoseResult after_gap = estimator.process(image, 10.1 + 2.0 * params.filter.max_gap_s);
+  ASSERT_TRUE(after_gap.valid) << after_gap.status;
+  EXPECT_FALSE(after_gap.orientation_valid);
+
+  params.consistency.confirm_new_orientation = false;
+  MonoPoseEstimator unconfirmed(model, camera, params);
+  const MonoPoseResult at_once = unconfirmed.process(image, 10.0);
+  ASSERT_TRUE(at_once.valid) << at_once.status;
+  EXPECT_TRUE(at_once.orientation_valid) << at_once.status;
+}
+
 TEST(MonoPoseEstimator, TrackingUsesThePredictedRegionAndGivesAVelocity) {
   const TargetModel model = synthetic::makeModel(2);
   const CameraIntrinsics camera = synthetic::defaultCamera();

@@ -86,6 +86,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("max_rotation_sigma_deg", &p.consistency.max_rotation_sigma_deg);
   visit("innovation_window_frames", &p.consistency.innovation_window_frames);
   visit("max_rotation_innovation_chi2", &p.consistency.max_rotation_innovation_chi2);
+  visit("confirm_new_orientation", &p.consistency.confirm_new_orientation);
   visit("max_hint_disagreement_fraction", &p.consistency.max_hint_disagreement_fraction);
   visit("hint_check_min_range_m", &p.consistency.hint_check_min_range_m);
   visit("max_dot_offset_factor", &p.consistency.max_dot_offset_factor);
