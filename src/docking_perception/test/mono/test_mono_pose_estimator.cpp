@@ -75,9 +75,9 @@ TEST(MonoPoseEstimator, VisibleViewsGiveThePoseWithBothSolvers) {
   }
 }
 
-// confirm_new_orientation: the first pose of a track claims its position only; the next frame, checked
-// against it, claims its orientation. After a gap longer than the filter's, the next pose is a first
-// pose again. Off, the first pose claims its orientation at once.
+// confirm_new_orientation (off by default): the first pose of a track claims its position only; the next
+// frame, checked against it, claims its orientation. After a gap longer than the filter's, the next pose
+// is a first pose again. Off, the first pose claims its orientation at once.
 TEST(MonoPoseEstimator, AFirstOrientationIsClaimedOnlyOnceTheNextFrameConfirmsIt) {
   const TargetModel model = synthetic::makeModel(2);
   const CameraIntrinsics camera = synthetic::defaultCamera();
@@ -85,7 +85,7 @@ TEST(MonoPoseEstimator, AFirstOrientationIsClaimedOnlyOnceTheNextFrameConfirmsIt
   const Eigen::Vector3d position(0.02, 0.0, 0.9);
   const cv::Mat image = synthetic::renderVisible(model, camera, rotation, position, 310);
   MonoPoseParams params = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
-  ASSERT_TRUE(params.consistency.confirm_new_orientation);  // the default
+  params.consistency.confirm_new_orientation = true;
   MonoPoseEstimator estimator(model, camera, params);
   const MonoPoseResult first = estimator.process(image, 10.0);
   ASSERT_TRUE(first.valid) << first.status;

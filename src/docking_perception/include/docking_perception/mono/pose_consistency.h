@@ -67,10 +67,12 @@ struct ConsistencyParams {
   // moves a running mean too little to cover it. 0 turns the check off.
   double max_rotation_innovation_chi2 = 16.27;
   // An orientation with nothing to be compared with (the first pose after acquisition, or after a gap
-  // longer than filter.max_gap_s) is not claimed: the next frame, checked against it, is. A one-frame
-  // delay; without it the first pose after glare (campaign seed 7899, 0.94 m) was 26.7 deg off, claimed
-  // with a 0.9 deg sigma, and the correct frame after it then looked like the jump.
-  bool confirm_new_orientation = true;
+  // longer than filter.max_gap_s) is not claimed: the next frame, checked against it, is. The case: the
+  // first pose after glare (campaign seed 7899, 0.94 m) was 26.7 deg off, claimed with a 0.9 deg sigma.
+  // Off by default: a withheld orientation also leaves the next frame's IPPE branch undecided
+  // (previousRotation), and the campaign with it on had three inner-pattern poses 5 % off in the dark
+  // (docs/PERFORMANCE.md, 4 Dec 2026 sixth part).
+  bool confirm_new_orientation = false;
   // A pose farther than this fraction of its range from a fresh position hint (the disparity detector's
   // estimate of the same target in the same camera, at most region_hint_max_age_s old) is not valid
   // (kHintDisagreement). Stereo measures a far target's range directly, the pose from the face's apparent
