@@ -69,8 +69,9 @@ struct ConsistencyParams {
   // An orientation with nothing to be compared with (the first pose after acquisition, or after a gap
   // longer than filter.max_gap_s) is not claimed: the next frame, checked against it, is. The case: the
   // first pose after glare (campaign seed 7899, 0.94 m) was 26.7 deg off, claimed with a 0.9 deg sigma.
-  // Off by default: a withheld orientation also leaves the next frame's IPPE branch undecided
-  // (previousRotation), and the campaign with it on had three inner-pattern poses 5 % off in the dark
+  // Off by default until measured like for like: a withheld orientation also leaves the next frame's
+  // IPPE branch undecided (previousRotation); the campaign with it on had three inner-pattern poses 5 %
+  // off in the dark, but those seeds run again gave one such pose with it off and none with it on
   // (docs/PERFORMANCE.md, 4 Dec 2026 sixth part).
   bool confirm_new_orientation = false;
   // A pose farther than this fraction of its range from a fresh position hint (the disparity detector's
