@@ -202,9 +202,9 @@ class DockingPlanner {
   std::string lostReason(double now_s) const;
   /// Why an estimate inside the odometry-only range is not used (empty: it is; see contact_estimate_gate_m).
   std::string contactEstimateRejection(const TargetObservation& observation) const;
-  /// Position only: to the search orbit around `port` (its yaw facing the chaser), then round it
-  /// counter-clockwise with the cameras on it. `why` prefixes the reason.
-  PlannerOutput orbitForTheFace(PlannerOutput out, const Pose2D& chaser, const PortState& port,
+  /// Position only: to the search orbit around `port` (its orientation ignored: taken as facing the
+  /// chaser), then round it counter-clockwise with the cameras on it. `why` prefixes the reason.
+  PlannerOutput orbitForTheFace(PlannerOutput out, const Pose2D& chaser, PortState port,
                                 const std::string& why) const;
 
   PlannerConfig config_;

@@ -317,8 +317,11 @@ PlannerOutput DockingPlanner::stop(PlannerOutput out, const std::string& reason)
   return out;
 }
 
-PlannerOutput DockingPlanner::orbitForTheFace(PlannerOutput out, const Pose2D& chaser, const PortState& port,
+PlannerOutput DockingPlanner::orbitForTheFace(PlannerOutput out, const Pose2D& chaser, PortState port,
                                               const std::string& why) const {
+  // Position only: the port taken as facing the chaser (the approach goal on the line of sight), not turning.
+  port.pose.yaw = std::atan2(chaser.y - port.pose.y, chaser.x - port.pose.x);
+  port.yaw_rate = 0.0;
   const double r_orbit = config_.search_orbit_radius_m;
   const double range_m = (port.pose.position() - chaser.position()).norm();
   if (range_m > r_orbit + 4.0 * config_.circle_tolerance_m) {
@@ -476,10 +479,7 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
           // Seen not long ago: it is most likely still there with its face turned away (a turning
           // target), or just outside the view. Turning in place would look away from it 5 s in 6;
           // orbiting where it was keeps it in view and brings the face round.
-          PortState last_seen = port;
-          last_seen.pose.yaw = std::atan2(chaser.y - port.pose.y, chaser.x - port.pose.x);
-          last_seen.yaw_rate = 0.0;
-          return finish(orbitForTheFace(out, chaser, last_seen, lostReason(now_s) + ": looking where it was; "));
+          return finish(orbitForTheFace(out, chaser, port, lostReason(now_s) + ": looking where it was; "));
         }
         out.command = BodyTwist{0.0, 0.0, config_.search_yaw_rate_radps};
         out.reason = lostReason(now_s) + ": turning to look for it";
