@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <utility>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -155,6 +156,8 @@ InnerPatternResult InnerPatternDetector::detect(const cv::Mat& gray, const Camer
         result.valid = true;
         result.pose = solution.pose;
         result.reprojection_rms_px = solution.reprojection_rms_px;
+        result.model_points = std::move(model);
+        result.pnp = solution;
       }
     }
   }

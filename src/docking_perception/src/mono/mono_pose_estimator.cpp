@@ -210,6 +210,14 @@ const Eigen::Matrix3d* MonoPoseEstimator::previousRotation(double stamp_s, Eigen
   return storage;
 }
 
+bool MonoPoseEstimator::trackedPose(double stamp_s, PoseWithCovariance* pose) const {
+  if (!tracking_ || !filter_.initialized() || !(stamp_s > filter_.lastStamp()) ||
+      stamp_s - filter_.lastStamp() > params_.filter.max_gap_s) {
+    return false;
+  }
+  return filter_.predict(stamp_s, pose);
+}
+
 PoseWithCovariance MonoPoseEstimator::predictedPose(double stamp_s) const {
   PoseWithCovariance predicted = last_pose_;
   if (stamp_s > last_stamp_s_ && stamp_s - last_stamp_s_ <= params_.filter.max_gap_s) {
@@ -584,15 +592,11 @@ bool MonoPoseEstimator::refineIrPose(const MarkerPixels& pixels, double median_s
   trial->pose = solution.pose;
   trial->reprojection_error_px = solution.reprojection_rms_px;
   trial->pnp_ambiguous = solution.ambiguous;
-  trial->pose.covariance = honestCovariance(camera_, trial->pose, model, trial->reprojection_error_px,
-                                            params_.pnp.min_pixel_sigma, trial->blur_sigma_px, params_.consistency);
-  trial->ambiguity_deg = undecidedAlternativeDeg(
-      solution, claimed_previous, model.size(), solution.reprojection_rms_px,
-      std::max(solution.reprojection_rms_px, params_.pnp.min_pixel_sigma), trial->pose.rotation, params_.consistency);
-  if (trial->ambiguity_deg > 0.0) {
-    addAlternative(trial->pose, solution.alternative_rotation, solution.alternative_translation,
-                   &trial->pose.covariance);
-  }
+  OrientationHistory history;
+  history.claimed = claimed_previous;
+  trial->ambiguity_deg = modelPnpCovariance(camera_, solution, history, model, solution.reprojection_rms_px,
+                                             solution.reprojection_rms_px, params_.pnp.min_pixel_sigma,
+                                             trial->blur_sigma_px, params_.consistency, &trial->pose);
   return true;
 }
 
@@ -695,6 +699,18 @@ void MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* r
   result->inner_pattern_status = tag.valid ? "" : tag.status;
   if (tag.valid) result->inner_pattern_corners.assign(tag.corners_px.begin(), tag.corners_px.end());
   if (!tag.valid) return;  // the face's result stands, valid or not
+  // The tag's pose takes the covariance model of every PnP pose. Its fit's covariance alone claimed
+  // ~3 deg at 0.3-0.45 m when IPPE's other solution, 10-13 deg away, fitted as well and no claimed
+  // orientation decided: one of those was the pose, and it was 11 deg off. The tag's own poses often
+  // claim no orientation there (sigma above max_rotation_sigma_deg), so the tracked orientation, claimed
+  // or not, weighs in by its covariance: it keeps a smooth approach decided.
+  OrientationHistory history;
+  history.claimed = previous;
+  PoseWithCovariance tracked;
+  if (trackedPose(result->stamp_s, &tracked)) history.tracked = &tracked;
+  const double tag_ambiguity_deg =
+      modelPnpCovariance(camera_, tag.pnp, history, tag.model_points, tag.reprojection_rms_px, tag.reprojection_rms_px,
+                         params_.inner_pattern.min_pixel_sigma, 0.0, params_.consistency, &tag.pose);
   if (result->valid) {
     // Both valid: they must agree, else one of them is wrong and nothing here says which.
     // The tolerances widen by 3 sigma of the tag's own pose: 4 cm of tag at 0.3-0.45 m gives the
@@ -721,7 +737,8 @@ void MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* r
   result->feature_matches = tag.candidate_points;  // the arbiter's evidence: grid corners found ...
   result->feature_inliers = tag.pose_points;       // ... and used by the pose
   result->reprojection_error_px = tag.reprojection_rms_px;
-  result->pnp_ambiguous = false;
+  result->pnp_ambiguous = tag.pnp.ambiguous;
+  result->ambiguity_deg = tag_ambiguity_deg;
 }
 
 void MonoPoseEstimator::updateFaceRetry(bool face_skipped, const MonoPoseResult& result) {
@@ -820,20 +837,6 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
     return reject(RejectReason::kInlierSpread, "pose points cover only " + std::to_string(result->inlier_spread) +
                                                    " of the face (min_inlier_spread)");
   }
-  // IPPE's flag compares raw RMS values; with a hundred refined points an alternative at 0.4 px against
-  // 0.1 px is clearly worse. A previous orientation decides only when it was claimed.
-  double ambiguity_deg = 0.0;
-  if (pnp != nullptr) {
-    Eigen::Matrix3d previous_storage;
-    ambiguity_deg = undecidedAlternativeDeg(*pnp, previousRotation(result->stamp_s, &previous_storage),
-                                            model_points.size(),
-                                            result->reprojection_error_px,
-                                            std::max(pixel_sigma_px, params_.pnp.min_pixel_sigma),
-                                            result->pose.rotation, c);
-    // Both solutions share nearly one position: beyond max_ambiguity_deg the orientation is withheld
-    // (process()), the position stays; the covariance below covers both solutions either way.
-    result->ambiguity_deg = ambiguity_deg;
-  }
   const AppearanceScore appearance = appearance_.score(gray, camera_, result->pose);
   result->appearance_ncc = appearance.median_ncc;
   result->blur_sigma_px = appearance.blur_sigma_px;
@@ -842,11 +845,16 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
                                                  std::to_string(appearance.median_ncc) + ", min_appearance_ncc)");
   }
   if (pnp != nullptr) {
-    result->pose.covariance = honestCovariance(camera_, result->pose, model_points, pixel_sigma_px,
-                                               params_.pnp.min_pixel_sigma, appearance.blur_sigma_px, c);
-    if (ambiguity_deg > 0.0) {
-      addAlternative(result->pose, pnp->alternative_rotation, pnp->alternative_translation, &result->pose.covariance);
-    }
+    // IPPE's flag compares raw RMS values; with a hundred refined points an alternative at 0.4 px against
+    // 0.1 px is clearly worse. A previous orientation decides only when it was claimed. Both solutions
+    // share nearly one position: beyond max_ambiguity_deg the orientation is withheld (process()), the
+    // position stays; the covariance covers both solutions either way.
+    Eigen::Matrix3d previous_storage;
+    OrientationHistory history;
+    history.claimed = previousRotation(result->stamp_s, &previous_storage);
+    result->ambiguity_deg = modelPnpCovariance(camera_, *pnp, history, model_points, result->reprojection_error_px, pixel_sigma_px,
+                                               params_.pnp.min_pixel_sigma, appearance.blur_sigma_px, c,
+                                               &result->pose);
   } else {
     // The 5-point covariance (its own Jacobian) scaled for blur, plus the floor.
     const double blur_factor = 1.0 + c.blur_gain * appearance.blur_sigma_px;

@@ -274,7 +274,8 @@ void InnovationCovarianceScale::reset() {
 
 double undecidedAlternativeDeg(const PlanarPnpSolution& pnp, const Eigen::Matrix3d* claimed_previous,
                                size_t point_count, double rms_px, double pixel_sigma_px,
-                               const Eigen::Matrix3d& rotation, const ConsistencyParams& params) {
+                               const Eigen::Matrix3d& rotation, const ConsistencyParams& params,
+                               double extra_evidence_chi2) {
   if (!pnp.has_alternative || !(pixel_sigma_px > 0.0)) return 0.0;
   if (claimed_previous != nullptr && rotationAngleBetween(rotation, *claimed_previous) <
                                          rotationAngleBetween(pnp.alternative_rotation, *claimed_previous)) {
@@ -282,8 +283,39 @@ double undecidedAlternativeDeg(const PlanarPnpSolution& pnp, const Eigen::Matrix
   }
   const double extra_squared = pnp.alternative_rms_px * pnp.alternative_rms_px - rms_px * rms_px;
   const double excess = static_cast<double>(point_count) * extra_squared / (pixel_sigma_px * pixel_sigma_px);
-  if (excess >= params.ambiguity_chi2) return 0.0;
+  if (excess + extra_evidence_chi2 >= params.ambiguity_chi2) return 0.0;
   return rotationAngleBetween(pnp.alternative_rotation, rotation) * 180.0 / M_PI;
+}
+
+double trackedOrientationEvidence(const PoseWithCovariance& tracked, const Eigen::Matrix3d& measured_rotation_covariance,
+                                  const Eigen::Matrix3d& chosen, const Eigen::Matrix3d& other) {
+  const Eigen::Matrix3d s = tracked.covariance.bottomRightCorner<3, 3>() + measured_rotation_covariance;
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(s);
+  if (!s.allFinite() || ldlt.info() != Eigen::Success || !ldlt.isPositive()) return 0.0;
+  const Eigen::Vector3d to_chosen = rotationLog(chosen * tracked.rotation.transpose());
+  const Eigen::Vector3d to_other = rotationLog(other * tracked.rotation.transpose());
+  const double evidence = to_other.dot(ldlt.solve(to_other)) - to_chosen.dot(ldlt.solve(to_chosen));
+  return std::isfinite(evidence) ? evidence : 0.0;
+}
+
+double modelPnpCovariance(const CameraIntrinsics& camera, const PlanarPnpSolution& pnp, const OrientationHistory& history,
+                          const std::vector<Eigen::Vector3d>& model_points, double rms_px, double pixel_sigma_px,
+                          double min_pixel_sigma, double blur_sigma_px, const ConsistencyParams& params,
+                          PoseWithCovariance* pose) {
+  pose->covariance =
+      honestCovariance(camera, *pose, model_points, pixel_sigma_px, min_pixel_sigma, blur_sigma_px, params);
+  const double tracked_evidence =
+      history.tracked != nullptr && pnp.has_alternative
+          ? trackedOrientationEvidence(*history.tracked, pose->covariance.bottomRightCorner<3, 3>(), pose->rotation,
+                                       pnp.alternative_rotation)
+          : 0.0;
+  const double ambiguity_deg =
+      undecidedAlternativeDeg(pnp, history.claimed, model_points.size(), rms_px,
+                              std::max(pixel_sigma_px, min_pixel_sigma), pose->rotation, params, tracked_evidence);
+  if (ambiguity_deg > 0.0) {
+    addAlternative(*pose, pnp.alternative_rotation, pnp.alternative_translation, &pose->covariance);
+  }
+  return ambiguity_deg;
 }
 
 void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,

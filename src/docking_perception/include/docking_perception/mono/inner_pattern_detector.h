@@ -56,6 +56,10 @@ struct InnerPatternResult {
   std::array<Eigen::Vector2d, 4> corners_px{};  // the black square's corners (when detected)
   int candidate_points = 0;            // grid corners of the tag
   int pose_points = 0;                 // of them, refined and used by the pose
+  // What the estimator's covariance model needs (modelPnpCovariance): the fitted points in `target`
+  // and IPPE's solutions. `pose.covariance` here is the fit's alone (residuals, floored).
+  std::vector<Eigen::Vector3d> model_points;
+  PlanarPnpSolution pnp;
   double processing_time_ms = 0.0;     // CPU time of detection and pose
 };
 

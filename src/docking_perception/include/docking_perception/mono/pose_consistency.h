@@ -148,12 +148,39 @@ class InnovationCovarianceScale {
 };
 
 // The angle (deg) from a PnP pose (rotation) to IPPE's other solution when nothing tells the two apart:
-// the other's extra squared residual over all points, in units of the pixel variance, is below
+// the other's extra squared residual over all points, in units of the pixel variance, plus
+// extra_evidence_chi2 (what else favours the chosen solution, in the same units), is below
 // params.ambiguity_chi2, and no claimed orientation tracked to this frame (claimed_previous, may be null)
 // is nearer the chosen solution than the other. 0 when decided. pixel_sigma_px: the points' noise (floored).
 double undecidedAlternativeDeg(const PlanarPnpSolution& pnp, const Eigen::Matrix3d* claimed_previous,
                                size_t point_count, double rms_px, double pixel_sigma_px,
-                               const Eigen::Matrix3d& rotation, const ConsistencyParams& params);
+                               const Eigen::Matrix3d& rotation, const ConsistencyParams& params,
+                               double extra_evidence_chi2 = 0.0);
+
+// What a pose's history says about its orientation, for IPPE's choice.
+struct OrientationHistory {
+  // A claimed orientation tracked to this frame: decides alone when it is nearer the chosen solution.
+  const Eigen::Matrix3d* claimed = nullptr;
+  // The velocity filter's prediction for this frame, claimed or not: its rotation covariance weighs it.
+  // How much better it fits the chosen solution than the other (the difference of their squared
+  // Mahalanobis distances, prediction and measurement covariances added) adds to the residuals' evidence.
+  const PoseWithCovariance* tracked = nullptr;
+};
+
+// The squared Mahalanobis distance of `other` from the tracked orientation minus that of `chosen` (the
+// rotation blocks of tracked.covariance and measured_rotation_covariance added); 0 when not invertible.
+double trackedOrientationEvidence(const PoseWithCovariance& tracked, const Eigen::Matrix3d& measured_rotation_covariance,
+                                  const Eigen::Matrix3d& chosen, const Eigen::Matrix3d& other);
+
+// The covariance model of every planar PnP pose (the face's, the IR pattern's, the inner pattern's), in one
+// place: honestCovariance at pixel_sigma_px, plus IPPE's other solution (addAlternative) when nothing
+// decides between the two (undecidedAlternativeDeg with the floored pixel sigma and the history's
+// evidence). Sets pose->covariance; returns the undecided alternative's angle, deg (0: decided).
+// rms_px: the pose's reprojection RMS.
+double modelPnpCovariance(const CameraIntrinsics& camera, const PlanarPnpSolution& pnp, const OrientationHistory& history,
+                          const std::vector<Eigen::Vector3d>& model_points, double rms_px, double pixel_sigma_px,
+                          double min_pixel_sigma, double blur_sigma_px, const ConsistencyParams& params,
+                          PoseWithCovariance* pose);
 
 // Adds (scale_bias_px / sqrt(projected face area, px^2) x range)^2 along the line of sight to the pose's
 // position covariance (ConsistencyParams::face_scale_bias_px). face_corners in the target frame.
