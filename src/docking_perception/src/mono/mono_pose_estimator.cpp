@@ -852,9 +852,9 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
     Eigen::Matrix3d previous_storage;
     OrientationHistory history;
     history.claimed = previousRotation(result->stamp_s, &previous_storage);
-    result->ambiguity_deg = modelPnpCovariance(camera_, *pnp, history, model_points, result->reprojection_error_px, pixel_sigma_px,
-                                               params_.pnp.min_pixel_sigma, appearance.blur_sigma_px, c,
-                                               &result->pose);
+    result->ambiguity_deg =
+        modelPnpCovariance(camera_, *pnp, history, model_points, result->reprojection_error_px, pixel_sigma_px,
+                           params_.pnp.min_pixel_sigma, appearance.blur_sigma_px, c, &result->pose);
   } else {
     // The 5-point covariance (its own Jacobian) scaled for blur, plus the floor.
     const double blur_factor = 1.0 + c.blur_gain * appearance.blur_sigma_px;

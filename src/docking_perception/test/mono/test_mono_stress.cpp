@@ -313,6 +313,36 @@ TEST(PoseConsistency, AnAlternativeTheDataCannotRejectIsUndecided) {
   EXPECT_EQ(mono::undecidedAlternativeDeg(pnp, nullptr, 5, 0.10, 0.3, chosen, c), 0.0);
 }
 
+// The tracked orientation's evidence: a prediction near the chosen solution, 10 deg from the other, with
+// 2 deg sigmas in all (prediction and measurement) is worth (10/2)^2 = 25 units of chi^2 for the chosen one,
+// enough to decide where the residuals' 0.24 are not; near the other it counts against the chosen one; a
+// prediction that claims nothing (a singular covariance) counts for nothing.
+TEST(PoseConsistency, TheTrackedOrientationWeighsInByItsCovariance) {
+  const mono::ConsistencyParams c;  // ambiguity_chi2 16
+  const Eigen::Matrix3d chosen = Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d other = mono::rotationExp(Eigen::Vector3d(0.0, 10.0 * M_PI / 180.0, 0.0));
+  const double half_variance = 0.5 * std::pow(2.0 * M_PI / 180.0, 2);  // prediction + measurement: 2 deg
+  mono::PoseWithCovariance tracked;
+  tracked.rotation = chosen;
+  tracked.covariance.setIdentity();
+  tracked.covariance.bottomRightCorner<3, 3>() = half_variance * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d measured = half_variance * Eigen::Matrix3d::Identity();
+  const double for_chosen = mono::trackedOrientationEvidence(tracked, measured, chosen, other);
+  EXPECT_NEAR(for_chosen, 25.0, 1e-6);
+  tracked.rotation = other;
+  EXPECT_NEAR(mono::trackedOrientationEvidence(tracked, measured, chosen, other), -25.0, 1e-6);
+  tracked.covariance.bottomRightCorner<3, 3>().setZero();
+  EXPECT_EQ(mono::trackedOrientationEvidence(tracked, Eigen::Matrix3d::Zero(), chosen, other), 0.0);
+
+  mono::PlanarPnpSolution pnp;
+  pnp.has_alternative = true;
+  pnp.alternative_rotation = other;
+  pnp.alternative_rms_px = 0.12;  // the residuals' extra chi^2: 0.24
+  EXPECT_NEAR(mono::undecidedAlternativeDeg(pnp, nullptr, 5, 0.10, 0.3, chosen, c, 0.0), 10.0, 1e-6);
+  EXPECT_EQ(mono::undecidedAlternativeDeg(pnp, nullptr, 5, 0.10, 0.3, chosen, c, for_chosen), 0.0);
+  EXPECT_NEAR(mono::undecidedAlternativeDeg(pnp, nullptr, 5, 0.10, 0.3, chosen, c, -for_chosen), 10.0, 1e-6);
+}
+
 // A face-size bias all points share moves the pose along the line of sight: the floor grows there as
 // range / sqrt(face area), and nowhere else.
 TEST(PoseConsistency, FaceScaleBiasWidensTheRangeAlongTheLineOfSight) {

@@ -177,10 +177,10 @@ class MonoPoseEstimator {
   // The region where the target should appear (empty: search the whole image) and, in visible mode,
   // the face's predicted apparent width.
   cv::Rect predictedRegion(double stamp_s, double* face_width_px) const;
-  // The pose expected at stamp_s (the velocity filter's prediction from the last pose; the last pose
-  // itself after a gap longer than max_gap_s).
   // The velocity filter's pose at stamp_s while tracking (within filter.max_gap_s of its last pose); false if none.
   bool trackedPose(double stamp_s, PoseWithCovariance* pose) const;
+  // The pose expected at stamp_s (the velocity filter's prediction from the last pose; the last pose
+  // itself after a gap longer than max_gap_s).
   PoseWithCovariance predictedPose(double stamp_s) const;
   // Tracking: the face at its predicted place (predict_face_when_tracking); found == false when the
   // prediction does not hold.
