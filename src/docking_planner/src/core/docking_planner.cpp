@@ -39,6 +39,13 @@ constexpr double kMaxPerceptionTimeoutS = 1.0;
 // along the circle (counter-clockwise seen from above) at its speed limit.
 constexpr double kOrbitLeadRad = 0.5;
 
+// A port whose orientation is unknown, taken as facing the chaser and not turning: the approach goal is
+// then the point of the safe circle on the line of sight, and no rotation is fed forward.
+void takeAsFacingTheChaser(const Pose2D& chaser, PortState* port) {
+  port->pose.yaw = std::atan2(chaser.y - port->pose.y, chaser.x - port->pose.x);
+  port->yaw_rate = 0.0;
+}
+
 }  // namespace
 
 const char* stateName(DockingPhase state) {
@@ -319,9 +326,7 @@ PlannerOutput DockingPlanner::stop(PlannerOutput out, const std::string& reason)
 
 PlannerOutput DockingPlanner::orbitForTheFace(PlannerOutput out, const Pose2D& chaser, PortState port,
                                               const std::string& why) const {
-  // Position only: the port taken as facing the chaser (the approach goal on the line of sight), not turning.
-  port.pose.yaw = std::atan2(chaser.y - port.pose.y, chaser.x - port.pose.x);
-  port.yaw_rate = 0.0;
+  takeAsFacingTheChaser(chaser, &port);  // position only
   const double r_orbit = config_.search_orbit_radius_m;
   const double range_m = (port.pose.position() - chaser.position()).norm();
   if (range_m > r_orbit + 4.0 * config_.circle_tolerance_m) {
@@ -375,10 +380,7 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
   Pose2D chaser;
   if (odom_problem.empty()) chaser = odometry->pose;
   if (track_.hasPosition() && odom_problem.empty() && !orientation_known) {
-    // Position only (far away, disparity): take the port as facing us, which makes the approach goal
-    // the point of the safe circle on the line of sight; no rotation is fed forward.
-    port.pose.yaw = std::atan2(chaser.y - port.pose.y, chaser.x - port.pose.x);
-    port.yaw_rate = 0.0;
+    takeAsFacingTheChaser(chaser, &port);  // position only (far away, disparity)
   }
   out.has_target = track_.hasPosition() && odom_problem.empty();
   if (out.has_target) {
