@@ -36,7 +36,7 @@ namespace mono {
 struct ConsistencyParams {
   double min_inlier_spread = 0.2;        // hull of the pose points / face area
   double min_appearance_ncc = 0.45;      // median cell NCC of the model at the estimated pose; < 0: off
-  double max_ambiguity_deg = 6.0;        // undecided IPPE: beyond this angle the orientation is withheld
+  double max_ambiguity_deg = 8.0;        // undecided IPPE: beyond this angle the orientation is withheld
   double ambiguity_chi2 = 16.0;          // IPPE undecided when the other solution's extra chi^2 is below this
   double blur_gain = 0.5;                // pixel sigma multiplier per px of estimated blur sigma
   double position_floor_fraction = 0.002;  // floor sigma of each position axis / range
