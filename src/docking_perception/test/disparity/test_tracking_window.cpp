@@ -181,6 +181,21 @@ INSTANTIATE_TEST_SUITE_P(Ranges, WindowPipeline,
                          ::testing::Values(WindowCase{0.0, 2.6}, WindowCase{0.4, 3.0}, WindowCase{-0.5, 4.0},
                                            WindowCase{0.3, 6.0}));
 
+// The window's height (config/far_stereo.yaml window_half_height_m) leaves the face room above and below for
+// a prediction off in height: both robots drive on the floor, so the port's height in the camera is
+// nearly constant and 0.1 m (2 deg at 3 m) is more than a fused estimate's height error.
+TEST(WindowPipeline, APredictionOffInHeightStillHoldsTheFace) {
+  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(0.2, 0.0, 3.0, 12.0), 1);
+  const Detection whole = detectOn(pair, std::nullopt);
+  ASSERT_TRUE(whole.found) << whole.reason;
+  for (const double dy : {-0.1, 0.1}) {
+    const cv::Rect window = windowAround(pair, Eigen::Vector3d(0.2, dy, 3.0));
+    const Detection windowed = detectOn(pair, window);
+    ASSERT_TRUE(windowed.found) << "height off by " << dy << " m: " << windowed.reason;
+    EXPECT_LT((windowed.position_m - whole.position_m).norm(), 0.016) << "height off by " << dy << " m";
+  }
+}
+
 // A box nearer than the target crossing the window's edge: a neighbour, looked behind. Told nothing of
 // the window (its edges taken for the image's), the detector takes the box's cut part for the target (the
 // matcher's own border leaves it a target-sized piece clear of the edge): what the ImageWindow prevents.

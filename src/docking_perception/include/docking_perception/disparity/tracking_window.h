@@ -24,7 +24,7 @@ namespace disparity {
 
 struct TrackingWindowParams {
   double half_width_m = 0.8;        // across the line of sight, around the port (the mockup: 0.45 m)
-  double half_height_m = 0.45;      // up and down (the mockup: 0.12 m up; its robot below, to the floor)
+  double half_height_m = 0.30;      // up and down (the face: 0.12 m each way; the floor 0.25 m below the port)
   int min_half_size_px = 48;        // never smaller (a far target: the matcher's and blob's own margins)
   double max_area_fraction = 0.7;   // a window larger than this share of the image: the whole image
   double max_prediction_s = 0.5;    // the estimate's velocity is extrapolated at most this far
