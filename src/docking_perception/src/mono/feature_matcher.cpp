@@ -230,6 +230,66 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
   }
 }
 
+namespace {
+
+// One patch of renderModelPatch, its pixels mapped into the model. kBorder: some bilinear neighbours
+// may lie off the model (a corner within a pixel of its edge); they count as 0.
+template <bool kBorder>
+void samplePatch(const cv::Mat& model, const cv::Matx33d& m, cv::Point top_left, int size, cv::Mat* patch) {
+  auto at = [&model](int u, int v) -> double {
+    if (kBorder && !(u >= 0 && v >= 0 && u < model.cols && v < model.rows)) return 0.0;
+    return model.at<uint8_t>(v, u);
+  };
+  for (int y = 0; y < size; ++y) {
+    uint8_t* out = patch->ptr<uint8_t>(y);
+    // Along a row the homogeneous point moves by the matrix's first column: additions, not products.
+    const double row_x = top_left.x;
+    const double row_y = top_left.y + y;
+    double hu = m(0, 0) * row_x + m(0, 1) * row_y + m(0, 2);
+    double hv = m(1, 0) * row_x + m(1, 1) * row_y + m(1, 2);
+    double hw = m(2, 0) * row_x + m(2, 1) * row_y + m(2, 2);
+    for (int x = 0; x < size; ++x, hu += m(0, 0), hv += m(1, 0), hw += m(2, 0)) {
+      const double inverse_w = 1.0 / hw;
+      const double u = hu * inverse_w;
+      const double v = hv * inverse_w;
+      // u, v >= -0.5 (checked at the corners): truncating u + 1 floors u, without a call to floor().
+      const int u0 = static_cast<int>(u + 1.0) - 1;
+      const int v0 = static_cast<int>(v + 1.0) - 1;
+      const double fu = u - u0;
+      const double fv = v - v0;
+      const double value = (1.0 - fv) * ((1.0 - fu) * at(u0, v0) + fu * at(u0 + 1, v0)) +
+                           fv * ((1.0 - fu) * at(u0, v0 + 1) + fu * at(u0 + 1, v0 + 1));
+      out[x] = static_cast<uint8_t>(value + 0.5);  // in [0, 255]: a blend of 8-bit values
+    }
+  }
+}
+
+}  // namespace
+
+bool renderModelPatch(const cv::Mat& model, const cv::Matx33d& image_to_model, cv::Point top_left, int size,
+                      cv::Mat* patch) {
+  const double max_u = model.cols - 0.5;
+  const double max_v = model.rows - 0.5;
+  // A homography maps the square patch to a convex quadrilateral: on the (convex) model iff its corners are.
+  const int last = size - 1;
+  bool interior = true;  // every bilinear neighbour on the model
+  for (const cv::Point corner : {cv::Point(0, 0), cv::Point(last, 0), cv::Point(0, last), cv::Point(last, last)}) {
+    const cv::Vec3d h = image_to_model * cv::Vec3d(top_left.x + corner.x, top_left.y + corner.y, 1.0);
+    if (h[2] == 0.0) return false;
+    const double u = h[0] / h[2];
+    const double v = h[1] / h[2];
+    if (!(u >= -0.5 && u < max_u && v >= -0.5 && v < max_v)) return false;
+    interior = interior && u >= 0.0 && v >= 0.0 && u < model.cols - 1 && v < model.rows - 1;
+  }
+  patch->create(size, size, CV_8UC1);
+  if (interior) {
+    samplePatch<false>(model, image_to_model, top_left, size, patch);
+  } else {
+    samplePatch<true>(model, image_to_model, top_left, size, patch);
+  }
+  return true;
+}
+
 // BRISK is created with the model (buildModel): a matcher that never gets one (mono_pose in IR mode)
 // never pays for its pattern tables.
 FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(params) {}
@@ -395,18 +455,11 @@ bool FeatureMatcher::refinePass(const cv::Mat& gray, const std::vector<cv::Point
   const cv::Rect image_rect(0, 0, gray.cols, gray.rows);
   const cv::Rect face_box = cv::boundingRect(outline) & image_rect;
   if (face_box.area() <= 0) return false;
-  // Level pixel -> texture pixel, then the homography, then shift into the face box.
+  // Level pixel -> texture pixel, then the homography into the image; inverted, it draws each patch.
   const double s = level->scale;
   const cv::Matx33d level_to_texture(1.0 / s, 0.0, 0.5 / s - 0.5, 0.0, 1.0 / s, 0.5 / s - 0.5, 0.0, 0.0, 1.0);
-  const cv::Matx33d to_box(1.0, 0.0, -face_box.x, 0.0, 1.0, -face_box.y, 0.0, 0.0, 1.0);
+  const cv::Matx33d image_to_level = (match->homography * level_to_texture).inv();
   cv::Mat rendered;
-  cv::Mat valid;
-  cv::warpPerspective(level->image, rendered, to_box * match->homography * level_to_texture, face_box.size(),
-                      cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-  cv::warpPerspective(cv::Mat(level->image.size(), CV_8UC1, cv::Scalar(255)), valid,
-                      to_box * match->homography * level_to_texture, face_box.size(), cv::INTER_NEAREST,
-                      cv::BORDER_CONSTANT, cv::Scalar(0));
-
   std::vector<cv::Point2f> texture_points;
   std::vector<cv::Point2f> image_points;
   cv::Mat response;
@@ -414,13 +467,13 @@ bool FeatureMatcher::refinePass(const cv::Mat& gray, const std::vector<cv::Point
     const cv::Vec3d projected = match->homography * cv::Vec3d(texture_point.x, texture_point.y, 1.0);
     const cv::Point2d predicted(projected[0] / projected[2], projected[1] / projected[2]);
     const cv::Point centre(static_cast<int>(std::lround(predicted.x)), static_cast<int>(std::lround(predicted.y)));
-    const cv::Rect patch(centre.x - kPatchRadius - face_box.x, centre.y - kPatchRadius - face_box.y,
-                         2 * kPatchRadius + 1, 2 * kPatchRadius + 1);
+    const cv::Rect patch(centre.x - kPatchRadius, centre.y - kPatchRadius, 2 * kPatchRadius + 1,
+                         2 * kPatchRadius + 1);
     const cv::Rect window(centre.x - kPatchRadius - kSearch, centre.y - kPatchRadius - kSearch,
                           2 * (kPatchRadius + kSearch) + 1, 2 * (kPatchRadius + kSearch) + 1);
-    if ((patch & cv::Rect(0, 0, face_box.width, face_box.height)) != patch || (window & image_rect) != window) continue;
-    if (cv::countNonZero(valid(patch)) != patch.area()) continue;  // template must lie on the face
-    normalisedCrossCorrelation(gray(window), rendered(patch), &response);
+    if ((patch & face_box) != patch || (window & image_rect) != window) continue;
+    if (!renderModelPatch(level->image, image_to_level, patch.tl(), patch.width, &rendered)) continue;
+    normalisedCrossCorrelation(gray(window), rendered, &response);
     double best = 0.0;
     cv::Point peak;
     cv::minMaxLoc(response, nullptr, &best, nullptr, &peak);

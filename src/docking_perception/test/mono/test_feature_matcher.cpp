@@ -95,6 +95,52 @@ TEST(NormalisedCrossCorrelation, FlatTemplateGivesZero) {
   EXPECT_EQ(cv::countNonZero(response), 0);
 }
 
+// The refinement's patches drawn one by one against the whole face drawn by cv::warpPerspective (what the
+// refinement did before): the same grey levels to within warpPerspective's 1/32-pixel coordinate
+// quantisation, and a patch refused exactly where warpPerspective's nearest-neighbour mask of the model
+// is not all set (the patch crosses the face's edge).
+TEST(RenderModelPatch, DrawsWhatWarpPerspectiveDraws) {
+  cv::RNG rng(21);
+  cv::Mat model(90, 120, CV_8U);
+  rng.fill(model, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(model, model, cv::Size(5, 5), 1.2);  // texture smooth enough for bilinear sampling to matter
+  const cv::Size image_size(200, 160);
+  // Model -> image: enlarged (a near face), turned and in perspective.
+  const cv::Matx33d model_to_image(1.35, 0.22, 21.0, -0.18, 1.28, 18.0, 0.0008, -0.0006, 1.0);
+  cv::Mat drawn;
+  cv::Mat mask;
+  cv::warpPerspective(model, drawn, model_to_image, image_size, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::warpPerspective(cv::Mat(model.size(), CV_8U, cv::Scalar(255)), mask, model_to_image, image_size,
+                      cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
+  constexpr int kSize = 11;
+  int drawn_patches = 0;
+  int refused_patches = 0;
+  int disagreements = 0;
+  for (int y = 0; y + kSize <= image_size.height; y += 7) {
+    for (int x = 0; x + kSize <= image_size.width; x += 7) {
+      const cv::Rect patch(x, y, kSize, kSize);
+      cv::Mat ours;
+      const bool on_face = renderModelPatch(model, model_to_image.inv(), patch.tl(), kSize, &ours);
+      const bool mask_full = cv::countNonZero(mask(patch)) == patch.area();
+      // On the face's very edge rounding may decide a pixel either way: count, do not fail, those.
+      if (on_face != mask_full) {
+        ++disagreements;
+        continue;
+      }
+      if (!on_face) {
+        ++refused_patches;
+        continue;
+      }
+      ++drawn_patches;
+      ASSERT_EQ(ours.size(), cv::Size(kSize, kSize));
+      EXPECT_LE(cv::norm(ours, drawn(patch), cv::NORM_INF), 2.0) << "patch at " << x << ", " << y;
+    }
+  }
+  EXPECT_GT(drawn_patches, 200);
+  EXPECT_GT(refused_patches, 100);
+  EXPECT_LE(disagreements, drawn_patches / 100);
+}
+
 // The refined homography must put the texture corners where the true plane homography puts them.
 TEST(FeatureMatcher, FindsTheFaceAndRefinesToSubPixel) {
   const TargetModel model = synthetic::makeModel(4);
