@@ -151,11 +151,11 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
 
 // The model drawn into one square patch of the image: each patch pixel (image pixel top_left + (x, y))
 // mapped through `image_to_model` into the 8-bit `model` and sampled bilinearly, as cv::warpPerspective
-// (INTER_LINEAR, border 0) would draw it; patch is size x size, CV_8U. False when a pixel maps off the
+// (INTER_LINEAR, border 0) would draw it; patch is size x size, CV_8U. False when the patch leaves the
 // model (a corner outside [-0.5, cols - 0.5) x [-0.5, rows - 0.5), where warpPerspective's nearest-
-// neighbour mask is 0): a template must lie on the face. The refinement draws only the patches it correlates, not the
-// whole face (at 0.3 m the face fills the image: two full warps cost ~25 M instructions a frame).
-// Exposed for tests.
+// neighbour mask is 0): a template must lie on the face. The refinement draws only the patches it
+// correlates, not the whole face (at 0.3 m the face fills the image: two full warps cost ~25 M
+// instructions a frame). Exposed for tests.
 bool renderModelPatch(const cv::Mat& model, const cv::Matx33d& image_to_model, cv::Point top_left, int size,
                       cv::Mat* patch);
 
