@@ -11,6 +11,9 @@
 #include <opencv2/imgproc.hpp>
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
 #endif
 
 namespace docking_perception {
@@ -44,6 +47,17 @@ double signedArea(const std::vector<cv::Point2f>& polygon) {
   return 0.5 * area;
 }
 
+// The two nearest train rows so far: ties keep the earlier row, as a scan in row order does.
+inline void keepTwoNearest(int distance, int index, HammingPair* pair) {
+  if (distance < pair->best_distance) {
+    pair->second_distance = pair->best_distance;
+    pair->best_distance = distance;
+    pair->best_index = index;
+  } else if (distance < pair->second_distance) {
+    pair->second_distance = distance;
+  }
+}
+
 // The matching loop. kWords > 0: descriptors of exactly kWords 64-bit words (BRISK's 64 bytes), a
 // loop of fixed length the compiler unrolls with the query's words held in registers; 0: any width.
 // Instantiated twice more so that the popcount builtin compiles to the POPCNT instruction where the CPU
@@ -67,13 +81,7 @@ inline void knnLoop(const cv::Mat& query, const cv::Mat& train, int first_row, i
         distance += __builtin_popcountll(x ^ y);
       }
       for (int k = 0; k < tail; ++k) distance += __builtin_popcount(static_cast<unsigned>(a[8 * words + k] ^ b[8 * words + k]));
-      if (distance < pair.best_distance) {
-        pair.second_distance = pair.best_distance;
-        pair.best_distance = distance;
-        pair.best_index = t;
-      } else if (distance < pair.second_distance) {
-        pair.second_distance = distance;
-      }
+      keepTwoNearest(distance, t, &pair);
     }
   }
 }
@@ -94,6 +102,49 @@ __attribute__((target("popcnt"))) void knnLoopPopcnt(const cv::Mat& query, const
                                                      int row_count, std::vector<HammingPair>* pairs) {
   knnLoopAnyWidth(query, train, first_row, row_count, pairs);
 }
+
+// BRISK's 64-byte descriptors, four train rows a step: the query is held in two registers, each pair's
+// bit counts summed per 64-bit lane (psadbw, <= 128 each), the four pairs' lanes packed as 16-bit fields
+// of one register and summed once, so the horizontal sum is paid once per four pairs.
+__attribute__((target("avx2,popcnt"))) void knnLoopAvx2(const cv::Mat& query, const cv::Mat& train, int first_row,
+                                                        int row_count, std::vector<HammingPair>* pairs) {
+  const int end = first_row + row_count;
+  const int end_of_fours = first_row + row_count / 4 * 4;
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i nibble_bits = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2, 1, 2, 2, 3,
+                                               1, 2, 2, 3, 2, 3, 3, 4);
+  const __m256i low_nibble = _mm256_set1_epi8(0x0f);
+  for (int q = 0; q < query.rows; ++q) {
+    const uint8_t* a = query.ptr<uint8_t>(q);
+    const __m256i a_low = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a));
+    const __m256i a_high = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + 32));
+    HammingPair& pair = (*pairs)[static_cast<size_t>(q)];
+    for (int t = first_row; t < end_of_fours; t += 4) {
+      __m256i lane_sums[4];
+      for (int k = 0; k < 4; ++k) {
+        const uint8_t* b = train.ptr<uint8_t>(t + k);
+        const __m256i x_low = _mm256_xor_si256(a_low, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b)));
+        const __m256i x_high = _mm256_xor_si256(a_high, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + 32)));
+        // Bits set in each byte: a 16-entry table looked up per nibble (AVX2 has no vector popcount).
+        const __m256i bits = _mm256_add_epi8(
+            _mm256_add_epi8(_mm256_shuffle_epi8(nibble_bits, _mm256_and_si256(x_low, low_nibble)),
+                            _mm256_shuffle_epi8(nibble_bits, _mm256_and_si256(_mm256_srli_epi16(x_low, 4), low_nibble))),
+            _mm256_add_epi8(_mm256_shuffle_epi8(nibble_bits, _mm256_and_si256(x_high, low_nibble)),
+                            _mm256_shuffle_epi8(nibble_bits, _mm256_and_si256(_mm256_srli_epi16(x_high, 4), low_nibble))));
+        lane_sums[k] = _mm256_sad_epu8(bits, zero);
+      }
+      const __m256i packed =
+          _mm256_or_si256(_mm256_or_si256(lane_sums[0], _mm256_slli_epi64(lane_sums[1], 16)),
+                          _mm256_or_si256(_mm256_slli_epi64(lane_sums[2], 32), _mm256_slli_epi64(lane_sums[3], 48)));
+      __m128i sum = _mm_add_epi16(_mm256_castsi256_si128(packed), _mm256_extracti128_si256(packed, 1));
+      sum = _mm_add_epi16(sum, _mm_unpackhi_epi64(sum, sum));
+      const uint64_t four = static_cast<uint64_t>(_mm_cvtsi128_si64(sum));
+      for (int k = 0; k < 4; ++k) keepTwoNearest(static_cast<int>((four >> (16 * k)) & 0xffff), t + k, &pair);
+    }
+  }
+  // The rows past the last four, after them in row order.
+  knnLoop<kBriskWords>(query, train, end_of_fours, end - end_of_fours, pairs);
+}
 #endif
 
 }  // namespace
@@ -106,6 +157,10 @@ std::vector<HammingPair> hammingKnn2(const cv::Mat& query, const cv::Mat& train,
   first_row = std::max(0, first_row);
   row_count = std::min(row_count, train.rows - first_row);
 #if defined(__x86_64__) && defined(__GNUC__)
+  if (query.cols == 8 * kBriskWords && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt")) {
+    knnLoopAvx2(query, train, first_row, row_count, &pairs);
+    return pairs;
+  }
   if (__builtin_cpu_supports("popcnt")) {
     knnLoopPopcnt(query, train, first_row, row_count, &pairs);
     return pairs;
@@ -118,9 +173,10 @@ std::vector<HammingPair> hammingKnn2(const cv::Mat& query, const cv::Mat& train,
 namespace {
 
 // The patch correlation's inputs as 16-bit rows padded for whole runs of kCorrelationRun values: the
-// template rows with zeros, and `inside` (all bits set under the template, 0 past it) keeps the window
-// pixels past the template out of the window's sums. The window rows are padded too, so every run reads
-// inside them. Kept per thread and reused: the refinement correlates ~270 patches a frame.
+// template rows with zeros, so a run's products past the template vanish; the window rows padded too,
+// so every run reads inside them. The window's own sums under the template come from its integral
+// images, once per window, not once per position. Kept per thread and reused: the refinement
+// correlates ~270 patches a frame.
 constexpr int kCorrelationRun = 8;
 struct PaddedPatches {
   int template_size = 0;
@@ -128,7 +184,8 @@ struct PaddedPatches {
   int window_stride = 0;  // window row length, padded
   std::vector<int16_t> window;
   std::vector<int16_t> templ;
-  std::vector<int16_t> inside;
+  std::vector<int32_t> integral;     // (rows + 1) x (cols + 1): sums of the window pixels above-left
+  std::vector<int32_t> integral_sq;  // the same for their squares
 };
 
 void padPatches(const cv::Mat& window, const cv::Mat& templ, PaddedPatches* padded) {
@@ -138,7 +195,6 @@ void padPatches(const cv::Mat& window, const cv::Mat& templ, PaddedPatches* padd
   padded->window_stride = window.cols + padded->row_length;
   padded->window.assign(static_cast<size_t>(padded->window_stride) * static_cast<size_t>(window.rows), 0);
   padded->templ.assign(static_cast<size_t>(padded->row_length) * static_cast<size_t>(size), 0);
-  padded->inside.assign(static_cast<size_t>(padded->row_length), 0);
   for (int y = 0; y < window.rows; ++y) {
     const uint8_t* w = window.ptr<uint8_t>(y);
     std::copy(w, w + window.cols, padded->window.begin() + static_cast<std::ptrdiff_t>(y) * padded->window_stride);
@@ -147,57 +203,91 @@ void padPatches(const cv::Mat& window, const cv::Mat& templ, PaddedPatches* padd
     const uint8_t* t = templ.ptr<uint8_t>(y);
     std::copy(t, t + size, padded->templ.begin() + static_cast<std::ptrdiff_t>(y) * padded->row_length);
   }
-  std::fill(padded->inside.begin(), padded->inside.begin() + size, static_cast<int16_t>(-1));
 }
 
-struct CorrelationSums {
-  int32_t cross = 0;        // sum of window x template
-  int32_t window_sum = 0;   // sum of the window pixels under the template
-  int32_t window_sum2 = 0;  // sum of their squares
-};
+void integrateWindow(const cv::Mat& window, PaddedPatches* padded) {
+  const size_t stride = static_cast<size_t>(window.cols) + 1;
+  padded->integral.assign(stride * static_cast<size_t>(window.rows + 1), 0);
+  padded->integral_sq.assign(stride * static_cast<size_t>(window.rows + 1), 0);
+  for (int y = 0; y < window.rows; ++y) {
+    const uint8_t* w = window.ptr<uint8_t>(y);
+    int32_t row_sum = 0;
+    int32_t row_sum_sq = 0;
+    const size_t above = static_cast<size_t>(y) * stride;
+    const size_t here = above + stride;
+    for (int x = 0; x < window.cols; ++x) {
+      row_sum += w[x];
+      row_sum_sq += w[x] * w[x];
+      padded->integral[here + x + 1] = padded->integral[above + x + 1] + row_sum;
+      padded->integral_sq[here + x + 1] = padded->integral_sq[above + x + 1] + row_sum_sq;
+    }
+  }
+}
 
-// The sums at one position: dot products over the template's rows. With SSE2 each run of 8 is three
-// multiply-adds (pmaddwd) into accumulators kept across the rows; elsewhere the same sums in plain loops.
-CorrelationSums positionSums(const PaddedPatches& p, int oy, int ox) {
-  CorrelationSums sums;
+// The box of the template's size at (oy, ox) from an integral image of row length `stride`.
+inline int32_t boxSum(const std::vector<int32_t>& integral, size_t stride, int oy, int ox, int size) {
+  const size_t top = static_cast<size_t>(oy) * stride;
+  const size_t bottom = static_cast<size_t>(oy + size) * stride;
+  return integral[bottom + ox + size] - integral[bottom + ox] - integral[top + ox + size] + integral[top + ox];
+}
+
+// The sum of window x template at one position: dot products over the template's rows. With SSE2 each
+// run of 8 is one multiply-add (pmaddwd) into an accumulator kept across the rows; elsewhere a plain loop.
+// kFixedSize > 0: the template's size known when compiled (the refinement's 11), loops the compiler
+// unrolls; 0: any size.
+template <int kFixedSize>
+inline int32_t positionCross(const PaddedPatches& p, int oy, int ox) {
+  const int size = kFixedSize > 0 ? kFixedSize : p.template_size;
+  const int row_length =
+      kFixedSize > 0 ? (kFixedSize + kCorrelationRun - 1) / kCorrelationRun * kCorrelationRun : p.row_length;
+  const int16_t* window = p.window.data() + static_cast<size_t>(oy) * p.window_stride + ox;
+  const int16_t* templ = p.templ.data();
 #if defined(__SSE2__)
   __m128i cross4 = _mm_setzero_si128();
-  __m128i sum4 = _mm_setzero_si128();
-  __m128i sum2_4 = _mm_setzero_si128();
-  const __m128i ones = _mm_set1_epi16(1);
-  for (int y = 0; y < p.template_size; ++y) {
-    const int16_t* w = p.window.data() + static_cast<size_t>(oy + y) * p.window_stride + ox;
-    const int16_t* t = p.templ.data() + static_cast<size_t>(y) * p.row_length;
-    for (int x = 0; x < p.row_length; x += kCorrelationRun) {
+  for (int y = 0; y < size; ++y) {
+    const int16_t* w = window + static_cast<size_t>(y) * p.window_stride;
+    const int16_t* t = templ + static_cast<size_t>(y) * row_length;
+    for (int x = 0; x < row_length; x += kCorrelationRun) {
       const __m128i wv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(w + x));
       const __m128i tv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(t + x));
-      const __m128i masked = _mm_and_si128(wv, _mm_loadu_si128(reinterpret_cast<const __m128i*>(p.inside.data() + x)));
       cross4 = _mm_add_epi32(cross4, _mm_madd_epi16(wv, tv));
-      sum4 = _mm_add_epi32(sum4, _mm_madd_epi16(masked, ones));
-      sum2_4 = _mm_add_epi32(sum2_4, _mm_madd_epi16(masked, masked));
     }
   }
-  alignas(16) int32_t lanes[3][4];
-  _mm_store_si128(reinterpret_cast<__m128i*>(lanes[0]), cross4);
-  _mm_store_si128(reinterpret_cast<__m128i*>(lanes[1]), sum4);
-  _mm_store_si128(reinterpret_cast<__m128i*>(lanes[2]), sum2_4);
-  sums.cross = lanes[0][0] + lanes[0][1] + lanes[0][2] + lanes[0][3];
-  sums.window_sum = lanes[1][0] + lanes[1][1] + lanes[1][2] + lanes[1][3];
-  sums.window_sum2 = lanes[2][0] + lanes[2][1] + lanes[2][2] + lanes[2][3];
+  cross4 = _mm_add_epi32(cross4, _mm_shuffle_epi32(cross4, _MM_SHUFFLE(1, 0, 3, 2)));
+  cross4 = _mm_add_epi32(cross4, _mm_shuffle_epi32(cross4, _MM_SHUFFLE(2, 3, 0, 1)));
+  return _mm_cvtsi128_si32(cross4);
 #else
-  for (int y = 0; y < p.template_size; ++y) {
-    const int16_t* w = p.window.data() + static_cast<size_t>(oy + y) * p.window_stride + ox;
-    const int16_t* t = p.templ.data() + static_cast<size_t>(y) * p.row_length;
-    for (int x = 0; x < p.row_length; ++x) {
-      const int32_t masked = w[x] & p.inside[x];
-      sums.cross += static_cast<int32_t>(w[x]) * t[x];
-      sums.window_sum += masked;
-      sums.window_sum2 += masked * masked;
+  int32_t cross = 0;
+  for (int y = 0; y < size; ++y) {
+    const int16_t* w = window + static_cast<size_t>(y) * p.window_stride;
+    const int16_t* t = templ + static_cast<size_t>(y) * row_length;
+    for (int x = 0; x < row_length; ++x) cross += static_cast<int32_t>(w[x]) * t[x];
+  }
+  return cross;
+#endif
+}
+
+// Every position's correlation, from the template's sums and the window's integrals.
+template <int kFixedSize>
+void correlateAtEveryPosition(const PaddedPatches& p, int window_cols, int t_sum, double t_var, cv::Mat* response) {
+  const int size = p.template_size;
+  const double n = static_cast<double>(size * size);
+  const size_t stride = static_cast<size_t>(window_cols) + 1;
+  for (int oy = 0; oy < response->rows; ++oy) {
+    float* out = response->ptr<float>(oy);
+    for (int ox = 0; ox < response->cols; ++ox) {
+      const int32_t w_sum = boxSum(p.integral, stride, oy, ox, size);
+      const int32_t w_sum2 = boxSum(p.integral_sq, stride, oy, ox, size);
+      const double w_var = w_sum2 - static_cast<double>(w_sum) * w_sum / n;
+      const double covariance = positionCross<kFixedSize>(p, oy, ox) - static_cast<double>(w_sum) * t_sum / n;
+      const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
+      out[ox] = denominator > 1e-9 ? static_cast<float>(covariance / denominator) : 0.0f;
     }
   }
-#endif
-  return sums;
 }
+
+constexpr int kRefinementPatchRadius = 5;  // FeatureMatcher::refinePass's patches
+constexpr int kRefinementPatchSize = 2 * kRefinementPatchRadius + 1;
 
 }  // namespace
 
@@ -205,8 +295,8 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
   const int size = templ.rows;
   const int positions = window.rows - size + 1;
   response->create(positions, positions, CV_32F);
-  const double n = static_cast<double>(size * size);
-  // 8-bit data: every sum fits in 32 bits (121 * 255^2 < 2^23).
+  // 8-bit data: every sum fits in 32 bits (121 * 255^2 < 2^23; the window's integrals, 625 * 255^2 for
+  // a 25x25 window, < 2^26).
   int t_sum = 0;
   int t_sum2 = 0;
   for (int y = 0; y < size; ++y) {
@@ -216,17 +306,15 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
       t_sum2 += t[x] * t[x];
     }
   }
-  const double t_var = t_sum2 - static_cast<double>(t_sum) * t_sum / n;
-  thread_local PaddedPatches padded;
+  const double t_var = t_sum2 - static_cast<double>(t_sum) * t_sum / static_cast<double>(size * size);
+  thread_local PaddedPatches padded_per_thread;
+  PaddedPatches& padded = padded_per_thread;  // one thread-local lookup, not one per access
   padPatches(window, templ, &padded);
-  for (int oy = 0; oy < positions; ++oy) {
-    for (int ox = 0; ox < positions; ++ox) {
-      const CorrelationSums sums = positionSums(padded, oy, ox);
-      const double w_var = sums.window_sum2 - static_cast<double>(sums.window_sum) * sums.window_sum / n;
-      const double covariance = sums.cross - static_cast<double>(sums.window_sum) * t_sum / n;
-      const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
-      response->at<float>(oy, ox) = denominator > 1e-9 ? static_cast<float>(covariance / denominator) : 0.0f;
-    }
+  integrateWindow(window, &padded);
+  if (size == kRefinementPatchSize) {
+    correlateAtEveryPosition<kRefinementPatchSize>(padded, window.cols, t_sum, t_var, response);
+  } else {
+    correlateAtEveryPosition<0>(padded, window.cols, t_sum, t_var, response);
   }
 }
 
@@ -450,7 +538,7 @@ bool FeatureMatcher::refinePass(const cv::Mat& gray, const std::vector<cv::Point
       level = &candidate;
     }
   }
-  constexpr int kPatchRadius = 5;
+  constexpr int kPatchRadius = kRefinementPatchRadius;
   constexpr int kSearch = 3;
   const cv::Rect image_rect(0, 0, gray.cols, gray.rows);
   const cv::Rect face_box = cv::boundingRect(outline) & image_rect;

@@ -14,31 +14,42 @@
 
 using namespace docking_perception::mono;  // NOLINT: test file
 
-// BRISK's 64-byte descriptors (the fixed-width loop) and an odd width (any-width loop, with a byte tail).
+// BRISK's 64-byte descriptors (the fixed-width loops: four rows a step where the CPU has AVX2, and the
+// rows past the last four) and an odd width (any-width loop, with a byte tail). Near-duplicate rows make
+// ties and small distances, where the order of the updates matters.
 TEST(HammingKnn2, AgreesWithBruteForceNorm) {
   for (const int width : {64, 37}) {
-    cv::RNG rng(3);
-    cv::Mat query(40, width, CV_8U);
-    cv::Mat train(300, width, CV_8U);
-    rng.fill(query, cv::RNG::UNIFORM, 0, 256);
-    rng.fill(train, cv::RNG::UNIFORM, 0, 256);
-    const auto pairs = hammingKnn2(query, train, 50, 200);
-    ASSERT_EQ(pairs.size(), 40u);
-    for (int q = 0; q < query.rows; ++q) {
-      int best = 1 << 30, second = 1 << 30, best_index = -1;
-      for (int t = 50; t < 250; ++t) {
-        const int d = static_cast<int>(cv::norm(query.row(q), train.row(t), cv::NORM_HAMMING));
-        if (d < best) {
-          second = best;
-          best = d;
-          best_index = t;
-        } else if (d < second) {
-          second = d;
+    for (const int row_count : {200, 203}) {
+      cv::RNG rng(3);
+      cv::Mat query(40, width, CV_8U);
+      cv::Mat train(300, width, CV_8U);
+      rng.fill(query, cv::RNG::UNIFORM, 0, 256);
+      rng.fill(train, cv::RNG::UNIFORM, 0, 256);
+      for (int q = 0; q < 20; ++q) {  // half the queries have two or three near copies among the rows
+        for (int copy = 0; copy < 1 + q % 2 + 1; ++copy) {
+          cv::Mat row = train.row(50 + rng.uniform(0, row_count));
+          query.row(q).copyTo(row);
+          row.at<uint8_t>(rng.uniform(0, width)) ^= static_cast<uint8_t>(1u << rng.uniform(0, 8));
         }
       }
-      EXPECT_EQ(pairs[q].best_distance, best) << width << " bytes";
-      EXPECT_EQ(pairs[q].second_distance, second) << width << " bytes";
-      EXPECT_EQ(pairs[q].best_index, best_index) << width << " bytes";
+      const auto pairs = hammingKnn2(query, train, 50, row_count);
+      ASSERT_EQ(pairs.size(), 40u);
+      for (int q = 0; q < query.rows; ++q) {
+        int best = 1 << 30, second = 1 << 30, best_index = -1;
+        for (int t = 50; t < 50 + row_count; ++t) {
+          const int d = static_cast<int>(cv::norm(query.row(q), train.row(t), cv::NORM_HAMMING));
+          if (d < best) {
+            second = best;
+            best = d;
+            best_index = t;
+          } else if (d < second) {
+            second = d;
+          }
+        }
+        EXPECT_EQ(pairs[q].best_distance, best) << width << " bytes, " << row_count << " rows";
+        EXPECT_EQ(pairs[q].second_distance, second) << width << " bytes, " << row_count << " rows";
+        EXPECT_EQ(pairs[q].best_index, best_index) << width << " bytes, " << row_count << " rows";
+      }
     }
   }
 }
