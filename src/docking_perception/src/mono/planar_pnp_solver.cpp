@@ -9,6 +9,8 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
+constexpr int kMaxRefinementIterations = 20;
+
 Eigen::Matrix3d toRotation(const cv::Mat& rvec) {
   cv::Mat rotation_cv;
   cv::Rodrigues(rvec, rotation_cv);
@@ -67,16 +69,13 @@ bool PlanarPnpSolver::solve(const CameraIntrinsics& camera, const std::vector<Ei
     Eigen::Matrix3d rotation;
     Eigen::Vector3d translation;
     double rms;
-    cv::Mat rvec;
-    cv::Mat tvec;
   };
   std::vector<Candidate> candidates;
   for (int i = 0; i < count; ++i) {
     const Eigen::Matrix3d rotation = toRotation(rvecs[static_cast<size_t>(i)]);
     const Eigen::Vector3d translation = toVector(tvecs[static_cast<size_t>(i)]);
     if (translation.z() <= 0.0) continue;  // behind the camera
-    candidates.push_back({rotation, translation, errors.at<double>(i), rvecs[static_cast<size_t>(i)].clone(),
-                          tvecs[static_cast<size_t>(i)].clone()});
+    candidates.push_back({rotation, translation, errors.at<double>(i)});
   }
   if (candidates.empty()) {
     if (reason) *reason = "IPPE solutions are all behind the camera";
@@ -105,16 +104,10 @@ bool PlanarPnpSolver::solve(const CameraIntrinsics& camera, const std::vector<Ei
     solution->alternative_rms_px = alternative.rms;
   }
 
-  cv::Mat rvec = candidates[chosen].rvec;
-  cv::Mat tvec = candidates[chosen].tvec;
-  try {
-    cv::solvePnPRefineLM(object, image, camera_matrix, cv::noArray(), rvec, tvec,
-                         cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 20, 1e-10));
-  } catch (const cv::Exception&) {
-    // Keep the IPPE pose: it is already a good planar solution.
-  }
-  solution->pose.rotation = toRotation(rvec);
-  solution->pose.translation = toVector(tvec);
+  solution->pose.rotation = candidates[chosen].rotation;
+  solution->pose.translation = candidates[chosen].translation;
+  refinePoseLevenbergMarquardt(camera, model_points, image_points, kMaxRefinementIterations, &solution->pose.rotation,
+                               &solution->pose.translation);
   solution->reprojection_rms_px =
       reprojectionRms(camera, solution->pose.rotation, solution->pose.translation, model_points, image_points);
 

@@ -1,6 +1,9 @@
 #include "docking_perception/mono/pose_types.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <limits>
 #include <cmath>
 #include <ctime>
 
@@ -60,22 +63,92 @@ double reprojectionRms(const CameraIntrinsics& camera, const Eigen::Matrix3d& ro
   return std::sqrt(sum / static_cast<double>(model_points.size()));
 }
 
+namespace {
+
+// One point's 2 x 6 block of reprojectionJacobian: `rotated` is R m, the point before the translation.
+Eigen::Matrix<double, 2, 6> pointJacobian(const CameraIntrinsics& camera, const Eigen::Vector3d& rotated,
+                                          const Eigen::Vector3d& translation) {
+  const Eigen::Vector3d p = rotated + translation;
+  const double inv_z = 1.0 / p.z();
+  Eigen::Matrix<double, 2, 3> d_pixel_d_point;
+  d_pixel_d_point << camera.fx * inv_z, 0.0, -camera.fx * p.x() * inv_z * inv_z,  //
+      0.0, camera.fy * inv_z, -camera.fy * p.y() * inv_z * inv_z;
+  // d(point)/d(dt) = I; d(point)/d(dtheta) = -[R m]x, since Exp(dtheta) R m ~ R m + dtheta x R m.
+  Eigen::Matrix<double, 2, 6> block;
+  block.leftCols<3>() = d_pixel_d_point;
+  block.rightCols<3>() = -d_pixel_d_point * skew(rotated);
+  return block;
+}
+
+// Sum of squared reprojection errors; infinite when a point is not in front of the camera.
+double reprojectionCost(const CameraIntrinsics& camera, const Eigen::Matrix3d& rotation,
+                        const Eigen::Vector3d& translation, const std::vector<Eigen::Vector3d>& model_points,
+                        const std::vector<Eigen::Vector2d>& image_points) {
+  double sum = 0.0;
+  for (size_t i = 0; i < model_points.size(); ++i) {
+    const Eigen::Vector3d p = rotation * model_points[i] + translation;
+    if (!(p.z() > 0.0)) return std::numeric_limits<double>::infinity();
+    sum += (camera.project(p) - image_points[i]).squaredNorm();
+  }
+  return sum;
+}
+
+}  // namespace
+
 Eigen::MatrixXd reprojectionJacobian(const CameraIntrinsics& camera, const Eigen::Matrix3d& rotation,
                                      const Eigen::Vector3d& translation,
                                      const std::vector<Eigen::Vector3d>& model_points) {
   Eigen::MatrixXd jacobian(2 * model_points.size(), 6);
   for (size_t i = 0; i < model_points.size(); ++i) {
-    const Eigen::Vector3d rotated = rotation * model_points[i];
-    const Eigen::Vector3d p = rotated + translation;
-    const double inv_z = 1.0 / p.z();
-    Eigen::Matrix<double, 2, 3> d_pixel_d_point;
-    d_pixel_d_point << camera.fx * inv_z, 0.0, -camera.fx * p.x() * inv_z * inv_z,  //
-        0.0, camera.fy * inv_z, -camera.fy * p.y() * inv_z * inv_z;
-    // d(point)/d(dt) = I; d(point)/d(dtheta) = -[R m]x, since Exp(dtheta) R m ~ R m + dtheta x R m.
-    jacobian.block<2, 3>(2 * i, 0) = d_pixel_d_point;
-    jacobian.block<2, 3>(2 * i, 3) = -d_pixel_d_point * skew(rotated);
+    jacobian.block<2, 6>(2 * i, 0) = pointJacobian(camera, rotation * model_points[i], translation);
   }
   return jacobian;
+}
+
+int refinePoseLevenbergMarquardt(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& model_points,
+                                 const std::vector<Eigen::Vector2d>& image_points, int max_iterations,
+                                 Eigen::Matrix3d* rotation, Eigen::Vector3d* translation) {
+  if (model_points.size() < 3 || model_points.size() != image_points.size()) return 0;
+  constexpr double kInitialDamping = 1e-3;  // relative to the normal matrix's diagonal
+  constexpr double kMaxDamping = 1e10;      // past this no step lowers the cost: a minimum
+  constexpr double kMinStep = 1e-12;        // m and rad: converged
+  double cost = reprojectionCost(camera, *rotation, *translation, model_points, image_points);
+  if (!std::isfinite(cost)) return 0;
+  double damping = kInitialDamping;
+  int iteration = 0;
+  for (; iteration < max_iterations; ++iteration) {
+    // Normal equations of the linearised residuals (observed - projected) at the current pose.
+    Matrix6d normal = Matrix6d::Zero();
+    Vector6d gradient = Vector6d::Zero();
+    for (size_t i = 0; i < model_points.size(); ++i) {
+      const Eigen::Vector3d rotated = *rotation * model_points[i];
+      const Eigen::Matrix<double, 2, 6> block = pointJacobian(camera, rotated, *translation);
+      normal.noalias() += block.transpose() * block;
+      gradient.noalias() += block.transpose() * (image_points[i] - camera.project(rotated + *translation));
+    }
+    bool lowered = false;
+    Vector6d step = Vector6d::Zero();
+    while (!lowered && damping <= kMaxDamping) {
+      Matrix6d damped = normal;
+      damped.diagonal() *= 1.0 + damping;
+      step = damped.ldlt().solve(gradient);
+      const Eigen::Vector3d candidate_translation = *translation + step.head<3>();
+      const Eigen::Matrix3d candidate_rotation = rotationExp(step.tail<3>()) * *rotation;
+      const double candidate_cost =
+          reprojectionCost(camera, candidate_rotation, candidate_translation, model_points, image_points);
+      if (candidate_cost <= cost) {
+        lowered = true;
+        cost = candidate_cost;
+        *translation = candidate_translation;
+        *rotation = candidate_rotation;
+        damping = std::max(damping * 0.1, 1e-12);
+      } else {
+        damping *= 10.0;
+      }
+    }
+    if (!lowered || step.norm() < kMinStep) break;
+  }
+  return iteration;
 }
 
 bool leastSquaresPoseCovariance(const CameraIntrinsics& camera, const Eigen::Matrix3d& rotation,

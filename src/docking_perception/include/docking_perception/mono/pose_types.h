@@ -65,6 +65,14 @@ Eigen::MatrixXd reprojectionJacobian(const CameraIntrinsics& camera, const Eigen
                                      const Eigen::Vector3d& translation,
                                      const std::vector<Eigen::Vector3d>& model_points);
 
+// Levenberg-Marquardt on the reprojection error (pinhole, no distortion: the images are rectified) from
+// (rotation, translation), updated in place to the minimum near them; the steps as in
+// reprojectionJacobian (R <- Exp(dtheta) R). Stops when a step is below 1e-12 or none lowers the cost.
+// Returns the iterations run (0: fewer than 3 points, or a start with a point behind the camera).
+int refinePoseLevenbergMarquardt(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& model_points,
+                                 const std::vector<Eigen::Vector2d>& image_points, int max_iterations,
+                                 Eigen::Matrix3d* rotation, Eigen::Vector3d* translation);
+
 // Gauss-Newton covariance of a least-squares pose: pixel_variance * (J^T J)^-1. Returns false when J^T J
 // is singular (fewer than 3 non-collinear points); the covariance is then set to 1e6 * I.
 bool leastSquaresPoseCovariance(const CameraIntrinsics& camera, const Eigen::Matrix3d& rotation,
