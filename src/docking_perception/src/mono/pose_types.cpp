@@ -110,13 +110,13 @@ int refinePoseLevenbergMarquardt(const CameraIntrinsics& camera, const std::vect
                                  Eigen::Matrix3d* rotation, Eigen::Vector3d* translation) {
   if (model_points.size() < 3 || model_points.size() != image_points.size()) return 0;
   constexpr double kInitialDamping = 1e-3;  // relative to the normal matrix's diagonal
+  constexpr double kMinDamping = 1e-12;     // after many good steps: Gauss-Newton, but never exactly
   constexpr double kMaxDamping = 1e10;      // past this no step lowers the cost: a minimum
   constexpr double kMinStep = 1e-12;        // m and rad: converged
   double cost = reprojectionCost(camera, *rotation, *translation, model_points, image_points);
   if (!std::isfinite(cost)) return 0;
   double damping = kInitialDamping;
-  int iteration = 0;
-  for (; iteration < max_iterations; ++iteration) {
+  for (int iteration = 1; iteration <= max_iterations; ++iteration) {
     // Normal equations of the linearised residuals (observed - projected) at the current pose.
     Matrix6d normal = Matrix6d::Zero();
     Vector6d gradient = Vector6d::Zero();
@@ -141,14 +141,14 @@ int refinePoseLevenbergMarquardt(const CameraIntrinsics& camera, const std::vect
         cost = candidate_cost;
         *translation = candidate_translation;
         *rotation = candidate_rotation;
-        damping = std::max(damping * 0.1, 1e-12);
+        damping = std::max(damping * 0.1, kMinDamping);
       } else {
         damping *= 10.0;
       }
     }
-    if (!lowered || step.norm() < kMinStep) break;
+    if (!lowered || step.norm() < kMinStep) return iteration;
   }
-  return iteration;
+  return max_iterations;
 }
 
 bool leastSquaresPoseCovariance(const CameraIntrinsics& camera, const Eigen::Matrix3d& rotation,
