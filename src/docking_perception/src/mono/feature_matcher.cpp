@@ -184,6 +184,7 @@ struct PaddedPatches {
   int window_stride = 0;  // window row length, padded
   std::vector<int16_t> window;
   std::vector<int16_t> templ;
+  int integral_stride = 0;           // window cols + 1
   std::vector<int32_t> integral;     // (rows + 1) x (cols + 1): sums of the window pixels above-left
   std::vector<int32_t> integral_sq;  // the same for their squares
 };
@@ -206,7 +207,8 @@ void padPatches(const cv::Mat& window, const cv::Mat& templ, PaddedPatches* padd
 }
 
 void integrateWindow(const cv::Mat& window, PaddedPatches* padded) {
-  const size_t stride = static_cast<size_t>(window.cols) + 1;
+  padded->integral_stride = window.cols + 1;
+  const size_t stride = static_cast<size_t>(padded->integral_stride);
   padded->integral.assign(stride * static_cast<size_t>(window.rows + 1), 0);
   padded->integral_sq.assign(stride * static_cast<size_t>(window.rows + 1), 0);
   for (int y = 0; y < window.rows; ++y) {
@@ -224,8 +226,9 @@ void integrateWindow(const cv::Mat& window, PaddedPatches* padded) {
   }
 }
 
-// The box of the template's size at (oy, ox) from an integral image of row length `stride`.
-inline int32_t boxSum(const std::vector<int32_t>& integral, size_t stride, int oy, int ox, int size) {
+// The box of the template's size at (oy, ox) from one of the window's integral images.
+inline int32_t boxSum(const std::vector<int32_t>& integral, int integral_stride, int oy, int ox, int size) {
+  const size_t stride = static_cast<size_t>(integral_stride);
   const size_t top = static_cast<size_t>(oy) * stride;
   const size_t bottom = static_cast<size_t>(oy + size) * stride;
   return integral[bottom + ox + size] - integral[bottom + ox] - integral[top + ox + size] + integral[top + ox];
@@ -269,15 +272,14 @@ inline int32_t positionCross(const PaddedPatches& p, int oy, int ox) {
 
 // Every position's correlation, from the template's sums and the window's integrals.
 template <int kFixedSize>
-void correlateAtEveryPosition(const PaddedPatches& p, int window_cols, int t_sum, double t_var, cv::Mat* response) {
+void correlateAtEveryPosition(const PaddedPatches& p, int t_sum, double t_var, cv::Mat* response) {
   const int size = p.template_size;
   const double n = static_cast<double>(size * size);
-  const size_t stride = static_cast<size_t>(window_cols) + 1;
   for (int oy = 0; oy < response->rows; ++oy) {
     float* out = response->ptr<float>(oy);
     for (int ox = 0; ox < response->cols; ++ox) {
-      const int32_t w_sum = boxSum(p.integral, stride, oy, ox, size);
-      const int32_t w_sum2 = boxSum(p.integral_sq, stride, oy, ox, size);
+      const int32_t w_sum = boxSum(p.integral, p.integral_stride, oy, ox, size);
+      const int32_t w_sum2 = boxSum(p.integral_sq, p.integral_stride, oy, ox, size);
       const double w_var = w_sum2 - static_cast<double>(w_sum) * w_sum / n;
       const double covariance = positionCross<kFixedSize>(p, oy, ox) - static_cast<double>(w_sum) * t_sum / n;
       const double denominator = std::sqrt(std::max(0.0, w_var * t_var));
@@ -312,9 +314,9 @@ void normalisedCrossCorrelation(const cv::Mat& window, const cv::Mat& templ, cv:
   padPatches(window, templ, &padded);
   integrateWindow(window, &padded);
   if (size == kRefinementPatchSize) {
-    correlateAtEveryPosition<kRefinementPatchSize>(padded, window.cols, t_sum, t_var, response);
+    correlateAtEveryPosition<kRefinementPatchSize>(padded, t_sum, t_var, response);
   } else {
-    correlateAtEveryPosition<0>(padded, window.cols, t_sum, t_var, response);
+    correlateAtEveryPosition<0>(padded, t_sum, t_var, response);
   }
 }
 
