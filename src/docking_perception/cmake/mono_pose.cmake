@@ -11,6 +11,7 @@ set(MONO_CORE_SOURCES
   src/mono/planar_pnp_solver.cpp
   src/mono/led_pattern_detector.cpp
   src/mono/feature_matcher.cpp
+  src/mono/upright_descriptor.cpp
   src/mono/dark_dot_locator.cpp
   src/mono/velocity_estimators.cpp
   src/mono/mono_pose_estimator.cpp
@@ -43,6 +44,7 @@ if(CATKIN_ENABLE_TESTING)
     test/mono/test_main.cpp
     test/mono/test_target_model.cpp
     test/mono/test_feature_matcher.cpp
+    test/mono/test_upright_descriptor.cpp
     test/mono/test_five_point_solver.cpp
     test/mono/test_planar_pnp_solver.cpp
     test/mono/test_velocity_estimators.cpp

@@ -388,6 +388,7 @@ void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
   const bool rebuild = params.brisk_threshold != params_.brisk_threshold ||
                        params.brisk_octaves != params_.brisk_octaves ||
                        params.use_brisk_detector != params_.use_brisk_detector ||
+                       params.upright_descriptors != params_.upright_descriptors ||
                        params.fast_threshold != params_.fast_threshold ||
                        params.max_model_keypoints_per_level != params_.max_model_keypoints_per_level ||
                        params.model_widths_px != params_.model_widths_px ||
@@ -434,6 +435,15 @@ void FeatureMatcher::detect(const cv::Mat& image, std::vector<cv::KeyPoint>* key
   cv::KeyPointsFilter::retainBest(*keypoints, max_keypoints);
 }
 
+void FeatureMatcher::describe(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors,
+                              bool blurred_set) const {
+  if (params_.upright_descriptors && !blurred_set) {
+    upright_descriptor_.compute(image, keypoints, descriptors);
+  } else {
+    brisk_->compute(image, *keypoints, *descriptors);
+  }
+}
+
 bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason) {
   texture_ = texture_gray;
   texture_size_ = texture_gray.size();
@@ -444,7 +454,9 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
     if (reason) *reason = "the model texture must be a non-empty 8-bit gray image";
     return false;
   }
-  brisk_ = sharedBrisk(params_.brisk_threshold, params_.brisk_octaves);
+  brisk_ = params_.use_brisk_detector || !params_.upright_descriptors || hasBlurredModel()
+               ? sharedBrisk(params_.brisk_threshold, params_.brisk_octaves)
+               : cv::Ptr<cv::BRISK>();
   std::vector<int> widths = params_.model_widths_px;
   std::sort(widths.rbegin(), widths.rend());
   // The sharp levels, then (blurred_model_sigma_px > 0) the same widths blurred: the descriptors a
@@ -471,7 +483,7 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
     std::vector<cv::KeyPoint> keypoints;
     cv::Mat descriptors;
     detect(level.image, &keypoints, params_.max_model_keypoints_per_level);
-    brisk_->compute(level.image, keypoints, descriptors);
+    describe(level.image, &keypoints, &descriptors, level.blurred);
     level.first_row = model_descriptors_.rows;
     level.row_count = descriptors.rows;
     for (const cv::KeyPoint& kp : keypoints) {
@@ -621,9 +633,11 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
     return result;
   }
   std::vector<cv::KeyPoint> keypoints;
-  // A continuous copy: BRISK's descriptor code mis-reads sub-matrix views (measured: almost no
-  // matches on a region view, normal matches on its copy).
-  cv::Mat view = roi == full ? gray : gray(roi).clone();
+  // BRISK's descriptor code mis-reads sub-matrix views (measured: almost no matches on a region view,
+  // normal matches on its copy), so it gets a continuous copy; FAST and the upright descriptor read
+  // the view itself.
+  cv::Mat view = roi == full || (params_.upright_descriptors && !(blurred_model && hasBlurredModel()))
+                     ? gray(roi) : gray(roi).clone();
   const bool half = pyramid_level > 0;
   result.pyramid_level = half ? 1 : 0;
   if (half) {
@@ -632,7 +646,7 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
   }
   detect(view, &keypoints, params_.max_image_keypoints);
   cv::Mat descriptors;
-  brisk_->compute(view, keypoints, descriptors);
+  describe(view, &keypoints, &descriptors, blurred_model && hasBlurredModel());
   result.keypoints = static_cast<int>(keypoints.size());
   if (keypoints.size() < 4) {
     result.status = "too few image keypoints (" + std::to_string(keypoints.size()) + ")";

@@ -275,21 +275,28 @@ TEST(FeatureMatcher, RefinesAtAPredictedHomographyAndRefusesAWrongOne) {
 }
 
 // Matchers with the same BRISK parameters share one BRISK object (46 MB of pattern tables each), made
-// only when a model is built, and two threads matching through it at once get what one thread gets.
+// only when a model is built with BRISK's descriptors, and two threads matching through it at once get
+// what one thread gets. The default (upright descriptors, FAST corners) makes none.
 TEST(FeatureMatcher, SharesOneBriskPerParametersAndMatchesConcurrently) {
   const TargetModel model = synthetic::makeModel(4);
   const CameraIntrinsics camera = synthetic::defaultCamera();
   const cv::Mat image = synthetic::renderVisible(model, camera, synthetic::facingRotation(0.2, 0.1, -0.1),
                                                  Eigen::Vector3d(-0.03, 0.01, 0.9), 5);
-  FeatureMatcher first;
-  EXPECT_EQ(first.descriptorExtractor(), nullptr);
-  FeatureMatcher second;
   std::string reason;
+  FeatureMatcher upright;
+  ASSERT_TRUE(upright.buildModel(model.textureGray(), &reason)) << reason;
+  EXPECT_EQ(upright.descriptorExtractor(), nullptr);
+
+  FeatureMatcherParams brisk_params;
+  brisk_params.upright_descriptors = false;
+  FeatureMatcher first(brisk_params);
+  EXPECT_EQ(first.descriptorExtractor(), nullptr);
+  FeatureMatcher second(brisk_params);
   ASSERT_TRUE(first.buildModel(model.textureGray(), &reason)) << reason;
   ASSERT_TRUE(second.buildModel(model.textureGray(), &reason)) << reason;
   ASSERT_NE(first.descriptorExtractor(), nullptr);
   EXPECT_EQ(first.descriptorExtractor(), second.descriptorExtractor());
-  FeatureMatcherParams other_params;
+  FeatureMatcherParams other_params = brisk_params;
   other_params.brisk_threshold += 5;
   FeatureMatcher other(other_params);
   ASSERT_TRUE(other.buildModel(model.textureGray(), &reason)) << reason;

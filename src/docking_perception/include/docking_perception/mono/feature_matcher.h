@@ -1,11 +1,13 @@
 // Finds the textured target face in an image and gives precise 2D-3D correspondences.
 //
 // Model (once): the texture at a few widths (a pyramid covering the face's apparent size from 0.4 m to
-// 2 m), corners and BRISK descriptors at each width.
+// 2 m), corners and descriptors at each width.
 // Per image: corners (FAST by default: ~50x cheaper than BRISK's own scale-space detector, and the
-// model pyramid already provides the scale invariance; BRISK's detector is selectable), BRISK
-// descriptors, 2-nearest-neighbour Hamming matching (hardware popcount) with Lowe's ratio test, RANSAC
-// homography from texture pixels to image pixels.
+// model pyramid already provides the scale invariance; BRISK's detector is selectable), 512-bit
+// descriptors (by default the upright ring descriptor, upright_descriptor.h, for the sharp model: the
+// test bed's cameras do not roll; OpenCV's rotation-invariant BRISK for the blurred model and when
+// selected), 2-nearest-neighbour Hamming matching
+// (hardware popcount) with Lowe's ratio test, RANSAC homography from texture pixels to image pixels.
 // Refinement: corner positions are good to ~1 px, too coarse for sub-degree orientation. The texture
 // level nearest the face's apparent size is warped into the image with the homography, and around each
 // inlier the image is correlated (normalised cross-correlation, 11x11 patch, +-3 px, parabolic peak)
@@ -20,11 +22,20 @@
 #include <string>
 #include <vector>
 
+#include "docking_perception/mono/upright_descriptor.h"
+
 namespace docking_perception {
 namespace mono {
 
 struct FeatureMatcherParams {
-  bool use_brisk_detector = false;  // false: FAST corners + BRISK descriptors
+  bool use_brisk_detector = false;  // false: FAST corners (the descriptors: upright_descriptors)
+  // true: UprightRingDescriptor for the sharp model and its searches (no orientation: the test bed's
+  // cameras do not roll; ~15x cheaper); false: OpenCV's rotation-invariant BRISK descriptors (a camera
+  // that rolls; they also use the scale that use_brisk_detector's keypoints carry, which the upright
+  // descriptor ignores). The blurred model keeps BRISK either way: with upright descriptors it found more
+  // faces under 9 px of motion blur, but some 10-35 deg off with a small covariance (stress seeds
+  // 100-139 and 400-439: 2 confident wrong in 120 frames, BRISK none).
+  bool upright_descriptors = true;
   int fast_threshold = 20;
   int brisk_threshold = 30;         // AGAST score threshold of BRISK's detector
   int brisk_octaves = 3;
@@ -82,8 +93,10 @@ class FeatureMatcher {
   void setParams(const FeatureMatcherParams& params);
   const FeatureMatcherParams& params() const { return params_; }
   int modelKeypointCount() const { return static_cast<int>(model_points_.size()); }
-  // The BRISK object in use: null until buildModel, then one per (brisk_threshold, brisk_octaves) in
-  // the process, shared by every matcher with those parameters (its pattern tables take 46 MB).
+  // The BRISK object in use: null until buildModel, then (when BRISK detects or describes:
+  // use_brisk_detector, upright_descriptors false, or a blurred model) one per (brisk_threshold,
+  // brisk_octaves) in the process, shared by every matcher with those parameters (its pattern tables
+  // take 46 MB).
   const cv::BRISK* descriptorExtractor() const { return brisk_.get(); }
 
   // Matches in roi (empty: the whole image) of an 8-bit gray image. expected_face_width_px > 0 (from
@@ -116,6 +129,10 @@ class FeatureMatcher {
     int row_count;
   };
   void detect(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, int max_keypoints) const;
+  // Descriptors of the keypoints (those too near the border for them are removed), of the kind the
+  // model set (sharp or blurred_set) was described with.
+  void describe(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors,
+                bool blurred_set) const;
   void refine(const cv::Mat& gray, FaceMatch* match) const;
   // Empty when the outline (texture corners mapped by the homography) is a plausible view of the face,
   // else why not (not convex, mirrored, too small).
@@ -127,6 +144,7 @@ class FeatureMatcher {
 
   FeatureMatcherParams params_;
   cv::Ptr<cv::BRISK> brisk_;
+  UprightRingDescriptor upright_descriptor_;
   cv::Mat texture_;
   cv::Size texture_size_;
   std::vector<ModelLevel> levels_;         // widest first

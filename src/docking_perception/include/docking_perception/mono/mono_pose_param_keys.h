@@ -24,6 +24,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("max_range_m", &p.max_range_m);
   visit("max_pattern_candidates", &p.max_pattern_candidates);
   visit("use_brisk_detector", &p.features.use_brisk_detector);
+  visit("upright_descriptors", &p.features.upright_descriptors);
   visit("fast_threshold", &p.features.fast_threshold);
   visit("brisk_threshold", &p.features.brisk_threshold);
   visit("brisk_octaves", &p.features.brisk_octaves);
