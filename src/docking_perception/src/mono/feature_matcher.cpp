@@ -633,11 +633,12 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
     return result;
   }
   std::vector<cv::KeyPoint> keypoints;
+  const bool use_blurred = blurred_model && hasBlurredModel();
+  result.blurred_model = use_blurred;
   // BRISK's descriptor code mis-reads sub-matrix views (measured: almost no matches on a region view,
   // normal matches on its copy), so it gets a continuous copy; FAST and the upright descriptor read
   // the view itself.
-  cv::Mat view = roi == full || (params_.upright_descriptors && !(blurred_model && hasBlurredModel()))
-                     ? gray(roi) : gray(roi).clone();
+  cv::Mat view = roi == full || (params_.upright_descriptors && !use_blurred) ? gray(roi) : gray(roi).clone();
   const bool half = pyramid_level > 0;
   result.pyramid_level = half ? 1 : 0;
   if (half) {
@@ -646,7 +647,7 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
   }
   detect(view, &keypoints, params_.max_image_keypoints);
   cv::Mat descriptors;
-  describe(view, &keypoints, &descriptors, blurred_model && hasBlurredModel());
+  describe(view, &keypoints, &descriptors, use_blurred);
   result.keypoints = static_cast<int>(keypoints.size());
   if (keypoints.size() < 4) {
     result.status = "too few image keypoints (" + std::to_string(keypoints.size()) + ")";
@@ -655,8 +656,6 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
 
   // Model rows to search: the levels of the requested set (sharp / blurred), all of them or those near
   // the expected apparent width.
-  const bool use_blurred = blurred_model && hasBlurredModel();
-  result.blurred_model = use_blurred;
   int first_row = 0;
   int row_count = 0;
   for (const bool by_width : {expected_face_width_px > 0.0, false}) {

@@ -77,16 +77,12 @@ void UprightRingDescriptor::compute(const cv::Mat& gray, std::vector<cv::KeyPoin
                                     cv::Mat* descriptors) const {
   CV_Assert(gray.type() == CV_8UC1);
   // Keep the keypoints whose samples lie inside the image (pixel centres at integers).
-  std::vector<cv::KeyPoint> kept;
-  kept.reserve(keypoints->size());
-  for (const cv::KeyPoint& kp : *keypoints) {
-    const int x = static_cast<int>(std::lround(kp.pt.x));
-    const int y = static_cast<int>(std::lround(kp.pt.y));
-    if (x >= border_px_ && y >= border_px_ && x < gray.cols - border_px_ && y < gray.rows - border_px_) {
-      kept.push_back(kp);
-    }
-  }
-  keypoints->swap(kept);
+  const auto outside = [&](const cv::KeyPoint& kp) {
+    const long x = std::lround(kp.pt.x);
+    const long y = std::lround(kp.pt.y);
+    return x < border_px_ || y < border_px_ || x >= gray.cols - border_px_ || y >= gray.rows - border_px_;
+  };
+  keypoints->erase(std::remove_if(keypoints->begin(), keypoints->end(), outside), keypoints->end());
   descriptors->create(static_cast<int>(keypoints->size()), kBytes, CV_8UC1);
   int32_t values[kSamples];
   for (size_t k = 0; k < keypoints->size(); ++k) {
