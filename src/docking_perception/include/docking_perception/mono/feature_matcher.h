@@ -6,8 +6,8 @@
 // model pyramid already provides the scale invariance; BRISK's detector is selectable), 512-bit
 // descriptors (by default the upright ring descriptor, upright_descriptor.h, for the sharp model: the
 // test bed's cameras do not roll; OpenCV's rotation-invariant BRISK for the blurred model and when
-// selected), 2-nearest-neighbour Hamming matching
-// (hardware popcount) with Lowe's ratio test, RANSAC homography from texture pixels to image pixels.
+// selected), 2-nearest-neighbour Hamming matching (hardware popcount) with Lowe's ratio test, RANSAC
+// homography from texture pixels to image pixels.
 // Refinement: corner positions are good to ~1 px, too coarse for sub-degree orientation. The texture
 // level nearest the face's apparent size is warped into the image with the homography, and around each
 // inlier the image is correlated (normalised cross-correlation, 11x11 patch, +-3 px, parabolic peak)
@@ -30,11 +30,12 @@ namespace mono {
 struct FeatureMatcherParams {
   bool use_brisk_detector = false;  // false: FAST corners (the descriptors: upright_descriptors)
   // true: UprightRingDescriptor for the sharp model and its searches (no orientation: the test bed's
-  // cameras do not roll; ~15x cheaper); false: OpenCV's rotation-invariant BRISK descriptors (a camera
-  // that rolls; they also use the scale that use_brisk_detector's keypoints carry, which the upright
-  // descriptor ignores). The blurred model keeps BRISK either way: with upright descriptors it found more
-  // faces under 9 px of motion blur, but some 10-35 deg off with a small covariance (stress seeds
-  // 100-139 and 400-439: 2 confident wrong in 120 frames, BRISK none).
+  // cameras do not roll; ~7 k instructions a keypoint against BRISK's ~65 k); false: OpenCV's
+  // rotation-invariant BRISK descriptors (a camera that rolls; they also use the scale that
+  // use_brisk_detector's keypoints carry, which the upright descriptor ignores). The blurred model keeps
+  // BRISK either way: with upright descriptors it found more faces under 9 px of motion blur, but some
+  // 10-35 deg off with a small covariance (stress seeds 100-139 and 400-439: 2 confident wrong in 120
+  // frames, BRISK none).
   bool upright_descriptors = true;
   int fast_threshold = 20;
   int brisk_threshold = 30;         // AGAST score threshold of BRISK's detector
