@@ -16,10 +16,8 @@ import json
 import os
 import pathlib
 import signal
-import struct
 import subprocess
 import sys
-import threading
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -48,11 +46,14 @@ def run(args):
     bag = out / "run.bag"
     for stale in (bag, out / "run.bag.active", out / "summary.json"):
         stale.unlink(missing_ok=True)
+    args.latency_samples = out / "latency_samples.txt"
+    args.latency_samples.unlink(missing_ok=True)
     port = args.port or free_port()
     master = f"http://127.0.0.1:{port}"
     env = dict(os.environ, ROS_MASTER_URI=master, ROS_HOME=str(out / "ros_home"))
     launch_args = [f"real_time_factor:={args.real_time_factor}", f"camera_rate_hz:={args.camera_rate_hz}",
-                   f"bag:={bag}", "output:=log", f"sim_nice:={args.sim_nice}", f"stack_nice:={args.stack_nice}"]
+                   f"bag:={bag}", "output:=log", f"sim_nice:={args.sim_nice}", f"stack_nice:={args.stack_nice}",
+                   f"latency_probe_file:={args.latency_samples}"]
     if args.scenario_file:
         launch_args.append(f"scenario_file:={pathlib.Path(args.scenario_file).resolve()}")
     else:
@@ -122,89 +123,43 @@ def died_processes(log_path):
     return out
 
 
-class LatencyProbe:
-    """Image -> cmd_vel latency in wall time, measured from outside the stack: the wall time this node
-    receives a camera's camera_info (the simulator publishes it with the image, same stamp; subscribing
-    the images themselves cost this Python node and the simulator ~30 MB/s of copies on a 2-core
-    computer, and delayed this node's own clock readings), keyed by its stamp, against the wall time it
-    receives the first cmd_vel after the arbiter's estimate with that stamp (the planner runs a cycle
-    on each estimate it takes), split at the estimate into perception (image -> estimate) and planner
-    (estimate -> cmd_vel). Only estimates the planner acts on are counted: not while it finishes on
-    odometry or is DOCKED (DockingState.target_visible false), when it ignores them on purpose. The
-    camera_info is subscribed as AnyMsg and only its header is read. Each sample is also filed under the
-    source the arbiter selected (far: disparity; near: a monocular pose), whose costs differ."""
+LATENCY_SOURCE_NAMES = {0: "disparity", 1: "mono_visible", 2: "mono_ir"}  # TargetEstimate.selected_source
 
-    SOURCE_NAMES = {0: "disparity", 1: "mono_visible", 2: "mono_ir"}
 
-    def __init__(self):
-        import rospy
-        from docking_msgs.msg import DockingState, TargetEstimate
-        from geometry_msgs.msg import Twist
-        self.lock = threading.Lock()
-        self.image_wall = {}     # stamp (ns) -> wall time received
-        self.pending = []        # (estimate stamp, wall time received) waiting for a cmd_vel
-        self.samples = []        # (total, perception, planner) seconds
-        self.in_use = False      # the planner's last state: acting on estimates
-        for topic in ("/stereo/left/camera_info", "/ir/camera_info"):
-            rospy.Subscriber(topic, rospy.AnyMsg, self.on_image, queue_size=5, tcp_nodelay=True)
-        # tcp_nodelay: without it Nagle's algorithm may hold a small message back until the previous one
-        # is acknowledged, and the probe would measure its own transport.
-        rospy.Subscriber("/target/estimate", TargetEstimate, self.on_estimate, queue_size=10, tcp_nodelay=True)
-        rospy.Subscriber("/cmd_vel", Twist, self.on_cmd, queue_size=10, tcp_nodelay=True)
-        rospy.Subscriber("/docking/state", DockingState, self.on_state, queue_size=10)
+def latency_summary(samples_path):
+    """Image -> cmd_vel latency in wall time, from docking_sim's latency_probe (sim.launch
+    latency_probe_file): one line per estimate the planner acted on, "total perception planner source"
+    (seconds; the arbiter's selected source: far disparity, near a monocular pose, whose costs differ).
+    The probe is C++ and runs ahead of the stack, so it notes each message when it arrives."""
+    rows = []
+    try:
+        with open(samples_path) as f:
+            for line in f:
+                fields = line.split()
+                if len(fields) == 4:  # a line cut short by the end of the run is left out
+                    rows.append((float(fields[0]), float(fields[1]), float(fields[2]),
+                                 LATENCY_SOURCE_NAMES.get(int(fields[3]), fields[3])))
+    except FileNotFoundError:
+        return {"count": 0}
+    if not rows:
+        return {"count": 0}
 
-    def on_image(self, msg):
-        wall = time.time()
-        seq, secs, nsecs = struct.unpack_from("<III", msg._buff, 0)
-        with self.lock:
-            self.image_wall[secs * 1000000000 + nsecs] = wall
-            if len(self.image_wall) > 400:
-                for key in sorted(self.image_wall)[:200]:
-                    del self.image_wall[key]
+    def stats(xs):
+        xs = sorted(xs)
+        pick = lambda q: xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
+        return 1e3 * pick(0.5), 1e3 * pick(0.95), 1e3 * xs[-1]
 
-    def on_state(self, msg):
-        with self.lock:
-            self.in_use = msg.target_visible and msg.state != msg.DOCKED
-
-    def on_estimate(self, msg):
-        wall = time.time()
-        if msg.valid:
-            with self.lock:
-                if self.in_use:
-                    source = self.SOURCE_NAMES.get(msg.selected_source, str(msg.selected_source))
-                    self.pending.append((msg.header.stamp.to_nsec(), wall, source))
-
-    def on_cmd(self, _msg):
-        wall = time.time()
-        with self.lock:
-            for stamp, estimate_wall, source in self.pending:
-                if stamp in self.image_wall:
-                    image_wall = self.image_wall[stamp]
-                    self.samples.append((wall - image_wall, estimate_wall - image_wall, wall - estimate_wall, source))
-            self.pending = []
-
-    def summary(self):
-        with self.lock:
-            rows = list(self.samples)
-        if not rows:
-            return {"count": 0}
-
-        def stats(xs):
-            xs = sorted(xs)
-            pick = lambda q: xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
-            return 1e3 * pick(0.5), 1e3 * pick(0.95), 1e3 * xs[-1]
-
-        median, p95, worst = stats([r[0] for r in rows])
-        perception = stats([r[1] for r in rows])
-        planner = stats([r[2] for r in rows])
-        by_source = {}
-        for source in sorted({r[3] for r in rows}):
-            totals = [r[0] for r in rows if r[3] == source]
-            m, p, w = stats(totals)
-            by_source[source] = {"count": len(totals), "median_ms": m, "p95_ms": p, "max_ms": w}
-        return {"count": len(rows), "median_ms": median, "p95_ms": p95, "max_ms": worst,
-                "perception_median_ms": perception[0], "perception_p95_ms": perception[1],
-                "planner_median_ms": planner[0], "planner_p95_ms": planner[1], "by_source": by_source}
+    median, p95, worst = stats([r[0] for r in rows])
+    perception = stats([r[1] for r in rows])
+    planner = stats([r[2] for r in rows])
+    by_source = {}
+    for source in sorted({r[3] for r in rows}):
+        totals = [r[0] for r in rows if r[3] == source]
+        m, p, w = stats(totals)
+        by_source[source] = {"count": len(totals), "median_ms": m, "p95_ms": p, "max_ms": w}
+    return {"count": len(rows), "median_ms": median, "p95_ms": p95, "max_ms": worst,
+            "perception_median_ms": perception[0], "perception_p95_ms": perception[1],
+            "planner_median_ms": planner[0], "planner_p95_ms": planner[1], "by_source": by_source}
 
 
 def monitor(launch, args, outcome):
@@ -233,7 +188,6 @@ def monitor(launch, args, outcome):
         last["count"] += 1
 
     rospy.Subscriber("/docking/state", DockingState, on_state, queue_size=10)
-    latency = LatencyProbe()
     while rospy.get_time() == 0.0:
         if launch.poll() is not None:
             return "roslaunch exited before /clock"
@@ -293,7 +247,7 @@ def monitor(launch, args, outcome):
     # requested --real-time-factor became on this machine.
     docking_wall_s = time.time() - wall_at_t0
     outcome["achieved_rtf"] = (rospy.get_time() - t0) / docking_wall_s if docking_wall_s > 0 else None
-    outcome["latency"] = latency.summary()
+    outcome["latency"] = latency_summary(args.latency_samples)
     rospy.signal_shutdown("done")
     return None
 
