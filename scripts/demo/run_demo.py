@@ -6,7 +6,8 @@ ROS master, starts the docking through the planner's docking action (docking/doc
 `rosrun docking_planner dock start` does), watches docking/state until DOCKED, the action's end or a
 sim-time timeout, stops everything, then analyses
 the bag against the simulator's truth (scripts/demo/analyze_run.py): prints a summary and writes
-OUT/summary.json, OUT/run.bag, OUT/trajectory.png, OUT/timeline.png.
+OUT/summary.json, OUT/run.bag, OUT/trajectory.png, OUT/timeline.png and
+OUT/latency_samples.txt (docking_sim's latency_probe: image -> cmd_vel in wall time, one line per estimate).
 
 Exit status: 0 when the run was carried out (docked or not: the summary says why), 1 when it could not
 be (a required node died, no /clock, no docking/state), 2 on bad arguments.
