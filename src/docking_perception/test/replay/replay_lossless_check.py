@@ -180,7 +180,13 @@ class ReplayLossless(unittest.TestCase):
         second_pass = set(looped) - first_pass
         valid_first = sum(looped[s][0] for s in first_pass)
         valid_second = sum(looped[s][0] for s in second_pass)
-        self.assertGreaterEqual(len(second_pass), frames - max_lost, "second pass: %d estimates" % len(second_pass))
+        # Against the loop's own first pass, not the left camera's frame count: the loop replays the raw
+        # images, and under load a frame's raw images can be incomplete in the bag (4 of 60 in one run with two
+        # CPU hogs; the compressed ones complete), which both passes skip alike.
+        self.assertGreaterEqual(len(second_pass), len(first_pass) - max_lost,
+                                "second pass: %d estimates, first pass %d" % (len(second_pass), len(first_pass)))
+        self.assertGreater(len(first_pass), frames // 2, "first pass: %d estimates for %d frames" % (
+            len(first_pass), frames))
         self.assertGreaterEqual(valid_second, valid_first - max_lost,
                                 "valid disparity estimates: first pass %d, second %d" % (valid_first, valid_second))
         fused_second = [s for s in runs["loop"].get(ESTIMATE_TOPICS[3], {}) if s in second_pass]
