@@ -15,7 +15,8 @@ Writes {"stages": {NAME: {"instructions_per_frame_M": float, "frames": int}}}. S
                                                   window_*: full resolution on the tracking window alone
                                                   (far_stereo.yaml window_*, the default while tracking)
   mono_full, mono_tracking,                       bench_mono's 90-frame approach (MonoPoseEstimator::process);
-  mono_tracking_features, mono_ir                 mono_tracking_features: tracking by the feature search (before)
+  mono_tracking_features, mono_ir                 mono_tracking_features: tracking by the feature search (before);
+  mono_tracking_near                              tracking on bench_mono's second approach, 0.6 m to 0.2 m
   apriltag, mono_full_same_frame,                 bench_apriltag on one frame of the target with a tag
   mono_tracking_same_frame                        inset (AprilTag 3, then our pose on the same pixels)
 Under callgrind the programs run ~50x slower: about 3 minutes in all on this machine.
@@ -34,7 +35,7 @@ LIB = ROOT / "devel" / "lib" / "docking_perception"
 DISPARITY_FRAMES = 3  # timed frames; bench_disparity adds 3 warm-up frames, counted too
 DISPARITY_WARMUP = 3
 APRILTAG_FRAMES = 5   # bench_apriltag adds one warm-up call per stage, counted too
-MONO_STAGES = ("mono_full", "mono_tracking", "mono_tracking_features", "mono_ir")
+MONO_STAGES = ("mono_full", "mono_tracking", "mono_tracking_near", "mono_tracking_features", "mono_ir")
 # The function whose every call is one frame of the stage.
 DISPARITY_STAGE_FUNCTIONS = {
     "rectify": "*rectifyPair*",

@@ -4,6 +4,8 @@
 //
 // Stages: mono_full (visible, PnP, full-frame search on every frame), mono_tracking (the same with the
 // region predicted from the last pose, the face refined at its predicted place first: deployed),
+// mono_tracking_near (the same on a second approach, 0.6 m to 0.2 m: the final approach, where the face fills
+// more of the image),
 // mono_tracking_features (tracking by the feature search in the predicted region only, as before issue 15's
 // predict_face_when_tracking), mono_full_paper_5point (the paper's solver, full frame) and
 // mono_ir (LED pattern + 5-point solver). The frames are synthetic views of the target (the texture of
@@ -141,6 +143,20 @@ int main(int argc, char** argv) {
     infrared.push_back(frame);
   }
 
+  // 90 frames at 30 Hz near contact, the planner's final approach: 0.6 m to 0.2 m, the same yaw swing and drift.
+  // In the closed loop the visible pose costs most here (the face fills more of the image; docs/PERFORMANCE.md,
+  // "5 Dec 2026, sixth part").
+  std::vector<Frame> near_contact;
+  for (int i = 0; i < 90; ++i) {
+    Frame frame;
+    frame.stamp_s = i / 30.0;
+    const double s = i / 89.0;
+    frame.translation = Eigen::Vector3d(0.02 * std::sin(2.0 * s), -0.01, 0.6 - 0.4 * s);
+    frame.rotation = synthetic::facingRotation(0.4 * std::sin(3.0 * s), 0.05, 0.02);
+    frame.image = synthetic::renderVisible(model, camera, frame.rotation, frame.translation, 3000 + i);
+    near_contact.push_back(frame);
+  }
+
   // The feature settings of config/mono_pose_visible.yaml (the struct defaults are the older ones).
   MonoPoseParams deployed;
   deployed.features.fast_threshold = 10;
@@ -171,6 +187,7 @@ int main(int argc, char** argv) {
   };
   const std::vector<StagePlan> plans = {{"mono_full", &full, &visible, false},
                                         {"mono_tracking", &tracking, &visible, true},
+                                        {"mono_tracking_near", &tracking, &near_contact, true},
                                         {"mono_tracking_features", &tracking_features, &visible, true},
                                         {"mono_full_paper_5point", &five_point, &visible, false},
                                         {"mono_tracking_2_passes", &tracking_two_passes, &visible, true},
