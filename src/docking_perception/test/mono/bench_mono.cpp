@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
 
   // 90 frames at 30 Hz near contact, the planner's final approach: 0.6 m to 0.2 m, the same yaw swing and drift.
   // In the closed loop the visible pose costs most here (the face fills more of the image; docs/PERFORMANCE.md,
-  // "5 Dec 2026, sixth part").
+  // "5 Dec 2026, sixth part"). The synthetic face has no inner tag: the tag's search runs and finds nothing.
   std::vector<Frame> near_contact;
   for (int i = 0; i < 90; ++i) {
     Frame frame;
