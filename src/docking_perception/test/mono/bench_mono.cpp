@@ -39,6 +39,31 @@ struct Frame {
   Eigen::Vector3d translation;
 };
 
+/// A straight approach along the optical axis: range from_m to to_m in 90 frames at 30 Hz, a lateral drift of
+/// amplitude lateral_m, a fixed height offset, the face yawing +-0.4 rad.
+struct Approach {
+  double from_m;
+  double to_m;
+  double lateral_m;
+  double height_m;
+};
+
+std::vector<Frame> visibleApproach(const TargetModel& model, const CameraIntrinsics& camera, const Approach& approach,
+                                   int noise_seed) {
+  std::vector<Frame> frames;
+  for (int i = 0; i < 90; ++i) {
+    Frame frame;
+    frame.stamp_s = i / 30.0;
+    const double s = i / 89.0;
+    frame.translation = Eigen::Vector3d(approach.lateral_m * std::sin(2.0 * s), approach.height_m,
+                                        approach.from_m - (approach.from_m - approach.to_m) * s);
+    frame.rotation = synthetic::facingRotation(0.4 * std::sin(3.0 * s), 0.05, 0.02);
+    frame.image = synthetic::renderVisible(model, camera, frame.rotation, frame.translation, noise_seed + i);
+    frames.push_back(frame);
+  }
+  return frames;
+}
+
 struct StageFigures {
   std::string name;
   double cpu_ms_median = 0.0;
@@ -127,35 +152,21 @@ int main(int argc, char** argv) {
   const CameraIntrinsics camera = synthetic::defaultCamera();
 
   // 90 frames at 30 Hz: approach from 1.4 m to 0.6 m, yaw swinging +-0.4 rad, some lateral drift.
-  std::vector<Frame> visible;
+  const Approach approach{1.4, 0.6, 0.05, -0.02};
+  const std::vector<Frame> visible = visibleApproach(model, camera, approach, 1000);
   std::vector<Frame> infrared;
-  for (int i = 0; i < 90; ++i) {
-    Frame frame;
-    frame.stamp_s = i / 30.0;
-    const double s = i / 89.0;
-    frame.translation = Eigen::Vector3d(0.05 * std::sin(2.0 * s), -0.02, 1.4 - 0.8 * s);
-    frame.rotation = synthetic::facingRotation(0.4 * std::sin(3.0 * s), 0.05, 0.02);
-    frame.image = synthetic::renderVisible(model, camera, frame.rotation, frame.translation, 1000 + i);
-    visible.push_back(frame);
+  for (std::size_t i = 0; i < visible.size(); ++i) {
+    Frame frame = visible[i];
     std::vector<Eigen::Vector3d> leds;
     for (const auto& m : model.markers()) leds.push_back(frame.rotation * m + frame.translation);
-    frame.image = synthetic::renderLedSpots(camera, leds, model.ledRadius(), 2000 + i);
+    frame.image = synthetic::renderLedSpots(camera, leds, model.ledRadius(), 2000 + static_cast<int>(i));
     infrared.push_back(frame);
   }
 
   // 90 frames at 30 Hz near contact, the planner's final approach: 0.6 m to 0.2 m, the same yaw swing and drift.
   // In the closed loop the visible pose costs most here (the face fills more of the image; docs/PERFORMANCE.md,
   // "5 Dec 2026, sixth part"). The synthetic face has no inner tag: the tag's search runs and finds nothing.
-  std::vector<Frame> near_contact;
-  for (int i = 0; i < 90; ++i) {
-    Frame frame;
-    frame.stamp_s = i / 30.0;
-    const double s = i / 89.0;
-    frame.translation = Eigen::Vector3d(0.02 * std::sin(2.0 * s), -0.01, 0.6 - 0.4 * s);
-    frame.rotation = synthetic::facingRotation(0.4 * std::sin(3.0 * s), 0.05, 0.02);
-    frame.image = synthetic::renderVisible(model, camera, frame.rotation, frame.translation, 3000 + i);
-    near_contact.push_back(frame);
-  }
+  const std::vector<Frame> near_contact = visibleApproach(model, camera, Approach{0.6, 0.2, 0.02, -0.01}, 3000);
 
   // The feature settings of config/mono_pose_visible.yaml (the struct defaults are the older ones).
   MonoPoseParams deployed;
