@@ -9,8 +9,8 @@
 // mono_tracking_features (tracking by the feature search in the predicted region only, as before issue 15's
 // predict_face_when_tracking), mono_full_paper_5point (the paper's solver, full frame) and
 // mono_ir (LED pattern + 5-point solver). The frames are synthetic views of the target (the texture of
-// TARGET_YAML when given and readable, else a seeded synthetic texture), approaching from 1.4 m to
-// 0.6 m while yawing. ms_median is the CPU time of the estimator's thread (the machine is shared, so
+// TARGET_YAML when given and readable, else a seeded synthetic texture, without the inner tag), approaching
+// from 1.4 m to 0.6 m (mono_tracking_near: 0.6 m to 0.2 m) while yawing. ms_median is the CPU time of the estimator's thread (the machine is shared, so
 // wall time measures the neighbours too; it is printed beside). Accuracy on the same frames is printed
 // too. --stages runs only the named stages (scripts/bench_instructions.py counts each stage's instructions
 // under callgrind, one stage per run). Nothing here is a test: it prints figures.
@@ -152,8 +152,7 @@ int main(int argc, char** argv) {
   const CameraIntrinsics camera = synthetic::defaultCamera();
 
   // 90 frames at 30 Hz: approach from 1.4 m to 0.6 m, yaw swinging +-0.4 rad, some lateral drift.
-  const Approach approach{1.4, 0.6, 0.05, -0.02};
-  const std::vector<Frame> visible = visibleApproach(model, camera, approach, 1000);
+  const std::vector<Frame> visible = visibleApproach(model, camera, Approach{1.4, 0.6, 0.05, -0.02}, 1000);
   std::vector<Frame> infrared;
   for (std::size_t i = 0; i < visible.size(); ++i) {
     Frame frame = visible[i];
@@ -163,7 +162,7 @@ int main(int argc, char** argv) {
     infrared.push_back(frame);
   }
 
-  // 90 frames at 30 Hz near contact, the planner's final approach: 0.6 m to 0.2 m, the same yaw swing and drift.
+  // 90 frames at 30 Hz near contact, the planner's final approach: 0.6 m to 0.2 m, the same yaw swing, less drift.
   // In the closed loop the visible pose costs most here (the face fills more of the image; docs/PERFORMANCE.md,
   // "5 Dec 2026, sixth part"). The synthetic face has no inner tag: the tag's search runs and finds nothing.
   const std::vector<Frame> near_contact = visibleApproach(model, camera, Approach{0.6, 0.2, 0.02, -0.01}, 3000);
