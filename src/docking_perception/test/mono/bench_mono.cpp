@@ -12,9 +12,9 @@
 // TARGET_YAML when given and readable, else a seeded synthetic texture, without the inner tag), approaching
 // from 1.4 m to 0.6 m (mono_tracking_near: 0.6 m to 0.2 m) while yawing. ms_median is the CPU time of the
 // estimator's thread (the machine is shared, so wall time measures the neighbours too; it is printed beside).
-// Accuracy on the same frames is printed
-// too. --stages runs only the named stages (scripts/bench_instructions.py counts each stage's instructions
-// under callgrind, one stage per run). Nothing here is a test: it prints figures.
+// Accuracy on the same frames is printed too. --stages runs only the named stages
+// (scripts/bench_instructions.py counts each stage's instructions under callgrind, one stage per run).
+// Nothing here is a test: it prints figures.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
