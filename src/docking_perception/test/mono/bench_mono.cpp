@@ -9,7 +9,7 @@
 // mono_tracking_features (tracking by the feature search in the predicted region only, as before issue 15's
 // predict_face_when_tracking), mono_full_paper_5point (the paper's solver, full frame) and
 // mono_ir (LED pattern + 5-point solver). The frames are synthetic views of the target (the texture of
-// TARGET_YAML when given and readable, else a seeded synthetic texture, without the inner tag), approaching
+// TARGET_YAML when given and readable, with its inner tag drawn, else a seeded synthetic texture), approaching
 // from 1.4 m to 0.6 m (mono_tracking_near: 0.6 m to 0.2 m) while yawing. ms_median is the CPU time of the
 // estimator's thread (the machine is shared, so wall time measures the neighbours too; it is printed beside).
 // Accuracy on the same frames is printed too. --stages runs only the named stages
@@ -59,7 +59,8 @@ std::vector<Frame> visibleApproach(const TargetModel& model, const CameraIntrins
     frame.translation = Eigen::Vector3d(approach.lateral_m * std::sin(2.0 * s), approach.height_m,
                                         approach.from_m - (approach.from_m - approach.to_m) * s);
     frame.rotation = synthetic::facingRotation(0.4 * std::sin(3.0 * s), 0.05, 0.02);
-    frame.image = synthetic::renderVisible(model, camera, frame.rotation, frame.translation, noise_seed + i);
+    frame.image = synthetic::renderVisible(model, camera, frame.rotation, frame.translation, noise_seed + i, 2.0,
+                                           /*with_inner_pattern=*/true);
     frames.push_back(frame);
   }
   return frames;
@@ -165,7 +166,7 @@ int main(int argc, char** argv) {
 
   // 90 frames at 30 Hz near contact, the planner's final approach: 0.6 m to 0.2 m, the same yaw swing, less drift.
   // In the closed loop the visible pose costs most here (the face fills more of the image; docs/PERFORMANCE.md,
-  // "5 Dec 2026, sixth part"). The synthetic face has no inner tag: the tag's search runs and finds nothing.
+  // "5 Dec 2026, sixth part"). The inner tag is drawn on the face (both approaches), as on the real one.
   const std::vector<Frame> near_contact = visibleApproach(model, camera, Approach{0.6, 0.2, 0.02, -0.01}, 3000);
 
   // The feature settings of config/mono_pose_visible.yaml (the struct defaults are the older ones).

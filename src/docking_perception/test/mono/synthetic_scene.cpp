@@ -79,8 +79,30 @@ Eigen::Matrix3d facingRotation(double yaw, double pitch, double roll) {
          Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()).toRotationMatrix();
 }
 
+void drawInnerPattern(cv::Mat* image, const TagSpec& tag, const CameraIntrinsics& camera,
+                      const Eigen::Isometry3d& camera_T_target) {
+  const cv::Mat cells = tagCells(tag);
+  const int px_per_cell = 40;
+  cv::Mat print;
+  cv::resize(cells, print, cv::Size(), px_per_cell, px_per_cell, cv::INTER_NEAREST);
+  print = 25 + print / 255 * 215;
+  // Print pixel (u, v) (edges at -0.5 .. n*px - 0.5) -> point on the face -> image.
+  const double n = cells.cols;
+  const double cell_m = tag.size_m / (n - 2);
+  const Eigen::Isometry3d camera_T_tag = camera_T_target * targetTTag(tag);
+  std::vector<cv::Point2f> src, dst;
+  for (const auto& uv : {cv::Point2f(0, 0), cv::Point2f(1, 0), cv::Point2f(1, 1), cv::Point2f(0, 1)}) {
+    src.emplace_back(static_cast<float>(uv.x * n * px_per_cell - 0.5), static_cast<float>(uv.y * n * px_per_cell - 0.5));
+    const Eigen::Vector3d p = camera_T_tag * Eigen::Vector3d((uv.x - 0.5) * n * cell_m, (uv.y - 0.5) * n * cell_m, 0.0);
+    const Eigen::Vector2d q = camera.project(p);
+    dst.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
+  }
+  cv::warpPerspective(print, *image, cv::getPerspectiveTransform(src, dst), image->size(), cv::INTER_LINEAR,
+                      cv::BORDER_TRANSPARENT);
+}
+
 cv::Mat renderVisible(const TargetModel& model, const CameraIntrinsics& camera, const Eigen::Matrix3d& rotation,
-                      const Eigen::Vector3d& translation, uint64_t seed, double noise_sigma) {
+                      const Eigen::Vector3d& translation, uint64_t seed, double noise_sigma, bool with_inner_pattern) {
   cv::RNG rng(seed);
   cv::Mat background(camera.height, camera.width, CV_8UC1);
   rng.fill(background, cv::RNG::UNIFORM, 40, 200);
@@ -110,6 +132,12 @@ cv::Mat renderVisible(const TargetModel& model, const CameraIntrinsics& camera, 
     for (int c = 0; c < 3; ++c) h_cv(r, c) = h(r, c);
   cv::Mat image = background.clone();
   cv::warpPerspective(texture, image, h_cv, image.size(), cv::INTER_LINEAR, cv::BORDER_TRANSPARENT);
+  if (with_inner_pattern && model.hasInnerPattern()) {
+    Eigen::Isometry3d camera_T_target = Eigen::Isometry3d::Identity();
+    camera_T_target.linear() = rotation;
+    camera_T_target.translation() = translation;
+    drawInnerPattern(&image, model.innerPattern(), camera, camera_T_target);
+  }
   if (noise_sigma > 0.0) {
     cv::Mat noise(image.size(), CV_16SC1);
     rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_sigma);

@@ -57,25 +57,8 @@ mono::TagSpec innerTag() {
 // The tag's print (white ring included) on a grey background, seen by `camera` at camera_T_target:
 // the print warped by the exact homography, a little blur and noise.
 cv::Mat drawTag(const mono::TagSpec& tag, const Eigen::Isometry3d& camera_T_target, double blur_px, int seed) {
-  const cv::Mat cells = mono::tagCells(tag);
-  const int px_per_cell = 40;
-  cv::Mat print;
-  cv::resize(cells, print, cv::Size(), px_per_cell, px_per_cell, cv::INTER_NEAREST);
-  print = 25 + print / 255 * 215;
-  // Print pixel (u, v) (edges at -0.5 .. n*px - 0.5) -> point on the face -> image.
-  const double cell_m = tag.size_m / (cells.cols - 2);
-  const Eigen::Isometry3d T = camera_T_target * mono::targetTTag(tag);
-  std::vector<cv::Point2f> src, dst;
-  for (const auto& uv : {cv::Point2f(0, 0), cv::Point2f(1, 0), cv::Point2f(1, 1), cv::Point2f(0, 1)}) {
-    const double n = cells.cols;
-    src.emplace_back(uv.x * n * px_per_cell - 0.5f, uv.y * n * px_per_cell - 0.5f);
-    const Eigen::Vector3d p = T * Eigen::Vector3d((uv.x - 0.5) * n * cell_m, (uv.y - 0.5) * n * cell_m, 0.0);
-    const Eigen::Vector2d q = camera().project(p);
-    dst.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
-  }
   cv::Mat image(480, 640, CV_8UC1, cv::Scalar(120));
-  cv::warpPerspective(print, image, cv::getPerspectiveTransform(src, dst), image.size(), cv::INTER_AREA,
-                      cv::BORDER_TRANSPARENT);
+  mono::synthetic::drawInnerPattern(&image, tag, camera(), camera_T_target);
   if (blur_px > 0) cv::GaussianBlur(image, image, cv::Size(), blur_px);
   cv::Mat noise(image.size(), CV_16SC1);
   cv::RNG rng(seed);
