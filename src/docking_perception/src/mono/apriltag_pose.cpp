@@ -22,6 +22,26 @@ void freeImage(image_u8_t* im) {
   std::free(im);
 }
 
+// camera <- target from apriltag's own pose of one detection (the region's offset undone).
+Eigen::Isometry3d tagPose(const TagSpec& spec, apriltag_detection_t* detection, const CameraIntrinsics& camera,
+                          const cv::Rect& region, double* object_space_error) {
+  // apriltag's pixel coordinates put a pixel's centre at (i + 0.5, j + 0.5) (its quad fit adds half a
+  // pixel), OpenCV's and camera_info's at (i, j): shifting the principal point by half a pixel is the
+  // same as shifting every detected corner back.
+  apriltag_detection_info_t info{detection, spec.size_m, camera.fx, camera.fy, camera.cx + 0.5 - region.x,
+                                 camera.cy + 0.5 - region.y};
+  apriltag_pose_t pose{nullptr, nullptr};
+  *object_space_error = estimate_tag_pose(&info, &pose);
+  Eigen::Isometry3d camera_T_tag = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) camera_T_tag.linear()(r, c) = MATD_EL(pose.R, r, c);
+    camera_T_tag.translation()(r) = MATD_EL(pose.t, r, 0);
+  }
+  freeMatrix(pose.R);
+  freeMatrix(pose.t);
+  return cameraTTargetFromTag(camera_T_tag, spec);
+}
+
 }  // namespace
 
 Eigen::Isometry3d targetTTag(const TagSpec& spec) {
@@ -74,7 +94,8 @@ TagDetector::~TagDetector() {
   tag36h11_destroy(family_);
 }
 
-TagResult TagDetector::detect(const cv::Mat& gray, const CameraIntrinsics& camera, const cv::Rect& roi) {
+TagResult TagDetector::detect(const cv::Mat& gray, const CameraIntrinsics& camera, const cv::Rect& roi,
+                              TagOutput output) {
   TagResult result;
   const double start = threadCpuTimeMs();
   cv::Mat image = gray;
@@ -98,28 +119,20 @@ TagResult TagDetector::detect(const cv::Mat& gray, const CameraIntrinsics& camer
     if (det->id == spec_.id && (!best || det->decision_margin > best->decision_margin)) best = det;
   }
   if (best) {
-    // apriltag's pixel coordinates put a pixel's centre at (i + 0.5, j + 0.5) (its quad fit adds half a
-    // pixel), OpenCV's and camera_info's at (i, j): shifting the principal point by half a pixel is the
-    // same as shifting every detected corner back.
-    apriltag_detection_info_t info{best, spec_.size_m, camera.fx, camera.fy, camera.cx + 0.5 - region.x,
-                                   camera.cy + 0.5 - region.y};
-    apriltag_pose_t pose{nullptr, nullptr};
-    result.object_space_error = estimate_tag_pose(&info, &pose);
-    Eigen::Isometry3d camera_T_tag = Eigen::Isometry3d::Identity();
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) camera_T_tag.linear()(r, c) = MATD_EL(pose.R, r, c);
-      camera_T_tag.translation()(r) = MATD_EL(pose.t, r, 0);
-    }
-    freeMatrix(pose.R);
-    freeMatrix(pose.t);
-    result.camera_T_target = cameraTTargetFromTag(camera_T_tag, spec_);
     result.decision_margin = best->decision_margin;
     result.hamming = best->hamming;
+    bool corners_finite = true;
     for (int k = 0; k < 4; ++k) {
       result.corners_px[k] = Eigen::Vector2d(best->p[k][0] - 0.5 + region.x, best->p[k][1] - 0.5 + region.y);
+      corners_finite = corners_finite && result.corners_px[k].allFinite();
     }
-    result.found = std::isfinite(result.camera_T_target.translation().norm());
-    if (!result.found) result.status = "pose not finite";
+    result.found = corners_finite;
+    if (!result.found) result.status = "corners not finite";
+    if (result.found && output == TagOutput::kCornersAndPose) {
+      result.camera_T_target = tagPose(spec_, best, camera, region, &result.object_space_error);
+      result.found = std::isfinite(result.camera_T_target.translation().norm());
+      if (!result.found) result.status = "pose not finite";
+    }
   } else {
     result.status = result.detections ? "tag " + std::to_string(spec_.id) + " not among the detections" : "no tag detected";
   }

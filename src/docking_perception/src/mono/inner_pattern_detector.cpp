@@ -116,7 +116,7 @@ InnerPatternResult InnerPatternDetector::detect(const cv::Mat& gray, const Camer
                                                 const Eigen::Matrix3d* previous_rotation, const cv::Rect& roi) {
   InnerPatternResult result;
   const double start = threadCpuTimeMs();
-  const TagResult tag = detector_->detect(gray, camera, roi);
+  const TagResult tag = detector_->detect(gray, camera, roi, TagOutput::kCornersOnly);  // the grid fit gives the pose
   if (!tag.found) {
     result.status = "inner pattern: " + tag.status;
   } else {

@@ -63,6 +63,11 @@ struct TagResult {
   double processing_time_ms = 0.0;    // thread CPU time of detection + pose
 };
 
+// What TagDetector::detect computes beyond the detection: apriltag's own pose (estimate_tag_pose, a
+// third of the cost of a search in a small region), or the corners only, for a caller that fits its own
+// pose (the inner pattern fits the grid corners inside the tag).
+enum class TagOutput { kCornersAndPose, kCornersOnly };
+
 // tag36h11 detector (one thread unless told), AprilTag's defaults otherwise.
 class TagDetector {
  public:
@@ -72,8 +77,10 @@ class TagDetector {
   TagDetector& operator=(const TagDetector&) = delete;
 
   // gray: 8-bit single channel, rectified, described by camera. roi: where to look (empty: the whole
-  // image); corners and pose are in the full image's pixels.
-  TagResult detect(const cv::Mat& gray, const CameraIntrinsics& camera, const cv::Rect& roi = cv::Rect());
+  // image); corners and pose are in the full image's pixels. kCornersOnly: camera_T_target stays the
+  // identity and object_space_error 0.
+  TagResult detect(const cv::Mat& gray, const CameraIntrinsics& camera, const cv::Rect& roi = cv::Rect(),
+                   TagOutput output = TagOutput::kCornersAndPose);
 
  private:
   TagSpec spec_;
