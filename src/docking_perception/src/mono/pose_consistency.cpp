@@ -93,13 +93,25 @@ std::vector<double> cellCorrelations(const cv::Mat& image, const cv::Mat& templ,
   return nccs;
 }
 
+// The outer edges of a `size` image's pixels (OpenCV's centres at integers: -0.5 .. size - 0.5) mapped by
+// `homography`, clockwise from the top left.
+std::vector<cv::Point2f> mappedOutline(const cv::Size& size, const cv::Matx33d& homography) {
+  const float w = static_cast<float>(size.width) - 0.5f;
+  const float h = static_cast<float>(size.height) - 0.5f;
+  std::vector<cv::Point2f> outline;
+  cv::perspectiveTransform(std::vector<cv::Point2f>{{-0.5f, -0.5f}, {w, -0.5f}, {w, h}, {-0.5f, h}}, outline,
+                           cv::Mat(homography));
+  return outline;
+}
+
 // The box of `gray` reduced by `scale` (<= 1) by area averaging: first by the whole factor k = floor(1 /
 // scale) on a box cropped to multiples of k (OpenCV's fast integer path), then the rest (<= 2x) on the
 // small image. One area resize by an arbitrary factor of the whole image cost 4 M instructions a frame
 // near contact, where the face fills the image. `box` returns the crop.
 cv::Mat workingImage(const cv::Mat& gray, double scale, cv::Rect* box) {
   if (scale >= 1.0) return gray(*box);
-  const int whole = std::max(1, static_cast<int>(std::floor(1.0 / scale)));
+  // At most the box's smaller side, so that the crop keeps at least one whole block.
+  const int whole = std::clamp(static_cast<int>(std::floor(1.0 / scale)), 1, std::min(box->width, box->height));
   box->width -= box->width % whole;
   box->height -= box->height % whole;
   cv::Mat reduced;
@@ -119,10 +131,7 @@ cv::Mat workingImage(const cv::Mat& gray, double scale, cv::Rect* box) {
 // 255 where `warp` maps a pixel of a `source`-sized image (its pixel edges included) into the working
 // image, 0 elsewhere: the face's outline filled, as warping an all-white image would give, without the warp.
 cv::Mat faceMask(const cv::Size& source, const cv::Matx33d& warp, const cv::Size& work) {
-  const std::vector<cv::Point2f> corners = {{-0.5f, -0.5f}, {source.width - 0.5f, -0.5f},
-                                            {source.width - 0.5f, source.height - 0.5f}, {-0.5f, source.height - 0.5f}};
-  std::vector<cv::Point2f> outline;
-  cv::perspectiveTransform(corners, outline, cv::Mat(warp));
+  const std::vector<cv::Point2f> outline = mappedOutline(source, warp);
   constexpr int kShift = 4;  // fixed point: 1/16 px
   std::vector<cv::Point> fixed;
   for (const cv::Point2f& p : outline) {
@@ -183,10 +192,7 @@ AppearanceScore FaceAppearance::score(const cv::Mat& gray, const CameraIntrinsic
   if (pyramid_.empty() || gray.empty()) return out;
   const cv::Matx33d texture_to_image = faceHomography(texture_to_face_, camera, pose);
   const cv::Size ts = pyramid_.front().size();
-  std::vector<cv::Point2f> corners = {{-0.5f, -0.5f}, {ts.width - 0.5f, -0.5f}, {ts.width - 0.5f, ts.height - 0.5f},
-                                      {-0.5f, ts.height - 0.5f}};
-  std::vector<cv::Point2f> outline;
-  cv::perspectiveTransform(corners, outline, cv::Mat(texture_to_image));
+  const std::vector<cv::Point2f> outline = mappedOutline(ts, texture_to_image);
   cv::Rect box = cv::boundingRect(outline) & cv::Rect(0, 0, gray.cols, gray.rows);
   if (box.width < 16 || box.height < 16) return out;
   const double face_width = 0.5 * (cv::norm(outline[1] - outline[0]) + cv::norm(outline[2] - outline[3]));
