@@ -93,6 +93,10 @@ def run(args):
     analyze_run.plot(summary, data, raw, out)
     with open(out / "summary.json", "w") as f:
         json.dump(summary, f, indent=2)
+    # Every estimate paired with the truth (errors, sigmas, codes): what the summary's figures count, kept so
+    # a campaign's runs can be re-counted under a new rule without their bags.
+    with open(out / "estimates.json", "w") as f:
+        json.dump(raw, f)
     analyze_run.print_summary(summary)
     if summary.get("achieved_real_time_factor"):
         print(f"  real-time factor: {summary['achieved_real_time_factor']:.2f} reached during the docking "

@@ -798,12 +798,25 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
     last_valid_range_m_ = result.range_m;
     last_pose_ = result.pose;
     last_stamp_s_ = stamp_s;
+    withholdUncertainPosition(&result);
   } else {
     tracking_ = false;
     result.velocity_status = "no pose";
   }
   result.processing_time_ms = threadCpuTimeMs() - start_ms;
   return result;
+}
+
+void MonoPoseEstimator::withholdUncertainPosition(MonoPoseResult* result) const {
+  // After the tracking state took the pose: it is a measurement with an honest, wide covariance, and the
+  // filter, the search region and the covariance's innovation scale go on learning from it (were they
+  // not fed, the scale that widened the sigma could never shrink again). Only the claim is withheld.
+  std::string note;
+  if (positionClaimed(result->pose, params_.consistency, &note)) return;
+  result->valid = false;
+  result->orientation_valid = false;
+  result->reject_reason = RejectReason::kPositionUncertain;
+  result->status = note;
 }
 
 bool MonoPoseEstimator::hintFresh(double stamp_s) const {

@@ -445,7 +445,9 @@ void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono
                     docking_msgs::TargetEstimate::REJECT_DOT_APPEARANCE ==
                         static_cast<int>(mono::RejectReason::kDotAppearance) &&
                     docking_msgs::TargetEstimate::REJECT_HINT_DISAGREEMENT ==
-                        static_cast<int>(mono::RejectReason::kHintDisagreement),
+                        static_cast<int>(mono::RejectReason::kHintDisagreement) &&
+                    docking_msgs::TargetEstimate::REJECT_POSITION_UNCERTAIN ==
+                        static_cast<int>(mono::RejectReason::kPositionUncertain),
                 "TargetEstimate REJECT_* and mono::RejectReason differ");
   msg.reject_reason = static_cast<uint8_t>(result.valid ? mono::RejectReason::kNone : result.reject_reason);
   // What the arbiter would refuse (a NaN, a non-unit quaternion) leaves here as not valid, with the code.

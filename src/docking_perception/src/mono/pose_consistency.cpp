@@ -153,6 +153,9 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.position_floor_fraction >= 0.0)) return "position_floor_fraction must not be negative";
   if (!(p.rotation_floor_deg >= 0.0)) return "rotation_floor_deg must not be negative";
   if (!(p.max_rotation_sigma_deg > 0.0)) return "max_rotation_sigma_deg must be positive";
+  if (!(p.max_position_sigma_fraction >= 0.0 && p.max_position_sigma_fraction < 1.0)) {
+    return "max_position_sigma_fraction must be in [0, 1) (0: off)";
+  }
   if (!(p.innovation_window_frames >= 0.0)) return "innovation_window_frames must not be negative (0: off)";
   if (!(p.max_rotation_innovation_chi2 >= 0.0)) return "max_rotation_innovation_chi2 must not be negative (0: off)";
   if (!(p.max_hint_disagreement_fraction >= 0.0 && p.max_hint_disagreement_fraction < 1.0)) {
@@ -271,6 +274,22 @@ bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams&
   }
   if (sigma_deg <= params.max_rotation_sigma_deg) return true;
   *note = "orientation withheld: rotation sigma " + std::to_string(sigma_deg) + " deg > max_rotation_sigma_deg";
+  return false;
+}
+
+bool positionClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note) {
+  if (params.max_position_sigma_fraction <= 0.0) return true;
+  const Eigen::Matrix3d position_block = pose.covariance.topLeftCorner<3, 3>();
+  double sigma_m = std::numeric_limits<double>::infinity();  // a non-finite block claims nothing
+  if (position_block.allFinite()) {
+    const double largest_variance =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(position_block).eigenvalues().maxCoeff();
+    sigma_m = std::sqrt(std::max(0.0, largest_variance));
+  }
+  const double range_m = pose.translation.norm();
+  if (sigma_m <= params.max_position_sigma_fraction * range_m) return true;
+  *note = "position withheld: sigma " + std::to_string(sigma_m) + " m is " + std::to_string(100.0 * sigma_m / range_m) +
+          " % of the range " + std::to_string(range_m) + " m (max_position_sigma_fraction)";
   return false;
 }
 

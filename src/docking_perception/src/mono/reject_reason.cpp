@@ -20,6 +20,7 @@ const char* toString(RejectReason reason) {
     case RejectReason::kLedBlobShape: return "led_blob_shape";
     case RejectReason::kDotAppearance: return "dot_appearance";
     case RejectReason::kHintDisagreement: return "hint_disagreement";
+    case RejectReason::kPositionUncertain: return "position_uncertain";
   }
   return "unknown";
 }

@@ -304,6 +304,40 @@ TEST(MonoPoseEstimator, IrCovarianceGrowsWithTheLedStreaks) {
   EXPECT_GT(smeared_rotation, 3.0 * sharp_rotation) << smeared.blur_sigma_px;
 }
 
+// A pose whose position sigma is above max_position_sigma_fraction of its range is published not valid,
+// with its code, but stays the tracked pose: the next image searches where it says the target is (were it
+// dropped, the covariance's innovation scale that widened the sigma could never learn it had narrowed).
+TEST(MonoPoseEstimator, AnUncertainPositionIsWithheldButStillTracked) {
+  const TargetModel model = synthetic::makeModel(2);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  const Eigen::Matrix3d rotation = synthetic::facingRotation(0.2);
+  const Eigen::Vector3d position(0.02, 0.0, 1.2);
+  MonoPoseParams params = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
+  MonoPoseEstimator unlimited(model, camera, params);
+  const MonoPoseResult reference = unlimited.process(synthetic::renderVisible(model, camera, rotation, position, 320), 10.0);
+  ASSERT_TRUE(reference.valid) << reference.status;
+  const double largest_variance =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(reference.pose.covariance.topLeftCorner<3, 3>()).eigenvalues().maxCoeff();
+  const double sigma_fraction = std::sqrt(largest_variance) / reference.pose.translation.norm();
+  ASSERT_GT(sigma_fraction, 0.0);
+
+  params.consistency.max_position_sigma_fraction = 0.5 * sigma_fraction;
+  MonoPoseEstimator strict(model, camera, params);
+  for (int frame = 0; frame < 3; ++frame) {
+    const MonoPoseResult result =
+        strict.process(synthetic::renderVisible(model, camera, rotation, position, 320 + frame), 10.0 + frame / 30.0);
+    EXPECT_FALSE(result.valid) << "frame " << frame;
+    EXPECT_FALSE(result.orientation_valid) << "frame " << frame;
+    EXPECT_EQ(result.reject_reason, RejectReason::kPositionUncertain) << "frame " << frame;
+    EXPECT_NE(result.status.find("max_position_sigma_fraction"), std::string::npos) << result.status;
+    EXPECT_EQ(result.used_tracking_region, frame > 0) << "frame " << frame << ": still tracked";
+  }
+  params.consistency.max_position_sigma_fraction = 2.0 * sigma_fraction;
+  MonoPoseEstimator loose(model, camera, params);
+  const MonoPoseResult claimed = loose.process(synthetic::renderVisible(model, camera, rotation, position, 320), 10.0);
+  EXPECT_TRUE(claimed.valid) << claimed.status;
+}
+
 TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
   MonoPoseParams params;
   params.features.ratio = 1.5;

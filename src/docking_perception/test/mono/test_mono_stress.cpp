@@ -209,6 +209,38 @@ TEST(PoseConsistency, OrientationIsWithheldAboveTheRotationSigmaLimit) {
   EXPECT_FALSE(mono::orientationClaimed(pose, params, &note));
 }
 
+// A position is claimed only while its largest sigma (an eigenvalue: a correlated block counts along its
+// worst direction) is within max_position_sigma_fraction of the range; 0 turns the check off.
+TEST(PoseConsistency, PositionIsWithheldAboveTheRangeFractionLimit) {
+  mono::ConsistencyParams params;
+  params.max_position_sigma_fraction = 0.02;
+  mono::PoseWithCovariance pose;
+  pose.translation = Eigen::Vector3d(0.0, 0.0, 2.5);  // 2 % of the range: 50 mm
+  pose.covariance = mono::Matrix6d::Identity() * 1e-6;
+  std::string note;
+  pose.covariance(2, 2) = std::pow(0.049, 2);
+  EXPECT_TRUE(mono::positionClaimed(pose, params, &note)) << note;
+  pose.covariance(2, 2) = std::pow(0.051, 2);
+  EXPECT_FALSE(mono::positionClaimed(pose, params, &note));
+  EXPECT_NE(note.find("max_position_sigma_fraction"), std::string::npos) << note;
+  // Two axes at 40 mm, fully correlated: 57 mm along their sum.
+  pose.covariance(0, 0) = pose.covariance(2, 2) = pose.covariance(0, 2) = pose.covariance(2, 0) = std::pow(0.040, 2);
+  EXPECT_FALSE(mono::positionClaimed(pose, params, &note));
+  pose.covariance(0, 2) = pose.covariance(2, 0) = 0.0;
+  EXPECT_TRUE(mono::positionClaimed(pose, params, &note)) << note;
+  // The same sigma twice as far is claimed: the limit scales with the range.
+  pose.covariance(2, 2) = std::pow(0.080, 2);
+  EXPECT_FALSE(mono::positionClaimed(pose, params, &note));
+  pose.translation *= 2.0;
+  EXPECT_TRUE(mono::positionClaimed(pose, params, &note)) << note;
+  pose.covariance(1, 1) = NAN;
+  EXPECT_FALSE(mono::positionClaimed(pose, params, &note));
+  params.max_position_sigma_fraction = 0.0;  // off
+  EXPECT_TRUE(mono::positionClaimed(pose, params, &note));
+  params.max_position_sigma_fraction = -0.1;
+  EXPECT_NE(mono::validateConsistencyParams(params), "");
+}
+
 // Poses that scatter about the prediction by 3 times their claimed sigma get their covariance scaled by
 // ~9 (variance); poses that scatter as claimed keep theirs. Fixed seed.
 TEST(PoseConsistency, InnovationScaleFollowsTheScatterAboutThePrediction) {

@@ -172,6 +172,9 @@ class MonoPoseEstimator {
   // False (with the code and reason in *result) when a fresh position hint and the pose's position are
   // farther apart than consistency.max_hint_disagreement_fraction of the range.
   bool agreesWithPositionHint(MonoPoseResult* result) const;
+  // A tracked pose whose position sigma is above consistency.max_position_sigma_fraction of its range is
+  // published not valid (kPositionUncertain), though it stays the tracked pose.
+  void withholdUncertainPosition(MonoPoseResult* result) const;
   // An external hint is set and at most region_hint_max_age_s from this image's stamp.
   bool hintFresh(double stamp_s) const;
   // The region where the target should appear (empty: search the whole image) and, in visible mode,

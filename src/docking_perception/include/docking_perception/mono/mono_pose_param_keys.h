@@ -85,6 +85,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("position_floor_fraction", &p.consistency.position_floor_fraction);
   visit("rotation_floor_deg", &p.consistency.rotation_floor_deg);
   visit("max_rotation_sigma_deg", &p.consistency.max_rotation_sigma_deg);
+  visit("max_position_sigma_fraction", &p.consistency.max_position_sigma_fraction);
   visit("innovation_window_frames", &p.consistency.innovation_window_frames);
   visit("max_rotation_innovation_chi2", &p.consistency.max_rotation_innovation_chi2);
   visit("confirm_new_orientation", &p.consistency.confirm_new_orientation);

@@ -59,6 +59,12 @@ struct ConsistencyParams {
   // 3.3 deg puts 3 sigma at 10 deg, the error that makes an estimate wrong. Five LEDs under motion blur
   // gave 10-28 deg errors with honest sigmas of 4-7 deg (eval_real_motion9px_1m); those are withheld.
   double max_rotation_sigma_deg = 3.3;
+  // A pose whose largest position sigma is above this fraction of its range is not valid
+  // (kPositionUncertain): 3 sigma would pass the 5 % of range that makes a position wrong, so the pose
+  // claims nothing a planner can use. The estimator still tracks it (its filter, its search region): the
+  // covariance is honest, only the claim is withheld. The case: an IR pose at 2.8 m, 6.6 % too far, valid
+  // with a sigma of 4.6 % of range (campaign seed 10502). 0 turns the check off.
+  double max_position_sigma_fraction = 0.0;
   // Frames over which the scatter of the poses about the velocity filter's prediction is averaged to
   // scale the covariance (InnovationCovarianceScale); 0 turns the scaling off.
   double innovation_window_frames = 10.0;
@@ -121,6 +127,10 @@ Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovarian
 // Whether the pose's orientation may be claimed: the largest rotation sigma (the rotation block's largest
 // eigenvalue) within max_rotation_sigma_deg. If not, *note says so (for people).
 bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note);
+
+// Whether the pose's position may be claimed: the largest position sigma (the position block's largest
+// eigenvalue) within max_position_sigma_fraction of the range. If not, *note says so (for people).
+bool positionClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note);
 
 // The covariance model predicts the pixel noise from the residuals and the blur; it cannot see noise that
 // all the points share (a blurred face's points move together, so their residuals stay small while the
