@@ -823,16 +823,33 @@ bool MonoPoseEstimator::hintFresh(double stamp_s) const {
   return hint_region_.area() > 0 && std::abs(stamp_s - hint_stamp_s_) <= params_.region_hint_max_age_s;
 }
 
-bool MonoPoseEstimator::agreesWithPositionHint(MonoPoseResult* result) const {
-  const double limit = params_.consistency.max_hint_disagreement_fraction;
-  if (limit <= 0.0 || !hint_has_position_ || !hintFresh(result->stamp_s)) return true;
-  if (hint_position_.norm() < params_.consistency.hint_check_min_range_m) return true;
+bool MonoPoseEstimator::agreesWithPositionHint(MonoPoseResult* result) {
+  const ConsistencyParams& c = params_.consistency;
+  const double limit = c.max_hint_disagreement_fraction;
+  if (limit <= 0.0) return true;
   const double range = result->pose.translation.norm();
+  const double since_s = result->stamp_s - last_hint_disagreement_s_;
+  const bool holding = since_s >= 0.0 && since_s <= c.hint_disagreement_hold_s;
+  if (!hint_has_position_ || !hintFresh(result->stamp_s)) {
+    if (range < c.hint_check_min_range_m || !holding) return true;
+    result->reject_reason = RejectReason::kHintDisagreement;
+    result->status = "no fresh disparity estimate to check the position against, and one " + std::to_string(since_s) +
+                     " s ago disagreed (hint_disagreement_hold_s)";
+    return false;
+  }
+  if (hint_position_.norm() < c.hint_check_min_range_m) return true;
   const double apart = (result->pose.translation - hint_position_).norm();
-  if (apart <= limit * range) return true;
+  // Hysteresis: a pose shown biased must come closer than the first refusal's limit to be trusted again.
+  const double fraction = holding ? c.hint_recovery_fraction : limit;
+  if (apart <= fraction * range) {
+    last_hint_disagreement_s_ = kNoHintDisagreement;
+    return true;
+  }
+  last_hint_disagreement_s_ = result->stamp_s;
   result->reject_reason = RejectReason::kHintDisagreement;
   result->status = "position " + std::to_string(apart) + " m from the disparity estimate, more than " +
-                   "max_hint_disagreement_fraction of the range " + std::to_string(range) + " m";
+                   (holding ? "hint_recovery_fraction" : "max_hint_disagreement_fraction") + " of the range " +
+                   std::to_string(range) + " m";
   return false;
 }
 

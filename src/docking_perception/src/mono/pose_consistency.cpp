@@ -162,6 +162,11 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
     return "max_hint_disagreement_fraction must be in [0, 1) (0: off)";
   }
   if (!(p.hint_check_min_range_m >= 0.0)) return "hint_check_min_range_m must not be negative";
+  if (!(p.hint_disagreement_hold_s >= 0.0)) return "hint_disagreement_hold_s must not be negative (0: off)";
+  if (!(p.hint_recovery_fraction > 0.0 && p.hint_recovery_fraction <= p.max_hint_disagreement_fraction) &&
+      p.max_hint_disagreement_fraction > 0.0) {
+    return "hint_recovery_fraction must be positive and at most max_hint_disagreement_fraction";
+  }
   if (!(p.max_dot_offset_factor > 0.0)) return "max_dot_offset_factor must be positive";
   if (!(p.max_solver_disagreement_deg > 0.0)) return "max_solver_disagreement_deg must be positive";
   if (!(p.max_led_area_ratio > 1.0)) return "max_led_area_ratio must exceed 1";

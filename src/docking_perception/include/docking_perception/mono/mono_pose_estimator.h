@@ -9,6 +9,7 @@
 // and the face turned towards the camera.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
@@ -171,7 +172,9 @@ class MonoPoseEstimator {
   bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
   // False (with the code and reason in *result) when a fresh position hint and the pose's position are
   // farther apart than consistency.max_hint_disagreement_fraction of the range.
-  bool agreesWithPositionHint(MonoPoseResult* result) const;
+  // Without a fresh hint, a pose at least hint_check_min_range_m away is refused for
+  // hint_disagreement_hold_s after a pose that disagreed.
+  bool agreesWithPositionHint(MonoPoseResult* result);
   // A tracked pose whose position sigma is above consistency.max_position_sigma_fraction of its range is
   // published not valid (kPositionUncertain), though it stays the tracked pose.
   void withholdUncertainPosition(MonoPoseResult* result) const;
@@ -251,6 +254,10 @@ class MonoPoseEstimator {
   double hint_stamp_s_ = 0.0;
   bool hint_has_position_ = false;  // the hint came from setPositionHint (else only the region is known)
   Eigen::Vector3d hint_position_ = Eigen::Vector3d::Zero();
+  // Image stamp of the last pose that disagreed with a fresh hint; kNoHintDisagreement: none since the
+  // last that agreed.
+  static constexpr double kNoHintDisagreement = -std::numeric_limits<double>::infinity();
+  double last_hint_disagreement_s_ = kNoHintDisagreement;
   DirectFaceAligner direct_aligner_;
 };
 

@@ -91,6 +91,8 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("confirm_new_orientation", &p.consistency.confirm_new_orientation);
   visit("max_hint_disagreement_fraction", &p.consistency.max_hint_disagreement_fraction);
   visit("hint_check_min_range_m", &p.consistency.hint_check_min_range_m);
+  visit("hint_disagreement_hold_s", &p.consistency.hint_disagreement_hold_s);
+  visit("hint_recovery_fraction", &p.consistency.hint_recovery_fraction);
   visit("max_dot_offset_factor", &p.consistency.max_dot_offset_factor);
   visit("max_solver_disagreement_deg", &p.consistency.max_solver_disagreement_deg);
   visit("max_led_area_ratio", &p.consistency.max_led_area_ratio);

@@ -91,6 +91,15 @@ struct ConsistencyParams {
   // 3 % of the truth at 0.8-1.6 m, against the stereo estimate (all its refusals of poses 3-5 % or more
   // off were at 2.2-3.8 m).
   double hint_check_min_range_m = 2.0;
+  // After a pose disagreed with a hint, poses at least hint_check_min_range_m away that have no fresh hint
+  // to be checked against stay not valid (kHintDisagreement) for this long: the face's scale bias lasts
+  // seconds, and a frame whose disparity estimate came late slipped through (campaign seed 10506: at
+  // 3.36 m, 6.2 % too far between poses 6-7 % off that the check refused). 0: only fresh hints count.
+  double hint_disagreement_hold_s = 1.0;
+  // ... and within that hold a pose must come this close to a fresh hint (fraction of its range) to be
+  // valid again: one frame whose bias fell just under max_hint_disagreement_fraction against a stereo
+  // estimate itself 2 % off was published 6-7 % off the truth (seeds 10506, 10526, with the hold on).
+  double hint_recovery_fraction = 0.02;
 };
 
 // Empty when usable, else a message naming the parameter (config key).
