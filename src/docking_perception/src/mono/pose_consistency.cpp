@@ -269,14 +269,18 @@ Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovarian
   return covariance;
 }
 
+namespace {
+// The sigma along a 3x3 covariance block's worst direction (its largest eigenvalue): a correlated block is
+// judged by that, not by its diagonal. Infinite for a non-finite block, which claims nothing.
+double largestSigma(const Eigen::Matrix3d& block) {
+  if (!block.allFinite()) return std::numeric_limits<double>::infinity();
+  const double largest_variance = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(block).eigenvalues().maxCoeff();
+  return std::sqrt(std::max(0.0, largest_variance));
+}
+}  // namespace
+
 bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note) {
-  const Eigen::Matrix3d rotation_block = pose.covariance.bottomRightCorner<3, 3>();
-  double sigma_deg = std::numeric_limits<double>::infinity();  // a non-finite block claims nothing
-  if (rotation_block.allFinite()) {
-    const double largest_variance =
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(rotation_block).eigenvalues().maxCoeff();
-    sigma_deg = std::sqrt(std::max(0.0, largest_variance)) * 180.0 / M_PI;
-  }
+  const double sigma_deg = largestSigma(pose.covariance.bottomRightCorner<3, 3>()) * 180.0 / M_PI;
   if (sigma_deg <= params.max_rotation_sigma_deg) return true;
   *note = "orientation withheld: rotation sigma " + std::to_string(sigma_deg) + " deg > max_rotation_sigma_deg";
   return false;
@@ -284,13 +288,7 @@ bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams&
 
 bool positionClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note) {
   if (params.max_position_sigma_fraction <= 0.0) return true;
-  const Eigen::Matrix3d position_block = pose.covariance.topLeftCorner<3, 3>();
-  double sigma_m = std::numeric_limits<double>::infinity();  // a non-finite block claims nothing
-  if (position_block.allFinite()) {
-    const double largest_variance =
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(position_block).eigenvalues().maxCoeff();
-    sigma_m = std::sqrt(std::max(0.0, largest_variance));
-  }
+  const double sigma_m = largestSigma(pose.covariance.topLeftCorner<3, 3>());
   const double range_m = pose.translation.norm();
   if (sigma_m <= params.max_position_sigma_fraction * range_m) return true;
   *note = "position withheld: sigma " + std::to_string(sigma_m) + " m is " + std::to_string(100.0 * sigma_m / range_m) +
