@@ -63,7 +63,9 @@ struct ConsistencyParams {
   // (kPositionUncertain): 3 sigma would pass the 5 % of range that makes a position wrong, so the pose
   // claims nothing a planner can use. The estimator still tracks it (its filter, its search region): the
   // covariance is honest, only the claim is withheld. The case: an IR pose at 2.8 m, 6.6 % too far, valid
-  // with a sigma of 4.6 % of range (campaign seed 10502). 0 turns the check off.
+  // with a sigma of 4.6 % of range (campaign seed 10502). 0 turns the check off, and it is off: far IR
+  // poses are honest but wide (range sigma 2-7 %, errors under 2 %), and at 0.0167 two dark runs of nine
+  // never started (docs/PERFORMANCE.md, 6 Dec 2026).
   double max_position_sigma_fraction = 0.0;
   // Frames over which the scatter of the poses about the velocity filter's prediction is averaged to
   // scale the covariance (InnovationCovarianceScale); 0 turns the scaling off.
