@@ -56,6 +56,9 @@ std::string validateParams(const MonoPoseParams& p) {
       positive("min_range_m", p.min_range_m),
       p.max_range_m > p.min_range_m ? "" : "max_range_m must exceed min_range_m",
       p.tracking_margin_px >= 0.0 ? "" : "tracking_margin_px must not be negative",
+      p.filtered_orientation_correlated_fraction >= 0.0 && p.filtered_orientation_correlated_fraction <= 1.0
+          ? ""
+          : "filtered_orientation_correlated_fraction must be in [0, 1]",
       p.max_pattern_candidates >= 1 ? "" : "max_pattern_candidates must be at least 1",
       p.features.brisk_threshold > 0 ? "" : "brisk_threshold must be positive",
       p.features.brisk_octaves >= 0 && p.features.brisk_octaves <= 8 ? "" : "brisk_octaves must be 0..8",
@@ -632,7 +635,7 @@ void MonoPoseEstimator::scaleByInnovation(MonoPoseResult* result) {
   result->covariance_scale_rotation = innovation_scale_.rotationScale();
 }
 
-void MonoPoseEstimator::updateVelocities(MonoPoseResult* result) {
+bool MonoPoseEstimator::updateVelocities(MonoPoseResult* result) {
   std::string filter_note;
   std::string difference_note;
   const bool filter_ok = filter_.update(result->stamp_s, result->pose, &filter_note);
@@ -650,6 +653,26 @@ void MonoPoseEstimator::updateVelocities(MonoPoseResult* result) {
   if (!result->twist.valid && result->velocity_status.empty()) {
     result->velocity_status = "velocity needs two poses within filter.max_gap_s";
   }
+  return filter_ok;
+}
+
+void MonoPoseEstimator::publishFilteredOrientation(bool fused, MonoPoseResult* result) const {
+  result->measured_pose = result->pose;
+  // One fused pose is the measurement itself; a gated one left the filter at its prediction.
+  constexpr int kMinFusedPoses = 2;
+  if (!params_.publish_filtered_orientation || !fused || filter_.updatesSinceRestart() < kMinFusedPoses) return;
+  // The filter averages what it takes for independent errors; the part of an image's error that persists
+  // from image to image (a tilt bias that moves with the blur) does not average out, so it stays in. The
+  // position keeps its own block; its correlation with the (now filtered) rotation is not known: dropped.
+  const double persistent = params_.filtered_orientation_correlated_fraction;
+  const PoseWithCovariance posterior = filter_.pose();
+  const Matrix6d& measured = result->measured_pose.covariance;
+  result->pose.rotation = posterior.rotation;
+  result->pose.covariance.setZero();
+  result->pose.covariance.topLeftCorner<3, 3>() = measured.topLeftCorner<3, 3>();
+  result->pose.covariance.bottomRightCorner<3, 3>() =
+      posterior.covariance.bottomRightCorner<3, 3>() + persistent * persistent * measured.bottomRightCorner<3, 3>();
+  result->orientation_filtered = true;
 }
 
 // ---- The inner pattern (target.yaml `inner_pattern`): close range, to contact. ----------------------
@@ -792,12 +815,13 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
     scaleByInnovation(&result);
     result.orientation_valid = claimOrientation(result);
     result.range_m = result.pose.translation.norm();
-    updateVelocities(&result);
+    const bool fused = updateVelocities(&result);
     tracking_ = true;
     last_orientation_claimed_ = result.orientation_valid;
     last_valid_range_m_ = result.range_m;
     last_pose_ = result.pose;
     last_stamp_s_ = stamp_s;
+    publishFilteredOrientation(fused, &result);
     withholdUncertainPosition(&result);
   } else {
     tracking_ = false;

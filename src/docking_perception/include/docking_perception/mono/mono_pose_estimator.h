@@ -49,6 +49,15 @@ struct MonoPoseParams {
   MonoMode mode = MonoMode::kVisible;
   PoseSolverType solver = PoseSolverType::kPnp;
   VelocityMethod velocity = VelocityMethod::kFilter;
+  // The published orientation is the velocity filter's posterior at the image's stamp (this image's pose
+  // fused with the ones before it) once the filter has fused at least two poses since its last restart and
+  // accepted this one; otherwise the image's own. Single images under blur scatter by degrees about the
+  // truth, frame to frame; their fused orientation does not. The position stays the image's own: a turning
+  // camera moves the target on a curve in its frame, which a constant-velocity filter follows with a lag.
+  bool publish_filtered_orientation = true;
+  // The fraction of an image's orientation error (1-sigma) that persists over images, which no filtering
+  // averages out: the published rotation covariance is the filter's plus this squared times the image's.
+  double filtered_orientation_correlated_fraction = 0.5;
   bool use_tracking_region = true;
   double tracking_margin_px = 40.0;    // added around the predicted face outline
   double max_reprojection_px = 3.0;    // a pose whose RMS reprojection error is larger is rejected
@@ -97,7 +106,9 @@ struct MonoPoseResult {
   std::string status;                  // why not valid, or what part is withheld (for people); else empty
   RejectReason reject_reason = RejectReason::kNone;  // the same as a code (for programs)
   std::string solver;                  // "paper_5point" or "pnp"
-  PoseWithCovariance pose;             // camera <- target
+  PoseWithCovariance pose;             // camera <- target: what is published (see publish_filtered_orientation)
+  PoseWithCovariance measured_pose;    // this image's own pose (equal to `pose` unless orientation_filtered)
+  bool orientation_filtered = false;   // `pose`'s orientation is the velocity filter's posterior
   double range_m = 0.0;
   TwistWithCovariance twist;           // from the selected velocity method
   TwistWithCovariance twist_filter;
@@ -192,7 +203,11 @@ class MonoPoseEstimator {
   // prediction does not hold.
   FaceMatch matchPredictedFace(const cv::Mat& gray, double stamp_s) const;
   const Eigen::Matrix3d* previousRotation(double stamp_s, Eigen::Matrix3d* storage) const;
-  void updateVelocities(MonoPoseResult* result);
+  // Feeds the pose to the velocity estimators; true when the filter fused it (or restarted on it).
+  bool updateVelocities(MonoPoseResult* result);
+  // After the tracking state took this image's pose: the filter's posterior orientation becomes the
+  // published one (publish_filtered_orientation); measured_pose keeps the image's own.
+  void publishFilteredOrientation(bool fused, MonoPoseResult* result) const;
   void scaleByInnovation(MonoPoseResult* result);
   bool claimOrientation(MonoPoseResult& result) const;
   bool directSearchDue();

@@ -52,6 +52,8 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("dot_min_contrast", &p.dots.min_contrast);
   visit("pnp_ambiguity_ratio", &p.pnp.ambiguity_ratio);
   visit("pnp_ambiguity_floor_px", &p.pnp.ambiguity_floor_px);
+  visit("publish_filtered_orientation", &p.publish_filtered_orientation);
+  visit("filtered_orientation_correlated_fraction", &p.filtered_orientation_correlated_fraction);
   visit("accel_noise", &p.filter.accel_noise);
   visit("angular_accel_noise", &p.filter.angular_accel_noise);
   visit("max_gap_s", &p.filter.max_gap_s);
