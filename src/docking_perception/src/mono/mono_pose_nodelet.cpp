@@ -253,6 +253,8 @@ void MonoPoseNodelet::reconfigure(MonoPoseConfig& config, uint32_t /*level*/) {
   next.leds.threshold = config.led_threshold;
   next.filter.accel_noise = config.accel_noise;
   next.filter.angular_accel_noise = config.angular_accel_noise;
+  next.publish_filtered_orientation = config.publish_filtered_orientation;
+  next.filtered_orientation_correlated_fraction = config.filtered_orientation_correlated_fraction;
   const std::string invalid = mono::validateParams(next);
   if (!invalid.empty()) {
     NODELET_ERROR("mono_pose: reconfigure rejected: %s", invalid.c_str());

@@ -54,6 +54,9 @@ struct FeatureMatcherParams {
   // one and correlates the points it kept again, so the parabolic peak fit works near zero offset,
   // where it is unbiased (a first pass with offsets up to +-3 px leans toward whole pixels).
   int refine_passes = 1;
+  // Refinement with the blurred model's patches too (when there is one), keeping them when they correlate
+  // clearly better with the image: a blurred image refined against sharp patches gives biased points.
+  bool blur_matched_refinement = true;
   // Keypoint budget spread over a keypoint_grid x keypoint_grid grid of the search region (0: the
   // strongest max_image_keypoints of the whole region). Over a busy background the strongest corners
   // are the background's; a grid keeps a share for every part of the image, the target's included.
@@ -72,6 +75,7 @@ struct FaceMatch {
   int pyramid_level = 0;            // the image level the keypoints came from (0 full, 1 half resolution)
   bool blurred_model = false;       // matched against the blurred model pyramid
   bool refined = false;             // the correspondences below are the refined ones
+  bool refined_with_blurred_model = false;  // ... against the blurred model's patches (blur_matched_refinement)
   bool from_prediction = false;     // matchAtPrediction: no features, the refinement started from a prediction
   int refine_candidates = 0;        // points the (first) refinement pass tried to correlate
   cv::Matx33d homography = cv::Matx33d::eye();  // texture pixel -> image pixel
@@ -142,6 +146,16 @@ class FeatureMatcher {
   // One refinement pass over candidates (texture pixels) with match->homography; false (match
   // unchanged) when too few points survive.
   bool refinePass(const cv::Mat& gray, const std::vector<cv::Point2f>& candidates, FaceMatch* match) const;
+  struct RefinedPoints {
+    std::vector<cv::Point2f> texture_points;
+    std::vector<cv::Point2f> image_points;
+    double mean_correlation = 0.0;  // of the kept points' NCC peaks
+  };
+  // The model level of one set (sharp or blurred) nearest the face's apparent width.
+  const ModelLevel& refinementLevel(double apparent_width, bool blurred) const;
+  // Each candidate's patch, drawn from `level` with the homography, located in the image by NCC.
+  RefinedPoints refineAgainst(const cv::Mat& gray, const ModelLevel& level, const std::vector<cv::Point2f>& candidates,
+                              const cv::Matx33d& homography, const cv::Rect& face_box) const;
 
   FeatureMatcherParams params_;
   cv::Ptr<cv::BRISK> brisk_;

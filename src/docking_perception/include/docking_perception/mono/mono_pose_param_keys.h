@@ -77,6 +77,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("predicted_face_min_kept_fraction", &p.predicted_face_min_kept_fraction);
   visit("keypoint_grid", &p.features.keypoint_grid);
   visit("blurred_model_sigma_px", &p.features.blurred_model_sigma_px);
+  visit("blur_matched_refinement", &p.features.blur_matched_refinement);
   visit("region_hint_max_age_s", &p.region_hint_max_age_s);
   visit("region_hint_radius_m", &p.region_hint_radius_m);
   visit("min_inlier_spread", &p.consistency.min_inlier_spread);
