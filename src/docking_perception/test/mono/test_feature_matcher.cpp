@@ -14,6 +14,21 @@
 
 using namespace docking_perception::mono;  // NOLINT: test file
 
+namespace {
+
+// RMS distance (px) of a match's refined points from the true projections of their model points.
+double refinedPointsRmsPx(const FaceMatch& match, const TargetModel& model, const CameraIntrinsics& camera,
+                          const Eigen::Matrix3d& r, const Eigen::Vector3d& t) {
+  double sum = 0.0;
+  for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
+    const Eigen::Vector2d truth = camera.project(r * model.texturePixelToPoint(match.inlier_texture_points[i]) + t);
+    sum += (Eigen::Vector2d(match.inlier_image_points[i].x, match.inlier_image_points[i].y) - truth).squaredNorm();
+  }
+  return std::sqrt(sum / static_cast<double>(match.inlier_texture_points.size()));
+}
+
+}  // namespace
+
 // BRISK's 64-byte descriptors (the fixed-width loops: four rows a step where the CPU has AVX2, and the
 // rows past the last four) and an odd width (any-width loop, with a byte tail). Near-duplicate rows make
 // ties and small distances, where the order of the updates matters.
@@ -198,14 +213,6 @@ TEST(FeatureMatcher, SecondRefinementPassIsAtLeastAsAccurate) {
   std::string reason;
   ASSERT_TRUE(matcher_one.buildModel(model.textureGray(), &reason)) << reason;
   ASSERT_TRUE(matcher_two.buildModel(model.textureGray(), &reason)) << reason;
-  auto rms = [&](const FaceMatch& match, const Eigen::Matrix3d& r, const Eigen::Vector3d& t) {
-    double sum = 0.0;
-    for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
-      const Eigen::Vector2d truth = camera.project(r * model.texturePixelToPoint(match.inlier_texture_points[i]) + t);
-      sum += (Eigen::Vector2d(match.inlier_image_points[i].x, match.inlier_image_points[i].y) - truth).squaredNorm();
-    }
-    return std::sqrt(sum / static_cast<double>(match.inlier_texture_points.size()));
-  };
   double total_one = 0.0;
   double total_two = 0.0;
   for (int view = 0; view < 4; ++view) {
@@ -217,8 +224,8 @@ TEST(FeatureMatcher, SecondRefinementPassIsAtLeastAsAccurate) {
     ASSERT_TRUE(a.found && a.refined) << "view " << view << ": " << a.status;
     ASSERT_TRUE(b.found && b.refined) << "view " << view << ": " << b.status;
     EXPECT_GE(b.inlier_texture_points.size(), static_cast<size_t>(two.min_inliers));
-    total_one += rms(a, r, t);
-    total_two += rms(b, r, t);
+    total_one += refinedPointsRmsPx(a, model, camera, r, t);
+    total_two += refinedPointsRmsPx(b, model, camera, r, t);
   }
   std::cout << "refined-point RMS vs truth: one pass " << total_one / 4.0 << " px, two passes " << total_two / 4.0
             << " px\n";
@@ -251,12 +258,7 @@ TEST(FeatureMatcher, RefinesAtAPredictedHomographyAndRefusesAWrongOne) {
   EXPECT_EQ(match.keypoints, 0);  // no feature was detected
   EXPECT_GE(match.inliers, 50);
   EXPECT_GE(match.inliers, match.refine_candidates / 2);
-  double sum = 0.0;
-  for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
-    const Eigen::Vector2d truth = camera.project(r * model.texturePixelToPoint(match.inlier_texture_points[i]) + t);
-    sum += (Eigen::Vector2d(match.inlier_image_points[i].x, match.inlier_image_points[i].y) - truth).squaredNorm();
-  }
-  EXPECT_LT(std::sqrt(sum / match.inlier_texture_points.size()), 0.3);
+  EXPECT_LT(refinedPointsRmsPx(match, model, camera, r, t), 0.3);
   // The kept fraction is enforced: asking for every point tried (some always fall off the face's edge or
   // below min_correlation) refuses even this prediction.
   ASSERT_LT(match.inliers, match.refine_candidates);
@@ -299,14 +301,7 @@ TEST(FeatureMatcher, ABlurredFaceIsRefinedAgainstTheBlurredModel) {
   truth.translation = t;
   const cv::Matx33d shift(1.0, 0.0, 0.8, 0.0, 1.0, -0.6, 0.0, 0.0, 1.0);
   const cv::Matx33d prediction = shift * faceHomography(model, camera, truth);
-  auto rms = [&](const FaceMatch& match) {
-    double sum = 0.0;
-    for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
-      const Eigen::Vector2d p = camera.project(r * model.texturePixelToPoint(match.inlier_texture_points[i]) + t);
-      sum += (Eigen::Vector2d(match.inlier_image_points[i].x, match.inlier_image_points[i].y) - p).squaredNorm();
-    }
-    return std::sqrt(sum / static_cast<double>(match.inlier_texture_points.size()));
-  };
+  auto rms = [&](const FaceMatch& match) { return refinedPointsRmsPx(match, model, camera, r, t); };
   const FaceMatch with_blurred = matched.matchAtPrediction(blurred, prediction, 0.3);
   const FaceMatch with_sharp = sharp_only.matchAtPrediction(blurred, prediction, 0.3);
   ASSERT_TRUE(with_blurred.found) << with_blurred.status;
