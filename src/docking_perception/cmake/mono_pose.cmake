@@ -11,6 +11,7 @@ set(MONO_CORE_SOURCES
   src/mono/planar_pnp_solver.cpp
   src/mono/led_pattern_detector.cpp
   src/mono/feature_matcher.cpp
+  src/mono/motion_kernel.cpp
   src/mono/upright_descriptor.cpp
   src/mono/dark_dot_locator.cpp
   src/mono/velocity_estimators.cpp

@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "docking_perception/mono/motion_kernel.h"
 #include "docking_sim/renderer.h"
 #include "docking_sim/scene.h"
 
@@ -43,28 +44,6 @@ docking_sim::Surface surfaceFrom(const Eigen::Vector3d& origin, const Eigen::Vec
   s.edge_u = u_end - origin;
   s.edge_v = v_end - origin;
   return s;
-}
-
-// Linear motion blur: a line of `length` px at `angle` (anti-aliased), normalised.
-cv::Mat motionKernel(double length, double angle) {
-  const int size = static_cast<int>(std::ceil(length)) | 1;
-  cv::Mat kernel = cv::Mat::zeros(size + 2, size + 2, CV_32F);
-  const double c = 0.5 * (size + 1);
-  const int steps = std::max(2, static_cast<int>(length * 8));
-  for (int i = 0; i < steps; ++i) {
-    const double s = (static_cast<double>(i) / (steps - 1) - 0.5) * (length - 1.0);
-    const double x = c + s * std::cos(angle);
-    const double y = c + s * std::sin(angle);
-    const int x0 = static_cast<int>(std::floor(x));
-    const int y0 = static_cast<int>(std::floor(y));
-    const double fx = x - x0;
-    const double fy = y - y0;
-    kernel.at<float>(y0, x0) += static_cast<float>((1 - fx) * (1 - fy));
-    kernel.at<float>(y0, x0 + 1) += static_cast<float>(fx * (1 - fy));
-    kernel.at<float>(y0 + 1, x0) += static_cast<float>((1 - fx) * fy);
-    kernel.at<float>(y0 + 1, x0 + 1) += static_cast<float>(fx * fy);
-  }
-  return kernel / cv::sum(kernel)[0];
 }
 
 void addGaussianBlob(cv::Mat* image, const cv::Point2d& centre, double sigma, double peak) {
@@ -328,8 +307,12 @@ StressFrame StressRenderer::render(const StressCondition& condition, const Trial
   // Optics: defocus, then motion during the exposure.
   if (condition.defocus_sigma_px > 0.0) cv::GaussianBlur(image, image, cv::Size(0, 0), condition.defocus_sigma_px);
   if (condition.motion_length_px > 1.0) {
-    cv::filter2D(image, image, -1, motionKernel(condition.motion_length_px, uniform(rng, 0, M_PI)), cv::Point(-1, -1),
-                 0, cv::BORDER_REFLECT);
+    // One draw whatever the spread, so that the other conditions' images stay the same.
+    const double draw = uniform(rng, 0, M_PI);
+    const double angle = condition.motion_max_angle_deg >= 90.0 ? draw
+                                                                : (draw - 0.5 * M_PI) * condition.motion_max_angle_deg / 90.0;
+    cv::filter2D(image, image, -1, mono::linearMotionKernel(condition.motion_length_px, angle), cv::Point(-1, -1), 0,
+                 cv::BORDER_REFLECT);
   }
   // Sensor: clip (saturated highlights stay flat), noise, quantise.
   cv::min(image, 255.0, image);
@@ -384,6 +367,8 @@ std::vector<StressCondition> standardConditions() {
     c.region_hint = true; out.push_back(c); }
   { auto c = visible("clutter_defocus2_noise8_hint"); c.clutter = true; c.defocus_sigma_px = 2.0; c.noise_sigma = 8.0;
     c.region_hint = true; out.push_back(c); }
+  { auto c = visible("motion9_far_rows_hint"); c.motion_length_px = 9.0; c.motion_max_angle_deg = 10.0;
+    c.min_range_m = 1.6; c.region_hint = true; out.push_back(c); }
   { auto c = visible("specular"); c.specular = true; out.push_back(c); }
   { auto c = visible("specular_far"); c.specular = true; c.min_range_m = 1.6; out.push_back(c); }
   { auto c = visible("occlusion"); c.occlusion = true; out.push_back(c); }

@@ -27,6 +27,8 @@ struct StressCondition {
   bool clutter = false;          // busy textured surfaces behind and beside the target
   double defocus_sigma_px = 0.0;
   double motion_length_px = 0.0; // linear blur, direction drawn per frame
+  double motion_max_angle_deg = 90.0;  // the direction is drawn within +-this of the image rows (90: any);
+                                       // robots on a floor that yaw and drive smear along the rows
   double noise_sigma = 2.0;
   bool specular = false;         // saturated blob on the face
   bool occlusion = false;        // a card over part of the face (IR: over one LED)

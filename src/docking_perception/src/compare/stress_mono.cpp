@@ -135,7 +135,12 @@ int main(int argc, char** argv) {
         if constexpr (std::is_same_v<Field, bool>) *field = value == "true" || value == "1";
         else if constexpr (std::is_same_v<Field, int>) *field = std::stoi(value);
         else if constexpr (std::is_same_v<Field, double>) *field = std::stod(value);
-        else known = false;
+        else if constexpr (std::is_same_v<Field, std::vector<int>>) {
+          // A comma-separated list ("" or "none": empty).
+          field->clear();
+          std::stringstream list(value == "none" ? std::string() : value);
+          for (std::string item; std::getline(list, item, ',');) field->push_back(std::stoi(item));
+        } else known = false;
       });
     }
     if (!known) {

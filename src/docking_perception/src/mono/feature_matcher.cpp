@@ -1,5 +1,7 @@
 #include "docking_perception/mono/feature_matcher.h"
 
+#include "docking_perception/mono/motion_kernel.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -392,7 +394,8 @@ void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
                        params.fast_threshold != params_.fast_threshold ||
                        params.max_model_keypoints_per_level != params_.max_model_keypoints_per_level ||
                        params.model_widths_px != params_.model_widths_px ||
-                       params.blurred_model_sigma_px != params_.blurred_model_sigma_px;
+                       params.blurred_model_sigma_px != params_.blurred_model_sigma_px ||
+                       params.refinement_row_smears_px != params_.refinement_row_smears_px;
   params_ = params;
   if (rebuild && !texture_.empty()) buildModel(texture_, nullptr);
 }
@@ -448,6 +451,7 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
   texture_ = texture_gray;
   texture_size_ = texture_gray.size();
   levels_.clear();
+  smeared_levels_.clear();
   model_points_.clear();
   model_descriptors_ = cv::Mat();
   if (texture_gray.empty() || texture_gray.type() != CV_8UC1) {
@@ -494,6 +498,21 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
     if (!descriptors.empty()) model_descriptors_.push_back(descriptors);
     levels_.push_back(level);
   }
+  // The sharp levels smeared along their rows: the level nearest the face's width has about the image's
+  // scale, so a smear in level pixels is about the same in image pixels.
+  for (const int smear : params_.refinement_row_smears_px) {
+    const cv::Mat kernel = linearMotionKernel(smear, 0.0);
+    for (const ModelLevel& sharp : levels_) {
+      if (sharp.blurred) continue;
+      ModelLevel level = sharp;
+      level.smear_px = smear;
+      level.first_row = 0;
+      level.row_count = 0;
+      level.image = cv::Mat();  // its own pixels: the copy shares the sharp level's, which must stay sharp
+      cv::filter2D(sharp.image, level.image, -1, kernel, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+      smeared_levels_.push_back(level);
+    }
+  }
   if (static_cast<int>(model_points_.size()) < params_.min_inliers) {
     if (reason) {
       *reason = "the model texture gives only " + std::to_string(model_points_.size()) +
@@ -511,13 +530,7 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   // the same refinement cost each.
   const double apparent_width = 0.5 * (cv::norm(match->face_outline[1] - match->face_outline[0]) +
                                        cv::norm(match->face_outline[2] - match->face_outline[3]));
-  const ModelLevel* nearest = &levels_.front();
-  for (const ModelLevel& candidate : levels_) {
-    if (candidate.blurred) continue;
-    if (std::abs(std::log(candidate.width_px / apparent_width)) < std::abs(std::log(nearest->width_px / apparent_width))) {
-      nearest = &candidate;
-    }
-  }
+  const ModelLevel* nearest = &refinementLevel(apparent_width, false);
   std::vector<cv::Point2f> candidates = match->inlier_texture_points;
   const int extra_budget = std::max(0, params_.max_refined_points - static_cast<int>(candidates.size()));
   if (extra_budget > 0 && nearest->row_count > 0) {
@@ -536,17 +549,68 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   }
 }
 
-const FeatureMatcher::ModelLevel& FeatureMatcher::refinementLevel(double apparent_width, bool blurred) const {
-  // The level of the set whose width is closest (in ratio) to the face's apparent width.
-  const ModelLevel* level = nullptr;
-  for (const ModelLevel& candidate : levels_) {
-    if (candidate.blurred != blurred) continue;
-    if (!level ||
-        std::abs(std::log(candidate.width_px / apparent_width)) < std::abs(std::log(level->width_px / apparent_width))) {
-      level = &candidate;
+const FeatureMatcher::ModelLevel& FeatureMatcher::nearestLevel(const std::vector<const ModelLevel*>& levels,
+                                                                double apparent_width) {
+  // The width closest in ratio to the face's apparent width.
+  const ModelLevel* nearest = levels.front();
+  for (const ModelLevel* candidate : levels) {
+    if (std::abs(std::log(candidate->width_px / apparent_width)) <
+        std::abs(std::log(nearest->width_px / apparent_width))) {
+      nearest = candidate;
     }
   }
-  return level ? *level : levels_.front();
+  return *nearest;
+}
+
+const FeatureMatcher::ModelLevel& FeatureMatcher::refinementLevel(double apparent_width, bool blurred) const {
+  std::vector<const ModelLevel*> set;
+  for (const ModelLevel& candidate : levels_) {
+    if (candidate.blurred == blurred) set.push_back(&candidate);
+  }
+  return set.empty() ? levels_.front() : nearestLevel(set, apparent_width);
+}
+
+FeatureMatcher::RefinedPoints FeatureMatcher::refineAgainstRowSmears(const cv::Mat& gray, double apparent_width,
+                                                                     const std::vector<cv::Point2f>& candidates,
+                                                                     const cv::Matx33d& homography,
+                                                                     const cv::Rect& face_box,
+                                                                     const RefinedPoints& to_beat,
+                                                                     int* smear_px) const {
+  // Judged by the correlation summed over all candidates (a point dropped counts 0), not by the mean of
+  // those kept: a long smear keeps only the points along horizontal edges, and those correlate well.
+  auto support = [](const RefinedPoints& points) {
+    return points.mean_correlation * static_cast<double>(points.image_points.size());
+  };
+  // The smear is chosen on a sample of the candidates, against the blurred model on the same sample; only
+  // the winner correlates them all (a third of the cost of trying every smear on every point).
+  constexpr size_t kSelectionSample = 48;
+  const size_t stride = std::max<size_t>(1, candidates.size() / kSelectionSample);
+  std::vector<cv::Point2f> sample;
+  for (size_t i = 0; i < candidates.size(); i += stride) sample.push_back(candidates[i]);
+  double best_support =
+      support(refineAgainst(gray, refinementLevel(apparent_width, true), sample, homography, face_box));
+  const ModelLevel* best_level = nullptr;
+  for (const int smear : params_.refinement_row_smears_px) {
+    std::vector<const ModelLevel*> set;
+    for (const ModelLevel& level : smeared_levels_) {
+      if (level.smear_px == smear) set.push_back(&level);
+    }
+    if (set.empty()) continue;
+    const ModelLevel& level = nearestLevel(set, apparent_width);
+    const double sample_support = support(refineAgainst(gray, level, sample, homography, face_box));
+    if (sample_support > best_support) {
+      best_support = sample_support;
+      best_level = &level;
+    }
+  }
+  *smear_px = 0;
+  if (!best_level) return RefinedPoints();
+  RefinedPoints smeared = refineAgainst(gray, *best_level, candidates, homography, face_box);
+  if (static_cast<int>(smeared.image_points.size()) < params_.min_inliers || support(smeared) <= support(to_beat)) {
+    return RefinedPoints();
+  }
+  *smear_px = best_level->smear_px;
+  return smeared;
 }
 
 FeatureMatcher::RefinedPoints FeatureMatcher::refineAgainst(const cv::Mat& gray, const ModelLevel& level,
@@ -626,6 +690,14 @@ bool FeatureMatcher::refinePass(const cv::Mat& gray, const std::vector<cv::Point
         blurred.mean_correlation > refined.mean_correlation + kBlurredRefinementMinGain) {
       refined = std::move(blurred);
       match->refined_with_blurred_model = true;
+      // A blurred image: its blur may be a smear along the rows rather than round.
+      int smear_px = 0;
+      RefinedPoints smeared =
+          refineAgainstRowSmears(gray, apparent_width, candidates, match->homography, face_box, refined, &smear_px);
+      if (smear_px > 0) {
+        refined = std::move(smeared);
+        match->refined_with_row_smear_px = smear_px;
+      }
     }
   }
   const std::vector<cv::Point2f>& texture_points = refined.texture_points;

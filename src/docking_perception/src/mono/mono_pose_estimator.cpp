@@ -9,6 +9,9 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
+// The longest row smear the refinement tries: the 11 px patches searched +-3 px hold no longer one.
+constexpr int kMaxRowSmearPx = 15;
+
 Eigen::Vector2d applyHomography(const cv::Matx33d& h, const Eigen::Vector2d& p) {
   const cv::Vec3d q = h * cv::Vec3d(p.x(), p.y(), 1.0);
   return {q[0] / q[2], q[1] / q[2]};
@@ -109,6 +112,9 @@ std::string validateParams(const MonoPoseParams& p) {
   if (!consistency.empty()) return consistency;
   for (const int width : p.features.model_widths_px) {
     if (width < 32) return "model_widths_px entries must be at least 32";
+  }
+  for (const int smear : p.features.refinement_row_smears_px) {
+    if (smear < 2 || smear > kMaxRowSmearPx) return "refinement_row_smears_px entries must be 2.." + std::to_string(kMaxRowSmearPx);
   }
   return validateInnerPatternParams(p.inner_pattern);
 }

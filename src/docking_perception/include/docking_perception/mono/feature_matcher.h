@@ -57,6 +57,12 @@ struct FeatureMatcherParams {
   // Refinement with the blurred model's patches too (when there is one), keeping them when they correlate
   // clearly better with the image: a blurred image refined against sharp patches gives biased points.
   bool blur_matched_refinement = true;
+  // Lengths (px) of motion blur along the image rows that the refinement also tries, each as a model
+  // smeared by that much, when the blurred model already correlated better than the sharp one (a blurred
+  // image): the smear that correlates best gives the points. Robots on a floor yaw and drive, so their
+  // images smear along the rows, and a round (Gaussian) blur matched to a row smear still leaves each
+  // point off in its own way. Empty: none.
+  std::vector<int> refinement_row_smears_px;
   // Keypoint budget spread over a keypoint_grid x keypoint_grid grid of the search region (0: the
   // strongest max_image_keypoints of the whole region). Over a busy background the strongest corners
   // are the background's; a grid keeps a share for every part of the image, the target's included.
@@ -76,6 +82,7 @@ struct FaceMatch {
   bool blurred_model = false;       // matched against the blurred model pyramid
   bool refined = false;             // the correspondences below are the refined ones
   bool refined_with_blurred_model = false;  // ... against the blurred model's patches (blur_matched_refinement)
+  int refined_with_row_smear_px = 0;        // ... against the model smeared along the rows by this (0: not)
   bool from_prediction = false;     // matchAtPrediction: no features, the refinement started from a prediction
   int refine_candidates = 0;        // points the (first) refinement pass tried to correlate
   cv::Matx33d homography = cv::Matx33d::eye();  // texture pixel -> image pixel
@@ -128,6 +135,7 @@ class FeatureMatcher {
   struct ModelLevel {
     int width_px;
     bool blurred = false;  // a level of the blurred model
+    int smear_px = 0;      // a level smeared along the rows (refinement only, no descriptors)
     double scale;      // level pixels per texture pixel
     cv::Mat image;
     int first_row;     // this level's rows in model_descriptors_
@@ -153,6 +161,13 @@ class FeatureMatcher {
   };
   // The model level of one set (sharp or blurred) nearest the face's apparent width.
   const ModelLevel& refinementLevel(double apparent_width, bool blurred) const;
+  // The level nearest the face's apparent width among `levels` (not empty).
+  static const ModelLevel& nearestLevel(const std::vector<const ModelLevel*>& levels, double apparent_width);
+  // Refinement against the row-smeared levels (refinement_row_smears_px): the smear whose patches
+  // correlate best, or none (empty points) when no smear beats `to_beat`.
+  RefinedPoints refineAgainstRowSmears(const cv::Mat& gray, double apparent_width,
+                                       const std::vector<cv::Point2f>& candidates, const cv::Matx33d& homography,
+                                       const cv::Rect& face_box, const RefinedPoints& to_beat, int* smear_px) const;
   // Each candidate's patch, drawn from `level` with the homography, located in the image by NCC.
   RefinedPoints refineAgainst(const cv::Mat& gray, const ModelLevel& level, const std::vector<cv::Point2f>& candidates,
                               const cv::Matx33d& homography, const cv::Rect& face_box) const;
@@ -163,6 +178,7 @@ class FeatureMatcher {
   cv::Mat texture_;
   cv::Size texture_size_;
   std::vector<ModelLevel> levels_;         // widest first
+  std::vector<ModelLevel> smeared_levels_;  // refinement_row_smears_px x the widths (refinement only)
   std::vector<cv::Point2f> model_points_;  // texture pixel of each model descriptor row
   cv::Mat model_descriptors_;
 };
