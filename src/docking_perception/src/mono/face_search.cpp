@@ -1,22 +1,38 @@
 #include "docking_perception/mono/face_search.h"
 
+#include <algorithm>
+
 namespace docking_perception {
 namespace mono {
+namespace {
+
+int imageLevel(int configuration) { return configuration == 1 ? 1 : 0; }
+
+ModelSet modelSet(int configuration) {
+  return configuration == 0 ? ModelSet::kSharp : configuration == 3 ? ModelSet::kRowSmeared : ModelSet::kBlurred;
+}
+
+}  // namespace
 
 FaceSearchOutcome searchFace(const FeatureMatcher& matcher, const cv::Mat& gray, const std::vector<SearchRegion>& priors,
                              bool use_blur_search, int* preferred) {
   FaceSearchOutcome outcome;
-  std::vector<int> order = {use_blur_search ? *preferred : 0};
+  // The configurations this matcher has (its model sets), in order.
+  std::vector<int> available = {0};
   if (use_blur_search) {
-    for (int c = 0; c < kSearchConfigurations; ++c) {
-      if (c != order.front() && (c != 2 || matcher.hasBlurredModel())) order.push_back(c);
+    // Half resolution searches with the sharp model when there is no blurred one.
+    for (int c = 1; c < kSearchConfigurations; ++c) {
+      if (c == 1 || matcher.hasModelSet(modelSet(c))) available.push_back(c);
     }
+  }
+  if (std::find(available.begin(), available.end(), *preferred) == available.end()) *preferred = 0;
+  std::vector<int> order = {*preferred};
+  for (const int c : available) {
+    if (c != *preferred) order.push_back(c);
   }
   auto attempt = [&](const cv::Rect& rect, double face_width_px, int prior_index) {
     for (const int configuration : order) {
-      const int level = configuration == 1 ? 1 : 0;
-      const bool blurred = configuration != 0 && matcher.hasBlurredModel();
-      FaceMatch match = matcher.match(gray, rect, face_width_px, level, blurred);
+      FaceMatch match = matcher.match(gray, rect, face_width_px, imageLevel(configuration), modelSet(configuration));
       ++outcome.attempts;
       // Nothing found: the last attempt (the full frame) says why.
       outcome.match = match;
@@ -37,10 +53,9 @@ FaceSearchOutcome searchFace(const FeatureMatcher& matcher, const cv::Mat& gray,
   // next one on the next image (a cold start under blur takes up to kSearchConfigurations images, and
   // no image costs more than one full-frame search).
   order.resize(1);
-  if (!attempt(cv::Rect(), 0.0, -1) && use_blur_search) {
-    int next = (order.front() + 1) % kSearchConfigurations;
-    if (!matcher.hasBlurredModel()) next = 1 - std::min(order.front(), 1);
-    *preferred = next;
+  if (!attempt(cv::Rect(), 0.0, -1)) {
+    const auto current = std::find(available.begin(), available.end(), order.front());
+    *preferred = available[static_cast<size_t>(current - available.begin() + 1) % available.size()];
   }
   return outcome;
 }

@@ -113,6 +113,9 @@ std::string validateParams(const MonoPoseParams& p) {
   for (const int width : p.features.model_widths_px) {
     if (width < 32) return "model_widths_px entries must be at least 32";
   }
+  if (p.features.search_row_smear_px < 0 || p.features.search_row_smear_px > kMaxRowSmearPx) {
+    return "search_row_smear_px must be 0.." + std::to_string(kMaxRowSmearPx);
+  }
   for (const int smear : p.features.refinement_row_smears_px) {
     if (smear < 2 || smear > kMaxRowSmearPx) return "refinement_row_smears_px entries must be 2.." + std::to_string(kMaxRowSmearPx);
   }

@@ -31,8 +31,9 @@ struct FaceSearchOutcome {
 
 // The ways to look in one region: (image level, model set). 0: full resolution, sharp model (sharp
 // faces); 1: half resolution, blurred model (strong blur); 2: full resolution, blurred model (moderate
-// blur on a small, far face that half resolution would shrink below the model's smallest level).
-constexpr int kSearchConfigurations = 3;
+// blur on a small, far face that half resolution would shrink below the model's smallest level); 3: full
+// resolution, the row-smeared model (a far face smeared by the robot's yaw or drive), when it is built.
+constexpr int kSearchConfigurations = 4;
 
 // Prior regions try every configuration (small regions are cheap); the full frame tries one per image
 // and moves *preferred on to the next after a failure (round robin over images).

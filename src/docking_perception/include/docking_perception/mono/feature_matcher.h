@@ -27,6 +27,11 @@
 namespace docking_perception {
 namespace mono {
 
+// The model pyramids a search can match against: the sharp texture; the texture blurred round
+// (blurred_model_sigma_px: defocus); that blurred one also smeared along the rows (search_row_smear_px:
+// a robot's yaw or drive during the exposure).
+enum class ModelSet { kSharp, kBlurred, kRowSmeared };
+
 struct FeatureMatcherParams {
   bool use_brisk_detector = false;  // false: FAST corners (the descriptors: upright_descriptors)
   // true: UprightRingDescriptor for the sharp model and its searches (no orientation: the test bed's
@@ -70,6 +75,10 @@ struct FeatureMatcherParams {
   // > 0: a second model pyramid of the texture blurred by this sigma (px at each level), matched by the
   // searches for blurred faces (defocus, motion): their corners have the blurred texture's descriptors.
   double blurred_model_sigma_px = 0.0;
+  // > 0 (with a blurred model): a third model pyramid, the blurred one also smeared along its rows by this
+  // many px, matched by a search of its own (FaceSearch): the corners of a face smeared by motion have
+  // the smeared texture's descriptors.
+  int search_row_smear_px = 0;
 };
 
 struct FaceMatch {
@@ -79,7 +88,7 @@ struct FaceMatch {
   int matches = 0;                  // after the ratio test
   int inliers = 0;                  // ratio-test matches that are inliers of the RANSAC homography
   int pyramid_level = 0;            // the image level the keypoints came from (0 full, 1 half resolution)
-  bool blurred_model = false;       // matched against the blurred model pyramid
+  ModelSet model_set = ModelSet::kSharp;  // the model pyramid matched against
   bool refined = false;             // the correspondences below are the refined ones
   bool refined_with_blurred_model = false;  // ... against the blurred model's patches (blur_matched_refinement)
   int refined_with_row_smear_px = 0;        // ... against the model smeared along the rows by this (0: not)
@@ -116,10 +125,14 @@ class FeatureMatcher {
   // pyramid_level 1 detects and describes on the half-resolution image (blurred images keep only coarse
   // corners; FAST finds them at half resolution); the homography and the refinement are at full
   // resolution either way.
-  // blurred_model matches against the blurred model pyramid (when built).
+  // model_set: the pyramid matched against (one not built: the sharp one).
   FaceMatch match(const cv::Mat& gray, const cv::Rect& roi = cv::Rect(), double expected_face_width_px = 0.0,
-                  int pyramid_level = 0, bool blurred_model = false) const;
+                  int pyramid_level = 0, ModelSet model_set = ModelSet::kSharp) const;
   bool hasBlurredModel() const { return params_.blurred_model_sigma_px > 0.0; }
+  bool hasRowSmearedModel() const { return hasBlurredModel() && params_.search_row_smear_px > 0; }
+  bool hasModelSet(ModelSet set) const {
+    return set == ModelSet::kSharp || (set == ModelSet::kBlurred ? hasBlurredModel() : hasRowSmearedModel());
+  }
 
   // Tracking without features (issue 15): the face where a predicted homography (texture pixel -> image
   // pixel, from the tracked pose) puts it; the model corners of the level nearest its apparent size are
@@ -134,7 +147,7 @@ class FeatureMatcher {
  private:
   struct ModelLevel {
     int width_px;
-    bool blurred = false;  // a level of the blurred model
+    ModelSet set = ModelSet::kSharp;
     int smear_px = 0;      // a level smeared along the rows (refinement only, no descriptors)
     double scale;      // level pixels per texture pixel
     cv::Mat image;
@@ -159,8 +172,8 @@ class FeatureMatcher {
     std::vector<cv::Point2f> image_points;
     double mean_correlation = 0.0;  // of the kept points' NCC peaks
   };
-  // The model level of one set (sharp or blurred) nearest the face's apparent width.
-  const ModelLevel& refinementLevel(double apparent_width, bool blurred) const;
+  // The model level of one set nearest the face's apparent width.
+  const ModelLevel& refinementLevel(double apparent_width, ModelSet set) const;
   // The level nearest the face's apparent width among `levels` (not empty).
   static const ModelLevel& nearestLevel(const std::vector<const ModelLevel*>& levels, double apparent_width);
   // Refinement against the row-smeared levels (refinement_row_smears_px): the smear whose patches

@@ -79,6 +79,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("blurred_model_sigma_px", &p.features.blurred_model_sigma_px);
   visit("blur_matched_refinement", &p.features.blur_matched_refinement);
   visit("refinement_row_smears_px", &p.features.refinement_row_smears_px);
+  visit("search_row_smear_px", &p.features.search_row_smear_px);
   visit("region_hint_max_age_s", &p.region_hint_max_age_s);
   visit("region_hint_radius_m", &p.region_hint_radius_m);
   visit("min_inlier_spread", &p.consistency.min_inlier_spread);
