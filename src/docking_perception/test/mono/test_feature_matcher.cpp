@@ -277,17 +277,35 @@ TEST(FeatureMatcher, RefinesAtAPredictedHomographyAndRefusesAWrongOne) {
   EXPECT_EQ(mirrored.refine_candidates, 0);
 }
 
+// The scene of the refinement tests: a face at 1.2 m, turned, and a prediction of it 1 px off.
+struct RefinementScene {
+  TargetModel model = synthetic::makeModel(4);
+  CameraIntrinsics camera = synthetic::defaultCamera();
+  Eigen::Matrix3d r = synthetic::facingRotation(0.25, -0.05, 0.1);
+  Eigen::Vector3d t = Eigen::Vector3d(-0.03, 0.02, 1.2);
+  cv::Mat sharp = synthetic::renderVisible(model, camera, r, t, 41);
+
+  cv::Matx33d prediction() const {
+    PoseWithCovariance truth;
+    truth.rotation = r;
+    truth.translation = t;
+    const cv::Matx33d shift(1.0, 0.0, 0.8, 0.0, 1.0, -0.6, 0.0, 0.0, 1.0);
+    return shift * faceHomography(model, camera, truth);
+  }
+  double rms(const FaceMatch& match) const { return refinedPointsRmsPx(match, model, camera, r, t); }
+  cv::Mat blurred(double sigma_px) const {
+    cv::Mat out;
+    cv::GaussianBlur(sharp, out, cv::Size(0, 0), sigma_px);
+    return out;
+  }
+};
+
 // Blur-matched refinement (issue 11): on a face blurred by 2 px the sharp model's patches locate the
 // points with offsets that do not cancel; the blurred model's patches correlate clearly better, are the
 // ones kept, and their points are nearer the truth. On the sharp image the sharp patches are kept.
 TEST(FeatureMatcher, ABlurredFaceIsRefinedAgainstTheBlurredModel) {
-  const TargetModel model = synthetic::makeModel(4);
-  const CameraIntrinsics camera = synthetic::defaultCamera();
-  const Eigen::Matrix3d r = synthetic::facingRotation(0.25, -0.05, 0.1);
-  const Eigen::Vector3d t(-0.03, 0.02, 1.2);
-  const cv::Mat sharp = synthetic::renderVisible(model, camera, r, t, 41);
-  cv::Mat blurred;
-  cv::GaussianBlur(sharp, blurred, cv::Size(0, 0), 2.0);
+  const RefinementScene scene;
+  const cv::Mat blurred = scene.blurred(2.0);
   FeatureMatcherParams matched_params;
   matched_params.blurred_model_sigma_px = 1.5;
   FeatureMatcherParams sharp_only_params = matched_params;
@@ -295,24 +313,18 @@ TEST(FeatureMatcher, ABlurredFaceIsRefinedAgainstTheBlurredModel) {
   FeatureMatcher matched(matched_params);
   FeatureMatcher sharp_only(sharp_only_params);
   std::string reason;
-  ASSERT_TRUE(matched.buildModel(model.textureGray(), &reason)) << reason;
-  ASSERT_TRUE(sharp_only.buildModel(model.textureGray(), &reason)) << reason;
-  PoseWithCovariance truth;
-  truth.rotation = r;
-  truth.translation = t;
-  const cv::Matx33d shift(1.0, 0.0, 0.8, 0.0, 1.0, -0.6, 0.0, 0.0, 1.0);
-  const cv::Matx33d prediction = shift * faceHomography(model, camera, truth);
-  auto rms = [&](const FaceMatch& match) { return refinedPointsRmsPx(match, model, camera, r, t); };
-  const FaceMatch with_blurred = matched.matchAtPrediction(blurred, prediction, 0.3);
-  const FaceMatch with_sharp = sharp_only.matchAtPrediction(blurred, prediction, 0.3);
+  ASSERT_TRUE(matched.buildModel(scene.model.textureGray(), &reason)) << reason;
+  ASSERT_TRUE(sharp_only.buildModel(scene.model.textureGray(), &reason)) << reason;
+  const FaceMatch with_blurred = matched.matchAtPrediction(blurred, scene.prediction(), 0.3);
+  const FaceMatch with_sharp = sharp_only.matchAtPrediction(blurred, scene.prediction(), 0.3);
   ASSERT_TRUE(with_blurred.found) << with_blurred.status;
   ASSERT_TRUE(with_sharp.found) << with_sharp.status;
   EXPECT_TRUE(with_blurred.refined_with_blurred_model);
   EXPECT_FALSE(with_sharp.refined_with_blurred_model);
-  std::cout << "refined-point RMS vs truth on a 2 px blur: blurred patches " << rms(with_blurred)
-            << " px, sharp patches " << rms(with_sharp) << " px\n";
-  EXPECT_LT(rms(with_blurred), rms(with_sharp));
-  const FaceMatch on_sharp = matched.matchAtPrediction(sharp, prediction, 0.3);
+  std::cout << "refined-point RMS vs truth on a 2 px blur: blurred patches " << scene.rms(with_blurred)
+            << " px, sharp patches " << scene.rms(with_sharp) << " px\n";
+  EXPECT_LT(scene.rms(with_blurred), scene.rms(with_sharp));
+  const FaceMatch on_sharp = matched.matchAtPrediction(scene.sharp, scene.prediction(), 0.3);
   ASSERT_TRUE(on_sharp.found) << on_sharp.status;
   EXPECT_FALSE(on_sharp.refined_with_blurred_model);
 }
@@ -321,15 +333,9 @@ TEST(FeatureMatcher, ABlurredFaceIsRefinedAgainstTheBlurredModel) {
 // exposure) is refined against the model smeared by the length that fits it best, and its points are
 // nearer the truth than with the round blurred model alone. A round blur keeps the round model.
 TEST(FeatureMatcher, ARowSmearedFaceIsRefinedAgainstTheSmearedModel) {
-  const TargetModel model = synthetic::makeModel(4);
-  const CameraIntrinsics camera = synthetic::defaultCamera();
-  const Eigen::Matrix3d r = synthetic::facingRotation(0.25, -0.05, 0.1);
-  const Eigen::Vector3d t(-0.03, 0.02, 1.2);
-  const cv::Mat sharp = synthetic::renderVisible(model, camera, r, t, 41);
+  const RefinementScene scene;
   cv::Mat smeared;
-  cv::filter2D(sharp, smeared, -1, linearMotionKernel(9.0, 0.0), cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
-  cv::Mat round;
-  cv::GaussianBlur(sharp, round, cv::Size(0, 0), 2.0);
+  cv::filter2D(scene.sharp, smeared, -1, linearMotionKernel(9.0, 0.0), cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
   FeatureMatcherParams round_params;
   round_params.blurred_model_sigma_px = 1.5;
   FeatureMatcherParams smear_params = round_params;
@@ -337,24 +343,18 @@ TEST(FeatureMatcher, ARowSmearedFaceIsRefinedAgainstTheSmearedModel) {
   FeatureMatcher with_smears(smear_params);
   FeatureMatcher round_only(round_params);
   std::string reason;
-  ASSERT_TRUE(with_smears.buildModel(model.textureGray(), &reason)) << reason;
-  ASSERT_TRUE(round_only.buildModel(model.textureGray(), &reason)) << reason;
-  PoseWithCovariance truth;
-  truth.rotation = r;
-  truth.translation = t;
-  const cv::Matx33d shift(1.0, 0.0, 0.8, 0.0, 1.0, -0.6, 0.0, 0.0, 1.0);
-  const cv::Matx33d prediction = shift * faceHomography(model, camera, truth);
-  auto rms = [&](const FaceMatch& match) { return refinedPointsRmsPx(match, model, camera, r, t); };
-  const FaceMatch smear_matched = with_smears.matchAtPrediction(smeared, prediction, 0.3);
-  const FaceMatch round_matched = round_only.matchAtPrediction(smeared, prediction, 0.3);
+  ASSERT_TRUE(with_smears.buildModel(scene.model.textureGray(), &reason)) << reason;
+  ASSERT_TRUE(round_only.buildModel(scene.model.textureGray(), &reason)) << reason;
+  const FaceMatch smear_matched = with_smears.matchAtPrediction(smeared, scene.prediction(), 0.3);
+  const FaceMatch round_matched = round_only.matchAtPrediction(smeared, scene.prediction(), 0.3);
   ASSERT_TRUE(smear_matched.found) << smear_matched.status;
   ASSERT_TRUE(round_matched.found) << round_matched.status;
   EXPECT_EQ(smear_matched.refined_with_row_smear_px, 9);
   EXPECT_EQ(round_matched.refined_with_row_smear_px, 0);
-  std::cout << "refined-point RMS vs truth on a 9 px row smear: smeared patches " << rms(smear_matched)
-            << " px, round blurred patches " << rms(round_matched) << " px\n";
-  EXPECT_LT(rms(smear_matched), rms(round_matched));
-  const FaceMatch on_round = with_smears.matchAtPrediction(round, prediction, 0.3);
+  std::cout << "refined-point RMS vs truth on a 9 px row smear: smeared patches " << scene.rms(smear_matched)
+            << " px, round blurred patches " << scene.rms(round_matched) << " px\n";
+  EXPECT_LT(scene.rms(smear_matched), scene.rms(round_matched));
+  const FaceMatch on_round = with_smears.matchAtPrediction(scene.blurred(2.0), scene.prediction(), 0.3);
   ASSERT_TRUE(on_round.found) << on_round.status;
   EXPECT_TRUE(on_round.refined_with_blurred_model);
   EXPECT_EQ(on_round.refined_with_row_smear_px, 0);
