@@ -290,6 +290,21 @@ void correlateAtEveryPosition(const PaddedPatches& p, int t_sum, double t_var, c
   }
 }
 
+// The level whose width is closest in ratio to the face's apparent width, among those `keep` accepts
+// (the first on a tie; null when it accepts none). No list is built: it runs on every refinement.
+template <typename Level, typename Keep>
+const Level* nearestByWidth(const std::vector<Level>& levels, double apparent_width, Keep keep) {
+  const Level* nearest = nullptr;
+  for (const Level& candidate : levels) {
+    if (!keep(candidate)) continue;
+    if (!nearest || std::abs(std::log(candidate.width_px / apparent_width)) <
+                        std::abs(std::log(nearest->width_px / apparent_width))) {
+      nearest = &candidate;
+    }
+  }
+  return nearest;
+}
+
 constexpr int kRefinementPatchRadius = 5;  // FeatureMatcher::refinePass's patches
 constexpr int kRefinementPatchSize = 2 * kRefinementPatchRadius + 1;
 
@@ -559,25 +574,10 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   }
 }
 
-const FeatureMatcher::ModelLevel& FeatureMatcher::nearestLevel(const std::vector<const ModelLevel*>& levels,
-                                                                double apparent_width) {
-  // The width closest in ratio to the face's apparent width.
-  const ModelLevel* nearest = levels.front();
-  for (const ModelLevel* candidate : levels) {
-    if (std::abs(std::log(candidate->width_px / apparent_width)) <
-        std::abs(std::log(nearest->width_px / apparent_width))) {
-      nearest = candidate;
-    }
-  }
-  return *nearest;
-}
-
 const FeatureMatcher::ModelLevel& FeatureMatcher::refinementLevel(double apparent_width, ModelSet set) const {
-  std::vector<const ModelLevel*> levels;
-  for (const ModelLevel& candidate : levels_) {
-    if (candidate.set == set) levels.push_back(&candidate);
-  }
-  return levels.empty() ? levels_.front() : nearestLevel(levels, apparent_width);
+  const ModelLevel* level =
+      nearestByWidth(levels_, apparent_width, [set](const ModelLevel& candidate) { return candidate.set == set; });
+  return level ? *level : levels_.front();
 }
 
 FeatureMatcher::RefinedPoints FeatureMatcher::refineAgainstRowSmears(const cv::Mat& gray, double apparent_width,
@@ -608,16 +608,13 @@ FeatureMatcher::RefinedPoints FeatureMatcher::refineAgainstRowSmears(const cv::M
       support(refineAgainst(gray, refinementLevel(apparent_width, ModelSet::kBlurred), sample, homography, face_box));
   const ModelLevel* best_level = nullptr;
   for (const int smear : params_.refinement_row_smears_px) {
-    std::vector<const ModelLevel*> set;
-    for (const ModelLevel& level : smeared_levels_) {
-      if (level.smear_px == smear) set.push_back(&level);
-    }
-    if (set.empty()) continue;
-    const ModelLevel& level = nearestLevel(set, apparent_width);
-    const double sample_support = support(refineAgainst(gray, level, sample, homography, inside(smear)));
+    const ModelLevel* level = nearestByWidth(smeared_levels_, apparent_width,
+                                             [smear](const ModelLevel& candidate) { return candidate.smear_px == smear; });
+    if (!level) continue;
+    const double sample_support = support(refineAgainst(gray, *level, sample, homography, inside(smear)));
     if (sample_support > best_support) {
       best_support = sample_support;
-      best_level = &level;
+      best_level = level;
     }
   }
   *smear_px = 0;

@@ -174,8 +174,6 @@ class FeatureMatcher {
   };
   // The model level of one set nearest the face's apparent width.
   const ModelLevel& refinementLevel(double apparent_width, ModelSet set) const;
-  // The level nearest the face's apparent width among `levels` (not empty).
-  static const ModelLevel& nearestLevel(const std::vector<const ModelLevel*>& levels, double apparent_width);
   // Refinement against the row-smeared levels (refinement_row_smears_px): the smear whose patches
   // correlate best, or none (empty points) when no smear beats `to_beat`.
   RefinedPoints refineAgainstRowSmears(const cv::Mat& gray, double apparent_width,
