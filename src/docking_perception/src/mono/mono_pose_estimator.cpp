@@ -86,6 +86,7 @@ std::string validateParams(const MonoPoseParams& p) {
       p.filter.max_rejections >= 1 ? "" : "max_rejections must be at least 1",
       p.features.max_refined_points >= 0 ? "" : "max_refined_points must not be negative",
       p.features.refine_passes >= 1 && p.features.refine_passes <= 5 ? "" : "refine_passes must be 1..5",
+      p.features.refine_again_move_px >= 0.0 ? "" : "refine_again_move_px must not be negative",
       p.features.fast_threshold > 0 ? "" : "fast_threshold must be positive",
       p.features.max_model_keypoints_per_level >= 10 ? "" : "max_model_keypoints_per_level must be at least 10",
       p.features.blurred_model_sigma_px >= 0.0 && p.features.blurred_model_sigma_px <= 5.0 ? "" : "blurred_model_sigma_px must be 0..5",
@@ -930,6 +931,8 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
     }
   }
   addFaceScaleBias(camera_, model_.faceCorners(), c.face_scale_bias_px, &result->pose);
+  addFaceShapeBias(camera_, model_.faceCorners(), c.smear_shape_bias_fraction * match.refined_with_row_smear_px,
+                   &result->pose);
   return true;
 }
 

@@ -173,6 +173,7 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.max_led_elongation >= 1.0)) return "max_led_elongation must be at least 1";
   if (!(p.led_still_streak_px >= 0.0)) return "led_still_streak_px must not be negative";
   if (!(p.face_scale_bias_px >= 0.0)) return "face_scale_bias_px must not be negative (0: off)";
+  if (!(p.smear_shape_bias_fraction >= 0.0)) return "smear_shape_bias_fraction must not be negative (0: off)";
   return "";
 }
 
@@ -395,6 +396,45 @@ void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::V
   const double sigma = scale_bias_px / std::sqrt(area_px) * range;
   const Eigen::Vector3d line_of_sight = pose->translation / range;
   pose->covariance.topLeftCorner<3, 3>() += sigma * sigma * line_of_sight * line_of_sight.transpose();
+}
+
+namespace {
+
+// The face's corners projected under a rotation and translation; false when one is behind the camera.
+bool projectFace(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
+                 const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation, std::vector<Eigen::Vector2d>* pixels) {
+  pixels->clear();
+  for (const Eigen::Vector3d& corner : face_corners) {
+    const Eigen::Vector3d in_camera = rotation * corner + translation;
+    if (!(in_camera.z() > 0.0)) return false;
+    pixels->push_back(camera.project(in_camera));
+  }
+  return true;
+}
+
+// The two keystones of a projected quadrilateral: the difference between the lengths of each pair of
+// opposite edges.
+Eigen::Vector2d keystones(const std::vector<Eigen::Vector2d>& q) {
+  return {(q[1] - q[0]).norm() - (q[2] - q[3]).norm(), (q[3] - q[0]).norm() - (q[2] - q[1]).norm()};
+}
+
+}  // namespace
+
+void addFaceShapeBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
+                      double shape_bias_px, PoseWithCovariance* pose) {
+  if (!(shape_bias_px > 0.0) || face_corners.size() != 4) return;
+  std::vector<Eigen::Vector2d> at_pose;
+  if (!projectFace(camera, face_corners, pose->rotation, pose->translation, &at_pose)) return;
+  constexpr double kStepRad = 1e-3;
+  for (int axis = 0; axis < 2; ++axis) {  // the tilts: about the camera's x and y axes
+    const Eigen::Matrix3d turned = Eigen::AngleAxisd(kStepRad, Eigen::Vector3d::Unit(axis)).toRotationMatrix() * pose->rotation;
+    std::vector<Eigen::Vector2d> at_turned;
+    if (!projectFace(camera, face_corners, turned, pose->translation, &at_turned)) return;
+    const double keystone_per_rad = (keystones(at_turned) - keystones(at_pose)).cwiseAbs().maxCoeff() / kStepRad;
+    if (!(keystone_per_rad > 0.0)) continue;
+    const double sigma = shape_bias_px / keystone_per_rad;
+    pose->covariance(3 + axis, 3 + axis) += sigma * sigma;
+  }
 }
 
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,

@@ -59,6 +59,11 @@ struct FeatureMatcherParams {
   // one and correlates the points it kept again, so the parabolic peak fit works near zero offset,
   // where it is unbiased (a first pass with offsets up to +-3 px leans toward whole pixels).
   int refine_passes = 1;
+  // One pass more when the last one moved a corner of the face by more than this (px): its patches were
+  // drawn at a homography that far off (a tracking prediction through a turn reversal, a feature match on
+  // a blurred face), which leaves each point off in its own way. Steady tracking moves the face by less,
+  // and pays nothing. 0: never.
+  double refine_again_move_px = 0.0;
   // Refinement with the blurred model's patches too (when there is one), keeping them when they correlate
   // clearly better with the image: a blurred image refined against sharp patches gives biased points.
   bool blur_matched_refinement = true;
@@ -92,8 +97,10 @@ struct FaceMatch {
   bool refined = false;             // the correspondences below are the refined ones
   bool refined_with_blurred_model = false;  // ... against the blurred model's patches (blur_matched_refinement)
   int refined_with_row_smear_px = 0;        // ... against the model smeared along the rows by this (0: not)
+  bool refined_again = false;       // the last pass moved the face more than refine_again_move_px: one more
   bool from_prediction = false;     // matchAtPrediction: no features, the refinement started from a prediction
   int refine_candidates = 0;        // points the (first) refinement pass tried to correlate
+  int first_pass_kept = 0;          // ... and kept: whether a prediction held (later passes may keep fewer)
   cv::Matx33d homography = cv::Matx33d::eye();  // texture pixel -> image pixel
   std::vector<cv::Point2f> matched_image_points;  // all ratio-test matches (for the debug image)
   // The correspondences for the pose: the homography inliers, or after refinement the refined points
@@ -167,6 +174,10 @@ class FeatureMatcher {
   // One refinement pass over candidates (texture pixels) with match->homography; false (match
   // unchanged) when too few points survive.
   bool refinePass(const cv::Mat& gray, const std::vector<cv::Point2f>& candidates, FaceMatch* match) const;
+  // A pass more on the points the last one kept, at its homography; false (match unchanged) when it fails.
+  bool refineKeptAgain(const cv::Mat& gray, FaceMatch* match) const;
+  // The largest distance (px) between the face's corners under two homographies.
+  double largestCornerMove(const cv::Matx33d& from, const cv::Matx33d& to) const;
   struct RefinedPoints {
     std::vector<cv::Point2f> texture_points;
     std::vector<cv::Point2f> image_points;

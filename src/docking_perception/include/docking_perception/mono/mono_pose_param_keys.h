@@ -39,6 +39,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("min_correlation", &p.features.min_correlation);
   visit("max_refined_points", &p.features.max_refined_points);
   visit("refine_passes", &p.features.refine_passes);
+  visit("refine_again_move_px", &p.features.refine_again_move_px);
   visit("led_threshold", &p.leds.threshold);
   visit("led_min_area_px", &p.leds.min_area_px);
   visit("led_max_area_px", &p.leds.max_area_px);
@@ -104,6 +105,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("max_led_elongation", &p.consistency.max_led_elongation);
   visit("led_still_streak_px", &p.consistency.led_still_streak_px);
   visit("face_scale_bias_px", &p.consistency.face_scale_bias_px);
+  visit("smear_shape_bias_fraction", &p.consistency.smear_shape_bias_fraction);
   // Issue 11: direct (ECC) alignment of the face when the features fail (face_alignment.h).
   visit("use_direct_alignment", &p.use_direct_alignment);
   visit("direct_yaw_hypotheses", &p.direct_yaw_hypotheses);

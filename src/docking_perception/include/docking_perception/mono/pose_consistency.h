@@ -55,6 +55,12 @@ struct ConsistencyParams {
   // ~37 px across) the pose came out 1.7 % too far for seconds against a 0.6 % range sigma
   // (eval_real_clutter_far_4m). 0 turns it off.
   double face_scale_bias_px = 0.3;
+  // Visible: a face refined against a row smear of L px (FaceMatch::refined_with_row_smear_px) may carry a
+  // bias of this x L px in its shape (one edge's length against the opposite one's) that all its points
+  // share: a tilt that no residual shows, and the tilt of a small face changes its shape little (at 2 m a
+  // degree about x is ~0.17 px of keystone). Each tilt axis's sigma is at least that bias over the
+  // keystone a radian about it makes (addFaceShapeBias). 0 turns it off.
+  double smear_shape_bias_fraction = 0.0;
   // An orientation whose largest rotation sigma is above this is not claimed (the position still is):
   // 3.3 deg puts 3 sigma at 10 deg, the error that makes an estimate wrong. Five LEDs under motion blur
   // gave 10-28 deg errors with honest sigmas of 4-7 deg (eval_real_motion9px_1m); those are withheld.
@@ -207,6 +213,12 @@ double modelPnpCovariance(const CameraIntrinsics& camera, const PlanarPnpSolutio
 // position covariance (ConsistencyParams::face_scale_bias_px). face_corners in the target frame.
 void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
                       double scale_bias_px, PoseWithCovariance* pose);
+
+// Adds (shape_bias_px / keystone per radian)^2 to the pose's rotation variance about the camera's x and y
+// axes, where the keystone is the change in the difference between opposite face edges' projected lengths
+// (ConsistencyParams::smear_shape_bias_fraction). face_corners in the target frame, in order around it.
+void addFaceShapeBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
+                      double shape_bias_px, PoseWithCovariance* pose);
 
 // Adds the outer product of the difference to another pose (IPPE's other solution) to a covariance.
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,
