@@ -591,9 +591,8 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
 }
 
 bool FeatureMatcher::refineKeptAgain(const cv::Mat& gray, FaceMatch* match) const {
-  const std::vector<cv::Point2f> kept = match->inlier_texture_points;
   FaceMatch again = *match;
-  if (!refinePass(gray, kept, &again)) return false;
+  if (!refinePass(gray, match->inlier_texture_points, &again)) return false;
   *match = again;
   return true;
 }

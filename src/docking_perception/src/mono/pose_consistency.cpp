@@ -380,24 +380,6 @@ double modelPnpCovariance(const CameraIntrinsics& camera, const PlanarPnpSolutio
   return ambiguity_deg;
 }
 
-void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
-                      double scale_bias_px, PoseWithCovariance* pose) {
-  if (!(scale_bias_px > 0.0) || face_corners.size() < 3) return;
-  std::vector<cv::Point2f> outline;
-  for (const Eigen::Vector3d& corner : face_corners) {
-    const Eigen::Vector3d in_camera = pose->rotation * corner + pose->translation;
-    if (!(in_camera.z() > 0.0)) return;  // a face behind the camera has no apparent size
-    const Eigen::Vector2d pixel = camera.project(in_camera);
-    outline.emplace_back(static_cast<float>(pixel.x()), static_cast<float>(pixel.y()));
-  }
-  const double area_px = std::abs(cv::contourArea(outline));
-  const double range = pose->translation.norm();
-  if (!(area_px > 0.0) || !(range > 0.0)) return;
-  const double sigma = scale_bias_px / std::sqrt(area_px) * range;
-  const Eigen::Vector3d line_of_sight = pose->translation / range;
-  pose->covariance.topLeftCorner<3, 3>() += sigma * sigma * line_of_sight * line_of_sight.transpose();
-}
-
 namespace {
 
 // The face's corners projected under a rotation and translation; false when one is behind the camera.
@@ -419,6 +401,22 @@ Eigen::Vector2d keystones(const std::vector<Eigen::Vector2d>& q) {
 }
 
 }  // namespace
+
+void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
+                      double scale_bias_px, PoseWithCovariance* pose) {
+  if (!(scale_bias_px > 0.0) || face_corners.size() < 3) return;
+  std::vector<Eigen::Vector2d> pixels;
+  // A face behind the camera has no apparent size.
+  if (!projectFace(camera, face_corners, pose->rotation, pose->translation, &pixels)) return;
+  std::vector<cv::Point2f> outline;
+  for (const Eigen::Vector2d& pixel : pixels) outline.emplace_back(static_cast<float>(pixel.x()), static_cast<float>(pixel.y()));
+  const double area_px = std::abs(cv::contourArea(outline));
+  const double range = pose->translation.norm();
+  if (!(area_px > 0.0) || !(range > 0.0)) return;
+  const double sigma = scale_bias_px / std::sqrt(area_px) * range;
+  const Eigen::Vector3d line_of_sight = pose->translation / range;
+  pose->covariance.topLeftCorner<3, 3>() += sigma * sigma * line_of_sight * line_of_sight.transpose();
+}
 
 void addFaceShapeBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
                       double shape_bias_px, PoseWithCovariance* pose) {
