@@ -581,7 +581,7 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
     // 1 m it often drops a third of them and is still better.
     constexpr double kMinKeptSpreadFraction = 0.8;
     FaceMatch again = *match;
-    if (refineKeptAgain(gray, &again) &&
+    if (refinePass(gray, match->inlier_texture_points, &again) &&
         inlierSpread(again.inlier_texture_points, texture_size_) >=
             kMinKeptSpreadFraction * inlierSpread(match->inlier_texture_points, texture_size_)) {
       *match = std::move(again);
