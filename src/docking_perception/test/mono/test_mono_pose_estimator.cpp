@@ -240,9 +240,9 @@ TEST(MonoPoseEstimator, ThePublishedOrientationIsTheFiltersPosterior) {
 }
 
 // The disparity detector's position of the same target (the position hint) checks the pose while fresh
-// and in the stereo range: a pose 8 % of the range away from it is not valid (the code says why), one at
-// the hint is, and a stale hint, or one nearer than hint_check_min_range_m, checks nothing. Synthetic view
-// at 1.2 m; max_hint_disagreement_fraction 0.04, hint_check_min_range_m set below the view's range (the
+// and in the stereo range: a pose whose range is 8 % off the hint's is not valid (the code says why), one
+// at the hint's range is, wherever the hint's bearing (a turning chaser moves it), and a stale hint, or
+// one nearer than hint_check_min_range_m, checks nothing. Synthetic view at 1.2 m; max_hint_disagreement_fraction 0.04, hint_check_min_range_m set below the view's range (the
 // default, 2 m, is the stereo range's start).
 TEST(MonoPoseEstimator, APoseThatDisagreesWithAFreshPositionHintIsNotValid) {
   const TargetModel model = synthetic::makeModel(4);
@@ -261,7 +261,10 @@ TEST(MonoPoseEstimator, APoseThatDisagreesWithAFreshPositionHintIsNotValid) {
   };
   const std::vector<HintCase> cases = {{t, 0.07, true},              // the stereo range agrees
                                        {1.08 * t, 0.07, false},      // 8 % farther along the ray
-                                       {t + Eigen::Vector3d(0.07, 0.0, 0.0), 0.07, false},  // 6 % to the side
+                                       // 6 % to the side at the same range: where a turning chaser
+                                       // saw the target two frames ago; a scale bias is along the ray
+                                       {t.norm() * (t + Eigen::Vector3d(0.07, 0.0, 0.0)).normalized(), 0.07, true},
+                                       {0.92 * t + Eigen::Vector3d(0.07, 0.0, 0.0), 0.07, false},  // nearer and aside
                                        {1.08 * t, 0.5, true}};       // older than region_hint_max_age_s
   for (size_t i = 0; i < cases.size(); ++i) {
     MonoPoseEstimator estimator(model, camera, params);

@@ -181,8 +181,8 @@ class MonoPoseEstimator {
   bool estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
   bool solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason, RejectReason* code) const;
   bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
-  // False (with the code and reason in *result) when a fresh position hint and the pose's position are
-  // farther apart than consistency.max_hint_disagreement_fraction of the range.
+  // False (with the code and reason in *result) when a fresh position hint's range and the pose's differ
+  // by more than consistency.max_hint_disagreement_fraction of the range.
   // Without a fresh hint, a pose at least hint_check_min_range_m away is refused for
   // hint_disagreement_hold_s after a pose that disagreed.
   bool agreesWithPositionHint(MonoPoseResult* result);

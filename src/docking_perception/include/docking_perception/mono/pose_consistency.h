@@ -88,9 +88,9 @@ struct ConsistencyParams {
   // off in the dark, but those seeds run again gave one such pose with it off and none with it on
   // (docs/PERFORMANCE.md, 4 Dec 2026 sixth part).
   bool confirm_new_orientation = false;
-  // A pose farther than this fraction of its range from a fresh position hint (the disparity detector's
-  // estimate of the same target in the same camera, at most region_hint_max_age_s old) is not valid
-  // (kHintDisagreement). Stereo measures a far target's range directly, the pose from the face's apparent
+  // A pose whose range differs by more than this fraction from a fresh position hint's (the disparity
+  // detector's estimate of the same target in the same camera, at most region_hint_max_age_s old) is not
+  // valid (kHintDisagreement). Ranges, not positions: a turning chaser moves a stale hint's bearing. Stereo measures a far target's range directly, the pose from the face's apparent
   // size, and a small face (far, turned) aligned 5-6 % off in scale without a residual to show it (seed
   // 7699 at 2.7-3.8 m). 0 turns the check off.
   double max_hint_disagreement_fraction = 0.04;

@@ -22,7 +22,7 @@ enum class RejectReason {
   kLedBlobShape,           // IR: an LED blob merged / elongated / the wrong size for its range
   kDotAppearance,          // paper_5point: a located dot does not look like a printed dot
   // (12 is the arbiter's REJECT_SOURCES_SILENT, not an estimator's)
-  kHintDisagreement = 13,  // visible: the position disagrees with the disparity detector's estimate of the
+  kHintDisagreement = 13,  // visible: the range disagrees with the disparity detector's estimate of the
                            // same target (the position hint) by more than max_hint_disagreement_fraction
   kPositionUncertain = 14,  // the position's largest sigma is above max_position_sigma_fraction of the range
 };
