@@ -11,6 +11,8 @@ namespace {
 
 // The longest row smear the refinement tries: the 11 px patches searched +-3 px hold no longer one.
 constexpr int kMaxRowSmearPx = 15;
+// The longest gap over which the last pose's image position still gives the face's image speed.
+constexpr double kMotionSmearMaxGapS = 0.25;
 
 Eigen::Vector2d applyHomography(const cv::Matx33d& h, const Eigen::Vector2d& p) {
   const cv::Vec3d q = h * cv::Vec3d(p.x(), p.y(), 1.0);
@@ -936,9 +938,22 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
     }
   }
   addFaceScaleBias(camera_, model_.faceCorners(), c.face_scale_bias_px, &result->pose);
-  addFaceShapeBias(camera_, model_.faceCorners(), c.smear_shape_bias_fraction * match.refined_with_row_smear_px,
-                   &result->pose);
+  const double shape_bias_px = smearShapeBiasPx(c, result->used_direct_alignment, match.refined_with_row_smear_px,
+                                                motionSmearPx(result->pose.translation, result->stamp_s));
+  addFaceShapeBias(camera_, model_.faceCorners(), shape_bias_px, &result->pose);
   return true;
+}
+
+double MonoPoseEstimator::motionSmearPx(const Eigen::Vector3d& translation, double stamp_s) const {
+  const double exposure_s = params_.consistency.motion_smear_exposure_s;
+  const double since_s = stamp_s - last_stamp_s_;
+  // The last valid pose, tracked or not: a face re-found after a short gap moved as much.
+  if (!(exposure_s > 0.0) || !(since_s > 0.0) || since_s > kMotionSmearMaxGapS) return 0.0;
+  if (!(translation.z() > 0.0) || !(last_pose_.translation.z() > 0.0)) return 0.0;
+  auto pixel = [this](const Eigen::Vector3d& p) {
+    return Eigen::Vector2d(camera_.fx * p.x() / p.z(), camera_.fy * p.y() / p.z());
+  };
+  return (pixel(translation) - pixel(last_pose_.translation)).norm() / since_s * exposure_s;
 }
 
 bool MonoPoseEstimator::vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,

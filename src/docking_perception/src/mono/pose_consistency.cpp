@@ -174,6 +174,10 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.led_still_streak_px >= 0.0)) return "led_still_streak_px must not be negative";
   if (!(p.face_scale_bias_px >= 0.0)) return "face_scale_bias_px must not be negative (0: off)";
   if (!(p.smear_shape_bias_fraction >= 0.0)) return "smear_shape_bias_fraction must not be negative (0: off)";
+  if (!(p.motion_smear_exposure_s >= 0.0)) return "motion_smear_exposure_s must not be negative (0: off)";
+  if (!(p.direct_smear_shape_bias_fraction >= 0.0)) {
+    return "direct_smear_shape_bias_fraction must not be negative (0: off)";
+  }
   return "";
 }
 
@@ -433,6 +437,12 @@ void addFaceShapeBias(const CameraIntrinsics& camera, const std::vector<Eigen::V
     const double sigma = shape_bias_px / keystone_per_rad;
     pose->covariance(3 + axis, 3 + axis) += sigma * sigma;
   }
+}
+
+double smearShapeBiasPx(const ConsistencyParams& params, bool direct_alignment, double refined_row_smear_px,
+                        double motion_smear_px) {
+  const double fraction = direct_alignment ? params.direct_smear_shape_bias_fraction : params.smear_shape_bias_fraction;
+  return fraction * std::max(refined_row_smear_px, motion_smear_px);
 }
 
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,

@@ -469,6 +469,26 @@ TEST(PoseConsistency, FaceShapeBiasWidensTheTiltsAsTheKeystoneShrinks) {
   EXPECT_TRUE(off.covariance.isZero());
 }
 
+// The smear a shape bias is drawn from is the longer of the refinement's row smear and the face's motion
+// over the exposure; a direct-alignment pose (the sharp texture aligned with the smeared face) takes its
+// own, larger fraction of it.
+TEST(PoseConsistency, TheSmearShapeBiasTakesTheLongerSmearAndTheDirectFraction) {
+  mono::ConsistencyParams params;
+  params.smear_shape_bias_fraction = 0.04;
+  params.direct_smear_shape_bias_fraction = 0.08;
+  EXPECT_NEAR(mono::smearShapeBiasPx(params, false, 9.0, 0.0), 0.36, 1e-12);
+  EXPECT_NEAR(mono::smearShapeBiasPx(params, false, 5.0, 8.0), 0.32, 1e-12);  // it moved farther than refined
+  EXPECT_NEAR(mono::smearShapeBiasPx(params, true, 0.0, 8.0), 0.64, 1e-12);
+  EXPECT_EQ(mono::smearShapeBiasPx(params, true, 0.0, 0.0), 0.0);  // a still face
+  params.direct_smear_shape_bias_fraction = 0.0;
+  EXPECT_EQ(mono::smearShapeBiasPx(params, true, 0.0, 8.0), 0.0);  // off
+  params.direct_smear_shape_bias_fraction = -0.1;
+  EXPECT_NE(mono::validateConsistencyParams(params).find("direct_smear_shape_bias_fraction"), std::string::npos);
+  params.direct_smear_shape_bias_fraction = 0.08;
+  params.motion_smear_exposure_s = -0.01;
+  EXPECT_NE(mono::validateConsistencyParams(params).find("motion_smear_exposure_s"), std::string::npos);
+}
+
 // The node's hint: the disparity detector's 3D estimate (the blob's centre, a few cm off the port),
 // projected by setPositionHint. Over clutter at 1.4-2 m it must find what the whole frame misses.
 TEST(MonoStress, PositionHintFromTheStereoEstimateFindsTheTargetOverClutter) {

@@ -106,6 +106,8 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("led_still_streak_px", &p.consistency.led_still_streak_px);
   visit("face_scale_bias_px", &p.consistency.face_scale_bias_px);
   visit("smear_shape_bias_fraction", &p.consistency.smear_shape_bias_fraction);
+  visit("motion_smear_exposure_s", &p.consistency.motion_smear_exposure_s);
+  visit("direct_smear_shape_bias_fraction", &p.consistency.direct_smear_shape_bias_fraction);
   // Issue 11: direct (ECC) alignment of the face when the features fail (face_alignment.h).
   visit("use_direct_alignment", &p.use_direct_alignment);
   visit("direct_yaw_hypotheses", &p.direct_yaw_hypotheses);

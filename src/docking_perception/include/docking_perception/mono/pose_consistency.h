@@ -61,6 +61,14 @@ struct ConsistencyParams {
   // degree about x is ~0.17 px of keystone). Each tilt axis's sigma is at least that bias over the
   // keystone a radian about it makes (addFaceShapeBias). 0 turns it off.
   double smear_shape_bias_fraction = 0.0;
+  // Visible: the smear L above is at least the face's image speed since the last pose times this
+  // exposure, whichever model refined its points (the longest exposure expected: the frame period at
+  // most). 0 turns it off.
+  double motion_smear_exposure_s = 0.0;
+  // Visible: smear_shape_bias_fraction for a pose from the direct (ECC) alignment, which aligns the sharp
+  // texture with the smeared face (the feature refinement models the smear): at 2.4 m under an 8 px row
+  // smear its orientations were 5-8 deg off about x against 1.9 deg sigmas (tune_real_motion9px_2p4m).
+  double direct_smear_shape_bias_fraction = 0.0;
   // An orientation whose largest rotation sigma is above this is not claimed (the position still is):
   // 3.3 deg puts 3 sigma at 10 deg, the error that makes an estimate wrong. Five LEDs under motion blur
   // gave 10-28 deg errors with honest sigmas of 4-7 deg (eval_real_motion9px_1m); those are withheld.
@@ -219,6 +227,11 @@ void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::V
 // (ConsistencyParams::smear_shape_bias_fraction). face_corners in the target frame, in order around it.
 void addFaceShapeBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
                       double shape_bias_px, PoseWithCovariance* pose);
+// The shape bias (px) addFaceShapeBias takes for a face smeared by the larger of the row smear its points
+// were refined against and its image motion over motion_smear_exposure_s: smear_shape_bias_fraction of
+// it, or direct_smear_shape_bias_fraction for a pose from the direct alignment (the sharp texture).
+double smearShapeBiasPx(const ConsistencyParams& params, bool direct_alignment, double refined_row_smear_px,
+                        double motion_smear_px);
 
 // Adds the outer product of the difference to another pose (IPPE's other solution) to a covariance.
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,
