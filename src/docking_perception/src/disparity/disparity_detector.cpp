@@ -569,6 +569,7 @@ const char* outcomeName(Outcome outcome) {
     case Outcome::kOffTrack: return "off_track";
     case Outcome::kFootprintMisfit: return "footprint_misfit";
     case Outcome::kAppearanceMismatch: return "appearance_mismatch";
+    case Outcome::kAppearanceUnjudged: return "appearance_unjudged";
   }
   return "unknown";
 }

@@ -46,6 +46,7 @@ std::uint8_t rejectReasonOf(disparity::Outcome outcome) {
     case disparity::Outcome::kFound: return Estimate::REJECT_NONE;
     case disparity::Outcome::kBadInput: return Estimate::REJECT_BAD_INPUT;
     case disparity::Outcome::kAppearanceMismatch: return Estimate::REJECT_APPEARANCE;
+    case disparity::Outcome::kAppearanceUnjudged: return Estimate::REJECT_APPEARANCE;
     default: return Estimate::REJECT_NOT_FOUND;  // no blob, or none the mockup's size, shape or track
   }
 }
@@ -229,6 +230,7 @@ bool DisparityDetectorNodelet::loadConfig(Config* config) {
   read("appearance_saturated_level_dn", &Config::appearance_saturated_level_dn);
   read("appearance_max_saturated_fraction", &Config::appearance_max_saturated_fraction);
   read("appearance_min_mean_dn", &Config::appearance_min_mean_dn);
+  read("appearance_glare_keeps_blob", &Config::appearance_glare_keeps_blob);
   read("appearance_refine_port", &Config::appearance_refine_port);
   read("track_gate_enabled", &Config::track_gate_enabled);
   read("track_max_speed_mps", &Config::track_max_speed_mps);
@@ -333,6 +335,7 @@ disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Confi
   p.appearance.saturated_level_dn = c.appearance_saturated_level_dn;
   p.appearance.max_saturated_fraction = c.appearance_max_saturated_fraction;
   p.appearance.min_mean_dn = c.appearance_min_mean_dn;
+  p.appearance.glare_keeps_blob = c.appearance_glare_keeps_blob;
   p.appearance.refine_port = c.appearance_refine_port;
   p.target_shape = target_shape_;
   return p;

@@ -341,6 +341,12 @@ AppearanceResult confirmByAppearance(const FaceAppearanceCheck& check, const cv:
     detection->outcome = Outcome::kAppearanceMismatch;
     detection->reason = "not the target: " + result.reason;
   }
+  if (result.verdict == AppearanceVerdict::kGlare && !params.glare_keeps_blob) {
+    detection->found = false;
+    detection->outcome = Outcome::kAppearanceUnjudged;
+    detection->reason = "not confirmed: " + result.reason +
+                        "; glare hides part of the mockup, the port cannot be placed (appearance_glare_keeps_blob)";
+  }
   return result;
 }
 

@@ -221,6 +221,7 @@ DetectorParams loadDetectorParams(const std::string& path) {
   p.appearance.saturated_level_dn = static_cast<int>(number("appearance_saturated_level_dn"));
   p.appearance.max_saturated_fraction = number("appearance_max_saturated_fraction");
   p.appearance.min_mean_dn = number("appearance_min_mean_dn");
+  p.appearance.glare_keeps_blob = number("appearance_glare_keeps_blob") != 0.0;
   p.appearance.refine_port = number("appearance_refine_port") != 0.0;
   return p;
 }

@@ -76,6 +76,11 @@ struct FaceAppearanceParams {
   int saturated_level_dn = 250;       // grey at or above this: saturated (glare)
   double max_saturated_fraction = 0.3;  // more of the face saturated: cannot be judged (glare)
   double min_mean_dn = 25.0;          // the face's surroundings darker on average: cannot be judged
+  // A face too saturated to judge (glare) keeps its blob as the target (true), or the blob is reported
+  // invalid (Outcome::kAppearanceUnjudged). The glare that hides the print also hides part of the
+  // mockup: the blob left is the part outside it, and the footprint fit puts the port 0.2-0.4 m off
+  // (campaign seed 10939 at 2.9-3.9 m: every such blob 8-15 % of the range off, used by the arbiter).
+  bool glare_keeps_blob = false;
   // A matched print moves the port across the line of sight to the print's centre (same depth): the
   // footprint fit puts a turned target's port up to ~0.2 m aside (campaign seed 7515 at 2.5-3 m).
   bool refine_port = true;
@@ -190,6 +195,8 @@ enum class Outcome {
   kFootprintMisfit,      // the blob's depth profile does not fit the mockup's footprint
   kAppearanceMismatch,   // target-shaped, but the face print is not where the port is
                          // (set by confirmByAppearance, face_appearance.h, never by detect())
+  kAppearanceUnjudged,   // target-shaped, but its face too saturated to judge and glare_keeps_blob off
+                         // (set by confirmByAppearance)
 };
 
 // Short stable name of an outcome ("found", "blob_too_small", ...), for diagnostics keys and counters.

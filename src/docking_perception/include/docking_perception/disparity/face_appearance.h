@@ -82,7 +82,8 @@ class FaceAppearanceCheck {
 
 // Checks a found detection's face (port: detection->position_m) in `left_rect`: a print that does not
 // match turns it into a rejection (kAppearanceMismatch, found = false, the reason with the score); a
-// face that cannot be judged leaves it found. Sets appearance_judged and appearance_score. A detection
+// face too dark to judge leaves it found, one too saturated (glare) too only with params.glare_keeps_blob
+// (else kAppearanceUnjudged, found = false). Sets appearance_judged and appearance_score. A detection
 // not found is left alone (and not checked). With params.refine_port, a matched print moves the port
 // to the print's centre: across the line of sight, and in depth to the median of `disparity` (CV_32F, the
 // image the detection came from; empty: depth kept) over the middle half of the matched print (when at
