@@ -98,9 +98,10 @@ struct ConsistencyParams {
   bool confirm_new_orientation = false;
   // A pose whose range differs by more than this fraction from a fresh position hint's (the disparity
   // detector's estimate of the same target in the same camera, at most region_hint_max_age_s old) is not
-  // valid (kHintDisagreement). Ranges, not positions: a turning chaser moves a stale hint's bearing. Stereo measures a far target's range directly, the pose from the face's apparent
-  // size, and a small face (far, turned) aligned 5-6 % off in scale without a residual to show it (seed
-  // 7699 at 2.7-3.8 m). 0 turns the check off.
+  // valid (kHintDisagreement). Ranges, not positions: a turning chaser moves a stale hint's bearing.
+  // Stereo measures a far target's range directly, the pose from the face's apparent size, and a small
+  // face (far, turned) aligned 5-6 % off in scale without a residual to show it (seed 7699 at
+  // 2.7-3.8 m). 0 turns the check off.
   double max_hint_disagreement_fraction = 0.04;
   // ... only for a hint at least this far: the disparity detector's range (2-6 m). Nearer, the pose from
   // a large face is the better measure; on campaign seeds 7700-7749 the check refused 144 poses within
