@@ -571,7 +571,7 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   match->first_pass_kept = static_cast<int>(match->inlier_image_points.size());
   for (int pass = 1; pass < params_.refine_passes; ++pass) {
     drawn_at = match->homography;
-    if (!refineKeptAgain(gray, match)) return;
+    if (!refineKeptAgain(gray, 0.0, match)) return;
   }
   if (params_.refine_again_move_px > 0.0 &&
       largestCornerMove(drawn_at, match->homography) > params_.refine_again_move_px) {
@@ -580,20 +580,18 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
     // (min_inlier_spread refused twice as many frames on the tuning scene). Its points may be fewer: at
     // 1 m it often drops a third of them and is still better.
     constexpr double kMinKeptSpreadFraction = 0.8;
-    FaceMatch again = *match;
-    if (refinePass(gray, match->inlier_texture_points, &again) &&
-        inlierSpread(again.inlier_texture_points, texture_size_) >=
-            kMinKeptSpreadFraction * inlierSpread(match->inlier_texture_points, texture_size_)) {
-      *match = std::move(again);
-      match->refined_again = true;
-    }
+    if (refineKeptAgain(gray, kMinKeptSpreadFraction, match)) match->refined_again = true;
   }
 }
 
-bool FeatureMatcher::refineKeptAgain(const cv::Mat& gray, FaceMatch* match) const {
+bool FeatureMatcher::refineKeptAgain(const cv::Mat& gray, double min_spread_fraction, FaceMatch* match) const {
   FaceMatch again = *match;
   if (!refinePass(gray, match->inlier_texture_points, &again)) return false;
-  *match = again;
+  if (inlierSpread(again.inlier_texture_points, texture_size_) <
+      min_spread_fraction * inlierSpread(match->inlier_texture_points, texture_size_)) {
+    return false;
+  }
+  *match = std::move(again);
   return true;
 }
 

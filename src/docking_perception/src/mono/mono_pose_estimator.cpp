@@ -950,10 +950,7 @@ double MonoPoseEstimator::motionSmearPx(const Eigen::Vector3d& translation, doub
   // The last valid pose, tracked or not: a face re-found after a short gap moved as much.
   if (!(exposure_s > 0.0) || !(since_s > 0.0) || since_s > kMotionSmearMaxGapS) return 0.0;
   if (!(translation.z() > 0.0) || !(last_pose_.translation.z() > 0.0)) return 0.0;
-  auto pixel = [this](const Eigen::Vector3d& p) {
-    return Eigen::Vector2d(camera_.fx * p.x() / p.z(), camera_.fy * p.y() / p.z());
-  };
-  return (pixel(translation) - pixel(last_pose_.translation)).norm() / since_s * exposure_s;
+  return (camera_.project(translation) - camera_.project(last_pose_.translation)).norm() / since_s * exposure_s;
 }
 
 bool MonoPoseEstimator::vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,

@@ -174,8 +174,9 @@ class FeatureMatcher {
   // One refinement pass over candidates (texture pixels) with match->homography; false (match
   // unchanged) when too few points survive.
   bool refinePass(const cv::Mat& gray, const std::vector<cv::Point2f>& candidates, FaceMatch* match) const;
-  // A pass more on the points the last one kept, at its homography; false (match unchanged) when it fails.
-  bool refineKeptAgain(const cv::Mat& gray, FaceMatch* match) const;
+  // A pass more on the points the last one kept, at its homography; false (match unchanged) when it fails
+  // or its points span less than min_spread_fraction of the last pass's (inlierSpread).
+  bool refineKeptAgain(const cv::Mat& gray, double min_spread_fraction, FaceMatch* match) const;
   // The largest distance (px) between the face's corners under two homographies.
   double largestCornerMove(const cv::Matx33d& from, const cv::Matx33d& to) const;
   struct RefinedPoints {
