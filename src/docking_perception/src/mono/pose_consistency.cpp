@@ -156,6 +156,9 @@ std::string validateConsistencyParams(const ConsistencyParams& p) {
   if (!(p.max_position_sigma_fraction >= 0.0 && p.max_position_sigma_fraction < 1.0)) {
     return "max_position_sigma_fraction must be in [0, 1) (0: off)";
   }
+  if (!(p.position_sigma_check_max_range_m >= 0.0)) {
+    return "position_sigma_check_max_range_m must not be negative (0: every range)";
+  }
   if (!(p.innovation_window_frames >= 0.0)) return "innovation_window_frames must not be negative (0: off)";
   if (!(p.max_rotation_innovation_chi2 >= 0.0)) return "max_rotation_innovation_chi2 must not be negative (0: off)";
   if (!(p.max_hint_disagreement_fraction >= 0.0 && p.max_hint_disagreement_fraction < 1.0)) {
@@ -295,7 +298,9 @@ bool positionClaimed(const PoseWithCovariance& pose, const ConsistencyParams& pa
   if (params.max_position_sigma_fraction <= 0.0) return true;
   const double sigma_m = largestSigma(pose.covariance.topLeftCorner<3, 3>());
   const double range_m = pose.translation.norm();
-  if (sigma_m <= params.max_position_sigma_fraction * range_m) return true;
+  const bool beyond_check = params.position_sigma_check_max_range_m > 0.0 &&
+                            range_m >= params.position_sigma_check_max_range_m;
+  if (beyond_check || sigma_m <= params.max_position_sigma_fraction * range_m) return true;
   *note = "position withheld: sigma " + std::to_string(sigma_m) + " m is " + std::to_string(100.0 * sigma_m / range_m) +
           " % of the range " + std::to_string(range_m) + " m (max_position_sigma_fraction)";
   return false;

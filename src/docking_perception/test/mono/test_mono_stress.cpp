@@ -256,6 +256,18 @@ TEST(PoseConsistency, PositionIsWithheldAboveTheRangeFractionLimit) {
   EXPECT_TRUE(mono::positionClaimed(pose, params, &note)) << note;
   pose.covariance(1, 1) = NAN;
   EXPECT_FALSE(mono::positionClaimed(pose, params, &note));
+  // With a range band the limit holds only nearer than it: the same wide pose at 5 m passes beyond a 4 m
+  // band and is withheld within a 6 m one.
+  pose.covariance(1, 1) = 1e-6;
+  pose.covariance(2, 2) = std::pow(0.150, 2);  // 3 % of 5 m
+  ASSERT_FALSE(mono::positionClaimed(pose, params, &note));
+  params.position_sigma_check_max_range_m = 4.0;
+  EXPECT_TRUE(mono::positionClaimed(pose, params, &note)) << note;
+  params.position_sigma_check_max_range_m = 6.0;
+  EXPECT_FALSE(mono::positionClaimed(pose, params, &note));
+  params.position_sigma_check_max_range_m = -1.0;
+  EXPECT_NE(mono::validateConsistencyParams(params), "");
+  params.position_sigma_check_max_range_m = 0.0;  // every range
   params.max_position_sigma_fraction = 0.0;  // off
   EXPECT_TRUE(mono::positionClaimed(pose, params, &note));
   params.max_position_sigma_fraction = -0.1;

@@ -92,6 +92,7 @@ void visitMonoPoseParams(MonoPoseParams& p, Visitor&& visit) {
   visit("rotation_floor_deg", &p.consistency.rotation_floor_deg);
   visit("max_rotation_sigma_deg", &p.consistency.max_rotation_sigma_deg);
   visit("max_position_sigma_fraction", &p.consistency.max_position_sigma_fraction);
+  visit("position_sigma_check_max_range_m", &p.consistency.position_sigma_check_max_range_m);
   visit("innovation_window_frames", &p.consistency.innovation_window_frames);
   visit("max_rotation_innovation_chi2", &p.consistency.max_rotation_innovation_chi2);
   visit("confirm_new_orientation", &p.consistency.confirm_new_orientation);

@@ -81,6 +81,10 @@ struct ConsistencyParams {
   // poses are honest but wide (range sigma 2-7 %, errors under 2 %), and at 0.0167 two dark runs of nine
   // never started (docs/PERFORMANCE.md, 6 Dec 2026).
   double max_position_sigma_fraction = 0.0;
+  // The limit above holds only for poses nearer than this (0: at every range). Near the target nothing else
+  // checks a position (the stereo check starts at hint_check_min_range_m) and the planner docks on it; far
+  // out the range sigma is wide but honest (IPPE's undecided other pose) and the stereo check guards it.
+  double position_sigma_check_max_range_m = 0.0;
   // Frames over which the scatter of the poses about the velocity filter's prediction is averaged to
   // scale the covariance (InnovationCovarianceScale); 0 turns the scaling off.
   double innovation_window_frames = 10.0;
@@ -155,7 +159,8 @@ Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovarian
 bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note);
 
 // Whether the pose's position may be claimed: the largest position sigma (the position block's largest
-// eigenvalue) within max_position_sigma_fraction of the range. If not, *note says so (for people).
+// eigenvalue) within max_position_sigma_fraction of the range, where the pose is nearer than
+// position_sigma_check_max_range_m (when set). If not, *note says so (for people).
 bool positionClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note);
 
 // The covariance model predicts the pixel noise from the residuals and the blur; it cannot see noise that
