@@ -296,11 +296,11 @@ bool orientationClaimed(const PoseWithCovariance& pose, const ConsistencyParams&
 
 bool positionClaimed(const PoseWithCovariance& pose, const ConsistencyParams& params, std::string* note) {
   if (params.max_position_sigma_fraction <= 0.0) return true;
-  const double sigma_m = largestSigma(pose.covariance.topLeftCorner<3, 3>());
   const double range_m = pose.translation.norm();
-  const bool beyond_check = params.position_sigma_check_max_range_m > 0.0 &&
-                            range_m >= params.position_sigma_check_max_range_m;
-  if (beyond_check || sigma_m <= params.max_position_sigma_fraction * range_m) return true;
+  const double band_m = params.position_sigma_check_max_range_m;
+  if (band_m > 0.0 && range_m >= band_m) return true;  // beyond the band: not checked
+  const double sigma_m = largestSigma(pose.covariance.topLeftCorner<3, 3>());
+  if (sigma_m <= params.max_position_sigma_fraction * range_m) return true;
   *note = "position withheld: sigma " + std::to_string(sigma_m) + " m is " + std::to_string(100.0 * sigma_m / range_m) +
           " % of the range " + std::to_string(range_m) + " m (max_position_sigma_fraction)";
   return false;

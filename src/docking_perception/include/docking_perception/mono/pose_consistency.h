@@ -77,9 +77,9 @@ struct ConsistencyParams {
   // (kPositionUncertain): 3 sigma would pass the 5 % of range that makes a position wrong, so the pose
   // claims nothing a planner can use. The estimator still tracks it (its filter, its search region): the
   // covariance is honest, only the claim is withheld. The case: an IR pose at 2.8 m, 6.6 % too far, valid
-  // with a sigma of 4.6 % of range (campaign seed 10502). 0 turns the check off, and it is off: far IR
+  // with a sigma of 4.6 % of range (campaign seed 10502). 0 turns the check off. Off for IR: far IR
   // poses are honest but wide (range sigma 2-7 %, errors under 2 %), and at 0.0167 two dark runs of nine
-  // never started (docs/PERFORMANCE.md, 6 Dec 2026).
+  // never started (docs/PERFORMANCE.md, 6 Dec 2026). The visible pose uses 0.05 nearer than 1 m (below).
   double max_position_sigma_fraction = 0.0;
   // The limit above holds only for poses nearer than this (0: at every range). Near the target nothing else
   // checks a position (the stereo check starts at hint_check_min_range_m) and the planner docks on it; far
