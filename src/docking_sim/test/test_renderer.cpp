@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <cstdio>
 
 #include "docking_sim/renderer.h"
 #include "docking_sim/simulation.h"
@@ -290,6 +291,60 @@ TEST(Renderer, TextureLandsOnThePinholeProjectionAtEveryMipLevel) {
           << "at " << z << " m, lateral " << lateral << ": predicted " << predicted << " found " << found;
     }
   }
+}
+
+namespace {
+
+/// Where a dark-to-bright vertical step lies along image row y, from x0 to x1 (pixel centres), as a
+/// camera that integrates light over each pixel would place it: the bright share of the row segment.
+double stepEdgeX(const cv::Mat& gray, int y, int x0, int x1, double dark, double bright) {
+  double bright_px = 0.0;
+  for (int x = x0; x <= x1; ++x) bright_px += (gray.at<uchar>(y, x) - dark) / (bright - dark);
+  return x1 + 0.5 - bright_px;
+}
+
+/// The largest error of the step's image position over lateral moves of 0 .. 1 px in eighths: a
+/// surface whose texture (64 texels, each ~1 px at 1 m) steps from dark to bright at its middle.
+double worstStepEdgeErrorPx(bool bilinear) {
+  cv::Mat texture(64, 64, CV_8UC3);
+  texture.colRange(0, 32).setTo(cv::Scalar::all(30));
+  texture.colRange(32, 64).setTo(cv::Scalar::all(220));
+  const auto tex = docking_sim::makeTexture(texture, false);
+  const double f = 540.0, z = 1.0, side = 64.0 / f * 1.03;  // texels a little wider than a pixel
+  double worst = 0.0;
+  for (int eighth = 0; eighth <= 8; ++eighth) {
+    auto renderer = pinholeRenderer(docking_sim::Band::kVisible);
+    docking_sim::Surface square;
+    square.origin = Eigen::Vector3d(eighth / 8.0 / f * z - side / 2, -side / 2, z);
+    square.edge_u = Eigen::Vector3d(side, 0, 0);
+    square.edge_v = Eigen::Vector3d(0, side, 0);
+    square.texture = tex;
+    square.bilinear = bilinear;
+    docking_sim::Scene scene;
+    scene.addSurface(square);
+    scene.update(Eigen::Isometry3d::Identity());
+    cv::Mat gray;
+    cv::cvtColor(renderer.render(scene, Eigen::Isometry3d::Identity()), gray, cv::COLOR_BGR2GRAY);
+    const cv::Matx33d K(f, 0, 319.3, 0, f, 240.6, 0, 0, 1);
+    const double predicted = project(K, square.origin + 0.5 * square.edge_u + 0.5 * square.edge_v).x;
+    const int x = static_cast<int>(std::lround(predicted));
+    worst = std::max(worst, std::abs(stepEdgeX(gray, 240, x - 10, x + 10, 30.0, 220.0) - predicted));
+  }
+  return worst;
+}
+
+}  // namespace
+
+// A camera integrates light over each pixel, so an edge in a print moves smoothly as the print moves
+// by fractions of a pixel. Nearest-texel sampling moves it in whole pixels: on the target's fine print
+// that jitter beats with the pixel grid across the face into a warp (still poses 0.5 deg off at 1.4 m).
+// The target's surfaces (Surface::bilinear) must follow sub-pixel moves; the nearest texel must not,
+// which shows this test can tell the two apart.
+TEST(Renderer, BilinearTextureFollowsSubPixelMoves) {
+  const double bilinear = worstStepEdgeErrorPx(true), nearest = worstStepEdgeErrorPx(false);
+  std::printf("step edge error: bilinear %.3f px, nearest %.3f px\n", bilinear, nearest);
+  EXPECT_LE(bilinear, 0.06);
+  EXPECT_GE(nearest, 0.3);
 }
 
 // An emissive disc decal (a 24-gon, as the LEDs were drawn before they became light spots) in the

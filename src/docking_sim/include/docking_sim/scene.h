@@ -59,6 +59,12 @@ struct Surface {
   bool emissive{false};          ///< lights itself: not shaded, not scaled by the room light
   double emission{1.0};          ///< brightness of an emissive surface relative to led_intensity
   bool moves_with_target{false}; ///< defined in the target robot's frame
+  /// Texture sampled bilinearly, not from the nearest texel. A camera integrates light over each pixel;
+  /// nearest texels of a mip level 0.7-1.4 px wide warp a fine print by a moire of sub-pixel shifts that
+  /// beats with the pixel grid across the face (a still pose 0.5 deg off on sharp frames at 1.4 m,
+  /// changing with every mm of range). Set on the target's surfaces, which the pose measures; the
+  /// room keeps the cheaper nearest texel (~+35 % of the rasteriser's CPU where set).
+  bool bilinear{false};
   /// Lies on another surface (a sticker, a painted mark): drawn after all other surfaces, in `surfaces()`
   /// order, with area-coverage anti-aliasing (blended over what is there), winning depth ties with
   /// the surface under it by a relative 1/z bias, writing no depth. Flat colour only (no texture).

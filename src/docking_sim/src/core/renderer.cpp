@@ -70,10 +70,26 @@ inline int64_t toFixed(double texel) {
   return static_cast<int64_t>(bounded * 65536.0);
 }
 
+/// (a (256 - w) + b w) / 256 for the four bytes of two packed texels at once (w in 0..256).
+inline uint32_t lerpPacked(uint32_t a, uint32_t b, uint32_t w) {
+  const uint32_t even = (((a & 0x00ff00ffu) * (256 - w) + (b & 0x00ff00ffu) * w) >> 8) & 0x00ff00ffu;
+  const uint32_t odd = (((a >> 8) & 0x00ff00ffu) * (256 - w) + ((b >> 8) & 0x00ff00ffu) * w) & 0xff00ff00u;
+  return even | odd;
+}
+
+/// A texel index wrapped (repeating textures: sizes are powers of two) or clamped to the texture.
+template <bool kRepeat>
+inline int64_t texelIndex(int64_t i, int64_t mask) {
+  if (kRepeat) return i & mask;
+  return i < 0 ? 0 : (i > mask ? mask : i);
+}
+
 /// One segment of a textured span: depth test, texel fetch, shading, for `count` pixels from
-/// depth/row on. A separate function per (repeat, saturate) case keeps the loop free of branches
-/// that never change within a span and lets the compiler keep everything in registers.
-template <int kChannels, bool kRepeat, bool kSaturate>
+/// depth/row on. A separate function per (repeat, saturate, bilinear) case keeps the loop free of
+/// branches that never change within a span and lets the compiler keep everything in registers.
+/// kBilinear: the four texels around the sample, weighted by its position among their centres (the
+/// target's surfaces, Surface::bilinear); else the texel the sample falls in.
+template <int kChannels, bool kRepeat, bool kSaturate, bool kBilinear>
 double shadeSegmentImpl(int count, double nw, double dnw, int64_t u, int64_t du, int64_t v, int64_t dv, float* depth,
                         uchar* row, const BlockedLevel& img, uint32_t gain) {
   const uint32_t* u_offset = img.u_offset.data();
@@ -86,35 +102,60 @@ double shadeSegmentImpl(int count, double nw, double dnw, int64_t u, int64_t du,
     const float inv_z = static_cast<float>(nw);
     if (inv_z <= depth[i]) continue;
     depth[i] = inv_z;
-    int64_t iu = u >> 16, iv = v >> 16;
-    if (kRepeat) {
-      iu &= mask_u;  // the bias keeps u positive; sizes are powers of two
-      iv &= mask_v;
-    } else {
-      iu = iu < 0 ? 0 : (iu > mask_u ? mask_u : iu);
-      iv = iv < 0 ? 0 : (iv > mask_v ? mask_v : iv);
-    }
+    // Texel j covers [j, j + 1): its centre is j + 1/2, so the bilinear neighbours start half a texel lower.
+    // (The bias keeps u and v positive for repeating textures.)
+    constexpr int64_t kHalfTexel = kBilinear ? 0x8000 : 0;
+    const int64_t us = u - kHalfTexel, vs = v - kHalfTexel;
+    const int64_t iu = texelIndex<kRepeat>(us >> 16, mask_u), iv = texelIndex<kRepeat>(vs >> 16, mask_v);
     const uint32_t index = u_offset[iu] + v_offset[iv];
+    uint32_t t;
+    if (kBilinear) {
+      const int64_t iu1 = texelIndex<kRepeat>((us >> 16) + 1, mask_u);
+      const int64_t iv1 = texelIndex<kRepeat>((vs >> 16) + 1, mask_v);
+      const uint32_t wu = static_cast<uint32_t>((us & 0xffff) >> 8), wv = static_cast<uint32_t>((vs & 0xffff) >> 8);
+      const uint32_t right = u_offset[iu1] + v_offset[iv], below = u_offset[iu] + v_offset[iv1];
+      const uint32_t diagonal = u_offset[iu1] + v_offset[iv1];
+      if (kChannels == 4) {
+        t = lerpPacked(lerpPacked(texels4[index], texels4[right], wu), lerpPacked(texels4[below], texels4[diagonal], wu),
+                       wv);
+      } else {
+        const uint32_t top = texels1[index] * (256 - wu) + texels1[right] * wu;
+        const uint32_t bottom = texels1[below] * (256 - wu) + texels1[diagonal] * wu;
+        t = (top * (256 - wv) + bottom * wv + 0x8000) >> 16;
+      }
+    } else {
+      t = kChannels == 4 ? texels4[index] : texels1[index];
+    }
     if (kChannels == 4) {
-      const uint32_t t = texels4[index];
       row4[i] = kSaturate ? shadePackedSaturating(t, gain) : shadePacked(t, gain);
     } else {
-      const uint32_t value = (texels1[index] * gain) >> 8;
+      const uint32_t value = (t * gain) >> 8;
       row[i] = static_cast<uchar>(value > 255u ? 255u : value);
     }
   }
   return nw;
 }
 
-template <int kChannels>
-double shadeSegment(bool repeat, bool saturate, int count, double nw, double dnw, int64_t u, int64_t du, int64_t v,
-                    int64_t dv, float* depth, uchar* row, const BlockedLevel& img, uint32_t gain) {
+template <int kChannels, bool kBilinear>
+double shadeSegmentFiltered(bool repeat, bool saturate, int count, double nw, double dnw, int64_t u, int64_t du,
+                            int64_t v, int64_t dv, float* depth, uchar* row, const BlockedLevel& img, uint32_t gain) {
   if (repeat) {
-    return saturate ? shadeSegmentImpl<kChannels, true, true>(count, nw, dnw, u, du, v, dv, depth, row, img, gain)
-                    : shadeSegmentImpl<kChannels, true, false>(count, nw, dnw, u, du, v, dv, depth, row, img, gain);
+    return saturate
+               ? shadeSegmentImpl<kChannels, true, true, kBilinear>(count, nw, dnw, u, du, v, dv, depth, row, img, gain)
+               : shadeSegmentImpl<kChannels, true, false, kBilinear>(count, nw, dnw, u, du, v, dv, depth, row, img, gain);
   }
-  return saturate ? shadeSegmentImpl<kChannels, false, true>(count, nw, dnw, u, du, v, dv, depth, row, img, gain)
-                  : shadeSegmentImpl<kChannels, false, false>(count, nw, dnw, u, du, v, dv, depth, row, img, gain);
+  return saturate
+             ? shadeSegmentImpl<kChannels, false, true, kBilinear>(count, nw, dnw, u, du, v, dv, depth, row, img, gain)
+             : shadeSegmentImpl<kChannels, false, false, kBilinear>(count, nw, dnw, u, du, v, dv, depth, row, img, gain);
+}
+
+template <int kChannels>
+double shadeSegment(bool bilinear, bool repeat, bool saturate, int count, double nw, double dnw, int64_t u, int64_t du,
+                    int64_t v, int64_t dv, float* depth, uchar* row, const BlockedLevel& img, uint32_t gain) {
+  return bilinear
+             ? shadeSegmentFiltered<kChannels, true>(repeat, saturate, count, nw, dnw, u, du, v, dv, depth, row, img, gain)
+             : shadeSegmentFiltered<kChannels, false>(repeat, saturate, count, nw, dnw, u, du, v, dv, depth, row, img,
+                                                      gain);
 }
 
 }  // namespace
@@ -973,7 +1014,7 @@ void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d
       int64_t u = toFixed(u_start), v = toFixed(v_start);
       const double steps = xe - 1 > xs ? 1.0 / (xe - 1 - xs) : 0.0;
       const int64_t du = toFixed((u_end - u_start) * steps), dv = toFixed((v_end - v_start) * steps);
-      nw = shadeSegment<kChannels>(repeat, saturates, xe - xs, nw, H(2, 0), u, du, v, dv, depth + xs,
+      nw = shadeSegment<kChannels>(surface.bilinear, repeat, saturates, xe - xs, nw, H(2, 0), u, du, v, dv, depth + xs,
                                    row + static_cast<std::size_t>(xs) * kChannels, img, gain_u);
       if (xe <= x1) texel_at(xe, &u_start, &v_start);
     }

@@ -306,6 +306,7 @@ void Scene::addBox(const Eigen::Isometry3d& pose, const Eigen::Vector3d& size, c
       s.repeat_v = ev.norm() / texture_scale_m;
     }
     s.moves_with_target = moves_with_target;
+    s.bilinear = moves_with_target;  // the target's surfaces (Surface::bilinear)
     local_.push_back(s);
   };
   // Four sides, each seen upright from outside: origin top-left, u to the viewer's right (z x n).
@@ -335,6 +336,7 @@ void Scene::addTargetRobot(const TargetModel& t) {
     s.edge_u = rp.linear() * s.edge_u;
     s.edge_v = rp.linear() * s.edge_v;
     s.moves_with_target = true;
+    s.bilinear = true;
     local_.push_back(s);
   };
 
