@@ -253,6 +253,29 @@ cv::Point2d contrastCentroid(const cv::Mat& gray, cv::Point2d centre, int half, 
 // Gaussian blob off its centre: the blob's image centroid must be the pinhole projection of the
 // blob's centre. Mip levels built with cv::pyrDown (texel j of level L centred at texel 2^L j of
 // level 0, not at 2^L (j + 0.5) - 0.5) moved it by (2^L - 1) / 2 texels of level 0: 0.2-0.4 px here.
+namespace {
+
+/// A face-on textured square of side `side` m with its top-left corner at `origin` (camera frame),
+/// alone in the scene, through pinholeRenderer: the grey image.
+cv::Mat renderTexturedSquare(const Eigen::Vector3d& origin, double side,
+                             const std::shared_ptr<const docking_sim::Texture>& tex, bool bilinear) {
+  auto renderer = pinholeRenderer(docking_sim::Band::kVisible);
+  docking_sim::Surface square;
+  square.origin = origin;
+  square.edge_u = Eigen::Vector3d(side, 0, 0);
+  square.edge_v = Eigen::Vector3d(0, side, 0);
+  square.texture = tex;
+  square.bilinear = bilinear;
+  docking_sim::Scene scene;
+  scene.addSurface(square);
+  scene.update(Eigen::Isometry3d::Identity());
+  cv::Mat gray;
+  cv::cvtColor(renderer.render(scene, Eigen::Isometry3d::Identity()), gray, cv::COLOR_BGR2GRAY);
+  return gray;
+}
+
+}  // namespace
+
 TEST(Renderer, TextureLandsOnThePinholeProjectionAtEveryMipLevel) {
   const int size = 512;
   // A blob wide enough (several texels at level 3) that nearest-texel sampling jitter stays small.
@@ -271,19 +294,10 @@ TEST(Renderer, TextureLandsOnThePinholeProjectionAtEveryMipLevel) {
   const double side = 0.2;
   for (const double z : {0.5, 1.0, 1.4, 2.0}) {
     for (const double lateral : {-0.013, 0.021}) {
-      auto renderer = pinholeRenderer(docking_sim::Band::kVisible);
-      docking_sim::Surface square;
-      square.origin = Eigen::Vector3d(lateral - side / 2, 0.7 * lateral - side / 2, z);
-      square.edge_u = Eigen::Vector3d(side, 0, 0);
-      square.edge_v = Eigen::Vector3d(0, side, 0);
-      square.texture = tex;
-      docking_sim::Scene scene;
-      scene.addSurface(square);
-      scene.update(Eigen::Isometry3d::Identity());
-      cv::Mat gray;
-      cv::cvtColor(renderer.render(scene, Eigen::Isometry3d::Identity()), gray, cv::COLOR_BGR2GRAY);
+      const Eigen::Vector3d origin(lateral - side / 2, 0.7 * lateral - side / 2, z);
+      const cv::Mat gray = renderTexturedSquare(origin, side, tex, false);
       const cv::Matx33d K(540, 0, 319.3, 0, 540, 240.6, 0, 0, 1);
-      const Eigen::Vector3d centre = square.origin + blob_s * square.edge_u + blob_t * square.edge_v;
+      const Eigen::Vector3d centre = origin + Eigen::Vector3d(blob_s * side, blob_t * side, 0.0);
       const cv::Point2d predicted = project(K, centre);
       const double sigma_px = 540 * sigma * side / z;
       const cv::Point2d found = contrastCentroid(gray, predicted, static_cast<int>(std::ceil(4.5 * sigma_px)), 220.0);
@@ -313,20 +327,10 @@ double worstStepEdgeErrorPx(bool bilinear) {
   const double f = 540.0, z = 1.0, side = 64.0 / f * 1.03;  // texels a little wider than a pixel
   double worst = 0.0;
   for (int eighth = 0; eighth <= 8; ++eighth) {
-    auto renderer = pinholeRenderer(docking_sim::Band::kVisible);
-    docking_sim::Surface square;
-    square.origin = Eigen::Vector3d(eighth / 8.0 / f * z - side / 2, -side / 2, z);
-    square.edge_u = Eigen::Vector3d(side, 0, 0);
-    square.edge_v = Eigen::Vector3d(0, side, 0);
-    square.texture = tex;
-    square.bilinear = bilinear;
-    docking_sim::Scene scene;
-    scene.addSurface(square);
-    scene.update(Eigen::Isometry3d::Identity());
-    cv::Mat gray;
-    cv::cvtColor(renderer.render(scene, Eigen::Isometry3d::Identity()), gray, cv::COLOR_BGR2GRAY);
+    const Eigen::Vector3d origin(eighth / 8.0 / f * z - side / 2, -side / 2, z);
+    const cv::Mat gray = renderTexturedSquare(origin, side, tex, bilinear);
     const cv::Matx33d K(f, 0, 319.3, 0, f, 240.6, 0, 0, 1);
-    const double predicted = project(K, square.origin + 0.5 * square.edge_u + 0.5 * square.edge_v).x;
+    const double predicted = project(K, origin + Eigen::Vector3d(0.5 * side, 0.5 * side, 0.0)).x;
     const int x = static_cast<int>(std::lround(predicted));
     worst = std::max(worst, std::abs(stepEdgeX(gray, 240, x - 10, x + 10, 30.0, 220.0) - predicted));
   }
