@@ -70,10 +70,12 @@ inline int64_t toFixed(double texel) {
   return static_cast<int64_t>(bounded * 65536.0);
 }
 
-/// (a (256 - w) + b w) / 256 for the four bytes of two packed texels at once (w in 0..256).
-inline uint32_t lerpPacked(uint32_t a, uint32_t b, uint32_t w) {
-  const uint32_t even = (((a & 0x00ff00ffu) * (256 - w) + (b & 0x00ff00ffu) * w) >> 8) & 0x00ff00ffu;
-  const uint32_t odd = (((a >> 8) & 0x00ff00ffu) * (256 - w) + ((b >> 8) & 0x00ff00ffu) * w) & 0xff00ff00u;
+/// (a (256 - w) + b w) / 256 for the four bytes of two packed pixels or texels at once (w in 0..256),
+/// rounded or truncated: each product stays inside its 16-bit lane (255 * 256 + 128 < 2^16).
+inline uint32_t lerpPacked(uint32_t a, uint32_t b, uint32_t w, bool round) {
+  const uint32_t half = round ? 0x00800080u : 0u;
+  const uint32_t even = (((a & 0x00ff00ffu) * (256 - w) + (b & 0x00ff00ffu) * w + half) >> 8) & 0x00ff00ffu;
+  const uint32_t odd = (((a >> 8) & 0x00ff00ffu) * (256 - w) + ((b >> 8) & 0x00ff00ffu) * w + half) & 0xff00ff00u;
   return even | odd;
 }
 
@@ -116,8 +118,9 @@ double shadeSegmentImpl(int count, double nw, double dnw, int64_t u, int64_t du,
       const uint32_t right = u_offset[iu1] + v_offset[iv], below = u_offset[iu] + v_offset[iv1];
       const uint32_t diagonal = u_offset[iu1] + v_offset[iv1];
       if (kChannels == 4) {
-        t = lerpPacked(lerpPacked(texels4[index], texels4[right], wu), lerpPacked(texels4[below], texels4[diagonal], wu),
-                       wv);
+        // Truncated (the grey path rounds): under 1 DN darker on average, as measured in make eval.
+        t = lerpPacked(lerpPacked(texels4[index], texels4[right], wu, false),
+                       lerpPacked(texels4[below], texels4[diagonal], wu, false), wv, false);
       } else {
         const uint32_t top = texels1[index] * (256 - wu) + texels1[right] * wu;
         const uint32_t bottom = texels1[below] * (256 - wu) + texels1[diagonal] * wu;
@@ -539,14 +542,11 @@ void CameraRenderer::applyDefocus() {
       const uchar* a = level_rows[k] + x * channels;
       const uchar* b = level_rows[k + 1] + x * channels;
       if (channels == 4) {
-        // One pixel's four bytes at once: each product stays inside its 16-bit lane (255 * 256 < 2^16).
+        // One pixel's four bytes at once.
         uint32_t pa, pb;
         std::memcpy(&pa, a, 4);
         std::memcpy(&pb, b, 4);
-        const uint32_t wa = static_cast<uint32_t>(256 - w), wb = static_cast<uint32_t>(w);
-        const uint32_t even = (((pa & 0x00ff00ffu) * wa + (pb & 0x00ff00ffu) * wb + 0x00800080u) >> 8) & 0x00ff00ffu;
-        const uint32_t odd = ((((pa >> 8) & 0x00ff00ffu) * wa + ((pb >> 8) & 0x00ff00ffu) * wb + 0x00800080u)) & 0xff00ff00u;
-        const uint32_t merged = even | odd;
+        const uint32_t merged = lerpPacked(pa, pb, static_cast<uint32_t>(w), true);
         std::memcpy(out + x * 4, &merged, 4);
       } else {
         out[x] = static_cast<uchar>((a[0] * (256 - w) + b[0] * w + 128) >> 8);
