@@ -4,8 +4,9 @@
 // aligned with the image by ECC (enhanced correlation coefficient, cv::findTransformECC) over a
 // homography, coarse to fine on Gaussian pyramids of the image and of the texture resampled to the face's
 // apparent size. ECC maximises a zero-mean normalised correlation, so gain and offset (auto exposure) do
-// not matter; it only needs the prior within its basin (about a quarter of the face at the coarsest
-// level). The result is a grid of face points mapped through the homography, i.e. correspondences that
+// not matter; it only needs the prior within its basin. At the coarsest level the template is first slid
+// over the window (normalised correlation, whole pixels, a quarter of the face each way), and a level
+// whose homography ECC gives up (near-singular on a small smooth template) is fitted affine instead. The result is a grid of face points mapped through the homography, i.e. correspondences that
 // the estimator's PnP and consistency checks use like the feature matcher's.
 //
 // Honesty: the final correlation must reach min_correlation, the homography must keep the face convex
