@@ -174,6 +174,7 @@ StressFrame StressRenderer::render(const StressCondition& condition, const Trial
         toCamera(model_.texturePixelToPoint({static_cast<float>(ts.width) - 0.5f, -0.5f})),
         toCamera(model_.texturePixelToPoint({-0.5f, static_cast<float>(ts.height) - 0.5f})));
     face.texture = impl_->face;
+    face.bilinear = true;  // as docking_sim draws the target's face (Surface::bilinear)
     face.color = cv::Vec3b(255, 255, 255);
     scene.addSurface(face);
   } else {

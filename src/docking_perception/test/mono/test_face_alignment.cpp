@@ -58,8 +58,9 @@ double cornerError(const cv::Matx33d& homography, const stress::TrialPose& truth
   return worst;
 }
 
-// Measured on these seeds: 5 of 6 align (one ECC run diverges: the estimator then reports not found),
-// corners within 2 % of the face's width at 0.8 m under 2 px defocus / 9 px motion.
+// Measured on these seeds, with the face textured bilinearly as docking_sim draws it: 6 of 6 align under
+// 2 px defocus + 8 DN over clutter and under 9 px motion (3 and 5 of 6 before the coarse slide and the
+// affine fallback: ECC gave up at its coarsest level), corners within 2 % of the face's width at 0.8 m.
 void expectRecovered(const std::string& name) {
   const stress::StressCondition c = condition(name);
   const mono::DirectFaceAligner aligner(model(), visibleParams().direct);
@@ -82,7 +83,7 @@ void expectRecovered(const std::string& name) {
     EXPECT_EQ(result.image_points.size(), result.texture_points.size());
     EXPECT_GT(result.pixel_sigma_px, 0.0);
   }
-  EXPECT_GE(found, kTrials - 2) << name;
+  EXPECT_GE(found, kTrials - 1) << name;
 }
 
 }  // namespace
