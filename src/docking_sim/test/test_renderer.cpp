@@ -247,14 +247,6 @@ cv::Point2d contrastCentroid(const cv::Mat& gray, cv::Point2d centre, int half, 
   return sw > 0 ? cv::Point2d(sx / sw, sy / sw) : cv::Point2d(-1, -1);
 }
 
-}  // namespace
-
-// A face-on textured square (0.2 m, 512x512 texels: mip levels 1 to 3 at these distances) with a dark
-// Gaussian blob off its centre: the blob's image centroid must be the pinhole projection of the
-// blob's centre. Mip levels built with cv::pyrDown (texel j of level L centred at texel 2^L j of
-// level 0, not at 2^L (j + 0.5) - 0.5) moved it by (2^L - 1) / 2 texels of level 0: 0.2-0.4 px here.
-namespace {
-
 /// A face-on textured square of side `side` m with its top-left corner at `origin` (camera frame),
 /// alone in the scene, through pinholeRenderer: the grey image.
 cv::Mat renderTexturedSquare(const Eigen::Vector3d& origin, double side,
@@ -276,6 +268,10 @@ cv::Mat renderTexturedSquare(const Eigen::Vector3d& origin, double side,
 
 }  // namespace
 
+// A face-on textured square (0.2 m, 512x512 texels: mip levels 1 to 3 at these distances) with a dark
+// Gaussian blob off its centre: the blob's image centroid must be the pinhole projection of the
+// blob's centre. Mip levels built with cv::pyrDown (texel j of level L centred at texel 2^L j of
+// level 0, not at 2^L (j + 0.5) - 0.5) moved it by (2^L - 1) / 2 texels of level 0: 0.2-0.4 px here.
 TEST(Renderer, TextureLandsOnThePinholeProjectionAtEveryMipLevel) {
   const int size = 512;
   // A blob wide enough (several texels at level 3) that nearest-texel sampling jitter stays small.

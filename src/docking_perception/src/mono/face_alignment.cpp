@@ -156,9 +156,9 @@ double eccAtLevel(const cv::Mat& templ, const cv::Mat& image, const cv::TermCrit
   }
   cv::Matx33d from_seen;
   const cv::Mat seen = seenThroughWarp(templ, image, *warp, &from_seen);
-  const cv::Matx33d to_seen = from_seen.inv();
-  cv::Mat affine = (cv::Mat_<float>(2, 3) << 1.0f, 0.0f, static_cast<float>(to_seen(0, 2)), 0.0f, 1.0f,
-                    static_cast<float>(to_seen(1, 2)));
+  // Start at the prior: template pixel (x, y) is seen pixel (x + margin.x, y + margin.y).
+  cv::Mat affine = (cv::Mat_<float>(2, 3) << 1.0f, 0.0f, static_cast<float>(-from_seen(0, 2)), 0.0f, 1.0f,
+                    static_cast<float>(-from_seen(1, 2)));
   const double rho = cv::findTransformECC(templ, seen, affine, cv::MOTION_AFFINE, stop, cv::noArray(), kEccGaussianSize);
   const cv::Matx23f a(affine);
   *warp = *warp * from_seen * cv::Matx33d(a(0, 0), a(0, 1), a(0, 2), a(1, 0), a(1, 1), a(1, 2), 0.0, 0.0, 1.0);
