@@ -37,20 +37,39 @@ TEST(EnableHandshake, BoardThatDropsItsEnableGetsItAgain) {
   EXPECT_FALSE(h.shouldSend(true));
 }
 
-TEST(RebootRecovery, ErrorUntilEnoughGoodSamples) {
-  RebootRecovery r(3);
-  EXPECT_FALSE(r.recovering());
-  r.onSample(EncoderEvent::kBoardRebooted);
-  EXPECT_TRUE(r.recovering());
-  r.onSample(EncoderEvent::kAccepted);
-  r.onSample(EncoderEvent::kAccepted);
-  r.onSample(EncoderEvent::kImplausibleJump);  // not healthy yet: start over
-  r.onSample(EncoderEvent::kAccepted);
-  r.onSample(EncoderEvent::kAccepted);
-  EXPECT_TRUE(r.recovering());
-  r.onSample(EncoderEvent::kAccepted);
-  EXPECT_FALSE(r.recovering());
-  EXPECT_EQ(r.reboots(), 1u);
+TEST(LinkDoubt, ErrorUntilEnoughGoodSamplesAndReportedOnce) {
+  LinkDoubt doubt(3);
+  EXPECT_FALSE(doubt.inDoubt());
+  doubt.onSample(EncoderEvent::kBoardRebooted, "rebooted");
+  EXPECT_TRUE(doubt.inDoubt());
+  EXPECT_EQ(doubt.cause(), "rebooted");
+  doubt.onSample(EncoderEvent::kAccepted, "");
+  doubt.onSample(EncoderEvent::kAccepted, "");
+  doubt.onSample(EncoderEvent::kImplausibleJump, "jump");  // not healthy yet: start over
+  doubt.onSample(EncoderEvent::kAccepted, "");
+  doubt.onSample(EncoderEvent::kAccepted, "");
+  EXPECT_TRUE(doubt.inDoubt());
+  doubt.onSample(EncoderEvent::kAccepted, "");
+  // Healthy again, but no diagnostics update has shown the doubt yet: it stays until one has.
+  EXPECT_TRUE(doubt.inDoubt());
+  EXPECT_TRUE(doubt.report());
+  EXPECT_FALSE(doubt.inDoubt());
+  EXPECT_FALSE(doubt.report());
+}
+
+TEST(LinkDoubt, EveryRebootClaimCastsDoubt) {
+  for (EncoderEvent e : {EncoderEvent::kRebootPending, EncoderEvent::kRebootRefuted, EncoderEvent::kRebootImplausible,
+                         EncoderEvent::kBoardRebooted, EncoderEvent::kRebaselined}) {
+    LinkDoubt doubt(1);
+    doubt.onSample(e, "why");
+    EXPECT_TRUE(doubt.report()) << static_cast<int>(e);
+  }
+  for (EncoderEvent e : {EncoderEvent::kAccepted, EncoderEvent::kBaseline, EncoderEvent::kImplausibleJump,
+                         EncoderEvent::kClockJumped, EncoderEvent::kWrongWheelCount}) {
+    LinkDoubt doubt(1);
+    doubt.onSample(e, "why");
+    EXPECT_FALSE(doubt.report()) << static_cast<int>(e);
+  }
 }
 
 // Issue 12: a fast board reboot while driving. The host loop is the node's (serial backend + encoder
@@ -67,7 +86,7 @@ TEST(BoardSession, FastRebootWhileDrivingIsRecoveredWithoutAnOdometryJump) {
   tracker_cfg.max_plausible_rad_s = 2.0 * board_cfg.drive.maxSpeed();
   EncoderTracker tracker(tracker_cfg);
   EnableHandshake enable;
-  RebootRecovery recovery;
+  LinkDoubt doubt;
   OdometryIntegrator odometry;
   protocol::StreamDecoder host;
 
@@ -97,22 +116,24 @@ TEST(BoardSession, FastRebootWhileDrivingIsRecoveredWithoutAnOdometryJump) {
       ASSERT_TRUE(state);
       enable.onBoardState(state->sequence, (state->status & protocol::kStatusEnabled) != 0);
       const auto sample = tracker.update(EncoderFrame{state->encoder_counts, state->board_time_ms, t + 0.001});
-      recovery.onSample(sample.event);
-      if (sample.event == EncoderEvent::kBoardRebooted) enable.forceResend();
+      doubt.onSample(sample.event, sample.reason);
+      if (sample.event == EncoderEvent::kRebootPending) enable.forceResend();
       if (!sample.accepted()) continue;
       const Pose2D before = odometry.pose();
       odometry.integrateDisplacement(kinematics.forward(sample.delta_rad));
       if (sample.event == EncoderEvent::kBoardRebooted) {
         largest_step_at_reboot = std::hypot(odometry.pose().x - before.x, odometry.pose().y - before.y);
-        recovering_after_reboot = recovery.recovering();
+        recovering_after_reboot = doubt.inDoubt();
       }
     }
   }
   EXPECT_EQ(tracker.reboots(), 1u);
   EXPECT_GE(largest_step_at_reboot, 0.0) << "the reboot was not detected";
-  EXPECT_LE(largest_step_at_reboot, 1e-3);
+  // The step at the confirmation carries the motion of the held frames (at most 0.2 m/s over them), no jump.
+  EXPECT_LE(largest_step_at_reboot, 0.2 * 0.02 * (EncoderTracker::kRebootConfirmationFrames + 1) + 1e-3);
   EXPECT_TRUE(recovering_after_reboot);
-  EXPECT_FALSE(recovery.recovering());  // 3 s of good samples later
+  EXPECT_TRUE(doubt.report());   // never shown yet
+  EXPECT_FALSE(doubt.inDoubt());  // 3 s of good samples later, and reported
   EXPECT_TRUE(board.enabled()) << "ENABLE was not sent again after the reboot";
   EXPECT_NEAR(board.wheelSpeeds()[0], wheel_rad_s[0], 0.05 * std::abs(wheel_rad_s[0]));
   // Distance: 0.2 m/s for 5 s, less what the wheels did not do while the rebooted board was disabled

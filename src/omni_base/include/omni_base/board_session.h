@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "omni_base/encoder_tracker.h"
 
@@ -34,21 +35,27 @@ class EnableHandshake {
   std::uint64_t enable_losses_{0};
 };
 
-/// After a board reboot (or a re-baseline), the encoder health is ERROR until this many accepted samples
-/// in a row have come in.
-class RebootRecovery {
+/// Whether the link's odometry is in doubt: after a reboot (claimed, confirmed, refuted or refused) or a
+/// re-baseline, diagnostics report ERROR until `healthy_samples` accepted samples have come in a row AND
+/// the doubt has been reported at least once, so that a diagnostics period longer than the recovery
+/// still shows it.
+class LinkDoubt {
  public:
   static constexpr int kDefaultHealthySamples = 25;  // 0.5 s at 50 Hz
 
-  explicit RebootRecovery(int healthy_samples = kDefaultHealthySamples) : healthy_samples_(healthy_samples) {}
-  void onSample(EncoderEvent event);
-  bool recovering() const { return good_in_a_row_ < healthy_samples_; }
-  std::uint64_t reboots() const { return reboots_; }
+  explicit LinkDoubt(int healthy_samples = kDefaultHealthySamples) : healthy_samples_(healthy_samples) {}
+  void onSample(EncoderEvent event, const std::string& reason);
+  bool inDoubt() const { return good_in_a_row_ < healthy_samples_ || !reported_; }
+  /// Diagnostics call this when they publish: true while in doubt (the doubt then counts as reported).
+  bool report();
+  /// What raised the doubt last.
+  const std::string& cause() const { return cause_; }
 
  private:
   int healthy_samples_;
   int good_in_a_row_{healthy_samples_};
-  std::uint64_t reboots_{0};
+  bool reported_{true};
+  std::string cause_;
 };
 
 }  // namespace omni_base

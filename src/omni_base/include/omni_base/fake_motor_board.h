@@ -35,9 +35,12 @@ class FakeMotorBoard {
   void setReplyDropProbability(double p) { drop_probability_ = p; }
   void setGarbageBetweenFrames(bool on) { garbage_ = on; }
   void resetCounters();  ///< like a board reboot: counters, set-points and the board clock back to zero, disabled
+  /// A STATE frame in the board's format carrying the given board time and counts, as a glitching
+  /// firmware, a second writer on the port or a replayed log would send it; the board itself is unchanged.
+  std::vector<uint8_t> forgedState(uint32_t board_time_ms, const std::vector<int32_t>& counts) const;
 
   const std::vector<double>& wheelSpeeds() const { return speed_rad_s_; }
-  const std::vector<double>& wheelAngles() const { return angle_rad_; }
+  const std::vector<double>& wheelAngles() const { return angle_rad_; }  ///< true angles (a reboot keeps them)
   bool enabled() const { return enabled_; }
   uint32_t boardTimeMs() const;  ///< ms since the last (re)boot, wrapping like the real board's u32
   bool watchdogStopped() const { return watchdog_stopped_; }
@@ -53,6 +56,8 @@ class FakeMotorBoard {
   std::vector<double> setpoint_rad_s_;
   std::vector<double> speed_rad_s_;
   std::vector<double> angle_rad_;
+  std::vector<double> boot_angle_rad_;  ///< the true angles at the last (re)boot: the counters count from them
+  uint8_t last_reply_sequence_{0};
   bool enabled_{false};
   bool watchdog_stopped_{false};
   bool stalled_{false};

@@ -24,27 +24,22 @@ void EnableHandshake::onBoardState(uint8_t answered_sequence, bool board_enabled
   mismatch_ = true;
 }
 
-void RebootRecovery::onSample(EncoderEvent event) {
-  switch (event) {
-    case EncoderEvent::kBoardRebooted:
-      ++reboots_;
-      good_in_a_row_ = 0;
-      break;
-    case EncoderEvent::kRebaselined:
-      good_in_a_row_ = 0;
-      break;
-    case EncoderEvent::kAccepted:
-      if (good_in_a_row_ < healthy_samples_) ++good_in_a_row_;
-      break;
-    case EncoderEvent::kBaseline:
-      break;
-    case EncoderEvent::kWrongWheelCount:
-    case EncoderEvent::kImplausibleJump:
-    case EncoderEvent::kClockJumped:
-    case EncoderEvent::kClockBackwards:
-      if (recovering()) good_in_a_row_ = 0;
-      break;
+void LinkDoubt::onSample(EncoderEvent event, const std::string& reason) {
+  if (castsDoubtOnTheLink(event)) {
+    good_in_a_row_ = 0;
+    reported_ = false;
+    cause_ = reason;
+  } else if (event == EncoderEvent::kAccepted) {
+    if (good_in_a_row_ < healthy_samples_) ++good_in_a_row_;
+  } else if (event != EncoderEvent::kBaseline && good_in_a_row_ < healthy_samples_) {
+    good_in_a_row_ = 0;  // rejected while recovering: not healthy yet, start over
   }
+}
+
+bool LinkDoubt::report() {
+  const bool doubt = inDoubt();
+  reported_ = true;
+  return doubt;
 }
 
 }  // namespace omni_base

@@ -53,20 +53,96 @@ bool EncoderTracker::countsPlausible(const std::vector<int64_t>& deltas, double 
   return true;
 }
 
-bool EncoderTracker::looksLikeFreshBoot(const EncoderFrame& frame, int64_t board_dt_ms) const {
+std::vector<int64_t> EncoderTracker::deltasFrom(const std::vector<int32_t>& counts,
+                                                const std::vector<int32_t>& from) const {
+  std::vector<int64_t> deltas(counts.size());
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    deltas[i] = wrappedDifference(counts[i], from[i], config_.counter_bits);
+  }
+  return deltas;
+}
+
+std::vector<int64_t> EncoderTracker::countsSinceBoot(const EncoderFrame& frame) const {
+  // A fresh boot starts its counters at zero: they can only hold the motion since boot.
+  return deltasFrom(frame.counts, std::vector<int32_t>(frame.counts.size(), 0));
+}
+
+bool EncoderTracker::clockRestarted(const EncoderFrame& frame, int64_t board_dt_ms) const {
+  // The clock went back (to a smaller value: a corrupted time 2^31 ms ahead also reads as "back"), or
+  // the board has been up for less time than we have not heard from it.
   const double uptime_s = frame.source_time_ms * 1e-3;
   const double host_silence_s = frame.host_time_s - anchor_->host_time_s;
-  // The clock restarted: it went back (to a smaller value: a corrupted time 2^31 ms ahead also reads as
-  // "back"), or the board has been up for less time than we have not heard from it.
   const bool went_back = board_dt_ms < 0 && frame.source_time_ms < anchor_->source_time_ms;
-  const bool clock_restarted = went_back || uptime_s + kClockLeadToleranceS < host_silence_s;
-  if (!clock_restarted) return false;
-  // A fresh boot starts its counters at zero: they can only hold the motion since boot.
-  std::vector<int64_t> since_boot(frame.counts.size());
-  for (std::size_t i = 0; i < frame.counts.size(); ++i) {
-    since_boot[i] = wrappedDifference(frame.counts[i], 0, config_.counter_bits);
+  return went_back || uptime_s + kClockLeadToleranceS < host_silence_s;
+}
+
+EncoderTracker::Sample EncoderTracker::claimReboot(const EncoderFrame& frame) {
+  const double uptime_s = frame.source_time_ms * 1e-3;
+  const double host_silence_s = frame.host_time_s - anchor_->host_time_s;
+  if (uptime_s > host_silence_s + kClockLeadToleranceS) {
+    ++refused_reboots_;
+    return reject(EncoderEvent::kRebootImplausible,
+                  "board clock restarted at " + std::to_string(frame.source_time_ms) +
+                      " ms, but the board answered " + std::to_string(host_silence_s) + " s ago",
+                  frame);
   }
-  return countsPlausible(since_boot, uptime_s, nullptr);
+  std::size_t bad_wheel = 0;
+  if (!countsPlausible(countsSinceBoot(frame), uptime_s, &bad_wheel)) {
+    ++refused_reboots_;
+    return reject(EncoderEvent::kRebootImplausible,
+                  "board clock restarted at " + std::to_string(frame.source_time_ms) + " ms, but wheel " +
+                      std::to_string(bad_wheel) + " reads " + std::to_string(frame.counts[bad_wheel]) +
+                      " counts, more than it could turn since boot",
+                  frame);
+  }
+  pending_reboot_ = PendingReboot{frame, frame, 0};
+  Sample sample;
+  sample.event = EncoderEvent::kRebootPending;
+  sample.reason = "board clock restarted at " + std::to_string(frame.source_time_ms) +
+                  " ms: a reboot, if the next frames continue the new clock";
+  return sample;
+}
+
+bool EncoderTracker::continuesPendingClock(const EncoderFrame& frame) const {
+  const PendingReboot& pending = *pending_reboot_;
+  const int64_t step_ms = wrappedDifference(frame.source_time_ms, pending.latest.source_time_ms, kBoardClockBits);
+  const int64_t since_claim_ms = wrappedDifference(frame.source_time_ms, pending.first.source_time_ms, kBoardClockBits);
+  const double host_since_claim_s = frame.host_time_s - pending.first.host_time_s;
+  if (step_ms < 0 || since_claim_ms * 1e-3 > host_since_claim_s + kClockLeadToleranceS) return false;
+  return countsPlausible(deltasFrom(frame.counts, pending.latest.counts), step_ms * 1e-3, nullptr);
+}
+
+EncoderTracker::Sample EncoderTracker::followPendingReboot(const EncoderFrame& frame) {
+  if (continuesPendingClock(frame)) {
+    pending_reboot_->latest = frame;
+    if (++pending_reboot_->confirmations >= kRebootConfirmationFrames) return confirmReboot(frame);
+    consecutive_rejections_ = 0;
+    Sample sample;
+    sample.event = EncoderEvent::kRebootPending;
+    sample.reason = "board clock restarted: " + std::to_string(pending_reboot_->confirmations) + " of " +
+                    std::to_string(kRebootConfirmationFrames) + " frames continue it";
+    return sample;
+  }
+  // Not the new clock: the old timeline, if it continues there, refutes the claim.
+  Sample sample = countOnTimeline(frame);
+  if (sample.event == EncoderEvent::kAccepted) {
+    pending_reboot_.reset();
+    ++refused_reboots_;
+    sample.event = EncoderEvent::kRebootRefuted;
+    sample.reason = "a claimed reboot was refuted: the board's old clock and counters carry on";
+  } else if (sample.event == EncoderEvent::kRebaselined) {
+    pending_reboot_.reset();
+  }
+  return sample;
+}
+
+EncoderTracker::Sample EncoderTracker::confirmReboot(const EncoderFrame& frame) {
+  ++reboots_;
+  pending_reboot_.reset();
+  anchorClock(frame);
+  Sample sample = count(frame, countsSinceBoot(frame), frame.source_time_ms * 1e-3, EncoderEvent::kBoardRebooted);
+  sample.reason = "board rebooted (clock restarted, now at " + std::to_string(frame.source_time_ms) + " ms)";
+  return sample;
 }
 
 void EncoderTracker::anchorClock(const EncoderFrame& frame) {
@@ -103,11 +179,9 @@ EncoderTracker::Sample EncoderTracker::reject(EncoderEvent event, std::string re
   // Persistent: the board's clock or counters really moved. Re-anchor the clock on this frame, and keep
   // the motion since the last accepted sample if the host clock makes it plausible.
   ++rebaselines_;
+  pending_reboot_.reset();
   const Anchor previous = *anchor_;
-  std::vector<int64_t> deltas(frame.counts.size());
-  for (std::size_t i = 0; i < deltas.size(); ++i) {
-    deltas[i] = wrappedDifference(frame.counts[i], previous.counts[i], config_.counter_bits);
-  }
+  std::vector<int64_t> deltas = deltasFrom(frame.counts, previous.counts);
   const double host_dt_s = frame.host_time_s - previous.host_time_s;
   const bool keep = countsPlausible(deltas, host_dt_s, nullptr);
   if (!keep) std::fill(deltas.begin(), deltas.end(), 0);
@@ -133,21 +207,19 @@ EncoderTracker::Sample EncoderTracker::update(const EncoderFrame& frame) {
     sample.delta_rad.assign(config_.wheel_count, 0.0);
     return sample;
   }
+  if (pending_reboot_) return followPendingReboot(frame);
   const int64_t board_dt_ms = wrappedDifference(frame.source_time_ms, anchor_->source_time_ms, kBoardClockBits);
-  if (looksLikeFreshBoot(frame, board_dt_ms)) {
-    ++reboots_;
-    std::vector<int64_t> since_boot(frame.counts.size());
-    for (std::size_t i = 0; i < since_boot.size(); ++i) {
-      since_boot[i] = wrappedDifference(frame.counts[i], 0, config_.counter_bits);
-    }
-    anchorClock(frame);
-    Sample sample = count(frame, since_boot, frame.source_time_ms * 1e-3, EncoderEvent::kBoardRebooted);
-    sample.reason = "board rebooted (clock restarted at " + std::to_string(frame.source_time_ms) + " ms)";
-    return sample;
-  }
-  if (board_dt_ms < 0) {
-    return reject(EncoderEvent::kClockBackwards,
-                  "board clock went back " + std::to_string(-board_dt_ms) + " ms without a reboot", frame);
+  if (clockRestarted(frame, board_dt_ms)) return claimReboot(frame);
+  return countOnTimeline(frame);
+}
+
+EncoderTracker::Sample EncoderTracker::countOnTimeline(const EncoderFrame& frame) {
+  const int64_t board_dt_ms = wrappedDifference(frame.source_time_ms, anchor_->source_time_ms, kBoardClockBits);
+  if (board_dt_ms < 0 || clockRestarted(frame, board_dt_ms)) {
+    return reject(EncoderEvent::kClockJumped,
+                  "board clock at " + std::to_string(frame.source_time_ms) + " ms does not continue from " +
+                      std::to_string(anchor_->source_time_ms) + " ms",
+                  frame);
   }
   const int64_t source_unwrapped_ms = anchor_->source_time_unwrapped_ms + board_dt_ms;
   const double clock_lag_s = frame.host_time_s - source_unwrapped_ms * 1e-3;
@@ -155,10 +227,7 @@ EncoderTracker::Sample EncoderTracker::update(const EncoderFrame& frame) {
     return reject(EncoderEvent::kClockJumped,
                   "board clock jumped " + std::to_string(board_dt_ms) + " ms ahead of the host clock", frame);
   }
-  std::vector<int64_t> deltas(frame.counts.size());
-  for (std::size_t i = 0; i < deltas.size(); ++i) {
-    deltas[i] = wrappedDifference(frame.counts[i], anchor_->counts[i], config_.counter_bits);
-  }
+  const std::vector<int64_t> deltas = deltasFrom(frame.counts, anchor_->counts);
   const double dt_s = board_dt_ms * 1e-3;
   std::size_t bad_wheel = 0;
   if (!countsPlausible(deltas, dt_s, &bad_wheel)) {
@@ -171,6 +240,24 @@ EncoderTracker::Sample EncoderTracker::update(const EncoderFrame& frame) {
   min_clock_lag_s_ = std::min(min_clock_lag_s_, clock_lag_s);
   anchor_->source_time_unwrapped_ms = source_unwrapped_ms;
   return count(frame, deltas, dt_s, EncoderEvent::kAccepted);
+}
+
+bool castsDoubtOnTheLink(EncoderEvent event) {
+  switch (event) {
+    case EncoderEvent::kRebootPending:
+    case EncoderEvent::kBoardRebooted:
+    case EncoderEvent::kRebootRefuted:
+    case EncoderEvent::kRebootImplausible:
+    case EncoderEvent::kRebaselined:
+      return true;
+    case EncoderEvent::kAccepted:
+    case EncoderEvent::kBaseline:
+    case EncoderEvent::kWrongWheelCount:
+    case EncoderEvent::kImplausibleJump:
+    case EncoderEvent::kClockJumped:
+      return false;
+  }
+  return true;
 }
 
 }  // namespace omni_base

@@ -12,6 +12,7 @@ FakeMotorBoard::FakeMotorBoard(const FakeMotorBoardConfig& config)
       setpoint_rad_s_(config.wheel_count, 0.0),
       speed_rad_s_(config.wheel_count, 0.0),
       angle_rad_(config.wheel_count, 0.0),
+      boot_angle_rad_(config.wheel_count, 0.0),
       rng_(config.random_seed) {
   if (config_.wheel_count == 0 || config_.wheel_count > protocol::kMaxWheels) {
     throw std::invalid_argument("fake motor board: wheel count must be 1.." + std::to_string(protocol::kMaxWheels));
@@ -19,7 +20,7 @@ FakeMotorBoard::FakeMotorBoard(const FakeMotorBoardConfig& config)
 }
 
 void FakeMotorBoard::resetCounters() {
-  for (auto& a : angle_rad_) a = 0.0;
+  boot_angle_rad_ = angle_rad_;  // the wheels keep their true angle; the counters restart at zero
   for (auto& s : setpoint_rad_s_) s = 0.0;
   for (auto& m : motors_) m.reset();
   for (auto& s : speed_rad_s_) s = 0.0;
@@ -95,8 +96,20 @@ std::vector<uint8_t> FakeMotorBoard::stateReply(uint8_t sequence) {
                                       (watchdog_stopped_ ? protocol::kStatusWatchdogStopped : 0) |
                                       (stalled_ ? protocol::kStatusFault : 0));
   state.faults = stalled_ ? protocol::kFaultStall : 0;
-  for (double a : angle_rad_) state.encoder_counts.push_back(encoderCountsFromAngle(a, config_.counts_per_rev));
+  for (std::size_t i = 0; i < angle_rad_.size(); ++i) {
+    state.encoder_counts.push_back(encoderCountsFromAngle(angle_rad_[i] - boot_angle_rad_[i], config_.counts_per_rev));
+  }
   state.board_time_ms = boardTimeMs();
+  last_reply_sequence_ = sequence;
+  return protocol::encodeFrame(protocol::makeStateFrame(state));
+}
+
+std::vector<uint8_t> FakeMotorBoard::forgedState(uint32_t board_time_ms, const std::vector<int32_t>& counts) const {
+  protocol::BoardState state;
+  state.sequence = last_reply_sequence_;
+  state.status = enabled_ ? protocol::kStatusEnabled : 0;
+  state.encoder_counts = counts;
+  state.board_time_ms = board_time_ms;
   return protocol::encodeFrame(protocol::makeStateFrame(state));
 }
 

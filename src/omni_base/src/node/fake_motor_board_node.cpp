@@ -8,7 +8,10 @@
 //   "garbage"         random bytes and false start sequences between replies
 //   "disconnect S"    close the pty (an unplugged cable) for S seconds, then come back
 //   "reboot"          counters, set-points and the board clock back to zero, motors disabled
-// The true wheel speeds and angles are published on ~wheels (sensor_msgs/JointState) at 200 Hz.
+//   "forge T C0 C1 .." one extra STATE frame now, with board time T ms and counts C0 C1 ..; the board
+//                     itself carries on (a glitching firmware, a second writer on the port, a replayed log)
+// The true wheel speeds and angles (never reset, not even by a reboot) are published on ~wheels
+// (sensor_msgs/JointState) at 200 Hz.
 #include <poll.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
@@ -110,11 +113,30 @@ class FakeMotorBoardNode {
       reconnect_at_ = steadySeconds() + (value > 0.0 ? value : 1.0);
     } else if (kind == "reboot") {
       board_.resetCounters();
+    } else if (kind == "forge") {
+      if (!forge(msg->data)) return;
     } else {
-      ROS_ERROR("fake_motor_board: unknown fault '%s' (none|stall|drop P|garbage|disconnect S|reboot)", msg->data.c_str());
+      ROS_ERROR("fake_motor_board: unknown fault '%s' (none|stall|drop P|garbage|disconnect S|reboot|forge T C..)",
+                msg->data.c_str());
       return;
     }
     ROS_WARN("fake_motor_board: fault mode '%s'", msg->data.c_str());
+  }
+
+  /// "forge T C0 C1 ...": writes one STATE frame with that board time and those counts.
+  bool forge(const std::string& command) {
+    std::istringstream in(command);
+    std::string kind;
+    int64_t board_time_ms = 0;
+    in >> kind >> board_time_ms;
+    std::vector<int32_t> counts;
+    for (int64_t c = 0; in >> c;) counts.push_back(static_cast<int32_t>(c));
+    if (board_time_ms < 0 || counts.empty() || !pty_.isOpen()) {
+      ROS_ERROR("fake_motor_board: cannot forge '%s' (forge T C0 C1 ..., with the link up)", command.c_str());
+      return false;
+    }
+    pty_.write(board_.forgedState(static_cast<uint32_t>(board_time_ms), counts));
+    return true;
   }
 
   void publishWheels() {

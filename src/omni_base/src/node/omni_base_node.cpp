@@ -118,7 +118,7 @@ class OmniBaseNode {
     release_srv_ = pnh.advertiseService("release_e_stop", &OmniBaseNode::onReleaseEStop, this);
 
     diagnostics_.setHardwareID("omni_base (" + backend_->describe() + ")");
-    diagnostics_.add("Motor link", [this](diagnostic_updater::DiagnosticStatusWrapper& s) { backend_->diagnose(s); });
+    diagnostics_.add("Motor link", this, &OmniBaseNode::diagnoseLink);
     diagnostics_.add("Command", this, &OmniBaseNode::diagnoseCommand);
     diagnostics_.add("Encoders", this, &OmniBaseNode::diagnoseEncoders);
 
@@ -189,26 +189,9 @@ class OmniBaseNode {
       ROS_ERROR_THROTTLE(2.0, "omni_base: motor fault reported: %s", reading.fault_text.c_str());
     }
     const auto sample = encoders_.update(EncoderFrame{reading.counts, reading.source_time_ms, now.toSec()});
-    recovery_.onSample(sample.event);
+    link_doubt_.onSample(sample.event, sample.reason);
     if (!sample.reason.empty()) last_encoder_problem_ = sample.reason;
-    switch (sample.event) {
-      case EncoderEvent::kBoardRebooted:
-        ROS_ERROR("omni_base: %s; re-sending ENABLE", sample.reason.c_str());
-        backend_->forceEnable();
-        break;
-      case EncoderEvent::kRebaselined:
-        ROS_ERROR("omni_base: encoder samples rejected repeatedly: %s", sample.reason.c_str());
-        break;
-      case EncoderEvent::kAccepted:
-      case EncoderEvent::kBaseline:
-        break;
-      case EncoderEvent::kWrongWheelCount:
-      case EncoderEvent::kImplausibleJump:
-      case EncoderEvent::kClockJumped:
-      case EncoderEvent::kClockBackwards:
-        ROS_WARN_THROTTLE(1.0, "omni_base: encoder sample rejected: %s", sample.reason.c_str());
-        return;
-    }
+    if (!reportEncoderEvent(sample)) return;
     // Motion is measured on the board's clock between accepted samples, so it is exact through bursts.
     std::vector<double> wheel_velocity(sample.delta_rad.size(), 0.0);
     Twist2D body_velocity;
@@ -219,6 +202,37 @@ class OmniBaseNode {
     }
     publishOdometry(reading, body_velocity);
     publishWheelState(reading, wheel_velocity);
+  }
+
+  /// Logs the sample's event and acts on it; false when the sample moves nothing (held or rejected).
+  bool reportEncoderEvent(const EncoderTracker::Sample& sample) {
+    switch (sample.event) {
+      case EncoderEvent::kRebootPending:
+        // ENABLE to a board that did not reboot changes nothing; to one that did, it saves 0.1 s.
+        ROS_WARN("omni_base: %s; odometry held", sample.reason.c_str());
+        backend_->forceEnable();
+        return false;
+      case EncoderEvent::kBoardRebooted:
+        ROS_ERROR("omni_base: %s; re-sending ENABLE", sample.reason.c_str());
+        backend_->forceEnable();
+        return true;
+      case EncoderEvent::kRebootRefuted:
+      case EncoderEvent::kRebaselined:
+        ROS_ERROR("omni_base: %s", sample.reason.c_str());
+        return true;
+      case EncoderEvent::kRebootImplausible:
+        ROS_ERROR("omni_base: encoder sample rejected: %s", sample.reason.c_str());
+        return false;
+      case EncoderEvent::kAccepted:
+      case EncoderEvent::kBaseline:
+        return true;
+      case EncoderEvent::kWrongWheelCount:
+      case EncoderEvent::kImplausibleJump:
+      case EncoderEvent::kClockJumped:
+        ROS_WARN_THROTTLE(1.0, "omni_base: encoder sample rejected: %s", sample.reason.c_str());
+        return false;
+    }
+    return false;
   }
 
   void publishOdometry(const EncoderReading& reading, const Twist2D& velocity) {
@@ -291,18 +305,28 @@ class OmniBaseNode {
     stat.add("e-stop latched", controller_.eStopLatched());
   }
 
+  /// The backend's own status, made ERROR while the odometry is in doubt (LinkDoubt: a reboot claimed,
+  /// refuted or confirmed, a re-baseline), at least once per doubt whatever the diagnostics rate.
+  void diagnoseLink(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+    backend_->diagnose(stat);
+    link_in_doubt_ = link_doubt_.report();
+    if (link_in_doubt_) {
+      stat.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "odometry in doubt: %s", link_doubt_.cause().c_str());
+    }
+    stat.add("refused reboot claims", encoders_.refusedReboots());
+  }
+
   void diagnoseEncoders(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     using diagnostic_msgs::DiagnosticStatus;
-    // A reboot shorter than the diagnostics period is still reported once.
-    if (recovery_.recovering() || encoders_.reboots() > reported_reboots_) {
-      stat.summaryf(DiagnosticStatus::ERROR, "recovering: %s", last_encoder_problem_.c_str());
+    // The doubt as the Motor link task of the same update reported it.
+    if (link_in_doubt_) {
+      stat.summaryf(DiagnosticStatus::ERROR, "recovering: %s", link_doubt_.cause().c_str());
     } else if (encoders_.rejectedSamples() > reported_rejections_) {
       stat.summaryf(DiagnosticStatus::WARN, "implausible encoder samples rejected: %s", last_encoder_problem_.c_str());
     } else {
       stat.summary(DiagnosticStatus::OK, "encoders plausible");
     }
     reported_rejections_ = encoders_.rejectedSamples();
-    reported_reboots_ = encoders_.reboots();
     stat.add("rejected samples", encoders_.rejectedSamples());
     stat.add("re-baselines", encoders_.rebaselines());
     stat.add("board reboots", encoders_.reboots());
@@ -312,14 +336,14 @@ class OmniBaseNode {
   OmniKinematics kinematics_;
   BaseController controller_;
   EncoderTracker encoders_;
-  RebootRecovery recovery_;
+  LinkDoubt link_doubt_;
+  bool link_in_doubt_{false};  ///< as the last diagnostics update reported it
   OdometryIntegrator odometry_;
   std::unique_ptr<MotorBackend> backend_;
   std::vector<double> last_setpoints_;
   StopReason last_stop_reason_{StopReason::kNoCommand};
   std::string last_encoder_problem_;
   std::uint64_t reported_rejections_{0};
-  std::uint64_t reported_reboots_{0};
   ros::Time last_tf_stamp_;
 
   ros::Publisher odom_pub_;

@@ -81,10 +81,14 @@ std::optional<EncoderReading> SerialMotorBackend::poll(const ros::Time& now) {
     const auto state = protocol::parseStateFrame(frame);
     if (!state) continue;
     if (state->encoder_counts.size() != config_.wheel_count) {
+      // The board answers, but not as the configured base: a wrong firmware or configuration.
+      board_wheel_count_ = state->encoder_counts.size();
+      ++wrong_wheel_count_frames_;
       ROS_ERROR_THROTTLE(5.0, "omni_base: board reports %zu wheels, the configuration has %zu",
                          state->encoder_counts.size(), config_.wheel_count);
       continue;
     }
+    board_wheel_count_ = state->encoder_counts.size();
     if (!link_up_) {
       ROS_INFO("omni_base: motor board answering on %s", config_.device.c_str());
       backoff_.reset();
@@ -107,14 +111,20 @@ std::optional<EncoderReading> SerialMotorBackend::poll(const ros::Time& now) {
     newest = reading;
   }
   if ((now - last_frame_at_).toSec() > config_.link_timeout_s) {
-    dropConnection(now, "no valid frame from the board for " + std::to_string((now - last_frame_at_).toSec()) + " s");
+    dropConnection(now, wrongWheelCount() ? "the board answers with " + std::to_string(board_wheel_count_) +
+                                          " wheels; the configuration (wheels/names) has " +
+                                          std::to_string(config_.wheel_count)
+                                    : "no valid frame from the board for " +
+                                          std::to_string((now - last_frame_at_).toSec()) + " s");
   }
   return newest;
 }
 
 void SerialMotorBackend::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) const {
   using diagnostic_msgs::DiagnosticStatus;
-  if (!link_up_) {
+  if (!link_up_ && wrongWheelCount()) {
+    stat.summaryf(DiagnosticStatus::ERROR, "wrong wheel count: %s", last_error_.c_str());
+  } else if (!link_up_) {
     stat.summaryf(DiagnosticStatus::ERROR, "motor board not answering: %s", last_error_.c_str());
   } else if (!enable_.confirmed()) {
     stat.summary(DiagnosticStatus::ERROR, "motor board not in the commanded enable state (rebooted?): re-sending ENABLE");
@@ -137,6 +147,8 @@ void SerialMotorBackend::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   stat.add("board fault bits", static_cast<int>(last_faults_));
   stat.add("false starts", decoder_.falseStarts());
   stat.add("enable lost (board reboots)", enable_.enableLosses());
+  stat.add("board wheel count", board_wheel_count_);
+  stat.add("frames with the wrong wheel count", wrong_wheel_count_frames_);
   stat.add("last error", last_error_);
 }
 

@@ -39,6 +39,8 @@ class SerialMotorBackend : public MotorBackend {
   void tryConnect(const ros::Time& now);
   void dropConnection(const ros::Time& now, const std::string& why);
   bool writeFrame(const protocol::Frame& frame, const ros::Time& now);
+  /// The board's last STATE frame carried another wheel count than the configuration's.
+  bool wrongWheelCount() const { return board_wheel_count_ != 0 && board_wheel_count_ != config_.wheel_count; }
 
   SerialBackendConfig config_;
   SerialPort port_;
@@ -55,6 +57,8 @@ class SerialMotorBackend : public MotorBackend {
   uint8_t last_faults_{0};
   std::uint64_t link_losses_{0};
   std::uint64_t connects_{0};
+  std::size_t board_wheel_count_{0};          ///< wheels in the board's last STATE frame (0: none yet)
+  std::uint64_t wrong_wheel_count_frames_{0};
   std::string last_error_;
 };
 
