@@ -81,7 +81,7 @@ fuzz-messages: build
 
 fuzz-serial: deps
 	@mkdir -p devel/lib/python3/dist-packages build
-	@$(CATKIN_MAKE_SERIAL) -DCATKIN_WHITELIST_PACKAGES="docking_msgs;omni_base" -j1 fuzz_serial_decoder > build/build_fuzz_serial.log 2>&1 || { tail -40 build/build_fuzz_serial.log; exit 1; }
+	@$(CATKIN_MAKE_SERIAL) -DCATKIN_WHITELIST_PACKAGES="docking_msgs;docking_settings;omni_base" -j1 fuzz_serial_decoder > build/build_fuzz_serial.log 2>&1 || { tail -40 build/build_fuzz_serial.log; exit 1; }
 	devel/lib/omni_base/fuzz_serial_decoder --inputs $(FUZZ_INPUTS) --corruptions $(FUZZ_CORRUPTIONS) --seed $(FUZZ_SEED)
 
 lint: deps

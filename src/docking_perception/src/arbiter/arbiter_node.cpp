@@ -17,7 +17,8 @@
 #include <docking_perception/ArbiterConfig.h>
 #include <dynamic_reconfigure/server.h>
 #include "docking_msgs/latency_window.h"
-#include "docking_msgs/require_param.h"
+#include "docking_settings/param_reader.h"
+#include "docking_settings/run_node.h"
 #include <docking_msgs/TargetEstimate.h>
 #include <docking_msgs/estimate_check_msg.h>
 #include <docking_msgs/names.h>
@@ -38,7 +39,10 @@ namespace docking_perception {
 namespace arbiter {
 namespace {
 
-using docking_msgs::requireParam;
+template <typename T>
+T requireParam(const ros::NodeHandle& nh, const std::string& key) {
+  return docking_settings::ParamReader(nh).require<T>(key);
+}
 
 ArbiterConfig loadConfig(const ros::NodeHandle& pnh) {
   ArbiterConfig c;
@@ -50,7 +54,7 @@ ArbiterConfig loadConfig(const ros::NodeHandle& pnh) {
   c.stamp_limits.max_age_s = requireParam<double>(pnh, "max_stamp_age_s");
   const auto count = [&pnh](const char* name) {
     const int value = requireParam<int>(pnh, name);
-    if (value < 0) throw std::invalid_argument(std::string("parameter '") + name + "' must be >= 0");
+    if (value < 0) docking_settings::ParamReader(pnh).invalid(name, "must be >= 0");
     return static_cast<std::uint32_t>(value);
   };
   c.min_visible_inliers = count("min_visible_inliers");
@@ -66,11 +70,7 @@ ArbiterConfig loadConfig(const ros::NodeHandle& pnh) {
   k.min_rate_radps = requireParam<double>(pnh, "consistency_min_rate_radps");
   k.mount_sigma_m = requireParam<double>(pnh, "consistency_mount_sigma_m");
   k.mount_sigma_rad = requireParam<double>(pnh, "consistency_mount_sigma_rad");
-  try {
-    validate(c);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("parameter ") + e.what());
-  }
+  docking_settings::ParamReader(pnh).validated([&] { validate(c); });
   return c;
 }
 
@@ -133,11 +133,11 @@ class ArbiterNode {
   ArbiterNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
       : arbiter_(loadConfig(pnh)), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
     output_frame_ = pnh.param<std::string>("output_frame", docking_msgs::frames::kStereoLeftOptical);
-    if (output_frame_.empty()) throw std::invalid_argument("parameter 'output_frame' is empty");
+    if (output_frame_.empty()) docking_settings::ParamReader(pnh).invalid("output_frame", "is empty");
     const double status_rate_hz = requireParam<double>(pnh, "status_rate_hz");
-    if (!(status_rate_hz > 0.0)) throw std::invalid_argument("parameter 'status_rate_hz' must be > 0");
+    if (!(status_rate_hz > 0.0)) docking_settings::ParamReader(pnh).invalid("status_rate_hz", "must be > 0");
     const double tf_timeout_s = requireParam<double>(pnh, "tf_timeout_s");
-    if (!(tf_timeout_s >= 0.0)) throw std::invalid_argument("parameter 'tf_timeout_s' must be >= 0");
+    if (!(tf_timeout_s >= 0.0)) docking_settings::ParamReader(pnh).invalid("tf_timeout_s", "must be >= 0");
     tf_timeout_ = ros::Duration(tf_timeout_s);
     silence_ = std::make_unique<InputSilence>(requireParam<double>(pnh, "sources_silent_timeout_s"));
 
@@ -510,14 +510,10 @@ class ArbiterNode {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "arbiter");
-  ros::NodeHandle nh;
-  ros::NodeHandle pnh("~");
-  try {
+  return docking_settings::runNode([] {
+    ros::NodeHandle nh;
+    ros::NodeHandle pnh("~");
     docking_perception::arbiter::ArbiterNode node(nh, pnh);
     ros::spin();
-  } catch (const std::exception& e) {
-    ROS_FATAL("arbiter: %s", e.what());
-    return 1;
-  }
-  return 0;
+  });
 }

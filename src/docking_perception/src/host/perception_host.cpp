@@ -7,7 +7,10 @@
 //
 // A nodelet that refuses to start (its onInit throws on a bad parameter; its own FATAL says why) is
 // reported and left out; the others run, and the arbiter reports the missing source silent. With none
-// loaded the host exits non-zero (roslaunch respawns it).
+// loaded, or with a bad list, it is a configuration error: reported once, and the host waits with it
+// (docking_settings/run_node.h) instead of being respawned into the same error.
+#include <docking_settings/param_reader.h>
+#include <docking_settings/run_node.h>
 #include <nodelet/loader.h>
 #include <opencv2/core/utility.hpp>
 #include <ros/ros.h>
@@ -19,9 +22,6 @@
 
 namespace {
 
-constexpr int kExitNothingLoaded = 1;
-constexpr int kExitBadList = 2;
-constexpr int kExitBadParameter = 3;
 constexpr int kOpenCvDefaultThreads = -1;  // cv::setNumThreads(-1): OpenCV's own default (all cores)
 
 // Remappings as `nodelet load` passes them: both sides resolved in the host's namespace.
@@ -47,41 +47,32 @@ int loadAll(nodelet::Loader* loader, const std::vector<docking_perception::host:
   return loaded;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  ros::init(argc, argv, "perception_host");
+void runHost() {
   ros::NodeHandle private_nh("~");
-  XmlRpc::XmlRpcValue list;
+  const docking_settings::ParamReader params(private_nh);
   std::vector<docking_perception::host::NodeletSpec> specs;
   std::string error;
-  if (!private_nh.getParam("nodelets", list)) {
-    error = "parameter " + private_nh.resolveName("nodelets") + " is not set";
-  } else {
-    docking_perception::host::parseNodeletList(list, &specs, &error);
-  }
-  if (!error.empty()) {
-    ROS_FATAL("perception_host: %s", error.c_str());
-    return kExitBadList;
-  }
+  XmlRpc::XmlRpcValue list = params.require<XmlRpc::XmlRpcValue>("nodelets");
+  docking_perception::host::parseNodeletList(list, &specs, &error);
+  if (!error.empty()) params.invalid("nodelets", error);
   // OpenCV's own worker threads (block matching, remap) beside the nodelet workers: on a 2-core computer
   // they mostly wait and yield (measured: a sixth of this process's CPU in the scheduler). 1: each call
   // runs in the nodelet's thread; the nodelets still run in parallel on the worker threads.
-  int opencv_threads = kOpenCvDefaultThreads;
-  private_nh.param("opencv_threads", opencv_threads, kOpenCvDefaultThreads);
+  const int opencv_threads = params.optional<int>("opencv_threads", kOpenCvDefaultThreads);
   if (opencv_threads < kOpenCvDefaultThreads) {
-    ROS_FATAL("perception_host: ~opencv_threads must be -1 (OpenCV's default), 0 or 1 (no extra threads) "
-              "or a thread count; got %d", opencv_threads);
-    return kExitBadParameter;
+    params.invalid("opencv_threads", "must be -1 (OpenCV's default), 0 or 1 (no extra threads) or a thread count");
   }
   cv::setNumThreads(opencv_threads);
   nodelet::Loader loader(true);  // the manager's ROS API and worker threads, as `nodelet manager` has
   const int loaded = loadAll(&loader, specs);
-  if (loaded == 0) {
-    ROS_FATAL("perception_host: none of the %zu nodelets started", specs.size());
-    return kExitNothingLoaded;
-  }
+  if (loaded == 0) params.invalid("nodelets", "none of the " + std::to_string(specs.size()) + " nodelets started");
   ROS_INFO("perception_host: %d of %zu nodelets running in this process", loaded, specs.size());
   ros::spin();
-  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "perception_host");
+  return docking_settings::runNode(runHost);
 }

@@ -2,6 +2,7 @@
 // (config/mono_pose_<mode>.yaml), subscribes lazily to a rectified image + camera_info, publishes a
 // TargetEstimate per image (valid = false with the reason when the target is not found), a debug image,
 // diagnostics, and takes dynamic_reconfigure updates. No algorithm lives here.
+#include <docking_settings/param_reader.h>
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -109,8 +110,10 @@ class MonoPoseNodelet : public nodelet::Nodelet {
 
 template <typename T>
 void MonoPoseNodelet::require(const std::string& name, T* value, std::vector<std::string>* errors) {
-  if (!private_nh_.getParam(name, *value)) {
-    errors->push_back("missing or mistyped parameter '" + private_nh_.resolveName(name) + "'");
+  try {
+    *value = docking_settings::ParamReader(private_nh_).require<T>(name);
+  } catch (const docking_settings::ConfigError& e) {
+    errors->push_back(e.what());
   }
 }
 

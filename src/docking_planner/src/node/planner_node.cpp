@@ -27,6 +27,8 @@
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <std_srvs/Empty.h>
+#include <docking_settings/param_reader.h>
+#include <docking_settings/run_node.h>
 #include <tf2/utils.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_geometry_msgs/tf2_geometry_msgs.h>
@@ -40,15 +42,11 @@ namespace docking_planner {
 namespace {
 
 double requireDouble(const ros::NodeHandle& nh, const std::string& name) {
-  double value;
-  if (!nh.getParam(name, value)) throw std::invalid_argument("missing parameter '" + nh.resolveName(name) + "'");
-  return value;
+  return docking_settings::ParamReader(nh).require<double>(name);
 }
 
 bool requireBool(const ros::NodeHandle& nh, const std::string& name) {
-  bool value;
-  if (!nh.getParam(name, value)) throw std::invalid_argument("missing parameter '" + nh.resolveName(name) + "'");
-  return value;
+  return docking_settings::ParamReader(nh).require<bool>(name);
 }
 
 PlannerConfig loadConfig(const ros::NodeHandle& p) {
@@ -93,9 +91,7 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   t.max_port_speed_mps = requireDouble(p, "max_port_speed_mps");
   t.outlier_gate_sigma = requireDouble(p, "outlier_gate_sigma");
   const double reset_count = requireDouble(p, "outlier_reset_count");
-  if (!(reset_count >= 1.0 && reset_count <= 1000.0)) {
-    throw std::invalid_argument("parameter ~outlier_reset_count must be in [1, 1000]");
-  }
+  docking_settings::ParamReader(p).checkRange("outlier_reset_count", reset_count, 1.0, 1000.0);
   t.outlier_reset_count = static_cast<int>(reset_count);
   c.stamp_limits.max_future_s = requireDouble(p, "max_future_stamp_s");
   c.stamp_limits.max_age_s = requireDouble(p, "max_stamp_age_s");
@@ -126,11 +122,7 @@ PlannerConfig loadConfig(const ros::NodeHandle& p) {
   c.orbit_speed_mps = requireDouble(p, "orbit_speed_mps");
   c.search_orbit_memory_s = requireDouble(p, "search_orbit_memory_s");
   c.position_only_gate_m = requireDouble(p, "position_only_gate_m");
-  try {
-    validate(c);  // messages start with the field name, which is the parameter name
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument("parameter ~" + std::string(e.what()));
-  }
+  docking_settings::ParamReader(p).validated([&] { validate(c); });  // messages start with the parameter's name
   return c;
 }
 
@@ -176,14 +168,14 @@ class PlannerNode {
     odom_frame_ = pnh.param<std::string>("odom_frame", docking_msgs::frames::kOdom);
     base_frame_ = pnh.param<std::string>("base_frame", docking_msgs::frames::kBaseLink);
     const double rate_hz = requireDouble(pnh, "rate_hz");
-    if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) throw std::invalid_argument("parameter ~rate_hz must be in (0, 1000]");
+    if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) docking_settings::ParamReader(pnh).invalid("rate_hz", "must be in (0, 1000]");
     update_on_estimate_ = requireBool(pnh, "update_on_estimate");
     use_estimate_covariance_ = requireBool(pnh, "use_estimate_covariance");
     tf_wait_s_ = requireDouble(pnh, "tf_wait_s");
-    if (!(tf_wait_s_ >= 0.0)) throw std::invalid_argument("parameter ~tf_wait_s must be >= 0");
+    if (!(tf_wait_s_ >= 0.0)) docking_settings::ParamReader(pnh).invalid("tf_wait_s", "must be >= 0");
     max_odom_extrapolation_s_ = requireDouble(pnh, "max_odom_extrapolation_s");
     if (!(max_odom_extrapolation_s_ >= 0.0 && max_odom_extrapolation_s_ <= 0.2)) {
-      throw std::invalid_argument("parameter ~max_odom_extrapolation_s must be in [0, 0.2]");
+      docking_settings::ParamReader(pnh).invalid("max_odom_extrapolation_s", "must be in [0, 0.2]");
     }
 
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>(docking_msgs::topics::kCmdVel, 1);
@@ -202,10 +194,10 @@ class PlannerNode {
     feedback_period_s_ = 1.0 / requireDouble(pnh, "feedback_rate_hz");
     client_loss_timeout_s_ = requireDouble(pnh, "client_loss_timeout_s");
     if (!(feedback_period_s_ > 0.0 && feedback_period_s_ <= 10.0)) {
-      throw std::invalid_argument("parameter ~feedback_rate_hz must be in [0.1, inf)");
+      docking_settings::ParamReader(pnh).invalid("feedback_rate_hz", "must be in [0.1, inf)");
     }
     if (!(client_loss_timeout_s_ >= 0.0 && client_loss_timeout_s_ <= 60.0)) {
-      throw std::invalid_argument("parameter ~client_loss_timeout_s must be in [0, 60] (0: never)");
+      docking_settings::ParamReader(pnh).invalid("client_loss_timeout_s", "must be in [0, 60] (0: never)");
     }
     // The client's liveness: an action client subscribes to the server's feedback topic. roscpp shares
     // one publication per topic within a node, so this publisher's connect/disconnect callbacks see the
@@ -776,9 +768,9 @@ int main(int argc, char** argv) {
   // Own SIGINT handling, so that a last zero cmd_vel goes out before the node shuts down.
   ros::init(argc, argv, "planner", ros::init_options::NoSigintHandler);
   std::signal(SIGINT, docking_planner::onSigint);
-  ros::NodeHandle nh;
-  ros::NodeHandle pnh("~");
-  try {
+  const int exit_code = docking_settings::runNode([] {
+    ros::NodeHandle nh;
+    ros::NodeHandle pnh("~");
     docking_planner::PlannerNode node(nh, pnh);
     while (ros::ok() && !docking_planner::g_stop_requested) {
       ros::spinOnce();
@@ -786,11 +778,7 @@ int main(int argc, char** argv) {
     }
     node.shutdown();
     ros::WallDuration(0.1).sleep();  // let the zero command and the goal's end leave
-  } catch (const std::exception& e) {
-    ROS_FATAL("planner: %s", e.what());
-    ros::shutdown();
-    return 1;
-  }
+  });
   ros::shutdown();
-  return 0;
+  return exit_code;
 }

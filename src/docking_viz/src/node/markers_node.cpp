@@ -12,7 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "docking_msgs/require_param.h"
+#include "docking_settings/param_reader.h"
+#include "docking_settings/run_node.h"
 #include <docking_msgs/DockingState.h>
 #include <docking_msgs/PlannerGeometry.h>
 #include <docking_msgs/TargetEstimate.h>
@@ -63,7 +64,10 @@ constexpr char kCommandNamespace[] = "cmd_vel";
 constexpr char kStateNamespace[] = "state";
 std::string estimateNamespace(std::uint8_t source) { return std::string("estimate/") + sourceStyle(source).key; }
 
-using docking_msgs::requireParam;
+template <typename T>
+T requireParam(const ros::NodeHandle& nh, const std::string& key) {
+  return docking_settings::ParamReader(nh).require<T>(key);
+}
 
 MarkerConfig loadConfig(const ros::NodeHandle& pnh) {
   MarkerConfig c;
@@ -77,7 +81,7 @@ MarkerConfig loadConfig(const ros::NodeHandle& pnh) {
   c.velocity_arrow_s = requireParam<double>(pnh, "velocity_arrow_s");
   c.axis_arrow_length_m = requireParam<double>(pnh, "axis_arrow_length_m");
   c.planner_namespace = requireParam<std::string>(pnh, "planner_namespace");
-  validate(c);
+  docking_settings::ParamReader(pnh).validated([&] { validate(c); });
   return c;
 }
 
@@ -86,7 +90,7 @@ PlannerRadii loadPlannerRadii(const ros::NodeHandle& planner_nh) {
   PlannerRadii radii;
   radii.safe_radius_m = requireParam<double>(planner_nh, "safe_radius_m");
   radii.search_orbit_radius_m = requireParam<double>(planner_nh, "search_orbit_radius_m");
-  validate(radii);
+  docking_settings::ParamReader(planner_nh).validated([&] { validate(radii); });
   return radii;
 }
 
@@ -437,12 +441,8 @@ class MarkersNode {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "markers");
-  try {
+  return docking_settings::runNode([] {
     docking_viz::MarkersNode node(ros::NodeHandle(), ros::NodeHandle("~"));
     ros::spin();
-  } catch (const std::invalid_argument& e) {
-    ROS_FATAL("markers: %s", e.what());
-    return 1;
-  }
-  return 0;
+  });
 }

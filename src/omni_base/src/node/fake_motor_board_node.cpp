@@ -12,6 +12,7 @@
 //                     itself carries on (a glitching firmware, a second writer on the port, a replayed log)
 // The true wheel speeds and angles (never reset, not even by a reboot) are published on ~wheels
 // (sensor_msgs/JointState) at 200 Hz.
+#include <docking_settings/run_node.h>
 #include <poll.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
@@ -160,13 +161,9 @@ class FakeMotorBoardNode {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "fake_motor_board");
-  ros::NodeHandle pnh("~");
-  try {
+  return docking_settings::runNode([] {
+    ros::NodeHandle pnh("~");
     FakeMotorBoardNode node(pnh);
     node.run();
-  } catch (const std::exception& e) {
-    ROS_FATAL("fake_motor_board: %s", e.what());
-    return 1;
-  }
-  return 0;
+  });
 }

@@ -1,6 +1,7 @@
 // omni_base: cmd_vel in, wheel set-points out to the motor board (serial) or the simulator, odometry
 // back. The command path and the odometry are omni_base_core; this file wires them to ROS.
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <docking_settings/run_node.h>
 #include <docking_msgs/WheelState.h>
 #include <docking_msgs/names.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -47,9 +48,7 @@ NodeConfig loadConfig(const ros::NodeHandle& pnh) {
   const ParamLoader p(pnh);
   NodeConfig c;
   c.backend = p.require<std::string>("backend");
-  if (c.backend != "serial" && c.backend != "sim") {
-    throw std::runtime_error("parameter " + p.name("backend") + " must be 'serial' or 'sim', got '" + c.backend + "'");
-  }
+  if (c.backend != "serial" && c.backend != "sim") p.invalid("backend", "must be 'serial' or 'sim', got '" + c.backend + "'");
   c.control_rate_hz = p.requireInRange("control_rate_hz");
   c.wheel_names = p.require<std::vector<std::string>>("wheels/names");
   const auto angles_deg = p.requireVectorInRange("wheels/drive_angles_deg", c.wheel_names.size());
@@ -74,13 +73,14 @@ NodeConfig loadConfig(const ros::NodeHandle& pnh) {
 
   c.serial.device = p.require<std::string>("serial/device");
   c.serial.baud = p.requireIntInRange("serial/baud");
+  if (SerialPort::baudConstant(c.serial.baud) == 0) p.invalid("serial/baud", "not a baud rate the serial port supports");
   c.serial.link_timeout_s = p.requireInRange("serial/link_timeout_s");
   c.serial.backoff_min_s = p.requireInRange("serial/reconnect_backoff_min_s");
   c.serial.backoff_max_s = p.requireInRange("serial/reconnect_backoff_max_s");
   if (c.serial.backoff_max_s < c.serial.backoff_min_s) {
-    throw std::runtime_error("parameter " + p.name("serial/reconnect_backoff_max_s") + " = " +
-                             std::to_string(c.serial.backoff_max_s) + " is below " +
-                             p.name("serial/reconnect_backoff_min_s") + " = " + std::to_string(c.serial.backoff_min_s));
+    p.invalid("serial/reconnect_backoff_max_s", std::to_string(c.serial.backoff_max_s) + " is below " +
+                                                    p.name("serial/reconnect_backoff_min_s") + " = " +
+                                                    std::to_string(c.serial.backoff_min_s));
   }
   c.serial.wheel_count = c.wheel_names.size();
   c.serial.drive = c.drive;
@@ -361,14 +361,10 @@ class OmniBaseNode {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "omni_base");
-  ros::NodeHandle nh;
-  ros::NodeHandle pnh("~");
-  try {
+  return docking_settings::runNode([] {
+    ros::NodeHandle nh;
+    ros::NodeHandle pnh("~");
     omni_base::OmniBaseNode node(nh, pnh);
     ros::spin();
-  } catch (const std::exception& e) {
-    ROS_FATAL("omni_base: %s", e.what());
-    return 1;
-  }
-  return 0;
+  });
 }

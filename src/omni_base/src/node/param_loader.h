@@ -1,11 +1,11 @@
-// Reading and validating the node's parameters: a missing or invalid one stops the node with a
-// message that names it.
+// Reading and validating the node's parameters: the workspace's reader (docking_settings: a missing
+// key, a wrong type and a value out of range each stop the node once, naming the key) with the bounds of
+// parameter_ranges.h, the one home of omni_base's ranges.
 #pragma once
 
-#include <ros/ros.h>
+#include <docking_settings/param_reader.h>
 
 #include <cmath>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -15,67 +15,49 @@ namespace omni_base {
 
 class ParamLoader {
  public:
-  explicit ParamLoader(const ros::NodeHandle& nh) : nh_(nh) {}
+  explicit ParamLoader(const ros::NodeHandle& nh) : reader_(nh) {}
 
   template <typename T>
   T require(const std::string& name) const {
-    T value;
-    if (!nh_.getParam(name, value)) {
-      throw std::runtime_error("parameter " + nh_.resolveName(name) + " is missing or has the wrong type");
-    }
-    return value;
+    return reader_.require<T>(name);
   }
 
   template <typename T>
   T optional(const std::string& name, const T& fallback) const {
-    T value;
-    return nh_.getParam(name, value) ? value : fallback;
+    return reader_.optional<T>(name, fallback);
   }
 
+  /// A list of `size` finite entries (0: any size), each positive when `positive`.
   std::vector<double> requireVector(const std::string& name, std::size_t size, bool positive) const {
-    const auto v = require<std::vector<double>>(name);
-    if (size != 0 && v.size() != size) {
-      throw std::runtime_error("parameter " + nh_.resolveName(name) + " must have " + std::to_string(size) +
-                               " entries, has " + std::to_string(v.size()));
-    }
-    for (double x : v) {
-      if (!std::isfinite(x) || (positive && !(x > 0.0))) {
-        throw std::runtime_error("parameter " + nh_.resolveName(name) + " has an invalid entry " + std::to_string(x));
-      }
-    }
-    return v;
+    return reader_.requireListInRange(name, size, positive ? std::nextafter(0.0, 1.0) : -HUGE_VAL, HUGE_VAL);
   }
 
-  /// A number within its range in parameterRanges() (the one home of the bounds).
+  /// A number within its range in parameterRanges().
   double requireInRange(const std::string& name) const {
-    const double v = require<double>(name);
-    throwIfOutOfRange(name, v);
-    return v;
+    const ParameterRange& range = parameterRange(name);
+    return reader_.requireInRange<double>(name, range.min, range.max);
   }
 
   int requireIntInRange(const std::string& name) const {
-    const int v = require<int>(name);
-    throwIfOutOfRange(name, v);
-    return v;
+    const ParameterRange& range = parameterRange(name);
+    return reader_.requireInRange<int>(name, static_cast<int>(range.min), static_cast<int>(range.max));
   }
 
   /// A list whose every entry is within the range of `name`.
   std::vector<double> requireVectorInRange(const std::string& name, std::size_t size) const {
-    const auto v = requireVector(name, size, false);
-    for (std::size_t i = 0; i < v.size(); ++i) throwIfOutOfRange(name, v[i], "[" + std::to_string(i) + "]");
-    return v;
+    const ParameterRange& range = parameterRange(name);
+    return reader_.requireListInRange(name, size, range.min, range.max);
   }
 
-  std::string name(const std::string& param) const { return nh_.resolveName(param); }
+  /// A value the parameter does not allow (two parameters that contradict, an unknown name).
+  [[noreturn]] void invalid(const std::string& name, const std::string& why) const {
+    throw docking_settings::ConfigError(reader_.resolved(name), docking_settings::ConfigProblem::kInvalid, why);
+  }
+
+  std::string name(const std::string& param) const { return reader_.resolved(param); }
 
  private:
-  void throwIfOutOfRange(const std::string& name, double value, const std::string& index = "") const {
-    if (const auto error = checkParameterRange(name, value, nh_.resolveName(name) + index)) {
-      throw std::runtime_error(*error);
-    }
-  }
-
-  ros::NodeHandle nh_;
+  docking_settings::ParamReader reader_;
 };
 
 }  // namespace omni_base
