@@ -45,6 +45,8 @@ const char* stampProblemName(StampProblem problem) {
       return "stamp_in_future";
     case StampProblem::kTooOld:
       return "stamp_too_old";
+    case StampProblem::kUnset:
+      return "stamp_unset";
   }
   return "unknown";
 }
@@ -92,6 +94,7 @@ void validate(const StampLimits& limits) {
 
 StampProblem checkStamp(double stamp_s, double now_s, const StampLimits& limits) {
   if (!std::isfinite(stamp_s)) return StampProblem::kNotFinite;
+  if (stamp_s == 0.0) return StampProblem::kUnset;
   if (stamp_s - now_s > limits.max_future_s) return StampProblem::kFuture;
   if (now_s - stamp_s > limits.max_age_s) return StampProblem::kTooOld;
   return StampProblem::kNone;

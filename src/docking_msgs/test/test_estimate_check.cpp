@@ -36,7 +36,9 @@ TEST(StampCheck, EachKindHasItsCode) {
   EXPECT_EQ(checkStamp(1100.0, 100.0, limits), StampProblem::kFuture);
   EXPECT_EQ(checkStamp(100.6, 100.0, limits), StampProblem::kFuture);
   EXPECT_EQ(checkStamp(94.0, 100.0, limits), StampProblem::kTooOld);
-  EXPECT_EQ(checkStamp(0.0, 100.0, limits), StampProblem::kTooOld);
+  EXPECT_EQ(checkStamp(0.0, 100.0, limits), StampProblem::kUnset);
+  EXPECT_EQ(checkStamp(0.0, 3.0, limits), StampProblem::kUnset);  // issue 53: passed while the sim clock was < 5 s
+  EXPECT_EQ(checkStamp(0.5, 3.0, limits), StampProblem::kNone);
   EXPECT_EQ(checkStamp(kNaN, 100.0, limits), StampProblem::kNotFinite);
   EXPECT_EQ(checkStamp(kInf, 100.0, limits), StampProblem::kNotFinite);
   EXPECT_STREQ(stampProblemName(StampProblem::kFuture), "stamp_in_future");

@@ -27,6 +27,7 @@ enum class StampProblem : std::uint8_t {
   kNotFinite = 1,  ///< NaN or infinite
   kFuture = 2,     ///< more than max_future_s ahead of now
   kTooOld = 3,     ///< more than max_age_s behind now
+  kUnset = 4,      ///< exactly 0: ROS's "no stamp" (it passed as recent while a sim clock was under max_age_s)
 };
 const char* stampProblemName(StampProblem problem);
 

@@ -73,6 +73,8 @@ const char* offerProblemName(OfferProblem problem) {
       return "stamp_too_old";
     case OfferProblem::kOutOfOrder:
       return "out_of_order";
+    case OfferProblem::kStampUnset:
+      return "stamp_unset";
   }
   return "unknown";
 }
@@ -148,6 +150,9 @@ OfferResult SourceArbiter::offer(const EstimateSummary& estimate, double now_s) 
   if (stamp == StampProblem::kNotFinite) {
     result.problem = OfferProblem::kStampNotFinite;
     result.reason = std::string(sourceName(estimate.source)) + ": stamp is not finite";
+  } else if (stamp == StampProblem::kUnset) {
+    result.problem = OfferProblem::kStampUnset;
+    result.reason = std::string(sourceName(estimate.source)) + ": stamp is 0 (not set)";
   } else if (stamp == StampProblem::kFuture) {
     result.problem = OfferProblem::kStampInFuture;
     result.reason = std::string(sourceName(estimate.source)) + ": stamped " + formatDouble("%.3f", ahead) +

@@ -546,6 +546,9 @@ TEST(SourceArbiterStamps, TooOldAndNonFiniteStampsAreRejected) {
   EXPECT_FALSE(arbiter.latest(Source::kMonoIr).has_value());
   EXPECT_EQ(arbiter.offer(good(Source::kMonoIr, NAN, 1.0), 100.0).problem, OfferProblem::kStampNotFinite);
   EXPECT_EQ(arbiter.rejectedCount(), 2u);
+  // Issue 53: a zero stamp passed while the sim clock was under max_age_s.
+  EXPECT_EQ(arbiter.offer(good(Source::kMonoIr, 0.0, 1.0), 3.0).problem, OfferProblem::kStampUnset);
+  EXPECT_EQ(arbiter.rejectedCount(), 3u);
   EXPECT_TRUE(arbiter.offer(good(Source::kMonoIr, 99.9, 1.0), 100.0).accepted);
   EXPECT_EQ(arbiter.offer(good(Source::kMonoIr, 99.8, 1.0), 100.0).problem, OfferProblem::kOutOfOrder);
 }

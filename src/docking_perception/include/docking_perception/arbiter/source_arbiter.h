@@ -110,6 +110,7 @@ enum class OfferProblem : std::uint8_t {
   kStampInFuture = 3,   ///< beyond stamp_limits.max_future_s ahead of now
   kStampTooOld = 4,     ///< beyond stamp_limits.max_age_s behind now
   kOutOfOrder = 5,      ///< not after the last estimate accepted from that source (or a duplicate)
+  kStampUnset = 6,      ///< stamp exactly 0: no stamp
 };
 const char* offerProblemName(OfferProblem problem);
 
