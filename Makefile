@@ -6,8 +6,8 @@ export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 export ROS_HOME := $(CURDIR)/build/ros_home
 export ROSCONSOLE_FORMAT := [$${severity}] [$${time}] [$${node}]: $${message}
 export PYTHONDONTWRITEBYTECODE := 1
-# Loopback only (README "Network"): the master and the python nodes bind 127.0.0.1, the C++ nodes refuse
-# connections from other hosts. On a robot's private network set ROS_IP to the robot's address instead.
+# Loopback only (README "Network"): with the bind guard that devel/setup.bash preloads, every server socket
+# of every ROS process is on 127.0.0.1. On a robot's private network set ROS_IP to the robot's address.
 export ROS_IP := 127.0.0.1
 unexport ROS_HOSTNAME
 
