@@ -6,10 +6,12 @@
 
 Which YAML a node loads is read from launch/*.launch (its <rosparam command="load" file=...>), so the
 launch files stay the one home of that mapping. The node's current values are asked of its
-dynamic_reconfigure server (what `dynparam get` shows). Only keys already in the YAML are changed, each
-by editing the value on its own line: comments, blank lines, key order and every other line stay as
-they were (a YAML dump would lose the comments that document each setting). Live parameters that the
-file does not hold are reported, not added. A unified diff is printed; --dry-run prints it only.
+dynamic_reconfigure server (what `dynparam get` shows). A node whose settings are declared
+(src/*/settings/*.yaml claims its YAML) keeps in its YAML only what differs from the declared defaults:
+a live value that differs is changed on its line, or added as a line of its own; one back at its default
+has its line removed. Every other line stays as it was (comments, blank lines, key order: a YAML dump
+would lose them). For a node without a declaration, only keys already in the YAML are changed, and live
+parameters the file lacks are reported. A unified diff is printed; --dry-run prints it only.
 
 Exit status: 0 written (or nothing to write), 1 an error (no ROS master, node not running, no YAML
 mapped to the node, a key nested or repeated in the YAML), 2 bad arguments.
@@ -30,9 +32,13 @@ import yaml
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 LAUNCH_DIR = ROOT / "launch"
 CONFIG_DIR = ROOT / "config"
+sys.path.insert(0, str(ROOT / "src" / "docking_settings" / "src"))
+from docking_settings.declarations import find_declarations  # noqa: E402
 
 # A top-level `key: value` line; the key is a ROS parameter name (no quoting, no nesting).
 TOP_LEVEL_KEY = re.compile(r"^(?P<key>[A-Za-z_][A-Za-z0-9_]*)(?P<colon>[ \t]*:)(?P<rest>.*)$")
+# The empty mapping of a YAML that overrides no default.
+EMPTY_MAPPING = re.compile(r"^\{\}[ \t]*(#.*)?$")
 # Value texts that are not a one-line scalar: flow collections, block scalars, anchors, aliases, tags.
 NOT_SCALAR_START = ("[", "{", "|", ">", "&", "*", "!")
 
@@ -237,23 +243,34 @@ def edit_line(line, new_value):
     return m.group("key") + m.group("colon") + lead + new_text + tail + newline
 
 
-def write_back(text, live, path):
-    """(new text, [changed keys], [live keys not in the file]). Every other line is kept byte for byte.
-    The result is parsed again: it must hold the live values and every other key as before."""
+def write_back(text, live, path, defaults=None):
+    """(new text, [changed keys], [live keys not written]). Without `defaults`: only keys in the file are
+    changed. With `defaults` ({key: declared default}): the file holds exactly the live values that differ
+    from their defaults (changed, added or removed). Every other line is kept byte for byte. The result is
+    parsed again: it must hold the live values and every other key as before."""
     data = yaml.safe_load(text) or {}
     if not isinstance(data, dict):
         raise SaveError(f"{path}: not a YAML mapping")
     lines = text.splitlines(keepends=True)
-    changed, missing = [], []
+    changed, missing, removed, added = [], [], set(), {}
     for key in sorted(live):
+        wanted = defaults is None or (key in defaults and not same_value(live[key], defaults[key]))
         if key not in data:
             parent = nested_parent(data, key)
             if parent:
                 raise SaveError(f"{path}: key '{key}' is nested under '{'/'.join(parent)}', but the node "
                                 f"reads it at the top level (~{key}); not edited")
-            missing.append(key)
+            if defaults is not None and key in defaults and wanted:
+                added[key] = live[key]
+                changed.append(key)
+            elif defaults is None or key not in defaults:
+                missing.append(key)
             continue
         i = key_line(lines, key, path)
+        if not wanted:
+            removed.add(i)
+            changed.append(key)
+            continue
         if same_value(live[key], data[key]):
             continue
         try:
@@ -261,12 +278,41 @@ def write_back(text, live, path):
         except SaveError as e:
             raise SaveError(f"{path}:{i + 1}: {e}") from None
         changed.append(key)
+    lines = [line for i, line in enumerate(lines) if i not in removed]
+    if added and lines and not lines[-1].endswith("\n"):
+        lines[-1] += "\n"
+    lines += ["%s: %s\n" % (key, format_value(value, "")) for key, value in added.items()]
+    lines = with_empty_mapping_marker(lines)
     new_text = "".join(lines)
-    expected = dict(data, **{k: live[k] for k in changed})
+    expected = dict(data)
+    for key in changed:
+        if defaults is not None and key in defaults and same_value(live[key], defaults[key]):
+            expected.pop(key, None)
+        else:
+            expected[key] = live[key]
     reread = yaml.safe_load(new_text) or {}
     if set(reread) != set(expected) or not all(same_value(expected[k], reread[k]) for k in expected):
         raise SaveError(f"{path}: the edited file would not read back as the live values; not written")
     return new_text, changed, missing
+
+
+def with_empty_mapping_marker(lines):
+    """`{}` stands for a file of no keys: kept (or put back) when no key is left, dropped when one is."""
+    has_keys = any(TOP_LEVEL_KEY.match(line.rstrip("\r\n")) for line in lines)
+    marker = [i for i, line in enumerate(lines) if EMPTY_MAPPING.match(line.rstrip("\r\n"))]
+    if has_keys:
+        return [line for i, line in enumerate(lines) if i not in marker]
+    if not marker:
+        return lines + ["{}\n"]
+    return lines
+
+
+def declared_defaults(path):
+    """{key: declared default} of the node whose declaration claims this YAML; None when none does."""
+    for declaration in find_declarations(ROOT):
+        if any(pathlib.Path(c).name == pathlib.Path(path).name for c in declaration.config):
+            return {key: setting.default for key, setting in declaration.settings.items()}
+    return None
 
 
 def replace_file(path, text):
@@ -302,7 +348,7 @@ def save_node(node, config_dir, dry_run, timeout_s, out=sys.stdout, err=sys.stde
     live = live_values(node, timeout_s)
     with open(path, newline="") as f:
         old = f.read()
-    new, changed, missing = write_back(old, live, path)
+    new, changed, missing = write_back(old, live, path, declared_defaults(path))
     if missing:
         err.write(f"{node}: live, not in {path} (not added): {', '.join(missing)}\n")
     if not changed:

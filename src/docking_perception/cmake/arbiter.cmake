@@ -9,7 +9,8 @@ add_library(${PROJECT_NAME}_arbiter_core
   src/arbiter/source_arbiter.cpp
 )
 # The stamp checks and clock-jump detection shared with the planner (docking_msgs/estimate_check.h).
-target_link_libraries(${PROJECT_NAME}_arbiter_core ${docking_msgs_LIBRARIES})
+target_link_libraries(${PROJECT_NAME}_arbiter_core ${docking_msgs_LIBRARIES} ${docking_settings_LIBRARIES})
+add_dependencies(${PROJECT_NAME}_arbiter_core ${PROJECT_NAME}_settings_headers)
 
 # Node: tf2 into one output frame, publishes the FUSED estimate, pose, twist, tf, status, diagnostics.
 add_executable(arbiter src/arbiter/arbiter_node.cpp)
@@ -33,6 +34,7 @@ if(CATKIN_ENABLE_TESTING)
   if(TARGET test_arbiter_core)
     # Debian's catkin links GTest::gtest only; the tests use gtest's own main().
     target_link_libraries(test_arbiter_core ${PROJECT_NAME}_arbiter_core GTest::gtest_main)
+    target_compile_definitions(test_arbiter_core PRIVATE WORKSPACE_CONFIG_DIR="${CMAKE_CURRENT_SOURCE_DIR}/../../config")
   endif()
 
   # The node on synthetic estimates from two cameras (needs a roscore: rostest).

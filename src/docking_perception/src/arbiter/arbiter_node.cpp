@@ -18,6 +18,8 @@
 #include <dynamic_reconfigure/server.h>
 #include "docking_msgs/latency_window.h"
 #include "docking_settings/param_reader.h"
+#include "docking_settings/reconfigure.h"
+#include "docking_settings/ros_loader.h"
 #include "docking_settings/run_node.h"
 #include <docking_msgs/TargetEstimate.h>
 #include <docking_msgs/estimate_check_msg.h>
@@ -39,39 +41,13 @@ namespace docking_perception {
 namespace arbiter {
 namespace {
 
-template <typename T>
-T requireParam(const ros::NodeHandle& nh, const std::string& key) {
-  return docking_settings::ParamReader(nh).require<T>(key);
-}
-
-ArbiterConfig loadConfig(const ros::NodeHandle& pnh) {
-  ArbiterConfig c;
-  c.switch_range_m = requireParam<double>(pnh, "switch_range_m");
-  c.hysteresis_m = requireParam<double>(pnh, "hysteresis_m");
-  c.timeout_s = requireParam<double>(pnh, "timeout_s");
-  c.future_tolerance_s = requireParam<double>(pnh, "future_tolerance_s");
-  c.stamp_limits.max_future_s = requireParam<double>(pnh, "max_future_stamp_s");
-  c.stamp_limits.max_age_s = requireParam<double>(pnh, "max_stamp_age_s");
-  const auto count = [&pnh](const char* name) {
-    const int value = requireParam<int>(pnh, name);
-    if (value < 0) docking_settings::ParamReader(pnh).invalid(name, "must be >= 0");
-    return static_cast<std::uint32_t>(value);
-  };
-  c.min_visible_inliers = count("min_visible_inliers");
-  c.min_ir_inliers = count("min_ir_inliers");
-  c.min_disparity_range_m = requireParam<double>(pnh, "min_disparity_range_m");
-  c.max_mono_reprojection_error_px = requireParam<double>(pnh, "max_mono_reprojection_error_px");
-  ConsistencyConfig& k = c.consistency;
-  k.enabled = requireParam<bool>(pnh, "consistency_enabled");
-  k.gate_chi2_pose = requireParam<double>(pnh, "consistency_gate_chi2_pose");
-  k.gate_chi2_position = requireParam<double>(pnh, "consistency_gate_chi2_position");
-  k.stamp_tolerance_s = requireParam<double>(pnh, "consistency_stamp_tolerance_s");
-  k.min_speed_mps = requireParam<double>(pnh, "consistency_min_speed_mps");
-  k.min_rate_radps = requireParam<double>(pnh, "consistency_min_rate_radps");
-  k.mount_sigma_m = requireParam<double>(pnh, "consistency_mount_sigma_m");
-  k.mount_sigma_rad = requireParam<double>(pnh, "consistency_mount_sigma_rad");
-  docking_settings::ParamReader(pnh).validated([&] { validate(c); });
-  return c;
+/// The node's settings: the declared defaults with the parameter server's values (config/arbiter.yaml).
+ArbiterNodeSettings loadSettings(const ros::NodeHandle& pnh) {
+  ArbiterNodeSettings settings;
+  docking_settings::loadSettings(pnh, settings);
+  docking_settings::warnUnknownKeys(pnh, settings);
+  docking_settings::ParamReader(pnh).validated([&] { validate(settings.core); });
+  return settings;
 }
 
 Matrix6d toMatrix(const boost::array<double, 36>& a) {
@@ -130,16 +106,13 @@ EstimateSummary summarize(const docking_msgs::TargetEstimate& msg, Source source
 
 class ArbiterNode {
  public:
-  ArbiterNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
-      : arbiter_(loadConfig(pnh)), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
-    output_frame_ = pnh.param<std::string>("output_frame", docking_msgs::frames::kStereoLeftOptical);
+  ArbiterNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const ArbiterNodeSettings& settings)
+      : arbiter_(settings.core), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
+    output_frame_ = settings.output_frame;
     if (output_frame_.empty()) docking_settings::ParamReader(pnh).invalid("output_frame", "is empty");
-    const double status_rate_hz = requireParam<double>(pnh, "status_rate_hz");
-    if (!(status_rate_hz > 0.0)) docking_settings::ParamReader(pnh).invalid("status_rate_hz", "must be > 0");
-    const double tf_timeout_s = requireParam<double>(pnh, "tf_timeout_s");
-    if (!(tf_timeout_s >= 0.0)) docking_settings::ParamReader(pnh).invalid("tf_timeout_s", "must be >= 0");
-    tf_timeout_ = ros::Duration(tf_timeout_s);
-    silence_ = std::make_unique<InputSilence>(requireParam<double>(pnh, "sources_silent_timeout_s"));
+    tf_timeout_ = ros::Duration(settings.tf_timeout_s);
+    silence_ = std::make_unique<InputSilence>(settings.sources_silent_timeout_s);
+    const double status_rate_hz = settings.status_rate_hz;
 
     estimate_pub_ = nh.advertise<docking_msgs::TargetEstimate>(docking_msgs::topics::kTargetEstimate, 10);
     pose_pub_ = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>(docking_msgs::topics::kTargetPose, 10);
@@ -162,49 +135,17 @@ class ArbiterNode {
 
  private:
   void onReconfigure(docking_perception::ArbiterConfig& cfg) {
+    dynamic_reconfigure::Config message;
+    cfg.__toMessage__(message);
     arbiter::ArbiterConfig c = arbiter_.config();
-    c.switch_range_m = cfg.switch_range_m;
-    c.hysteresis_m = cfg.hysteresis_m;
-    c.timeout_s = cfg.timeout_s;
-    c.future_tolerance_s = cfg.future_tolerance_s;
-    c.stamp_limits.max_future_s = cfg.max_future_stamp_s;
-    c.stamp_limits.max_age_s = cfg.max_stamp_age_s;
-    c.min_visible_inliers = static_cast<std::uint32_t>(std::max(0, cfg.min_visible_inliers));
-    c.min_ir_inliers = static_cast<std::uint32_t>(std::max(0, cfg.min_ir_inliers));
-    c.min_disparity_range_m = cfg.min_disparity_range_m;
-    c.max_mono_reprojection_error_px = cfg.max_mono_reprojection_error_px;
-    c.consistency.enabled = cfg.consistency_enabled;
-    c.consistency.gate_chi2_pose = cfg.consistency_gate_chi2_pose;
-    c.consistency.gate_chi2_position = cfg.consistency_gate_chi2_position;
-    c.consistency.stamp_tolerance_s = cfg.consistency_stamp_tolerance_s;
-    c.consistency.min_speed_mps = cfg.consistency_min_speed_mps;
-    c.consistency.min_rate_radps = cfg.consistency_min_rate_radps;
-    c.consistency.mount_sigma_m = cfg.consistency_mount_sigma_m;
-    c.consistency.mount_sigma_rad = cfg.consistency_mount_sigma_rad;
+    docking_settings::applyReconfigure(message, c);
     try {
       arbiter_.reconfigure(c);
     } catch (const std::invalid_argument& e) {
       ROS_ERROR("arbiter: reconfigure refused (%s); keeping the previous values", e.what());
       // Show the values in force, not the refused ones (the server publishes what the callback leaves).
-      const arbiter::ArbiterConfig& kept = arbiter_.config();
-      cfg.switch_range_m = kept.switch_range_m;
-      cfg.hysteresis_m = kept.hysteresis_m;
-      cfg.timeout_s = kept.timeout_s;
-      cfg.future_tolerance_s = kept.future_tolerance_s;
-      cfg.max_future_stamp_s = kept.stamp_limits.max_future_s;
-      cfg.max_stamp_age_s = kept.stamp_limits.max_age_s;
-      cfg.min_visible_inliers = static_cast<int>(kept.min_visible_inliers);
-      cfg.min_ir_inliers = static_cast<int>(kept.min_ir_inliers);
-      cfg.min_disparity_range_m = kept.min_disparity_range_m;
-      cfg.max_mono_reprojection_error_px = kept.max_mono_reprojection_error_px;
-      cfg.consistency_enabled = kept.consistency.enabled;
-      cfg.consistency_gate_chi2_pose = kept.consistency.gate_chi2_pose;
-      cfg.consistency_gate_chi2_position = kept.consistency.gate_chi2_position;
-      cfg.consistency_stamp_tolerance_s = kept.consistency.stamp_tolerance_s;
-      cfg.consistency_min_speed_mps = kept.consistency.min_speed_mps;
-      cfg.consistency_min_rate_radps = kept.consistency.min_rate_radps;
-      cfg.consistency_mount_sigma_m = kept.consistency.mount_sigma_m;
-      cfg.consistency_mount_sigma_rad = kept.consistency.mount_sigma_rad;
+      dynamic_reconfigure::Config kept = docking_settings::toReconfigure(arbiter_.config());
+      cfg.__fromMessage__(kept);
     }
   }
 
@@ -254,7 +195,7 @@ class ArbiterNode {
     const double now_s = ros::Time::now().toSec();
     // The stamp against now before the tf look-up, which would wait tf_timeout_s for a future one.
     const auto stamp_problem =
-        docking_msgs::checks::checkStamp(msg->header.stamp.toSec(), now_s, arbiter_.config().stamp_limits);
+        docking_msgs::checks::checkStamp(msg->header.stamp.toSec(), now_s, arbiter::stampLimits(arbiter_.config()));
     if (stamp_problem != docking_msgs::checks::StampProblem::kNone) {
       const OfferResult refused = arbiter_.offer(summarize(*msg, source), now_s);  // counted, state untouched
       recordRejection(publisher, source, offerProblemName(refused.problem), refused.reason);
@@ -513,7 +454,7 @@ int main(int argc, char** argv) {
   return docking_settings::runNode([] {
     ros::NodeHandle nh;
     ros::NodeHandle pnh("~");
-    docking_perception::arbiter::ArbiterNode node(nh, pnh);
+    docking_perception::arbiter::ArbiterNode node(nh, pnh, docking_perception::arbiter::loadSettings(pnh));
     ros::spin();
   });
 }

@@ -11,18 +11,6 @@ namespace docking_perception {
 namespace arbiter {
 namespace {
 
-void requirePositive(double value, const char* name) {
-  if (!std::isfinite(value) || value <= 0.0) {
-    throw std::invalid_argument(std::string("consistency_") + name + " must be a positive number");
-  }
-}
-
-void requireNonNegative(double value, const char* name) {
-  if (!std::isfinite(value) || value < 0.0) {
-    throw std::invalid_argument(std::string("consistency_") + name + " must be a number >= 0");
-  }
-}
-
 /// Rotation taking `from` to `to`, as a rotation vector in the common frame (the covariances'
 /// convention: a perturbation about the frame's axes, q_to = exp(d) q_from). Shortest way round.
 Eigen::Vector3d rotationDifference(const Eigen::Quaterniond& from, const Eigen::Quaterniond& to) {
@@ -34,16 +22,7 @@ Eigen::Vector3d rotationDifference(const Eigen::Quaterniond& from, const Eigen::
 
 }  // namespace
 
-void validate(const ConsistencyConfig& c) {
-  requirePositive(c.gate_chi2_pose, "gate_chi2_pose");
-  requirePositive(c.gate_chi2_position, "gate_chi2_position");
-  requireNonNegative(c.stamp_tolerance_s, "stamp_tolerance_s");
-  requireNonNegative(c.min_speed_mps, "min_speed_mps");
-  requireNonNegative(c.min_rate_radps, "min_rate_radps");
-  // Positive: the test's covariance stays invertible whatever the sources report.
-  requirePositive(c.mount_sigma_m, "mount_sigma_m");
-  requirePositive(c.mount_sigma_rad, "mount_sigma_rad");
-}
+void validate(const ConsistencyConfig& c) { docking_settings::validateSettings(c); }
 
 std::optional<ConsistencyTest> compare(const ComparablePose& a, const ComparablePose& b,
                                        const ConsistencyConfig& config) {

@@ -92,26 +92,12 @@ const char* regimeName(RangeRegime regime) {
 }
 
 void validate(const ArbiterConfig& c) {
-  if (!std::isfinite(c.switch_range_m) || c.switch_range_m <= 0.0) {
-    throw std::invalid_argument("switch_range_m must be a positive number of metres");
-  }
-  if (!std::isfinite(c.hysteresis_m) || c.hysteresis_m < 0.0 || c.hysteresis_m >= c.switch_range_m) {
-    throw std::invalid_argument("hysteresis_m must be in [0, switch_range_m)");
-  }
-  if (!std::isfinite(c.timeout_s) || c.timeout_s <= 0.0) {
-    throw std::invalid_argument("timeout_s must be a positive number of seconds");
-  }
-  if (!std::isfinite(c.future_tolerance_s) || c.future_tolerance_s < 0.0) {
-    throw std::invalid_argument("future_tolerance_s must be >= 0");
-  }
-  if (!std::isfinite(c.max_mono_reprojection_error_px) || c.max_mono_reprojection_error_px <= 0.0) {
-    throw std::invalid_argument("max_mono_reprojection_error_px must be positive");
-  }
-  if (!std::isfinite(c.min_disparity_range_m) || c.min_disparity_range_m < 0.0) {
-    throw std::invalid_argument("min_disparity_range_m must be a number >= 0");
-  }
-  docking_msgs::checks::validate(c.stamp_limits);
-  validate(c.consistency);
+  docking_settings::validateSettings(c);
+  if (c.hysteresis_m >= c.switch_range_m) throw std::invalid_argument("hysteresis_m must be in [0, switch_range_m)");
+}
+
+docking_msgs::checks::StampLimits stampLimits(const ArbiterConfig& c) {
+  return docking_msgs::checks::StampLimits{c.max_future_stamp_s, c.max_stamp_age_s};
 }
 
 SourceArbiter::SourceArbiter(const ArbiterConfig& config) : config_(config) { validate(config_); }
@@ -142,7 +128,7 @@ void SourceArbiter::resetOrdering() {
 OfferResult SourceArbiter::offer(const EstimateSummary& estimate, double now_s) {
   followClock(now_s);
   using docking_msgs::checks::StampProblem;
-  const StampProblem stamp = docking_msgs::checks::checkStamp(estimate.stamp_s, now_s, config_.stamp_limits);
+  const StampProblem stamp = docking_msgs::checks::checkStamp(estimate.stamp_s, now_s, stampLimits(config_));
   if (stamp == StampProblem::kNone) return offer(estimate);
   OfferResult result;
   ++rejected_;
@@ -156,11 +142,11 @@ OfferResult SourceArbiter::offer(const EstimateSummary& estimate, double now_s) 
   } else if (stamp == StampProblem::kFuture) {
     result.problem = OfferProblem::kStampInFuture;
     result.reason = std::string(sourceName(estimate.source)) + ": stamped " + formatDouble("%.3f", ahead) +
-                    " s in the future (limit " + formatDouble("%.3f", config_.stamp_limits.max_future_s) + " s)";
+                    " s in the future (limit " + formatDouble("%.3f", config_.max_future_stamp_s) + " s)";
   } else {
     result.problem = OfferProblem::kStampTooOld;
     result.reason = std::string(sourceName(estimate.source)) + ": stamped " + formatDouble("%.3f", -ahead) +
-                    " s in the past (limit " + formatDouble("%.3f", config_.stamp_limits.max_age_s) + " s)";
+                    " s in the past (limit " + formatDouble("%.3f", config_.max_stamp_age_s) + " s)";
   }
   return result;
 }
@@ -233,8 +219,8 @@ void SourceArbiter::preferClaimedOrientation(std::array<Source, kSourceCount>* p
 
 std::string SourceArbiter::poorQualityReason(const EstimateSummary& e) const {
   if (!isMono(e.source)) return {};
-  const std::uint32_t min_inliers =
-      e.source == Source::kMonoIr ? config_.min_ir_inliers : config_.min_visible_inliers;
+  const auto min_inliers =
+      static_cast<std::uint32_t>(e.source == Source::kMonoIr ? config_.min_ir_inliers : config_.min_visible_inliers);
   if (e.feature_inliers < min_inliers) {
     return "poor (" + std::to_string(e.feature_inliers) + " inliers < " + std::to_string(min_inliers) + ")";
   }

@@ -137,7 +137,8 @@ TEST(Consistency, RejectsInvalidConfiguration) {
   try {
     validate(c);
     FAIL() << "no exception";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("consistency_min_speed_mps"), std::string::npos) << e.what();
+  } catch (const docking_settings::ConfigError& e) {
+    EXPECT_EQ(e.key(), "min_speed_mps");  // the node's loader names it with its prefix, consistency_
+    EXPECT_EQ(e.problem(), docking_settings::ConfigProblem::kOutOfRange);
   }
 }

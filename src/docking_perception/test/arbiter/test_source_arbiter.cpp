@@ -569,9 +569,9 @@ TEST(SourceArbiterStamps, ClockJumpBackResetsTheOrdering) {
 
 TEST(SourceArbiterStamps, StampLimitsAreValidated) {
   ArbiterConfig c;
-  c.stamp_limits.max_future_s = -1.0;
+  c.max_future_stamp_s = -1.0;
   EXPECT_THROW(SourceArbiter{c}, std::invalid_argument);
   c = ArbiterConfig{};
-  c.stamp_limits.max_age_s = 0.0;
+  c.max_stamp_age_s = 0.0;
   EXPECT_THROW(SourceArbiter{c}, std::invalid_argument);
 }

@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
-"""Issue 13, live tuning: scripts/tune/save_params.py writes a running node's tuned values back into its
-YAML. The arbiter runs from a temporary copy of config/arbiter.yaml; two of its parameters are changed
-through dynamic_reconfigure (as `dynparam set` does); save_params.py on that copy must change exactly
-those two values, keep every other line byte for byte (comments included), and write nothing on a dry
-run. It must refuse a node that is not running and a node no launch file maps to a YAML."""
+"""Live tuning: scripts/tune/save_params.py writes a running node's tuned values back into its YAML, which
+holds only what differs from the declared defaults (settings/arbiter.yaml). The arbiter runs from a
+temporary copy of config/arbiter.yaml; two of its settings are changed through dynamic_reconfigure (as
+`dynparam set` does); save_params.py must add exactly those two lines, keep every other line byte for byte
+(comments included), and write nothing on a dry run; set back to their defaults, the lines go again and
+the file is as it was. It must refuse a node that is not running and a node no launch file maps to a YAML."""
 import os
 import pathlib
 import shutil
@@ -86,37 +87,32 @@ class SaveParams(unittest.TestCase):
         self.assertEqual(self.yaml.read_bytes(), self.original)
 
     def test_2_dry_run_then_write_back(self):
+        defaults = {key: self.client.get_configuration()[key] for key in CHANGES}
         applied = self.client.update_configuration(CHANGES)
         for key, value in CHANGES.items():
             self.assertEqual(applied[key], value, "the arbiter refused %s" % key)
-
         dry = run_save_params("--dry-run", "--config-dir", str(self.config), NODE)
         self.assertEqual(dry.returncode, 0, dry.stderr)
         self.assertEqual(self.yaml.read_bytes(), self.original, "a dry run wrote the file")
         for key in CHANGES:
             self.assertRegex(dry.stdout, r"(?m)^\+%s: " % key, "the dry run's diff lacks %s" % key)
-
         real = run_save_params("--config-dir", str(self.config), NODE)
         self.assertEqual(real.returncode, 0, real.stderr)
         self.assertEqual(real.stdout, dry.stdout, "the diff written differs from the dry run's")
-
-        before = self.original.decode().splitlines(keepends=True)
-        after = self.yaml.read_text().splitlines(keepends=True)
-        self.assertEqual(len(after), len(before), "lines added or removed")
-        differing = {i for i, (a, b) in enumerate(zip(before, after)) if a != b}
-        self.assertEqual(len(differing), len(CHANGES), "lines changed: %s" % [after[i] for i in differing])
-        for i in differing:
-            key, _, rest = after[i].partition(":")
-            self.assertIn(key, CHANGES)
-            self.assertEqual(yaml.safe_load(after[i]), {key: CHANGES[key]}, after[i])
-            old_comment = before[i].partition("#")[2]
-            self.assertTrue(old_comment, "the test expects commented lines: %s" % before[i])
-            self.assertEqual(rest.partition("#")[2], old_comment, "comment lost or changed")
-            self.assertEqual(after[i].index("#"), before[i].index("#"), "comment moved: %s" % after[i])
-        self.assertEqual(type(yaml.safe_load("".join(after))["min_ir_inliers"]), int, "an int written as float")
-
+        written = yaml.safe_load(self.yaml.read_text())
+        self.assertEqual(written, CHANGES, "the file holds more or less than the two tuned values")
+        self.assertEqual(type(written["min_ir_inliers"]), int, "an int written as float")
+        comments = [line for line in self.original.decode().splitlines() if line.startswith("#")]
+        self.assertTrue(comments, "the test expects a commented file")
+        for line in comments:
+            self.assertIn(line, self.yaml.read_text().splitlines(), "a comment lost")
         again = run_save_params("--config-dir", str(self.config), NODE)
         self.assertEqual((again.returncode, again.stdout), (0, ""), "a second save changed the file again")
+        # Back to the defaults: the lines go, and the file is the original again.
+        self.client.update_configuration(defaults)
+        back = run_save_params("--config-dir", str(self.config), NODE)
+        self.assertEqual(back.returncode, 0, back.stderr)
+        self.assertEqual(self.yaml.read_bytes(), self.original, "the defaults did not restore the file")
 
     def test_3_refuses_node_not_running(self):
         result = run_save_params("--config-dir", str(self.config), "--timeout", "1", "/disparity_detector")
@@ -142,6 +138,11 @@ class SaveParams(unittest.TestCase):
         new, changed, missing = save_params.write_back(text, {"flag": False, "name": "c d", "extra": 1}, "f.yaml")
         self.assertEqual(new, "flag: false # on\nname: 'c d'   # quoted\n")
         self.assertEqual((changed, missing), (["flag", "name"], ["extra"]))
+        # With declared defaults: a value back at its default leaves the file, a new one is added.
+        new, changed, _ = save_params.write_back(text, {"flag": True, "name": "x", "extra": 2.5}, "f.yaml",
+                                                 {"flag": True, "name": "a b", "extra": 1.0})
+        self.assertEqual(new, "name: 'x'     # quoted\nextra: 2.5\n")
+        self.assertEqual(sorted(changed), ["extra", "flag", "name"])
 
 
 if __name__ == "__main__":

@@ -18,11 +18,12 @@ enum class ConfigProblem : std::uint8_t {
 };
 const char* configProblemName(ConfigProblem problem);
 
-class ConfigError : public std::runtime_error {
+/// An invalid argument of a particular kind: the cores' validators throw it too.
+class ConfigError : public std::invalid_argument {
  public:
   /// `key`: the resolved parameter name; `detail`: what was found and what was expected.
   ConfigError(std::string key, ConfigProblem problem, const std::string& detail)
-      : std::runtime_error(std::string("parameter ") + key + ": " + configProblemName(problem) + ": " + detail),
+      : std::invalid_argument(std::string("parameter ") + key + ": " + configProblemName(problem) + ": " + detail),
         key_(std::move(key)),
         problem_(problem) {}
   const std::string& key() const { return key_; }

@@ -88,6 +88,8 @@ class ParamReader {
   void validated(Validate&& validate) const {
     try {
       validate();
+    } catch (const ConfigError&) {
+      throw;
     } catch (const std::invalid_argument& e) {
       throw ConfigError(nh_.getNamespace(), ConfigProblem::kInvalid, e.what());
     }

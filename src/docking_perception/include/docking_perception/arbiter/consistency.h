@@ -6,24 +6,15 @@
 
 #include <optional>
 
+#include "docking_perception/arbiter/arbiter_settings.h"
 #include "docking_perception/arbiter/frame_change.h"
 
 namespace docking_perception {
 namespace arbiter {
 
-/// Settings of the cross-source consistency check (config/arbiter.yaml, `consistency_*`).
-struct ConsistencyConfig {
-  bool enabled{true};
-  double gate_chi2_pose{22.46};      ///< 6-dof test (mono vs mono): chi-square 99.9 % quantile, 6 dof
-  double gate_chi2_position{16.27};  ///< 3-dof test (position only): chi-square 99.9 % quantile, 3 dof
-  double stamp_tolerance_s{0.05};    ///< estimates further apart in time are not compared
-  double min_speed_mps{0.05};        ///< floor of the relative speed used for the stamp allowance
-  double min_rate_radps{0.05};       ///< floor of the relative turn rate used for the stamp allowance
-  double mount_sigma_m{0.005};       ///< camera mount calibration, per axis (also keeps the test defined
-  double mount_sigma_rad{0.01};      ///<   when a source reports a zero covariance)
-};
+/// ConsistencyConfig, the check's settings, is declared in settings/arbiter.yaml (generated header).
 
-/// Throws std::invalid_argument naming the bad field (prefixed "consistency_").
+/// Throws std::invalid_argument (ConfigError) naming the first setting its declaration does not allow.
 void validate(const ConsistencyConfig& config);
 
 /// One estimate as the test needs it: its pose in the common frame, its stamp, and its velocity

@@ -44,23 +44,14 @@ struct EstimateSummary {
   std::optional<TwistWithCovariance3> twist;
 };
 
-struct ArbiterConfig {
-  double switch_range_m{2.0};      ///< disparity beyond, mono inside
-  double hysteresis_m{0.2};        ///< switch to mono below switch - h, back to disparity above switch + h
-  double timeout_s{0.5};           ///< an estimate older than this (against `now`) is never used
-  double future_tolerance_s{0.05}; ///< stamps this far ahead of `now` are accepted (clock skew)
-  /// offer(e, now): stamps further ahead (max_future_stamp_s) or older (max_stamp_age_s) are refused
-  /// and leave no trace; future_tolerance_s above only decides whether a stored one is usable yet.
-  docking_msgs::checks::StampLimits stamp_limits;
-  std::uint32_t min_visible_inliers{12};       ///< fewer: the visible mono estimate is poor
-  std::uint32_t min_ir_inliers{5};             ///< fewer: the IR estimate is poor (an IR pose has 5 LEDs)
-  double min_disparity_range_m{0.0};           ///< disparity nearer than this is never used (0: no limit)
-  double max_mono_reprojection_error_px{2.5};  ///< larger: the mono estimate is poor
-  ConsistencyConfig consistency;               ///< cross-source check (consistency.h)
-};
+// ArbiterConfig, the core's settings, is declared in settings/arbiter.yaml (generated header).
 
-/// Throws std::invalid_argument naming the bad field.
+/// Throws std::invalid_argument (ConfigError) naming the first setting its declaration does not allow, or
+/// the hysteresis not below the switch range.
 void validate(const ArbiterConfig& config);
+
+/// The stamp limits of offer(e, now): stamps further ahead or older are refused and leave no trace.
+docking_msgs::checks::StampLimits stampLimits(const ArbiterConfig& config);
 
 enum class RangeRegime : std::uint8_t { kUnknown, kFar, kNear };
 const char* regimeName(RangeRegime regime);

@@ -1,0 +1,193 @@
+"""Reading and checking a settings declaration (a package's settings/<node>.yaml).
+
+A declaration names, for one node, every setting once: its key, type, default, range, unit and one line
+of meaning, whether it can change while running (dynamic_reconfigure), and whether it holds only for our
+test bed. From it come the C++ structs the node's core receives (generate_settings.py), the loader and
+validator (docking_settings/ros_loader.h, yaml_loader.h), dynamic_reconfigure's parameters
+(reconfigure.add_live_settings), and the README's table (tables.py). See the package README.
+
+    cpp: {header: pkg/node_settings.h, namespace: pkg::sub}
+    node: arbiter                      # the node (for the README heading)
+    config: [config/arbiter.yaml]      # the shipped files that set them (overrides of the defaults only)
+    readme: src/pkg/README.md          # its table goes between <!-- settings:NAME --> and <!-- /settings -->
+    root: ArbiterSettings              # the struct a node loads
+    structs:
+      ArbiterSettings:
+        doc: one line
+        settings:
+          switch_range_m: {type: double, default: 2.0, range: [0.5, 10.0], unit: m, live: true, doc: "..."}
+          consistency: {struct: ConsistencySettings, prefix: consistency_}     # a nested struct
+"""
+import pathlib
+import re
+
+import yaml
+
+TYPES = ("double", "int", "bool", "string", "double_list", "int_list", "string_list")
+SETTING_KEYS = {"type", "default", "range", "size", "choices", "unit", "doc", "live", "testbed", "paper"}
+MEMBER_KEYS = {"struct", "prefix", "doc"}
+IDENTIFIER = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+class DeclarationError(ValueError):
+    pass
+
+
+class Setting:
+    """One setting: `key` as it appears in YAML (prefixes of the nested structs included)."""
+
+    def __init__(self, struct, name, spec, where):
+        unknown = set(spec) - SETTING_KEYS
+        if unknown:
+            raise DeclarationError("%s: unknown fields %s" % (where, sorted(unknown)))
+        self.struct, self.name, self.where = struct, name, where
+        self.type = spec.get("type")
+        if self.type not in TYPES:
+            raise DeclarationError("%s: type must be one of %s" % (where, ", ".join(TYPES)))
+        if "default" not in spec:
+            raise DeclarationError("%s: no default" % where)
+        self.default = spec["default"]
+        self.range = spec.get("range")
+        self.size = spec.get("size", 0)
+        self.choices = spec.get("choices")
+        self.unit = spec.get("unit", "")
+        self.doc = spec.get("doc", "")
+        self.live = bool(spec.get("live", False))
+        self.testbed = spec.get("testbed", "")
+        self.paper = bool(spec.get("paper", False))
+        if not self.doc:
+            raise DeclarationError("%s: no doc (one line of meaning)" % where)
+        self.check(self.default, "the default")
+
+    @property
+    def is_list(self):
+        return self.type.endswith("_list")
+
+    @property
+    def element_type(self):
+        return self.type[:-5] if self.is_list else self.type
+
+    def problem(self, value):
+        """Why `value` is not allowed for this setting, or None."""
+        values = value if self.is_list else [value]
+        if self.is_list:
+            if not isinstance(value, list):
+                return "expected a list, got %r" % (value,)
+            if self.size and len(value) != self.size:
+                return "expected %d entries, got %d" % (self.size, len(value))
+        for v in values:
+            kind = self.element_type
+            if kind == "bool" and not isinstance(v, bool):
+                return "expected true or false, got %r" % (v,)
+            if kind == "int" and (isinstance(v, bool) or not isinstance(v, int)):
+                return "expected an integer, got %r" % (v,)
+            if kind == "double" and (isinstance(v, bool) or not isinstance(v, (int, float))):
+                return "expected a number, got %r" % (v,)
+            if kind == "string" and not isinstance(v, str):
+                return "expected a string, got %r" % (v,)
+            if self.range and kind in ("int", "double") and not (self.range[0] <= v <= self.range[1]):
+                return "%r is outside [%r, %r]" % (v, self.range[0], self.range[1])
+            if self.choices and v not in self.choices:
+                return "%r is not one of %s" % (v, ", ".join(self.choices))
+        return None
+
+    def check(self, value, what):
+        problem = self.problem(value)
+        if problem:
+            raise DeclarationError("%s: %s: %s" % (self.where, what, problem))
+
+
+class Member:
+    """A nested struct inside a struct: its settings' keys get `prefix`."""
+
+    def __init__(self, name, spec, where):
+        unknown = set(spec) - MEMBER_KEYS
+        if unknown:
+            raise DeclarationError("%s: unknown fields %s" % (where, sorted(unknown)))
+        self.name, self.struct, self.prefix, self.doc = name, spec["struct"], spec.get("prefix", ""), spec.get("doc", "")
+
+
+class Struct:
+    def __init__(self, name, spec, where):
+        self.name, self.doc = name, spec.get("doc", "")
+        self.fields = []  # Setting or Member, in declaration order
+        for field, field_spec in (spec.get("settings") or {}).items():
+            here = "%s: %s.%s" % (where, name, field)
+            if not IDENTIFIER.match(field):
+                raise DeclarationError("%s: a field name is lower_case_with_underscores" % here)
+            if "struct" in field_spec:
+                self.fields.append(Member(field, field_spec, here))
+            else:
+                self.fields.append(Setting(name, field, field_spec, here))
+
+
+class Declaration:
+    def __init__(self, path):
+        self.path = pathlib.Path(path)
+        spec = yaml.safe_load(self.path.read_text())
+        where = str(self.path)
+        for required in ("cpp", "node", "structs", "root"):
+            if required not in spec:
+                raise DeclarationError("%s: no '%s'" % (where, required))
+        self.header = spec["cpp"]["header"]
+        self.namespace = spec["cpp"]["namespace"]
+        self.node = spec["node"]
+        self.config = list(spec.get("config") or [])
+        self.readme = spec.get("readme")
+        self.root = spec["root"]
+        self.doc = spec.get("doc", "")
+        self.structs = {name: Struct(name, s, where) for name, s in spec["structs"].items()}
+        if self.root not in self.structs:
+            raise DeclarationError("%s: root %s is not declared" % (where, self.root))
+        self.settings = {}  # key -> Setting, every setting reachable from the root
+        self._collect(self.root, "", [])
+        for key, setting in self.settings.items():
+            if setting.live and "/" in key:
+                raise DeclarationError("%s: %s: a live setting's key cannot hold '/'" % (where, key))
+
+    def _collect(self, struct_name, prefix, path):
+        if struct_name in path:
+            raise DeclarationError("%s: %s contains itself" % (self.path, struct_name))
+        if struct_name not in self.structs:
+            raise DeclarationError("%s: struct %s is not declared" % (self.path, struct_name))
+        for field in self.structs[struct_name].fields:
+            if isinstance(field, Member):
+                self._collect(field.struct, prefix + field.prefix, path + [struct_name])
+            else:
+                key = prefix + field.name
+                if key in self.settings:
+                    raise DeclarationError("%s: key %s is declared twice" % (self.path, key))
+                self.settings[key] = field
+
+    def ordered_structs(self):
+        """Structs in an order where each comes after the structs it contains."""
+        done, order = set(), []
+
+        def visit(name):
+            if name in done:
+                return
+            for field in self.structs[name].fields:
+                if isinstance(field, Member):
+                    visit(field.struct)
+            done.add(name)
+            order.append(name)
+
+        for name in self.structs:
+            visit(name)
+        return order
+
+
+def find_declarations(workspace):
+    """Every settings declaration of the workspace's packages."""
+    return [Declaration(p) for p in sorted(pathlib.Path(workspace).glob("src/*/settings/*.yaml"))]
+
+
+def flatten(mapping, prefix=""):
+    """A loaded YAML file's keys as the loader reads them: nested dictionaries joined with '/'."""
+    out = {}
+    for key, value in (mapping or {}).items():
+        if isinstance(value, dict):
+            out.update(flatten(value, prefix + key + "/"))
+        else:
+            out[prefix + key] = value
+    return out
