@@ -17,7 +17,7 @@ CATKIN_MAKE_SERIAL := catkin_make -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCATKIN_WHIT
 CATKIN_MAKE := $(CATKIN_MAKE_SERIAL) -j$(JOBS)
 SETUP := source $(CURDIR)/devel/setup.bash
 
-.PHONY: deps build test demo campaign bench eval tune lint clean fuzz-serial fuzz-messages
+.PHONY: deps build test demo campaign bench eval tune ablate lint clean fuzz-serial fuzz-messages
 
 deps:
 	@scripts/install-deps.sh
@@ -49,6 +49,12 @@ bench: build
 
 eval: build
 	@$(SETUP) && scripts/run_eval.sh
+
+# Each rule switched off in turn, measured on held-out data (scripts/ablate/ablate.py): ABLATE_ARGS, e.g.
+#   make ablate ABLATE_ARGS="--rules arbiter_consistency --suites replay"
+# The held-out runs are recorded once by scripts/ablate/record_heldout.py (about 2 min each).
+ablate: build
+	@$(SETUP) && scripts/ablate/ablate.py $(ABLATE_ARGS)
 
 # Replays BAG losslessly with two configurations or a sweep and compares them per source (docs/TUNING.md):
 #   make tune BAG=/tmp/b.bag SET="disparity_detector.yaml:median_kernel_px=5"     (A = config/, B = A + SET)

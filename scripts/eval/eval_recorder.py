@@ -15,6 +15,9 @@ import rospy
 from docking_msgs.msg import TargetEstimate
 from nav_msgs.msg import Odometry
 
+import estimate_quality
+from estimate_quality import AXES, NOT_ESTIMATED_VARIANCE, WRONG_ORIENTATION_DEG, WRONG_POSITION_FRACTION_OF_RANGE  # noqa: F401
+
 SOURCES = {  # summary key -> topic
     "disparity": "/perception/disparity/estimate",
     "mono_visible": "/perception/mono_visible/estimate",
@@ -24,58 +27,23 @@ SOURCES = {  # summary key -> topic
 TRUTH_TOPICS = {"stereo_left_optical_frame": "/sim/truth/stereo_left", "ir_optical_frame": "/sim/truth/ir"}
 
 
-def quat_to_matrix(q):
-    x, y, z, w = q.x, q.y, q.z, q.w
-    return [
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ]
-
-
 def rotation_angle_deg(qa, qb):
-    """Angle of the rotation between two orientations."""
-    dot = abs(qa.x * qb.x + qa.y * qb.y + qa.z * qb.z + qa.w * qb.w)
-    return math.degrees(2.0 * math.acos(min(1.0, dot)))
+    """Angle of the rotation between two orientations (geometry_msgs quaternions)."""
+    return estimate_quality.rotation_angle_deg(xyzw(qa), xyzw(qb))
 
 
-def rotation_error_vector(q_est, q_true):
-    """dtheta with R_est = Exp(dtheta) * R_true (TargetEstimate's covariance convention: rotation about
-    the camera's axes), rad."""
-    re_, rt = quat_to_matrix(q_est), quat_to_matrix(q_true)
-    # D = R_est * R_true^T
-    d = [[sum(re_[i][k] * rt[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
-    cos_angle = max(-1.0, min(1.0, (d[0][0] + d[1][1] + d[2][2] - 1.0) / 2.0))
-    angle = math.acos(cos_angle)
-    axis = (d[2][1] - d[1][2], d[0][2] - d[2][0], d[1][0] - d[0][1])
-    s = math.sin(angle)
-    if s < 1e-9:
-        return tuple(0.5 * a for a in axis)  # small angle: the skew part is the vector itself
-    return tuple(angle * a / (2.0 * s) for a in axis)
-
-
-# An estimate is "confidently wrong" when it is valid and off by more than these (issue 11).
-WRONG_POSITION_FRACTION_OF_RANGE = 0.05
-WRONG_ORIENTATION_DEG = 10.0
-# Components whose variance is at least this are "not estimated" (TargetEstimate's convention).
-NOT_ESTIMATED_VARIANCE = 1e6
-AXES = ("x", "y", "z", "rx", "ry", "rz")
+def xyzw(q):
+    return (q.x, q.y, q.z, q.w)
 
 
 def normalized_errors(est, truth):
     """Per axis (x, y, z, rx, ry, rz): error / sigma from the estimate's covariance, None for an axis
     the estimate does not claim (invalid part or variance >= 1e6)."""
     pe, pt = est.pose.pose.position, truth.pose.pose.position
-    errors = [pe.x - pt.x, pe.y - pt.y, pe.z - pt.z]
-    if est.orientation_valid:
-        errors += list(rotation_error_vector(est.pose.pose.orientation, truth.pose.pose.orientation))
-    else:
-        errors += [None, None, None]
-    out = []
-    for i, e in enumerate(errors):
-        var = est.pose.covariance[7 * i]
-        out.append(None if (e is None or not (0.0 < var < NOT_ESTIMATED_VARIANCE)) else e / math.sqrt(var))
-    return out
+    rotation = (estimate_quality.rotation_error_vector(xyzw(est.pose.pose.orientation), xyzw(truth.pose.pose.orientation))
+                if est.orientation_valid else None)
+    return estimate_quality.normalized_errors((pe.x - pt.x, pe.y - pt.y, pe.z - pt.z), rotation,
+                                              [est.pose.covariance[7 * i] for i in range(6)])
 
 
 def percentile(values, p):
@@ -150,11 +118,11 @@ class EvalRecorder:
             true_range = math.sqrt(pt.x ** 2 + pt.y ** 2 + pt.z ** 2)
             est_range = math.sqrt(pe.x ** 2 + pe.y ** 2 + pe.z ** 2)
             range_err.append(100.0 * abs(est_range - true_range) / true_range)
-            wrong = pos_err[-1] > WRONG_POSITION_FRACTION_OF_RANGE * true_range
+            orientation_error = None
             if est.orientation_valid:
-                ori_err.append(rotation_angle_deg(est.pose.pose.orientation, truth.pose.pose.orientation))
-                wrong = wrong or ori_err[-1] > WRONG_ORIENTATION_DEG
-            confident_wrong += int(wrong)
+                orientation_error = rotation_angle_deg(est.pose.pose.orientation, truth.pose.pose.orientation)
+                ori_err.append(orientation_error)
+            confident_wrong += int(estimate_quality.confidently_wrong(pos_err[-1], true_range, orientation_error))
             for axis, z in zip(AXES, normalized_errors(est, truth)):
                 if z is not None:
                     normalized[axis].append(z)
@@ -182,8 +150,7 @@ class EvalRecorder:
             # Issue 11: valid estimates off by > 5 % of range or > 10 deg, and the share of errors within
             # 3 sigma of the estimate's own covariance, per axis it claims (None: no such estimate).
             "confident_wrong": confident_wrong,
-            "within_3_sigma": {axis: (sum(1 for z in zs if abs(z) <= 3.0) / len(zs)) if zs else None
-                               for axis, zs in normalized.items()},
+            "within_3_sigma": estimate_quality.within_3_sigma(normalized),
         }
         raw = [self.raw_row(e, t) for e, t in samples]
         if unmatched:
