@@ -2,7 +2,10 @@
 # Included by ../CMakeLists.txt after catkin_package().
 
 # ROS-free core: what an image must satisfy (encoding, sizes, step, data size, frame, stamp).
+docking_settings_generate(settings/image_guard.yaml)
 add_library(${PROJECT_NAME}_image_guard_core src/image_guard/image_check.cpp src/image_guard/rate_cap.cpp)
+target_link_libraries(${PROJECT_NAME}_image_guard_core ${docking_settings_LIBRARIES})
+add_dependencies(${PROJECT_NAME}_image_guard_core ${PROJECT_NAME}_settings_image_guard)
 
 # Nodelet (nodelet_plugins.xml): image_raw (any image_transport) -> image_checked, drops with diagnostics.
 add_library(${PROJECT_NAME}_image_guard_nodelet src/image_guard/image_guard_nodelet.cpp)

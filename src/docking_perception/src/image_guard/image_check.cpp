@@ -71,12 +71,7 @@ const char* cameraInfoProblemName(CameraInfoProblem problem) {
   return "unknown";
 }
 
-void validate(const ImageLimits& limits) {
-  if (limits.max_side_px == 0) throw std::invalid_argument("max_image_side_px must be positive");
-  if (!std::isfinite(limits.max_future_stamp_s) || limits.max_future_stamp_s < 0.0) {
-    throw std::invalid_argument("max_future_stamp_s must be a number >= 0");
-  }
-}
+void validate(const ImageLimits& limits) { docking_settings::validateSettings(limits); }
 
 namespace {
 struct PixelLayout {
@@ -107,7 +102,8 @@ ImageProblem checkImage(const ImageFacts& image, double now_s, const ImageLimits
   const std::uint32_t bytes_per_pixel = bytesPerPixel(image.encoding);
   if (bytes_per_pixel == 0) return ImageProblem::kUnknownEncoding;
   if (image.width == 0 || image.height == 0) return ImageProblem::kZeroSize;
-  if (image.width > limits.max_side_px || image.height > limits.max_side_px) return ImageProblem::kTooLarge;
+  const auto max_side = static_cast<std::uint32_t>(limits.max_image_side_px);
+  if (std::max(image.width, image.height) > max_side) return ImageProblem::kTooLarge;
   // 64-bit products: a forged width and step must not overflow into a match.
   if (static_cast<std::uint64_t>(image.step) < static_cast<std::uint64_t>(image.width) * bytes_per_pixel) {
     return ImageProblem::kStepTooSmall;
@@ -172,7 +168,8 @@ ImageSize describedImageSize(const CameraInfoFacts& info) {
 CameraInfoProblem checkCameraInfo(const CameraInfoFacts& info, const std::optional<ImageSize>& last_image,
                                   double now_s, const ImageLimits& limits) {
   if (info.width == 0 || info.height == 0) return CameraInfoProblem::kZeroSize;
-  if (info.width > limits.max_side_px || info.height > limits.max_side_px) return CameraInfoProblem::kTooLarge;
+  const auto max_side = static_cast<std::uint32_t>(limits.max_image_side_px);
+  if (std::max(info.width, info.height) > max_side) return CameraInfoProblem::kTooLarge;
   if (info.binning_x > kMaxBinning || info.binning_y > kMaxBinning || !roiInsideSensor(info)) {
     return CameraInfoProblem::kBadBinningOrRoi;
   }

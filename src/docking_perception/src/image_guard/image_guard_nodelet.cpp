@@ -7,11 +7,11 @@
 // another transport: its topic) and the problem (image_check.h). Likewise `camera_info` ->
 // `camera_info_checked`: a camera_info passes when it is well formed and describes the size of this
 // camera's last image that passed (image_proc's rectify, stereo_image_proc and our estimators read it).
-// Parameters (config/image_guard.yaml, all required): max_image_side_px, max_future_stamp_s,
-// max_rate_hz (valid frames passed at most this often, by stamp, image and camera_info alike: rate_cap.h;
-// perception.launch sets it for the right stereo camera), near_max_rate_hz with near_range_m,
-// near_hysteresis_m, near_max_fused_age_s (a lower cap while the arbiter's target/estimate is a monocular
+// Settings: settings/image_guard.yaml (max_rate_hz: valid frames passed at most this often, by stamp, image
+// and camera_info alike: rate_cap.h; near_*: a lower cap while the arbiter's target/estimate is a monocular
 // pose inside near_range_m: block matching at a keep-alive rate near; duty/fused_range_condition.h).
+#include <docking_settings/ros_loader.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -92,40 +92,18 @@ class ImageGuardNodelet : public nodelet::Nodelet {
 
 void ImageGuardNodelet::readParameters() {
   const ros::NodeHandle& pnh = getPrivateNodeHandle();
-  int max_side_px = 0;
-  if (!pnh.getParam("max_image_side_px", max_side_px)) {
-    throw std::invalid_argument("missing or non-integer parameter " + pnh.resolveName("max_image_side_px"));
-  }
-  if (!pnh.getParam("max_future_stamp_s", limits_.max_future_stamp_s)) {
-    throw std::invalid_argument("missing or non-numeric parameter " + pnh.resolveName("max_future_stamp_s"));
-  }
-  if (max_side_px <= 0) throw std::invalid_argument("parameter " + pnh.resolveName("max_image_side_px") + " must be > 0");
-  limits_.max_side_px = static_cast<std::uint32_t>(max_side_px);
-  auto readRate = [&pnh](const char* name, double min_value, const char* meaning) {
-    double value = 0.0;
-    if (!pnh.getParam(name, value)) {
-      throw std::invalid_argument("missing or non-numeric parameter " + pnh.resolveName(name));
-    }
-    if (!std::isfinite(value) || value < min_value) {
-      throw std::invalid_argument("parameter " + pnh.resolveName(name) + " must be >= " + std::to_string(min_value) +
-                                  " (" + meaning + ")");
-    }
-    return value;
-  };
-  max_rate_hz_ = readRate("max_rate_hz", 0.0, "0: every frame");
-  near_max_rate_hz_ = readRate("near_max_rate_hz", 0.0, "0: no lower cap near");
+  ImageGuardSettings settings;
+  docking_settings::loadSettings(pnh, settings);
+  docking_settings::warnUnknownKeys(pnh, settings);
+  limits_ = settings.limits;
+  max_rate_hz_ = settings.max_rate_hz;
+  near_max_rate_hz_ = settings.near_max_rate_hz;
   duty::FusedRangeConditionParams near;
-  near.range_m = readRate("near_range_m", 0.0, "0: no lower cap near");
-  near.hysteresis_m = readRate("near_hysteresis_m", 0.0, "metres");
-  near.max_fused_age_s = readRate("near_max_fused_age_s", 0.01, "seconds");
-  if (near_max_rate_hz_ <= 0.0) near.range_m = 0.0;  // the condition is off with its rate
+  near.range_m = near_max_rate_hz_ > 0.0 ? settings.near_range_m : 0.0;  // the condition is off with its rate
+  near.hysteresis_m = settings.near_hysteresis_m;
+  near.max_fused_age_s = settings.near_max_fused_age_s;
   near_.setParams(near);
   rate_cap_ = RateCap(max_rate_hz_);
-  try {
-    validate(limits_);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument("parameter " + pnh.getNamespace() + "/" + e.what());
-  }
 }
 
 void ImageGuardNodelet::onInit() {

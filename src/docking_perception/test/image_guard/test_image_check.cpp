@@ -100,7 +100,7 @@ TEST(ImageCheck, EachMalformedKindHasItsCode) {
 }
 
 TEST(ImageCheck, ForgedSizesDoNotOverflow) {
-  const ImageLimits limits{1u << 31, 0.5};
+  const ImageLimits limits{std::numeric_limits<int>::max(), 0.5};
   ImageFacts f = goodMono8();
   f.encoding = "bgra16";  // 8 bytes per pixel: width * 8 overflows 32 bits
   f.width = 1u << 30;

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "docking_perception/image_guard/image_guard_settings.h"
+
 namespace docking_perception {
 namespace image_guard {
 
@@ -17,7 +19,7 @@ enum class ImageProblem : std::uint8_t {
   kNone = 0,
   kUnknownEncoding = 1,  ///< not one of the encodings image_proc's debayer and cv_bridge convert
   kZeroSize = 2,         ///< width or height is 0
-  kTooLarge = 3,         ///< width or height above max_side_px
+  kTooLarge = 3,         ///< width or height above max_image_side_px
   kStepTooSmall = 4,     ///< step < width * bytes per pixel
   kDataSizeMismatch = 5, ///< data.size() != step * height (truncated, or padded)
   kBadEndianFlag = 6,    ///< is_bigendian neither 0 nor 1
@@ -45,11 +47,9 @@ struct ImageFacts {
   double stamp_s{0.0};
 };
 
-struct ImageLimits {
-  std::uint32_t max_side_px{8192};  ///< larger than any camera of ours by far; bounds step * height
-  double max_future_stamp_s{0.5};   ///< clock skew between the camera computer and this one
-};
-/// Throws std::invalid_argument naming the bad parameter (max_image_side_px, max_future_stamp_s).
+// ImageLimits, the checks' settings, is declared in settings/image_guard.yaml (generated header).
+
+/// Throws std::invalid_argument (ConfigError) naming the first setting its declaration does not allow.
 void validate(const ImageLimits& limits);
 
 /// Bytes per pixel of an encoding image_proc and cv_bridge convert; 0 for any other.
@@ -70,7 +70,7 @@ struct ImageSize {
 enum class CameraInfoProblem : std::uint8_t {
   kNone = 0,
   kZeroSize = 1,                 ///< width or height 0
-  kTooLarge = 2,                 ///< width or height above max_side_px
+  kTooLarge = 2,                 ///< width or height above max_image_side_px
   kBadBinningOrRoi = 3,          ///< binning above kMaxBinning, or a ROI outside the sensor
   kSizeDiffersFromImage = 4,     ///< the sensor size (after ROI and binning) is not the last image's size
   kUnknownDistortionModel = 5,   ///< not plumb_bob, rational_polynomial or equidistant
