@@ -5,8 +5,8 @@ it was not chosen on (scripts/ablate/heldout.yaml), one table: rule | suite | de
 
     scripts/ablate/ablate.py [--rules a,b] [--suites replay,stress,campaign] [--out DIR] [--baseline DIR]
 
-Rules: scripts/ablate/rules/*.yaml (each: rule, node, guards, off: {key: value}, motivated_by, suite).
-"Off" adds the keys to the node's shipped YAML (every file its settings declaration claims, or the rule's
+Rules: scripts/ablate/rules/*.yaml (each: rule, node, guards, off_by: {key: value}, motivated_by, suite).
+"off_by" adds the keys to the node's shipped YAML (every file its settings declaration claims, or the rule's
 `files`) in a copy of config/. Suites:
   replay   each held-out run (results/ablate/heldout, scripts/ablate/record_heldout.py) replayed losslessly
            (scripts/tune/tune_replay.replay) and judged against its recorded truth per source;
@@ -75,7 +75,7 @@ def make_config(rule, folder):
     if rule is None:
         return folder
     files, declaration = node_files(rule["node"])
-    for key, value in rule["off"].items():
+    for key, value in rule["off_by"].items():
         if key not in declaration.settings:
             raise SystemExit("ablate: %s: %s is not a setting of %s" % (rule["rule"], key, rule["node"]))
         problem = declaration.settings[key].problem(value)
@@ -198,7 +198,7 @@ def main():
     if a.rules:
         wanted = set(a.rules.split(","))
         rules = [r for r in rules if r["rule"] in wanted]
-    out = pathlib.Path(a.out or ROOT / "results" / "ablate" / datetime.datetime.now().strftime("%Y%m%d-%H%M%S"))
+    out = pathlib.Path(a.out or ROOT / "results" / "ablate" / datetime.datetime.now().strftime("%Y%m%d-%H%M%S")).resolve()
     out.mkdir(parents=True, exist_ok=True)
     suites_of = {r["rule"]: (a.suites.split(",") if a.suites else [r["suite"]]) for r in rules}
     needed = sorted({s for ss in suites_of.values() for s in ss}, key=SUITES.index)
