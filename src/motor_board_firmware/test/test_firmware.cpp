@@ -201,3 +201,111 @@ TEST(Firmware, AMillionRandomBytesNeitherMoveAWheelNorResetTheBoard) {
   drain(bench, 0.01);
   EXPECT_EQ(bench.receiveStates().size(), 1u);
 }
+
+TEST(Firmware, FloodsAndCorruptedFramesNeverMoveAWheelNorHangTheBoard) {
+  BoardBench bench(benchConfig());
+  bench.runFor(0.01);
+  bench.send(enableFrame(0, true));  // bridges on at zero duty: only a decoded non-zero duty could move a wheel
+  drain(bench, 0.01);
+  // 1. Back-to-back valid commands for 2 s: each answer (28 bytes) is longer than its command (16),
+  //    so answers are dropped, never waited for.
+  std::vector<uint8_t> flood;
+  for (int i = 0; i < 1400; ++i) {
+    const auto f = dutyFrame(static_cast<uint8_t>(i), {0, 0, 0});
+    flood.insert(flood.end(), f.begin(), f.end());
+  }
+  // 2. 20 000 zero-duty frames with 1..4 flipped bits, each followed by an intact one.
+  std::mt19937 rng(58);
+  for (int i = 0; i < 20000; ++i) {
+    auto f = dutyFrame(static_cast<uint8_t>(i), {0, 0, 0});
+    const auto intact = f;
+    const int flips = 1 + static_cast<int>(rng() % 4);
+    for (int k = 0; k < flips; ++k) f[rng() % f.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
+    flood.insert(flood.end(), f.begin(), f.end());
+    flood.insert(flood.end(), intact.begin(), intact.end());
+  }
+  // 3. False starts back to back, each announcing a 64-byte frame (the decoder's worst case).
+  for (int i = 0; i < 4000; ++i) {
+    const uint8_t header[4] = {0xA5, 0x5A, 0x01, 0x40};
+    flood.insert(flood.end(), header, header + 4);
+  }
+  bench.send(flood);
+  bench.board().resetBusyStatistics();
+  drain(bench, 0.05);
+  std::printf("[ FIGURE   ] floods (%zu bytes: 2 s of valid commands, 20 000 corrupted frames, 16 000 bytes of false "
+              "starts): %llu firmware resets, %llu steps with a non-zero duty, worst main-loop cycle %llu CPU cycles\n",
+              flood.size(), static_cast<unsigned long long>(bench.board().unexpectedResets()),
+              static_cast<unsigned long long>(bench.drivenSteps()),
+              static_cast<unsigned long long>(bench.board().worstBusyCycles()));
+  EXPECT_EQ(bench.board().unexpectedResets(), 0u);
+  EXPECT_EQ(bench.drivenSteps(), 0u);
+  EXPECT_EQ(bench.pwmPinHighEvents(), 0u);
+  EXPECT_GT(bench.receiveStates().size(), 20000u);  // the intact frames were answered
+  bench.send(enableFrame(1, false));
+  drain(bench, 0.01);
+  const auto states = bench.receiveStates();
+  ASSERT_FALSE(states.empty());
+  EXPECT_EQ(states.back().sequence, 1);
+}
+
+TEST(Firmware, AResetMidDriveDropsTheDriveAndRestartsTheClockAndCounters) {
+  BoardBench bench(benchConfig());
+  bench.runFor(0.01);
+  bench.send(enableFrame(0, true));
+  holdDuty(bench, {6000, 6000, 6000}, 0.5, 1);
+  ASSERT_TRUE(bench.outputs().bridges_enabled);
+  const double reset_at = bench.seconds();
+  std::array<int64_t, kWheels> edges_at_reset{};
+  for (std::size_t i = 0; i < kWheels; ++i) edges_at_reset[i] = bench.encoderEdges(i);
+  bench.board().pressReset();
+  bench.runFor(0.001);
+  EXPECT_FALSE(bench.outputs().bridges_enabled);  // the pins float: the pull-downs hold the bridges off
+  for (double d : bench.outputs().duty) EXPECT_EQ(d, 0.0);
+  bench.runFor(4.0);  // the wheels coast to rest on friction alone
+  for (std::size_t i = 0; i < kWheels; ++i) ASSERT_EQ(bench.wheelSpeed(i), 0.0);
+  bench.receiveStates();
+  bench.send(enableFrame(9, false));
+  drain(bench, 0.01);
+  const auto states = bench.receiveStates();
+  ASSERT_EQ(states.size(), 1u);
+  EXPECT_EQ(states[0].status, 0);  // started disabled
+  EXPECT_LT(states[0].board_time_ms, (bench.seconds() - reset_at) * 1000.0 + 1.0);
+  for (std::size_t i = 0; i < kWheels; ++i) {
+    EXPECT_EQ(states[0].encoder_counts[i], bench.encoderEdges(i) - edges_at_reset[i]) << "wheel " << i;
+    EXPECT_GT(states[0].encoder_counts[i], 0) << "wheel " << i;  // it counted the coasting
+  }
+  EXPECT_EQ(bench.board().requestedResets(), 1u);
+  EXPECT_EQ(bench.board().unexpectedResets(), 0u);
+}
+
+TEST(Firmware, MemoryAndTimeStayWithinBudget) {
+  const FirmwareImage image = readFirmwareImage(firmwareElfPath());
+  BoardBench bench(benchConfig());
+  bench.runFor(0.01);
+  // A workload that reaches every path: drive, reverse, stop, garbage, a flood, the watchdog.
+  bench.send(enableFrame(0, true));
+  uint8_t sequence = holdDuty(bench, {9000, -9000, 5000}, 0.5, 1);
+  sequence = holdDuty(bench, {-9000, 9000, -5000}, 0.5, sequence);
+  bench.send(randomBytes(20000, 7));
+  drain(bench, 0.3);
+  holdDuty(bench, {10000, 10000, 10000}, 0.3, sequence);
+  bench.runFor(0.4);
+  const std::size_t stack = bench.peakStackBytes();
+  const std::size_t ram = image.staticRamBytes() + stack;
+  std::printf("[ FIGURE   ] flash %u of 32768 bytes (%.1f %%); RAM data %u + bss %u + noinit %u + peak stack %zu = %zu of "
+              "2048 bytes (%.1f %%); worst main-loop cycle in this workload %llu CPU cycles (%.1f us)\n",
+              image.flashBytes(), 100.0 * image.flashBytes() / 32768.0, image.data_bytes, image.bss_bytes,
+              image.noinit_bytes, stack, ram, 100.0 * ram / 2048.0,
+              static_cast<unsigned long long>(bench.board().worstBusyCycles()),
+              bench.board().worstBusyCycles() / 16.0);
+  EXPECT_LE(image.flashBytes(), 32768u / 2);
+  EXPECT_GT(stack, 16u);  // the paint was overwritten: the measurement works
+  EXPECT_LE(ram, 2048u * 3 / 4);
+  EXPECT_EQ(bench.board().unexpectedResets(), 0u);
+  EXPECT_EQ(bench.misconfiguredSteps(), 0u);
+}
+
+TEST(Firmware, CountsPerRevolutionAreTheBaseConfigs) {
+  EXPECT_EQ(static_cast<double>(ENCODER_COUNTS_PER_WHEEL_REV),
+            baseConfig()["wheels"]["encoder_counts_per_rev"].as<double>());
+}

@@ -1,5 +1,6 @@
 #include "motor_board_firmware/avr_board.h"
 
+#include <avr_extint.h>
 #include <avr_ioport.h>
 #include <avr_uart.h>
 #include <sim_avr.h>
@@ -59,6 +60,10 @@ AvrBoard::AvrBoard(const std::string& hex_path) {
   free_ihex_chunks(chunks);
   avr_->codeend = avr_->flashend;
 
+  // INT0 and INT1 (unused by the firmware; their pins carry the enable line and motor 2's PWM) default
+  // to low-level sensing, which simavr would poll on every cycle while those pins are low: 2/3 of its time.
+  avr_extint_set_strict_lvl_trig(avr_, 0, 0);
+  avr_extint_set_strict_lvl_trig(avr_, 1, 0);
   uint32_t no_console = 0;  // simavr would print the UART's lines on stdout
   avr_ioctl(avr_, AVR_IOCTL_UART_SET_FLAGS('0'), &no_console);
   uart_input_ = avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
