@@ -271,7 +271,11 @@ TEST(Firmware, AResetMidDriveDropsTheDriveAndRestartsTheClockAndCounters) {
   EXPECT_EQ(states[0].status, 0);  // started disabled
   EXPECT_LT(states[0].board_time_ms, (bench.seconds() - reset_at) * 1000.0 + 1.0);
   for (std::size_t i = 0; i < kWheels; ++i) {
-    EXPECT_EQ(states[0].encoder_counts[i], bench.encoderEdges(i) - edges_at_reset[i]) << "wheel " << i;
+    // Edges during the ~1 ms start-up (before the pin-change interrupt is on) are not counted: at the
+    // ~12 rad/s of the reset that is 2-3 counts; the host's reboot handling absorbs them.
+    const int64_t since_reset = bench.encoderEdges(i) - edges_at_reset[i];
+    EXPECT_LE(states[0].encoder_counts[i], since_reset) << "wheel " << i;
+    EXPECT_GE(states[0].encoder_counts[i], since_reset - 6) << "wheel " << i;
     EXPECT_GT(states[0].encoder_counts[i], 0) << "wheel " << i;  // it counted the coasting
   }
   EXPECT_EQ(bench.board().requestedResets(), 1u);
