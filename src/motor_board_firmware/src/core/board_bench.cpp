@@ -84,7 +84,8 @@ void BoardBench::watchHostBytes(const TxByte& byte) {
   for (const auto& frame : host_stream_.feed(&byte.value, 1)) {
     const auto duty = omni_base::protocol::parseDutyFrame(frame);
     if ((duty && duty->duty.size() == kWheels) || omni_base::protocol::parseEnableFrame(frame)) {
-      last_valid_command_s_ = static_cast<double>(byte.cycle) / kCpuHz;
+      // The frame is whole when its last byte's stop bit is in, one byte time after it started.
+      last_valid_command_s_ = static_cast<double>(byte.cycle + board_->byteCycles()) / kCpuHz;
     }
   }
 }
