@@ -153,6 +153,7 @@ TEST(Firmware, DutiesTurnTheWheelsAndEveryEdgeIsCounted) {
     EXPECT_GT(std::abs(bench.encoderEdges(i)), 1000) << "wheel " << i;
     EXPECT_EQ(bench.encoderEdges(i) > 0, duty[i] > 0) << "wheel " << i;
   }
+  EXPECT_EQ(bench.firmwareEncoderGlitches(), 0u);
 }
 
 TEST(Firmware, CommandWatchdogStopsTheMotorsWithinItsTimeout) {

@@ -175,8 +175,8 @@ class FirmwareBench(unittest.TestCase):
             state = self.wheel_state
         count_rad = 2 * math.pi / COUNTS_PER_REV
         for i in range(3):
-            self.assertLessEqual(abs((state.position[i] % (2 * math.pi)) - (probe1.wheel_angle[i] % (2 * math.pi))),
-                                 1.5 * count_rad, f"wheel {i}")
+            difference = state.position[i] - probe1.wheel_angle[i]
+            self.assertLessEqual(abs(difference), 1.5 * count_rad, f"wheel {i}")
 
     def probes_between(self, first, last):
         with self.lock:
@@ -257,6 +257,7 @@ class FirmwareBench(unittest.TestCase):
               f"over {np.hypot(true_move[0], true_move[1]):.3f} m")
         self.assertLess(error, 0.006)
         self.assertEqual(self.snapshot()[0].unexpected_resets, 0)
+        self.assertEqual(self.snapshot()[0].firmware_encoder_glitches, 0)
 
 
 if __name__ == "__main__":

@@ -26,6 +26,18 @@ struct BoardBenchConfig {
   bool internal_plant{true};
 };
 
+/// The firmware's section sizes and the RAM addresses the harness looks at (where the painted free RAM
+/// starts, __heap_start; the encoder glitch counter): read from the .elf.
+struct FirmwareImage {
+  uint32_t text_bytes{0};
+  uint32_t data_bytes{0};
+  uint32_t bss_bytes{0};
+  uint32_t noinit_bytes{0};
+  uint16_t heap_start{0};
+  uint16_t encoder_glitches{0};  ///< address of the firmware's encoder_glitches (data space)
+  uint32_t flashBytes() const { return text_bytes + data_bytes; }
+  uint32_t staticRamBytes() const { return data_bytes + bss_bytes + noinit_bytes; }
+};
 /// Drives one encoder's A/B pins: moves toward a target count one Gray-code edge at a time, the edges
 /// spread evenly over a window.
 class QuadratureOutput {
@@ -43,6 +55,7 @@ class QuadratureOutput {
   int64_t emitted_{0};
   int64_t target_{0};
   uint64_t spacing_{0};
+  uint64_t last_edge_cycle_{0};
 };
 
 class BoardBench {
@@ -82,6 +95,8 @@ class BoardBench {
 
   /// Peak stack in bytes: free RAM the firmware painted at start-up and has overwritten since.
   std::size_t peakStackBytes() const;
+  /// The firmware's count of encoder transitions with both channels changed (an edge it missed).
+  uint16_t firmwareEncoderGlitches() const;
 
  private:
   uint64_t modelStep(uint64_t now);
@@ -104,19 +119,9 @@ class BoardBench {
   uint64_t pwm_pin_high_events_{0};
   uint64_t enable_pin_high_events_{0};
   uint64_t misconfigured_steps_{0};
+  FirmwareImage image_;
 };
 
-/// The address where the firmware's painted free RAM starts (symbol __heap_start of the .elf), and
-/// its section sizes: read from the ELF file.
-struct FirmwareImage {
-  uint32_t text_bytes{0};
-  uint32_t data_bytes{0};
-  uint32_t bss_bytes{0};
-  uint32_t noinit_bytes{0};
-  uint16_t heap_start{0};
-  uint32_t flashBytes() const { return text_bytes + data_bytes; }
-  uint32_t staticRamBytes() const { return data_bytes + bss_bytes + noinit_bytes; }
-};
 FirmwareImage readFirmwareImage(const std::string& elf_path);
 
 /// The firmware's build outputs (the .hex the board runs, the .elf beside it), as built by this

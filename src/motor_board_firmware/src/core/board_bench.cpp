@@ -18,10 +18,18 @@ namespace {
 #define MBF_LETTER(x) MBF_LETTER_(x)
 
 constexpr uint8_t kStackPaint = 0xC5;   // firmware/main.c
-constexpr uint64_t kMinEdgeSpacing = 160;  // 10 us: edges closer than the pin-change ISR would merge
+// 50 us between two edges of one encoder (20 000 edges/s, 4x a wheel at full speed): the firmware's
+// pin-change interrupt must see each one apart, and other interrupts may hold it off for a few hundred cycles.
+constexpr uint64_t kMinEdgeSpacing = 800;
 
 /// Count -> A | B << 1 (forward: A leads B), the firmware's encoders.c convention.
 constexpr std::array<int, 4> kGray = {0, 1, 3, 2};
+
+/// The .elf the .hex was made from (the same build), for the harness's look into the firmware's RAM.
+std::string elfPathBeside(const std::string& hex_path) {
+  const auto dot = hex_path.rfind('.');
+  return (dot == std::string::npos ? hex_path : hex_path.substr(0, dot)) + ".elf";
+}
 
 }  // namespace
 
@@ -36,7 +44,8 @@ void QuadratureOutput::moveTo(int64_t count, uint64_t over_cycles) {
   const uint64_t edges = static_cast<uint64_t>(std::llabs(target_ - emitted_));
   if (edges == 0) return;
   spacing_ = std::max<uint64_t>(kMinEdgeSpacing, over_cycles / edges);
-  board_.schedule(board_.cycle() + spacing_ / 2 + 1, [this](uint64_t now) { return emitEdge(now); }, slot_);
+  const uint64_t first = std::max(board_.cycle() + spacing_ / 2 + 1, last_edge_cycle_ + kMinEdgeSpacing);
+  board_.schedule(first, [this](uint64_t now) { return emitEdge(now); }, slot_);
 }
 
 uint64_t QuadratureOutput::emitEdge(uint64_t now) {
@@ -47,6 +56,7 @@ uint64_t QuadratureOutput::emitEdge(uint64_t now) {
   const int changed = before ^ after;  // exactly one channel
   if (changed & 1) board_.setPin(port_, bit_a_, after & 1);
   if (changed & 2) board_.setPin(port_, bit_b_, (after >> 1) & 1);
+  last_edge_cycle_ = now;
   return emitted_ == target_ ? 0 : now + spacing_;
 }
 
@@ -54,7 +64,8 @@ BoardBench::BoardBench(const BoardBenchConfig& config)
     : config_(config),
       board_(std::make_unique<AvrBoard>(config.hex_path)),
       motors_(kWheels, WheelMotor(config.motor)),
-      step_cycles_(static_cast<uint64_t>(std::llround(config.model_step_s * kCpuHz))) {
+      step_cycles_(static_cast<uint64_t>(std::llround(config.model_step_s * kCpuHz))),
+      image_(readFirmwareImage(elfPathBeside(config.hex_path))) {
   const char encoder_port = MBF_LETTER(ENCODER_PORT_LETTER);
   for (std::size_t i = 0; i < kWheels; ++i) {
     encoders_[i] = std::make_unique<QuadratureOutput>(*board_, encoder_port, static_cast<int>(2 * i),
@@ -131,12 +142,14 @@ std::vector<uint8_t> BoardBench::receiveBytes() {
 }
 
 std::size_t BoardBench::peakStackBytes() const {
-  std::string elf = config_.hex_path;
-  elf.replace(elf.size() - 4, 4, ".elf");
-  const uint16_t heap_start = readFirmwareImage(elf).heap_start;
-  uint16_t lowest = heap_start;
+  uint16_t lowest = image_.heap_start;
   while (lowest <= reg::kRamEnd && board_->readData(lowest) == kStackPaint) ++lowest;
   return static_cast<std::size_t>(reg::kRamEnd + 1 - lowest);
+}
+
+uint16_t BoardBench::firmwareEncoderGlitches() const {
+  return static_cast<uint16_t>(board_->readData(image_.encoder_glitches) |
+                               (board_->readData(static_cast<uint16_t>(image_.encoder_glitches + 1)) << 8));
 }
 
 FirmwareImage readFirmwareImage(const std::string& elf_path) {
@@ -166,12 +179,15 @@ FirmwareImage readFirmwareImage(const std::string& elf_path) {
     for (std::size_t k = 0; k < s.sh_size / sizeof(Elf32_Sym); ++k) {
       Elf32_Sym symbol;
       std::memcpy(&symbol, bytes.data() + s.sh_offset + k * sizeof symbol, sizeof symbol);
-      if (std::strcmp(bytes.data() + strings.sh_offset + symbol.st_name, "__heap_start") == 0) {
-        image.heap_start = static_cast<uint16_t>(symbol.st_value & 0xFFFFu);  // data space is at 0x800000
-      }
+      const char* name = bytes.data() + strings.sh_offset + symbol.st_name;
+      const auto data_address = static_cast<uint16_t>(symbol.st_value & 0xFFFFu);  // data space is at 0x800000
+      if (std::strcmp(name, "__heap_start") == 0) image.heap_start = data_address;
+      if (std::strcmp(name, "encoder_glitches") == 0) image.encoder_glitches = data_address;
     }
   }
-  if (image.heap_start == 0) throw std::runtime_error("no __heap_start in " + elf_path);
+  if (image.heap_start == 0 || image.encoder_glitches == 0) {
+    throw std::runtime_error("no __heap_start or encoder_glitches symbol in " + elf_path);
+  }
   return image;
 }
 

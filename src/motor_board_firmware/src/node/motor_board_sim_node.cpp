@@ -32,6 +32,7 @@ constexpr double kProbePeriodS = 0.01;
 constexpr double kClockPeriodS = 0.005;  // /clock in model mode
 constexpr double kClockOffsetS = 1.0;    // sim time 0 reads as "no time yet" to ROS nodes
 constexpr double kTargetSlackS = 1e-6;
+constexpr double kCommandRefreshS = 0.05;
 
 class MotorBoardSimNode {
  public:
@@ -121,8 +122,14 @@ class MotorBoardSimNode {
     return plant_ == "model" ? ros::Time(bench_->seconds() + kClockOffsetS) : sim_start_ + ros::Duration(bench_->seconds());
   }
 
+  /// On every change of the drive, and every kCommandRefreshS (docking_sim stops wheels whose command is
+  /// 0.25 s old, as the board's own watchdog would).
   void publishWheelCommand() {
     const auto& outputs = bench_->outputs();
+    const bool changed = outputs.bridges_enabled != last_command_.bridges_enabled || outputs.duty != last_command_.duty;
+    if (!changed && bench_->seconds() - last_command_s_ < kCommandRefreshS) return;
+    last_command_ = outputs;
+    last_command_s_ = bench_->seconds();
     docking_msgs::WheelCommand command;
     command.header.stamp = stamp();
     command.header.frame_id = docking_msgs::frames::kBaseLink;
@@ -166,6 +173,7 @@ class MotorBoardSimNode {
     probe.requested_resets = bench_->board().requestedResets();
     probe.worst_loop_cycles = bench_->board().worstBusyCycles();
     probe.pwm_pin_high_events = bench_->pwmPinHighEvents();
+    probe.firmware_encoder_glitches = bench_->firmwareEncoderGlitches();
     probe_pub_.publish(probe);
   }
 
@@ -197,6 +205,8 @@ class MotorBoardSimNode {
   std::vector<int32_t> last_counts_;
   std::vector<int64_t> unwrapped_;
   double last_clock_s_{-1.0};
+  MotorOutputs last_command_;
+  double last_command_s_{-1.0};
   double last_probe_s_{-1.0};
   uint64_t reported_resets_{0};
 };
