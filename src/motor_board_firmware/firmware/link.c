@@ -19,7 +19,7 @@ static void reply_state(uint8_t sequence) {
   int32_t counts[BOARD_WHEELS];
   uint32_t now_ms;
   uint8_t wheel;
-  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+  ATOMIC_BLOCK(ATOMIC_FORCEON) {
     encoders_copy(counts);
     now_ms = board_time_ms_locked();
   }
@@ -48,7 +48,7 @@ static uint8_t duty_frame_valid(const mp_frame* frame) {
 
 static void apply_duty(const mp_frame* frame) {
   uint8_t wheel;
-  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+  ATOMIC_BLOCK(ATOMIC_FORCEON) {
     board_clock_command_received_locked();
     for (wheel = 0; wheel < BOARD_WHEELS; ++wheel) {
       motors_set_duty(wheel, (int16_t)mp_get_u16le(&frame->payload[MP_SET_DUTY_DUTIES + 2u * wheel]));
@@ -57,7 +57,7 @@ static void apply_duty(const mp_frame* frame) {
 }
 
 static void apply_enable(uint8_t enable) {
-  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+  ATOMIC_BLOCK(ATOMIC_FORCEON) {
     board_clock_command_received_locked();
     if (enable != motors_enabled()) motors_set_enabled(enable); /* a repeated ENABLE keeps the duties */
   }
