@@ -17,7 +17,7 @@ CATKIN_MAKE_SERIAL := catkin_make -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCATKIN_WHIT
 CATKIN_MAKE := $(CATKIN_MAKE_SERIAL) -j$(JOBS)
 SETUP := source $(CURDIR)/devel/setup.bash
 
-.PHONY: deps build test demo campaign bench eval tune ablate lint clean fuzz-serial fuzz-messages
+.PHONY: deps build test demo campaign bench eval tune ablate lint clean fuzz-serial fuzz-messages firmware flash-firmware
 
 deps:
 	@scripts/install-deps.sh
@@ -89,6 +89,16 @@ fuzz-serial: deps
 	@mkdir -p devel/lib/python3/dist-packages build
 	@$(CATKIN_MAKE_SERIAL) -DCATKIN_WHITELIST_PACKAGES="docking_msgs;docking_settings;omni_base" -j1 fuzz_serial_decoder > build/build_fuzz_serial.log 2>&1 || { tail -40 build/build_fuzz_serial.log; exit 1; }
 	devel/lib/omni_base/fuzz_serial_decoder --inputs $(FUZZ_INPUTS) --corruptions $(FUZZ_CORRUPTIONS) --seed $(FUZZ_SEED)
+
+# The motor board's firmware (src/motor_board_firmware/README.md): build/motor_board_firmware/firmware/motor_board.hex
+# (`make build` builds it too), and flashing it: make flash-firmware PORT=/dev/ttyACM0 [UPLOAD_BAUD=57600] [PROGRAMMER=usbasp]
+FIRMWARE_MAKE = $(MAKE) -C src/motor_board_firmware/firmware BUILD_DIR=$(CURDIR)/build/motor_board_firmware/firmware \
+	$(if $(PORT),PORT=$(PORT)) $(if $(UPLOAD_BAUD),UPLOAD_BAUD=$(UPLOAD_BAUD)) $(if $(PROGRAMMER),PROGRAMMER=$(PROGRAMMER))
+firmware: deps
+	@$(FIRMWARE_MAKE)
+
+flash-firmware: firmware
+	@$(FIRMWARE_MAKE) flash
 
 lint: deps
 	@$(SETUP) && catkin_lint -W1 --strict src

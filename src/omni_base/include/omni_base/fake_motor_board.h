@@ -17,7 +17,7 @@ struct FakeMotorBoardConfig {
   MotorDriveModel drive;
   double motor_time_constant_s{0.02};
   double counts_per_rev{1320.0};
-  double watchdog_s{0.25};       ///< no valid command for this long: the board stops the motors
+  double watchdog_s{MP_BOARD_WATCHDOG_MS / 1000.0};  ///< no valid command for this long: the board stops the motors
   uint32_t random_seed{42};
 };
 

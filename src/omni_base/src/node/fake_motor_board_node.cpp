@@ -23,7 +23,7 @@
 
 #include "omni_base/fake_motor_board.h"
 #include "omni_base/serial_port.h"
-#include "param_loader.h"
+#include "omni_base/param_loader.h"
 
 namespace {
 

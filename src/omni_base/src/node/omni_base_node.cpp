@@ -21,7 +21,7 @@
 #include "omni_base/board_session.h"
 #include "omni_base/encoder_tracker.h"
 #include "omni_base/odometry.h"
-#include "param_loader.h"
+#include "omni_base/param_loader.h"
 #include "serial_motor_backend.h"
 #include "sim_motor_backend.h"
 
