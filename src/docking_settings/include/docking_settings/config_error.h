@@ -25,13 +25,16 @@ class ConfigError : public std::invalid_argument {
   ConfigError(std::string key, ConfigProblem problem, const std::string& detail)
       : std::invalid_argument(std::string("parameter ") + key + ": " + configProblemName(problem) + ": " + detail),
         key_(std::move(key)),
-        problem_(problem) {}
+        problem_(problem),
+        detail_(detail) {}
   const std::string& key() const { return key_; }
   ConfigProblem problem() const { return problem_; }
+  const std::string& detail() const { return detail_; }
 
  private:
   std::string key_;
   ConfigProblem problem_;
+  std::string detail_;
 };
 
 inline const char* configProblemName(ConfigProblem problem) {

@@ -82,14 +82,16 @@ class ParamReader {
     throw ConfigError(resolved(key), ConfigProblem::kInvalid, why);
   }
 
-  /// Runs a core's validation of the loaded settings; its std::invalid_argument (whose message names the
-  /// field) becomes a ConfigError on this node's namespace.
+  /// Runs a core's validation of the loaded settings: a ConfigError naming a key relative to the node gets
+  /// the resolved key; another std::invalid_argument (whose message names the field) becomes a ConfigError
+  /// on this node's namespace.
   template <typename Validate>
   void validated(Validate&& validate) const {
     try {
       validate();
-    } catch (const ConfigError&) {
-      throw;
+    } catch (const ConfigError& e) {
+      if (!e.key().empty() && e.key()[0] == '/') throw;
+      throw ConfigError(resolved(e.key()), e.problem(), e.detail());
     } catch (const std::invalid_argument& e) {
       throw ConfigError(nh_.getNamespace(), ConfigProblem::kInvalid, e.what());
     }

@@ -11,6 +11,10 @@ from docking_settings import tables
 
 def problems(declaration, workspace):
     found = []
+    if declaration.defaults_from:
+        data = flatten(yaml.safe_load((pathlib.Path(workspace) / declaration.defaults_from).read_text()) or {})
+        for key in sorted(set(data) - set(declaration.settings)):
+            found.append("%s: %s: no setting of %s reads it" % (declaration.defaults_from, key, declaration.node))
     for name in declaration.config:
         path = pathlib.Path(workspace) / name
         data = flatten(yaml.safe_load(path.read_text()) or {})

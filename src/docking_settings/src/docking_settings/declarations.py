@@ -9,6 +9,8 @@ validator (docking_settings/ros_loader.h, yaml_loader.h), dynamic_reconfigure's 
     cpp: {header: pkg/node_settings.h, namespace: pkg::sub}
     node: arbiter                      # the node (for the README heading)
     config: [config/arbiter.yaml]      # the shipped files that set them (overrides of the defaults only)
+    defaults_from: config/omni_base.yaml   # instead of `default:` per setting: a file that describes
+                                       # hardware (a base, a simulator) holds every value, and is their home
     readme: src/pkg/README.md          # its table goes between <!-- settings:NAME --> and <!-- /settings -->
     root: ArbiterSettings              # the struct a node loads
     structs:
@@ -36,7 +38,7 @@ class DeclarationError(ValueError):
 class Setting:
     """One setting: `key` as it appears in YAML (prefixes of the nested structs included)."""
 
-    def __init__(self, struct, name, spec, where):
+    def __init__(self, struct, name, spec, where, default_of=None):
         unknown = set(spec) - SETTING_KEYS
         if unknown:
             raise DeclarationError("%s: unknown fields %s" % (where, sorted(unknown)))
@@ -44,9 +46,11 @@ class Setting:
         self.type = spec.get("type")
         if self.type not in TYPES:
             raise DeclarationError("%s: type must be one of %s" % (where, ", ".join(TYPES)))
-        if "default" not in spec:
+        if "default" in spec and default_of is not None:
+            raise DeclarationError("%s: a default here and in defaults_from: one home only" % where)
+        if "default" not in spec and default_of is None:
             raise DeclarationError("%s: no default" % where)
-        self.default = spec["default"]
+        self.default = spec["default"] if default_of is None else default_of
         self.range = spec.get("range")
         self.size = spec.get("size", 0)
         self.choices = spec.get("choices")
@@ -57,6 +61,9 @@ class Setting:
         self.paper = bool(spec.get("paper", False))
         if not self.doc:
             raise DeclarationError("%s: no doc (one line of meaning)" % where)
+        if self.range is not None and not (len(self.range) == 2 and all(
+                isinstance(b, (int, float)) and not isinstance(b, bool) for b in self.range)):
+            raise DeclarationError("%s: range must be two numbers (YAML reads 1.0e6 as text: write 1.0e+6)" % where)
         self.check(self.default, "the default")
 
     @property
@@ -111,6 +118,7 @@ class Struct:
     def __init__(self, name, spec, where):
         self.name, self.doc = name, spec.get("doc", "")
         self.fields = []  # Setting or Member, in declaration order
+        self.specs = {}   # field -> its spec, for settings made once their keys are known
         for field, field_spec in (spec.get("settings") or {}).items():
             here = "%s: %s.%s" % (where, name, field)
             if not IDENTIFIER.match(field):
@@ -118,7 +126,8 @@ class Struct:
             if "struct" in field_spec:
                 self.fields.append(Member(field, field_spec, here))
             else:
-                self.fields.append(Setting(name, field, field_spec, here))
+                self.fields.append(field)
+                self.specs[field] = (field_spec, here)
 
 
 class Declaration:
@@ -136,6 +145,11 @@ class Declaration:
         self.readme = spec.get("readme")
         self.root = spec["root"]
         self.doc = spec.get("doc", "")
+        self.workspace = self.path.resolve().parents[3]  # src/<package>/settings/<node>.yaml
+        self.defaults_from = spec.get("defaults_from")
+        self.default_values = None
+        if self.defaults_from:
+            self.default_values = flatten(yaml.safe_load((self.workspace / self.defaults_from).read_text()) or {})
         self.structs = {name: Struct(name, s, where) for name, s in spec["structs"].items()}
         if self.root not in self.structs:
             raise DeclarationError("%s: root %s is not declared" % (where, self.root))
@@ -150,14 +164,28 @@ class Declaration:
             raise DeclarationError("%s: %s contains itself" % (self.path, struct_name))
         if struct_name not in self.structs:
             raise DeclarationError("%s: struct %s is not declared" % (self.path, struct_name))
-        for field in self.structs[struct_name].fields:
+        struct = self.structs[struct_name]
+        for index, field in enumerate(struct.fields):
             if isinstance(field, Member):
                 self._collect(field.struct, prefix + field.prefix, path + [struct_name])
-            else:
-                key = prefix + field.name
-                if key in self.settings:
-                    raise DeclarationError("%s: key %s is declared twice" % (self.path, key))
-                self.settings[key] = field
+                continue
+            if isinstance(field, Setting) and self.default_values is not None:
+                raise DeclarationError("%s: %s is used twice: its defaults cannot come from one file (defaults_from)"
+                                       % (self.path, struct_name))
+            if isinstance(field, str):  # made here, where its key (and so its default's place) is known
+                field_spec, here = struct.specs[field]
+                key = prefix + field
+                default = None
+                if self.default_values is not None:
+                    if key not in self.default_values:
+                        raise DeclarationError("%s: %s: not in %s (defaults_from)" % (here, key, self.defaults_from))
+                    default = self.default_values[key]
+                field = Setting(struct_name, field, field_spec, here, default)
+                struct.fields[index] = field
+            key = prefix + field.name
+            if key in self.settings:
+                raise DeclarationError("%s: key %s is declared twice" % (self.path, key))
+            self.settings[key] = field
 
     def ordered_structs(self):
         """Structs in an order where each comes after the structs it contains."""

@@ -1,5 +1,9 @@
 #include "docking_sim/configs.h"
 
+#include <docking_settings/yaml_loader.h>
+
+#include "omni_base/base_settings.h"
+
 #include <cmath>
 #include <set>
 
@@ -333,18 +337,20 @@ RobotModel loadRobotModel(const std::string& path) {
 }
 
 OmniBaseModel loadOmniBaseModel(const std::string& path) {
-  const YamlField root = YamlField::open(path);
+  // The base as omni_base_node reads it (settings/omni_base.yaml): the same checks, one copy.
+  omni_base::OmniBaseSettings settings;
+  try {
+    settings = docking_settings::shippedSettings<omni_base::OmniBaseSettings>(path);
+    omni_base::validate(settings);
+  } catch (const docking_settings::ConfigError& e) {
+    throw std::runtime_error(path + ": " + e.key() + ": " + e.detail());
+  }
   OmniBaseModel m;
   m.file = path;
-  const YamlField wheels = root["wheels"];
-  const YamlField angles = wheels["drive_angles_deg"];
-  const std::size_t n = angles.size();
-  if (n < 3) angles.fail("needs at least 3 wheels");
-  for (std::size_t i = 0; i < n; ++i) m.layout.drive_angles_rad.push_back(angles.at(i).asDouble() * kDegToRad);
-  m.layout.center_distance_m = wheels["center_distance_m"].asPositive();
-  m.layout.wheel_radius_m = wheels["radius_m"].asPositive();
-  m.encoder_counts_per_rev = wheels["encoder_counts_per_rev"].asPositive();
-  m.motor_time_constant_s = root["motor"]["time_constant_s"].asDouble(0.0, 10.0);
+  m.layout = omni_base::wheelLayout(settings.wheels);
+  if (m.layout.drive_angles_rad.size() < 3) throw std::runtime_error(path + ": wheels/names: needs at least 3 wheels");
+  m.encoder_counts_per_rev = settings.wheels.encoder_counts_per_rev;
+  m.motor_time_constant_s = settings.motor.time_constant_s;
   return m;
 }
 

@@ -21,7 +21,11 @@
 #include <memory>
 
 #include "motor_board_firmware/board_bench.h"
-#include "omni_base/param_loader.h"
+#include <docking_settings/param_reader.h>
+#include <docking_settings/ros_loader.h>
+#include <docking_settings/run_node.h>
+
+#include "omni_base/base_settings.h"
 #include "omni_base/serial_port.h"
 
 namespace motor_board_firmware {
@@ -37,29 +41,28 @@ constexpr double kCommandRefreshS = 0.05;
 class MotorBoardSimNode {
  public:
   explicit MotorBoardSimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
-    const omni_base::ParamLoader p(pnh);
+    const docking_settings::ParamReader p(pnh);
+    omni_base::OmniBaseSettings base;  // the base it drives: config/omni_base.yaml, as omni_base_node reads it
+    docking_settings::loadSettings(pnh, base);
+    p.validated([&] { omni_base::validate(base); });
     plant_ = p.optional<std::string>("plant", "model");
-    if (plant_ != "model" && plant_ != "simulator") {
-      throw std::runtime_error("parameter " + p.name("plant") + " must be 'model' or 'simulator', got '" + plant_ + "'");
-    }
-    if (p.require<std::vector<std::string>>("wheels/names").size() != kWheels) {
-      throw std::runtime_error("the motor board drives exactly 3 wheels; " + p.name("wheels/names") + " names another count");
-    }
+    if (plant_ != "model" && plant_ != "simulator") p.invalid("plant", "must be 'model' or 'simulator', got '" + plant_ + "'");
+    if (base.wheels.names.size() != kWheels) p.invalid("wheels/names", "the motor board drives exactly 3 wheels");
     BoardBenchConfig config;
     config.hex_path = p.optional<std::string>("hex", firmwareHexPath());
-    config.motor.volts_per_rad_s = p.requireInRange("motor/volts_per_rad_s");
-    config.motor.supply_volts = p.requireInRange("motor/supply_volts");
-    config.motor.time_constant_s = p.requireInRange("motor/time_constant_s");
+    config.motor.volts_per_rad_s = base.motor.volts_per_rad_s;
+    config.motor.supply_volts = base.motor.supply_volts;
+    config.motor.time_constant_s = base.motor.time_constant_s;
     config.motor.friction_volts = p.require<double>("friction_volts");
     config.model_step_s = p.require<double>("model_step_s");
     if (!(config.motor.friction_volts >= 0.0 && config.motor.friction_volts < config.motor.supply_volts) ||
         !(config.model_step_s >= 1e-5 && config.model_step_s <= 1e-3)) {
-      throw std::runtime_error("friction_volts must be in [0, supply) and model_step_s in [1e-5, 1e-3]");
+      p.invalid("friction_volts", "friction_volts must be in [0, supply) and model_step_s in [1e-5, 1e-3]");
     }
-    config.counts_per_rev = p.requireInRange("wheels/encoder_counts_per_rev");
+    config.counts_per_rev = base.wheels.encoder_counts_per_rev;
     config.internal_plant = plant_ == "model";
     real_time_factor_ = p.optional<double>("real_time_factor", 1.0);
-    if (!(real_time_factor_ > 0.0 && real_time_factor_ <= 10.0)) throw std::runtime_error("~real_time_factor must be in (0, 10]");
+    if (!(real_time_factor_ > 0.0 && real_time_factor_ <= 10.0)) p.invalid("real_time_factor", "must be in (0, 10]");
     bench_ = std::make_unique<BoardBench>(config);
     link_path_ = p.optional<std::string>("link", "/tmp/motor_board_sim");
     if (!pty_.open(link_path_)) throw std::runtime_error("cannot open the pseudo-terminal: " + pty_.lastError());
@@ -216,14 +219,10 @@ class MotorBoardSimNode {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "motor_board_sim");
-  ros::NodeHandle nh;
-  ros::NodeHandle pnh("~");
-  try {
+  return docking_settings::runNode([] {
+    ros::NodeHandle nh;
+    ros::NodeHandle pnh("~");
     motor_board_firmware::MotorBoardSimNode node(nh, pnh);
     node.run();
-  } catch (const std::exception& e) {
-    ROS_FATAL("motor_board_sim: %s", e.what());
-    return 1;
-  }
-  return 0;
+  });
 }

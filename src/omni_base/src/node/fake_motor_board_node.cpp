@@ -12,6 +12,8 @@
 //                     itself carries on (a glitching firmware, a second writer on the port, a replayed log)
 // The true wheel speeds and angles (never reset, not even by a reboot) are published on ~wheels
 // (sensor_msgs/JointState) at 200 Hz.
+#include <docking_settings/param_reader.h>
+#include <docking_settings/ros_loader.h>
 #include <docking_settings/run_node.h>
 #include <poll.h>
 #include <ros/ros.h>
@@ -23,7 +25,7 @@
 
 #include "omni_base/fake_motor_board.h"
 #include "omni_base/serial_port.h"
-#include "omni_base/param_loader.h"
+#include "omni_base/base_settings.h"
 
 namespace {
 
@@ -36,9 +38,10 @@ double steadySeconds() {
 
 class FakeMotorBoardNode {
  public:
-  FakeMotorBoardNode(ros::NodeHandle& pnh) : pnh_(pnh), board_(loadConfig(pnh)) {
-    link_path_ = omni_base::ParamLoader(pnh).optional<std::string>("link", "/tmp/omni_base_fake_board");
-    wheel_names_ = omni_base::ParamLoader(pnh).require<std::vector<std::string>>("wheels/names");
+  FakeMotorBoardNode(ros::NodeHandle& pnh) : pnh_(pnh), base_(loadBase(pnh)), board_(boardConfig(pnh, base_)) {
+    // Launch wiring, not a setting: where the pseudo-terminal is linked.
+    link_path_ = docking_settings::ParamReader(pnh).optional<std::string>("link", "/tmp/omni_base_fake_board");
+    wheel_names_ = base_.wheels.names;
     fault_sub_ = pnh.subscribe("fault", 10, &FakeMotorBoardNode::onFault, this);
     wheels_pub_ = pnh.advertise<sensor_msgs::JointState>("wheels", 10);
     connect();
@@ -73,15 +76,22 @@ class FakeMotorBoardNode {
   }
 
  private:
-  static omni_base::FakeMotorBoardConfig loadConfig(const ros::NodeHandle& pnh) {
-    const omni_base::ParamLoader p(pnh);
+  /// The base it stands in for: config/omni_base.yaml, as omni_base_node reads it.
+  static omni_base::OmniBaseSettings loadBase(const ros::NodeHandle& pnh) {
+    omni_base::OmniBaseSettings base;
+    docking_settings::loadSettings(pnh, base);
+    docking_settings::ParamReader(pnh).validated([&] { omni_base::validate(base); });
+    return base;
+  }
+
+  static omni_base::FakeMotorBoardConfig boardConfig(const ros::NodeHandle& pnh, const omni_base::OmniBaseSettings& base) {
     omni_base::FakeMotorBoardConfig c;
-    c.wheel_count = p.require<std::vector<std::string>>("wheels/names").size();
-    c.drive.volts_per_rad_s = p.requireInRange("motor/volts_per_rad_s");
-    c.drive.supply_volts = p.requireInRange("motor/supply_volts");
-    c.motor_time_constant_s = p.requireInRange("motor/time_constant_s");
-    c.counts_per_rev = p.requireInRange("wheels/encoder_counts_per_rev");
-    c.random_seed = static_cast<uint32_t>(p.optional<int>("random_seed", 42));
+    c.wheel_count = base.wheels.names.size();
+    c.drive = omni_base::driveModel(base.motor);
+    c.motor_time_constant_s = base.motor.time_constant_s;
+    c.counts_per_rev = base.wheels.encoder_counts_per_rev;
+    // A test's choice of misbehaviour sequence, not a setting of the base.
+    c.random_seed = static_cast<uint32_t>(docking_settings::ParamReader(pnh).optional<int>("random_seed", 42));
     return c;
   }
 
@@ -150,6 +160,7 @@ class FakeMotorBoardNode {
   }
 
   ros::NodeHandle pnh_;
+  omni_base::OmniBaseSettings base_;
   omni_base::FakeMotorBoard board_;
   omni_base::PseudoTerminal pty_;
   std::string link_path_;

@@ -1,6 +1,7 @@
 // omni_base: cmd_vel in, wheel set-points out to the motor board (serial) or the simulator, odometry
 // back. The command path and the odometry are omni_base_core; this file wires them to ROS.
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <docking_settings/ros_loader.h>
 #include <docking_settings/run_node.h>
 #include <docking_msgs/WheelState.h>
 #include <docking_msgs/names.h>
@@ -21,7 +22,7 @@
 #include "omni_base/board_session.h"
 #include "omni_base/encoder_tracker.h"
 #include "omni_base/odometry.h"
-#include "omni_base/param_loader.h"
+#include "omni_base/base_settings.h"
 #include "serial_motor_backend.h"
 #include "sim_motor_backend.h"
 
@@ -45,51 +46,44 @@ struct NodeConfig {
 };
 
 NodeConfig loadConfig(const ros::NodeHandle& pnh) {
-  const ParamLoader p(pnh);
+  OmniBaseSettings s;
+  docking_settings::loadSettings(pnh, s);
+  docking_settings::warnUnknownKeys(pnh, s);
+  const docking_settings::ParamReader reader(pnh);
+  reader.validated([&] { validate(s); });
+  if (SerialPort::baudConstant(s.serial.baud) == 0) reader.invalid("serial/baud", "not a baud rate the serial port supports");
   NodeConfig c;
-  c.backend = p.require<std::string>("backend");
-  if (c.backend != "serial" && c.backend != "sim") p.invalid("backend", "must be 'serial' or 'sim', got '" + c.backend + "'");
-  c.control_rate_hz = p.requireInRange("control_rate_hz");
-  c.wheel_names = p.require<std::vector<std::string>>("wheels/names");
-  const auto angles_deg = p.requireVectorInRange("wheels/drive_angles_deg", c.wheel_names.size());
-  for (double a : angles_deg) c.layout.drive_angles_rad.push_back(a * M_PI / 180.0);
-  c.layout.center_distance_m = p.requireInRange("wheels/center_distance_m");
-  c.layout.wheel_radius_m = p.requireInRange("wheels/radius_m");
-
-  c.drive.volts_per_rad_s = p.requireInRange("motor/volts_per_rad_s");
-  c.drive.supply_volts = p.requireInRange("motor/supply_volts");
+  c.backend = s.backend;
+  c.control_rate_hz = s.control_rate_hz;
+  c.wheel_names = s.wheels.names;
+  c.layout = wheelLayout(s.wheels);
+  c.drive = driveModel(s.motor);
 
   c.encoders.wheel_count = c.wheel_names.size();
-  c.encoders.counts_per_rev = p.requireInRange("wheels/encoder_counts_per_rev");
-  c.encoders.counter_bits = p.requireIntInRange("wheels/encoder_bits");
-  c.encoders.max_plausible_rad_s = p.requireInRange("encoders/max_plausible_speed_factor") * c.drive.maxSpeed();
+  c.encoders.counts_per_rev = s.wheels.encoder_counts_per_rev;
+  c.encoders.counter_bits = s.wheels.encoder_bits;
+  c.encoders.max_plausible_rad_s = s.encoders.max_plausible_speed_factor * c.drive.maxSpeed();
 
   auto toArray = [](const std::vector<double>& v) { return std::array<double, 3>{v[0], v[1], v[2]}; };
-  c.controller.limits.max_velocity = toArray(p.requireVectorInRange("limits/max_velocity", 3));
-  c.controller.limits.max_acceleration = toArray(p.requireVectorInRange("limits/max_acceleration", 3));
-  c.controller.stop_deceleration = toArray(p.requireVectorInRange("limits/stop_deceleration", 3));
-  c.controller.cmd_timeout_s = p.requireInRange("watchdog/cmd_vel_timeout_s");
+  c.controller.limits.max_velocity = toArray(s.limits.max_velocity);
+  c.controller.limits.max_acceleration = toArray(s.limits.max_acceleration);
+  c.controller.stop_deceleration = toArray(s.limits.stop_deceleration);
+  c.controller.cmd_timeout_s = s.watchdog.cmd_vel_timeout_s;
   c.controller.max_wheel_speed_rad_s = c.drive.maxSpeed();
 
-  c.serial.device = p.require<std::string>("serial/device");
-  c.serial.baud = p.requireIntInRange("serial/baud");
-  if (SerialPort::baudConstant(c.serial.baud) == 0) p.invalid("serial/baud", "not a baud rate the serial port supports");
-  c.serial.link_timeout_s = p.requireInRange("serial/link_timeout_s");
-  c.serial.backoff_min_s = p.requireInRange("serial/reconnect_backoff_min_s");
-  c.serial.backoff_max_s = p.requireInRange("serial/reconnect_backoff_max_s");
-  if (c.serial.backoff_max_s < c.serial.backoff_min_s) {
-    p.invalid("serial/reconnect_backoff_max_s", std::to_string(c.serial.backoff_max_s) + " is below " +
-                                                    p.name("serial/reconnect_backoff_min_s") + " = " +
-                                                    std::to_string(c.serial.backoff_min_s));
-  }
+  c.serial.device = s.serial.device;
+  c.serial.baud = s.serial.baud;
+  c.serial.link_timeout_s = s.serial.link_timeout_s;
+  c.serial.backoff_min_s = s.serial.reconnect_backoff_min_s;
+  c.serial.backoff_max_s = s.serial.reconnect_backoff_max_s;
   c.serial.wheel_count = c.wheel_names.size();
   c.serial.drive = c.drive;
 
-  c.odom_frame = p.require<std::string>("odometry/frame_id");
-  c.base_frame = p.require<std::string>("odometry/child_frame_id");
-  c.publish_tf = p.require<bool>("odometry/publish_tf");
-  c.pose_covariance = p.requireVector("odometry/pose_covariance_diagonal", 6, true);
-  c.twist_covariance = p.requireVector("odometry/twist_covariance_diagonal", 6, true);
+  c.odom_frame = s.odometry.frame_id;
+  c.base_frame = s.odometry.child_frame_id;
+  c.publish_tf = s.odometry.publish_tf;
+  c.pose_covariance = s.odometry.pose_covariance_diagonal;
+  c.twist_covariance = s.odometry.twist_covariance_diagonal;
   return c;
 }
 
