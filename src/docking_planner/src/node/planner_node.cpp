@@ -677,9 +677,12 @@ class PlannerNode {
     const double unknown = std::numeric_limits<double>::quiet_NaN();  // no target pose held
     state.range_m = last_.has_target ? last_.geometry.range_m : unknown;
     state.goal_distance_m = last_.has_target ? last_.goal_distance_m : unknown;
-    state.lateral_error_m = last_.has_target ? last_.geometry.lateral_m : unknown;
-    state.axial_distance_m = last_.has_target ? last_.geometry.axial_m : unknown;
-    state.yaw_error_rad = last_.has_target ? last_.geometry.yaw_error_rad : unknown;
+    // Against the port axis: unknown while only the port's position is held (the law then takes the line
+    // of sight as the axis, and these would read as a perfect zero).
+    const bool axis_known = last_.has_target && last_.port_orientation_known;
+    state.lateral_error_m = axis_known ? last_.geometry.lateral_m : unknown;
+    state.axial_distance_m = axis_known ? last_.geometry.axial_m : unknown;
+    state.yaw_error_rad = axis_known ? last_.geometry.yaw_error_rad : unknown;
     state.bearing_rad = last_.has_target ? last_.geometry.bearing_rad : unknown;
     state_pub_.publish(state);
     last_state_msg_ = state;
