@@ -2,9 +2,9 @@
 """Issues 13 and 54: record.launch beside a simulator docking, then replay.launch lossless:=true, on masters
 of their own.
 
-1. The simulator (still_3m, real-time factor 0.3, 15 Hz cameras) runs the whole stack and docks
-   (sim.launch dock:=true), so that its right camera runs at the block matcher's rate (7.5 Hz: every
-   second frame) as in any live docking; record.launch images:=both records ~record_s of sim time,
+1. scripts/tune/record_sim_bag.py --dock --images both (still_3m, real-time factor 0.3, 15 Hz cameras):
+   the simulator runs the whole stack and docks, so that its right camera runs at the block matcher's rate
+   (7.5 Hz: every second frame) as in any live docking, and record.launch records ~record_s of sim time,
    nothing added: the simulator's truth is in its default list.
 2. replay.launch lossless:=true replays it twice from the compressed frames (decoded by republish), once
    from the raw ones, and once with loop:=true passes:=2, each time recording what it made.
@@ -20,7 +20,6 @@ disparity ranges of the compressed and of the raw replay agree with the truth (m
 well as the first (no estimate refused for its time). The raw-vs-compressed differences, and the replay
 against the estimates the stack made live, are printed.
 """
-import glob
 import math
 import os
 import shutil
@@ -39,6 +38,7 @@ PKG = "docking_perception"
 # One free_port for every script that starts a master of its own (scripts/tune/launch_runner.py).
 sys.path.insert(0, os.path.join(rospkg.RosPack().get_path(PKG), "..", "..", "scripts", "tune"))
 from launch_runner import free_port  # noqa: E402
+import record_sim_bag  # noqa: E402
 ESTIMATE_TOPICS = ("/perception/disparity/estimate", "/perception/mono_visible/estimate",
                    "/perception/mono_ir/estimate", "/target/estimate")
 
@@ -98,35 +98,12 @@ class ReplayLossless(unittest.TestCase):
         import rospy  # the test node's own master: only for parameters
         rospy.init_node("replay_lossless_check")
         record_s = rospy.get_param("~record_s", 4.0)
-        # The simulator in the background, record.launch in the foreground on the same master (it ends
-        # after record_s of sim time).
-        port = free_port()
-        env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port)
-        sim_log = open(os.path.join(self.dir, "sim.log"), "w")
-        sim_proc = subprocess.Popen(
-            ["roslaunch", "-p", str(port), os.path.join(self.launch_dir, "sim.launch"), "scenario:=still_3m",
-             "real_time_factor:=0.3", "camera_rate_hz:=15.0", "dock:=true", "output:=log"],
-            env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)
+        # The documented tool (docs/TUNING.md step 1): the simulator docking, record.launch beside it.
+        bags = [os.path.join(self.dir, "rec.bag")]
         try:
-            # The simulator's cameras running first: the recorder's duration counts from its start, on the
-            # sim clock, and must not run out before the first image arrives.
-            # (rostopic fails at once while the simulator's master is not up yet: asked again until then.)
-            deadline = time.time() + 240.0
-            while subprocess.call(["rostopic", "echo", "-n", "1", "/stereo/left/camera_info"], env=env,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=240) != 0:
-                self.assertLess(time.time(), deadline, "the simulator's cameras did not start")
-                time.sleep(1.0)
-            with open(os.path.join(self.dir, "record.log"), "w") as log:
-                rc = subprocess.call(
-                    ["roslaunch", os.path.join(self.launch_dir, "record.launch"),
-                     "path:=" + os.path.join(self.dir, "rec"), "duration:=%gs" % record_s, "images:=both"],
-                    env=env, stdout=log, stderr=subprocess.STDOUT, timeout=300)
-        finally:
-            os.killpg(sim_proc.pid, 2)
-            sim_proc.wait(timeout=60)
-        bags = glob.glob(os.path.join(self.dir, "rec_*.bag"))
-        self.assertEqual(rc, 0, "record.launch failed: %s" % open(os.path.join(self.dir, "record.log")).read()[-2000:])
-        self.assertEqual(len(bags), 1, "bags recorded: %s" % bags)
+            record_sim_bag.record("still_3m", record_s, 15.0, 0.3, bags[0], images="both", dock=True)
+        except (RuntimeError, subprocess.TimeoutExpired) as err:
+            self.fail("record_sim_bag failed: %s" % err)
         with rosbag.Bag(bags[0]) as bag:
             counts = {t: i.message_count for t, i in bag.get_type_and_topic_info().topics.items()}
         for topic in ("/stereo/left/image_raw", "/stereo/left/image_raw/compressed", "/sim/truth/stereo_left"):
