@@ -28,6 +28,13 @@ deps:
 build: deps
 	@mkdir -p devel/lib/python3/dist-packages
 	$(CATKIN_MAKE)
+	@touch $(BUILT)
+
+# make tune builds only when a file under src/ is newer than the last build (a catkin_make that finds
+# nothing to do still takes a minute on this machine).
+BUILT := devel/.built
+$(BUILT): $(shell find src -type f -not -name '*.pyc' 2>/dev/null) scripts/deb-packages.txt
+	@$(MAKE) --no-print-directory build
 
 # Builds and runs every gtest and rostest, then prints one line `N passed, N failed`.
 test: build
@@ -61,15 +68,18 @@ ablate: build
 #   make tune BAG=/tmp/b.bag SWEEP="mono_pose_visible.yaml:fast_threshold=5,10,20" [SET=...] [OUT=dir]
 #   make tune BAG=/tmp/both.bag IMAGES=raw,compressed     (what JPEG recording costs: a bag of record.launch images:=both)
 # SET: edits separated by spaces (no spaces inside a value: [1,2]). Output: OUT (default results/tune/<date-time>/).
+# PORT: the ROS master's port for the replays (default: a free one per replay). Builds only if src/ changed.
 BAG ?=
 SET ?=
 SWEEP ?=
 IMAGES ?=
 OUT ?=
-tune: build
+PORT ?=
+tune: $(BUILT)
 	@test -n "$(BAG)" || { echo "make tune: BAG=file.bag is required (docs/TUNING.md)"; exit 2; }
 	@$(SETUP) && scripts/tune/tune_replay.py --bag "$(BAG)" $(foreach edit,$(SET),--set "$(edit)") \
-		$(if $(SWEEP),--sweep "$(SWEEP)") $(if $(IMAGES),--images "$(IMAGES)") $(if $(OUT),--out "$(OUT)")
+		$(if $(SWEEP),--sweep "$(SWEEP)") $(if $(IMAGES),--images "$(IMAGES)") $(if $(OUT),--out "$(OUT)") \
+		$(if $(PORT),--port "$(PORT)")
 
 # Seeded fuzz of omni_base's serial stream decoder (src/omni_base/README.md, "Serial fuzz harness"):
 # 1 M random streams checked for its invariants, 2 M corrupted zero-duty frames that must never decode

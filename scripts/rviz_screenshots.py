@@ -3,10 +3,13 @@
 what a user sees without a screen, and where the README's pictures come from.
 
 Starts Xvfb, then sim.launch rviz:=true dock:=true (or, with --replay BAG, replay.launch bag:=BAG
-rviz:=true) on a master of its own, and saves the whole screen (ImageMagick's `import -window root`) at
-each moment asked for: seconds of ROS time since its clock started ("12.5"), or a planner state, taken
-when the planner first enters it ("ALIGN", "DOCKED"; --settle-s later, so that rviz has drawn it). Ends
-when every moment is taken or --timeout-s (wall) passes.
+rviz:=true, looping) on a master of its own, and saves the whole screen (ImageMagick's `import -window
+root`) at each moment asked for: seconds since the simulation started, or into the bag ("12.5"), or a
+planner state, taken when the planner first enters it ("ALIGN", "DOCKED"; --settle-s later, so that rviz
+has drawn it). Each file is named by the moment it shows, measured when it was taken:
+<scenario or bag>[_<state>]_t<seconds>s.png, and for a replay _pass<N> (the bag loops while rviz starts;
+a time is taken in the first pass that reaches it with rviz up). Ends when every moment is taken or
+--timeout-s (wall) passes.
 
   source devel/setup.bash
   scripts/rviz_screenshots.py [--scenario default] [--at 2,ALIGN,DOCKED] [--out results/rviz]
@@ -41,30 +44,52 @@ def parse_args():
 
 
 class Moments:
-    """What to capture: sim times, and states turned into sim times when the planner enters them."""
+    """What to capture: times, and states turned into times when the planner enters them. Times count from
+    the start of the simulation, or of the bag's pass (pass_s: a replay's pass length; 0: no loop)."""
 
-    def __init__(self, text, settle_s):
-        self.pending = {}   # label -> sim time to capture at (None: waiting for the state)
+    def __init__(self, text, settle_s, pass_s=0.0):
+        self.pending = {}   # label ("" for a time, else the state) -> time to capture at (None: waiting)
         self.settle_s = settle_s
+        self.pass_s = pass_s
         for item in (x.strip() for x in text.split(",") if x.strip()):
             try:
-                self.pending["t%06.1fs" % float(item)] = float(item)
+                self.pending["%.1f" % float(item)] = float(item)
             except ValueError:
                 self.pending[item.upper()] = None
 
+    def into_pass(self, now_s):
+        """(pass number from 1, seconds into it)."""
+        if self.pass_s <= 0.0:
+            return 1, now_s
+        return int(now_s // self.pass_s) + 1, now_s % self.pass_s
+
     def on_state(self, state_name, now_s):
         if self.pending.get(state_name, 0.0) is None:
-            self.pending[state_name] = now_s + self.settle_s
+            self.pending[state_name] = self.into_pass(now_s)[1] + self.settle_s
 
     def due(self, now_s):
-        return [label for label, t in self.pending.items() if t is not None and now_s >= t]
+        """The moments to take now: their time reached (in a replay: in this pass, not more than a second
+        ago; a later pass brings it again). The file name says when it was really taken."""
+        into = self.into_pass(now_s)[1]
+        late_ok = float("inf") if self.pass_s <= 0.0 else 1.0
+        return [label for label, t in self.pending.items() if t is not None and t <= into < t + late_ok]
+
+    def file_name(self, prefix, label, now_s):
+        number, into = self.into_pass(now_s)
+        state = "" if label[:1].isdigit() else "_" + label
+        return "%s%s_t%04.1fs%s.png" % (prefix, state, into, "_pass%d" % number if self.pass_s > 0.0 else "")
 
 
 def main():
     args = parse_args()
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    moments = Moments(args.at, args.settle_s)
+    pass_s = 0.0
+    if args.replay:
+        import rosbag
+        with rosbag.Bag(args.replay) as bag:  # replay_paced's pass: the bag's length and a 0.1 s gap
+            pass_s = bag.get_end_time() - bag.get_start_time() + 0.1
+    moments = Moments(args.at, args.settle_s, pass_s)
     # GLX on and Mesa's software renderer: without them rviz (OGRE) dies at start-up (SIGSEGV) on Xvfb.
     xvfb = subprocess.Popen(["Xvfb", args.display, "-screen", "0", args.size + "x24", "+extension", "GLX",
                              "-nolisten", "tcp"],
@@ -129,9 +154,9 @@ def capture_all(moments, env, out, args):
     while moments.pending and time.time() < deadline:
         now_s = rospy.Time.now().to_sec() - clock_start_s
         for label in moments.due(now_s):
-            path = out / ("%s_%s.png" % (args.scenario, label))
+            path = out / moments.file_name(args.scenario, label, now_s)
             subprocess.run(["import", "-window", "root", str(path)], env=env, check=True, timeout=60)
-            print("rviz_screenshots: %s at sim %.1f s" % (path, now_s), flush=True)
+            print("rviz_screenshots: %s (%.1f s since the clock started)" % (path, now_s), flush=True)
             del moments.pending[label]
         time.sleep(0.1)
     if moments.pending:

@@ -21,8 +21,8 @@ LOG_STAMP = re.compile(r"\[[0-9.]+(, [0-9.]+)?\]: ")
 PID = re.compile(r"\[pid \d+, ")
 # replay_paced's last line (src/docking_perception/scripts/replay_paced).
 PLAYER_SUMMARY = re.compile(r"replay_paced: (\d+) frames played, (\d+) skipped.*?(\d+) lost")
-# A node that gives up: its FATAL lines, or roslaunch reporting its death (the player's own end, the
-# normal end of a replay, is "REQUIRED process [play-N] has died").
+# A node that gives up: its FATAL lines, or roslaunch reporting its death (the player's failure is said by
+# its own lines; its normal end ends the launch quietly: src/docking_perception/scripts/ends_launch).
 FAILURE = re.compile(r"\[FATAL\]|^\[(?!play-)[\w-]+\] process has died")
 
 
@@ -90,9 +90,10 @@ def failure_context(lines):
     return out[:12]
 
 
-def run_launch(args, log_path, timeout_s, stop_on_failure=True):
-    """Runs `roslaunch -p PORT args...` with its output in log_path; returns a LaunchResult."""
-    port = free_port()
+def run_launch(args, log_path, timeout_s, stop_on_failure=True, port=None):
+    """Runs `roslaunch -p PORT args...` (PORT: `port`, else a free one) with its output in log_path; returns a
+    LaunchResult."""
+    port = port or free_port()
     env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port)
     deadline = time.time() + timeout_s
     lines, failed, timed_out = [], False, False

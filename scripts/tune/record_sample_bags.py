@@ -26,7 +26,7 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import launch_runner  # noqa: E402
-from record_sim_bag import TRUTH_TOPICS, wait_for_cameras  # noqa: E402
+from record_sim_bag import wait_for_cameras  # noqa: E402
 
 REPO = str(pathlib.Path(__file__).resolve().parents[2])
 LAUNCH = os.path.join(REPO, "launch")
@@ -48,7 +48,7 @@ def parse_args():
 def start_recording(env, path, seconds, log_dir, name):
     log = open(os.path.join(log_dir, name + ".log"), "w")
     return subprocess.Popen(["roslaunch", os.path.join(LAUNCH, "record.launch"), "path:=" + path,
-                             "duration:=%gs" % seconds, "extra_topics:=" + TRUTH_TOPICS],
+                             "duration:=%gs" % seconds],  # the truth is in record.launch's list
                             env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
 
 
@@ -107,7 +107,7 @@ def main():
     sim_log = open(os.path.join(work, "sim.log"), "w")
     sim = subprocess.Popen(["roslaunch", "-p", str(port), os.path.join(LAUNCH, "sim.launch"),
                             "scenario:=" + args.scenario, "dock:=false", "output:=log",
-                            "stereo_right_rate_hz:=0",  # complete stereo pairs for lossless replays
+                            "stereo_right_rate_hz:=0",  # every stereo pair: the far bag is the disparity detector's
                             "camera_rate_hz:=%g" % args.camera_rate_hz,
                             "real_time_factor:=%g" % args.real_time_factor],
                            env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)

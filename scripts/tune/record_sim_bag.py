@@ -4,11 +4,11 @@
     record_sim_bag.py --scenario translating_2m --duration 8 --out /tmp/tune/translating_2m.bag
 
 The simulator (no perception: the bag is to be replayed through perception; --dock: the closed loop
-docking from the start) runs on a master of its own; once its cameras publish, launch/record.launch
-records `duration` seconds of sim time, with the simulator's truth (/sim/truth/stereo_left, /sim/truth/ir,
-/sim/truth/chaser) added, and the bag is moved to --out. The same steps as the replay_lossless rostest, as
-one command. About 7 MB per second of sim time with 15 Hz cameras and JPEG images (record.launch's
-default), 31 MB raw (--images raw).
+docking from the start, the right camera then at the block matcher's rate as in any live docking) runs
+on a master of its own; once its cameras publish, launch/record.launch records `duration` seconds of sim
+time, with the simulator's truth (in record.launch's list), and the bag is moved to --out. The
+replay_lossless rostest records its bag with it. About 7 MB per second of sim time with 15 Hz cameras
+and JPEG images (record.launch's default), 31 MB raw (--images raw).
 """
 import argparse
 import glob
@@ -24,7 +24,6 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import launch_runner  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-TRUTH_TOPICS = "/sim/truth/stereo_left /sim/truth/ir /sim/truth/chaser"
 
 
 def wait_for_cameras(env, timeout_s):
@@ -50,15 +49,14 @@ def record(scenario, duration_s, rate_hz, real_time_factor, out_path, images=Non
     sim = subprocess.Popen(
         ["roslaunch", "-p", str(port), str(ROOT / "launch" / "sim.launch"), "scenario:=" + scenario,
          "real_time_factor:=%g" % real_time_factor, "camera_rate_hz:=%g" % rate_hz,
-         "dock:=true" if dock else "perception:=false", "output:=log",
-         "stereo_right_rate_hz:=0"],  # complete stereo pairs: lossless replays need both frames of each
+         "dock:=true" if dock else "perception:=false", "output:=log"],
         env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)
     try:
         wait_for_cameras(env, 240.0)
         with open(os.path.join(work, "record.log"), "w") as log:
             recorder = subprocess.Popen(["roslaunch", str(ROOT / "launch" / "record.launch"),
-                                         "path:=" + os.path.join(work, "rec"), "duration:=%gs" % duration_s,
-                                         "extra_topics:=" + TRUTH_TOPICS] + (["images:=" + images] if images else []),
+                                         "path:=" + os.path.join(work, "rec"), "duration:=%gs" % duration_s]
+                                        + (["images:=" + images] if images else []),
                                         env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
             try:
                 rc = recorder.wait(timeout=60 + 20 * duration_s / real_time_factor)

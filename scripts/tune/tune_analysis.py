@@ -1,7 +1,8 @@
 """The analysis half of the tuning tool (scripts/tune/tune_replay.py, issue 13): from the bag that was
 replayed and the bags the replays recorded, per source (the three estimators and the arbiter's fused
 output):
-  - detection rate: frames with a valid estimate / image frames of that source's camera in the bag;
+  - detection rate: frames with a valid estimate / image frames of that source's camera in the bag (the
+    disparity detector: the stereo pairs);
   - error against the simulator's truth, where the bag holds it;
   - CPU time per frame (the estimators' own processing_time_ms);
   - differences between two configurations, stamp by stamp.
@@ -23,9 +24,11 @@ import math
 import numpy as np
 import rosbag
 
-# source name -> (estimate topic, the camera whose frames it answers; None: every camera's frames)
+# source name -> (estimate topic, the camera whose frames it answers; None: every camera's frames).
+# "stereo pairs": the left frames whose right image the bag holds too (all of them in a bag without right
+# camera frames): a live docking's right camera runs at the block matcher's rate only.
 SOURCES = {
-    "disparity": ("/perception/disparity/estimate", "stereo/left"),
+    "disparity": ("/perception/disparity/estimate", "stereo pairs"),
     "mono_visible": ("/perception/mono_visible/estimate", "stereo/left"),
     "mono_ir": ("/perception/mono_ir/estimate", "ir"),
     "fused": ("/target/estimate", None),
@@ -109,6 +112,10 @@ def read_camera_frames(bag_path):
                 continue
             for _, msg, _ in bag.read_messages(topics=[names[wanted]]):
                 frames[camera].add(msg.header.stamp.to_nsec())
+        right = "stereo/right/camera_info" if "stereo/right/camera_info" in names else "stereo/right/image_raw"
+        if right in names:
+            right_stamps = {msg.header.stamp.to_nsec() for _, msg, _ in bag.read_messages(topics=[names[right]])}
+            frames["stereo pairs"] = frames["stereo/left"] & right_stamps
     return {camera: sorted(stamps) for camera, stamps in frames.items()}
 
 
@@ -198,6 +205,8 @@ def statistics_of(values, scale=1.0):
 def frames_of(source, camera_frames):
     """The frame stamps a source answers: its camera's, or for the fused output every camera's."""
     camera = SOURCES[source][1]
+    if camera == "stereo pairs" and camera not in camera_frames:
+        camera = "stereo/left"
     if camera is not None:
         return camera_frames.get(camera, [])
     return sorted(set().union(*camera_frames.values())) if camera_frames else []

@@ -161,13 +161,13 @@ def check_bag(path):
                          % (path, ", ".join(missing), ", ".join(sorted(topics))))
 
 
-def replay(bag, config_dir, out_bag, log_path, timeout_s, images="auto"):
-    """One lossless replay; raises UsageError with the nodes' own words when they refuse the
-    configuration, RuntimeError when the replay fails otherwise."""
+def replay(bag, config_dir, out_bag, log_path, timeout_s, images="auto", port=None):
+    """One lossless replay (on a master at `port`, else at a free port); raises UsageError with the nodes'
+    own words when they refuse the configuration, RuntimeError when the replay fails otherwise."""
     result = launch_runner.run_launch(
         [str(ROOT / "launch" / "replay.launch"), "bag:=%s" % bag, "config_dir:=%s" % config_dir,
          "out:=%s" % out_bag, "lossless:=true", "dock:=false", "output:=screen", "images:=%s" % images],
-        str(log_path), timeout_s)
+        str(log_path), timeout_s, port=port)
     if result.failure_lines:
         raise UsageError("a node refused this configuration (%s):\n  %s" % (log_path, "\n  ".join(result.failure_lines)))
     if result.timed_out:
@@ -193,6 +193,8 @@ def parse_args(argv):
                         help="replay one configuration from each kind of image frame of a bag recorded with "
                              "record.launch images:=both: what the JPEG recording costs the estimates")
     parser.add_argument("--timeout", type=float, default=1800.0, help="wall seconds allowed per replay")
+    parser.add_argument("--port", type=int, help="the ROS master's port for every replay, one after the other "
+                                                 "(default: a free port per replay)")
     return parser.parse_args(argv)
 
 
@@ -214,7 +216,7 @@ def main(argv=None):
             out_bag = out / ("replay_%d.bag" % index)
             print("tune_replay: [%d/%d] %s ..." % (index + 1, len(configurations), configuration.label), flush=True)
             result = replay(bag, out / ("config_%d" % index), out_bag, out / ("replay_%d.log" % index), args.timeout,
-                            configuration.images)
+                            configuration.images, args.port)
             print("  " + result.player_summary, flush=True)
             runs.append((out_bag, result))
     except UsageError as err:

@@ -4,6 +4,8 @@ The table groups rows by source, one row per configuration, so that the effect o
 one estimator reads down a column. The plot has one panel per metric, the configurations along x and one
 line per source, so that a trade (detection up, error up, CPU up) is seen at a glance.
 """
+import os
+
 import matplotlib
 
 matplotlib.use("Agg")  # headless: written to a file, no display needed
@@ -42,7 +44,7 @@ def table(report):
     def line(cells):
         return "  ".join(cell[:width].ljust(width) for cell, (_, width) in zip(cells, COLUMNS)).rstrip()
 
-    lines = ["bag: %s (truth: %s; frames: %s)" % (report["bag"], "yes" if report["truth"] else "no",
+    lines = ["bag: %s (truth: %s; frames: %s)" % (shown_path(report["bag"]), "yes" if report["truth"] else "no",
                                                    ", ".join("%s %d" % kv for kv in report["camera_frames"].items())),
              line([header for header, _ in COLUMNS])]
     for source in SOURCES:
@@ -51,6 +53,13 @@ def table(report):
             lines.append(line(row_cells(configuration["label"], source, configuration["sources"][source])))
     lines += ["", NOTE]
     return "\n".join(lines)
+
+
+def shown_path(path):
+    """A bag inside the repository by its path there (bags/far_approach.bag), the same on every clone."""
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    relative = os.path.relpath(path, root)
+    return path if relative.startswith("..") else relative
 
 
 def series(report, source, getter):

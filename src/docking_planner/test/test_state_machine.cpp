@@ -252,7 +252,7 @@ TEST_F(StateMachineTest, LostTooLongInsideTheCircleAbortsBacksOffThenSearches) {
   EXPECT_TRUE(isZero(out.command));
 }
 
-TEST_F(StateMachineTest, PerceptionGoneHoldsStillWithoutTimeoutThenResumes) {
+TEST_F(StateMachineTest, PerceptionGoneHoldsStillPastTheHoldTimeoutThenResumes) {
   step(kFar, true);
   ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
   const PlannerConfig& c = planner_.config();
@@ -276,6 +276,57 @@ TEST_F(StateMachineTest, PerceptionGoneHoldsStillWithoutTimeoutThenResumes) {
   out = step(kFar, true);
   EXPECT_EQ(out.state, DockingPhase::kApproach) << out.reason;
   EXPECT_FALSE(isZero(out.command));
+}
+
+// Issue 54: a camera with no frames left the planner in HOLD for ever. Perception gone for the search
+// timeout (the goal's here) ends the docking, PERCEPTION_LOST, zero velocity, naming the camera at fault.
+TEST_F(StateMachineTest, PerceptionGoneForTheSearchTimeoutEndsTheDockingNamingTheCamera) {
+  planner_.cancel(t_, "restart with a goal's search timeout");
+  DockingLimits limits;
+  limits.search_timeout_s = 5.0;
+  ASSERT_TRUE(planner_.start(t_, limits, nullptr));
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  planner_.setInputProblem("camera stereo_camera: left: no readable image matches image sequence /x_%04d.png");
+  PlannerOutput out;
+  double ended_after_s = -1.0;
+  for (double waited = kDt; waited < 8.0 && ended_after_s < 0.0; waited += kDt) {
+    out = stepPerceptionGone(kFar, true);
+    ASSERT_TRUE(isZero(out.command));
+    if (out.outcome) {
+      ended_after_s = waited;
+    } else {
+      ASSERT_EQ(out.state, DockingPhase::kHold) << out.reason;
+    }
+  }
+  ASSERT_TRUE(out.outcome.has_value());
+  EXPECT_EQ(*out.outcome, DockingOutcome::kPerceptionLost);
+  EXPECT_GE(ended_after_s, limits.search_timeout_s);
+  EXPECT_LE(ended_after_s, limits.search_timeout_s + 2 * kDt);
+  EXPECT_NE(out.reason.find("no estimator publishes"), std::string::npos) << out.reason;
+  EXPECT_NE(out.reason.find("camera stereo_camera"), std::string::npos) << out.reason;
+  EXPECT_FALSE(planner_.active());
+  EXPECT_TRUE(isZero(stepPerceptionGone(kFar, true).command));
+}
+
+// A camera at fault while another still sees the target: the docking goes on. With the target not seen
+// it does not search (that needs the camera) but holds still, then ends as above.
+TEST_F(StateMachineTest, CameraFaultHoldsOnlyWhileTheTargetIsNotSeen) {
+  step(kFar, true);
+  ASSERT_EQ(step(kFar, true).state, DockingPhase::kApproach);
+  planner_.setInputProblem("camera ir_camera: /dev/ir does not exist (not plugged in?)");
+  PlannerOutput out = step(kFar, true);
+  EXPECT_EQ(out.state, DockingPhase::kApproach) << out.reason;
+  EXPECT_FALSE(isZero(out.command));
+  const PlannerConfig& c = planner_.config();
+  out = runFor(c.hold_timeout_s + c.search_wait_s + 1.0, kFar, false);  // long enough to search, normally
+  EXPECT_EQ(out.state, DockingPhase::kHold) << out.reason;
+  EXPECT_TRUE(isZero(out.command));
+  EXPECT_NE(out.reason.find("ir_camera"), std::string::npos) << out.reason;
+  out = stepUntilEnded(kFar, false, static_cast<int>((c.search_timeout_s + 1.0) / kDt));
+  ASSERT_TRUE(out.outcome.has_value()) << out.reason;
+  EXPECT_EQ(*out.outcome, DockingOutcome::kPerceptionLost);
+  EXPECT_NE(out.reason.find("ir_camera"), std::string::npos) << out.reason;
 }
 
 TEST_F(StateMachineTest, ArbiterSayingNoEstimatorTalksStopsAtOnce) {

@@ -80,4 +80,10 @@ constexpr const char kTarget[] = "target";        // the docking port: origin at
 constexpr const char kChaserTruth[] = "chaser_truth";  // simulator only
 constexpr const char kTargetTruth[] = "target_truth";  // simulator only (the port, true pose)
 }  // namespace frames
+
+namespace diagnostics {
+// The camera nodes' diagnostic task: their statuses on /diagnostics are named "<node>: camera capture" and
+// say what is wrong with their source. The planner cites those that are not OK when perception is gone.
+constexpr const char kCameraCapture[] = "camera capture";
+}  // namespace diagnostics
 }  // namespace docking_msgs

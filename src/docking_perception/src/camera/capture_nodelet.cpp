@@ -173,7 +173,7 @@ void CaptureNodelet::onInit() {
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, getPrivateNodeHandle(), getName());
   diagnostics_->setHardwareID(hardware_id);
-  diagnostics_->add("capture", this, &CaptureNodelet::diagnoseCapture);
+  diagnostics_->add(docking_msgs::diagnostics::kCameraCapture, this, &CaptureNodelet::diagnoseCapture);
   min_rate_hz_ = rate_hz_;
   max_rate_hz_ = rate_hz_;
   publish_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(

@@ -1,4 +1,5 @@
 #include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/debug_caption.h"
 #include "docking_perception/disparity/footprint_fit.h"
 #include "number_text.h"
 
@@ -9,6 +10,7 @@
 #include <stdexcept>
 
 #include <climits>
+#include <iomanip>
 #include <functional>
 #include <limits>
 #include <utility>
@@ -975,8 +977,7 @@ cv::Mat renderDebugImage(const cv::Mat& disparity, const Detection& detection,
                          double display_max_disparity_px) {
   if (disparity.empty() || disparity.type() != CV_32FC1) {
     cv::Mat blank(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));
-    cv::putText(blank, detection.reason.empty() ? "no disparity image" : detection.reason,
-                cv::Point(10, 30), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 255), 1);
+    drawCaption(blank, detection.reason.empty() ? "no disparity image" : detection.reason, cv::Scalar(0, 0, 255));
     return blank;
   }
   // Near = bright; NaN and negative (invalid) become 0 through the saturating conversion.
@@ -1004,14 +1005,14 @@ cv::Mat renderDebugImage(const cv::Mat& disparity, const Detection& detection,
                    cv::Scalar(255, 255, 0), cv::MARKER_CROSS, 20, 2);
   }
   std::ostringstream text;
-  text.precision(3);
   if (detection.found) {
-    text << std::fixed << "Z " << detection.position_m.z() << " m  d " << detection.disparity_px
-         << " px  " << detection.blob_pixels << " px";
+    text.precision(2);
+    text << std::fixed << "Z " << detection.position_m.z() << " m  d " << std::setprecision(1)
+         << detection.disparity_px << " px";
   } else {
     text << detection.reason;
   }
-  cv::putText(image, text.str(), cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.55, colour, 2);
+  drawCaption(image, text.str(), colour);
   return image;
 }
 

@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 
+#include "docking_perception/debug_caption.h"
+
 namespace docking_perception {
 namespace mono {
 namespace {
@@ -49,14 +51,12 @@ cv::Mat drawDebugImage(const cv::Mat& image, const MonoPoseResult& result, const
   }
   char text[256];
   if (result.valid) {
-    std::snprintf(text, sizeof(text), "%s  range %.3f m  inliers %d  rms %.2f px  %.1f ms", result.solver.c_str(),
-                  result.range_m, result.feature_inliers, result.reprojection_error_px, result.processing_time_ms);
+    std::snprintf(text, sizeof(text), "%.3f m  %d inliers  %.2f px", result.range_m, result.feature_inliers,
+                  result.reprojection_error_px);
   } else {
-    std::snprintf(text, sizeof(text), "%s  not found: %s", result.solver.c_str(), result.status.c_str());
+    std::snprintf(text, sizeof(text), "no pose: %s", result.status.c_str());
   }
-  cv::putText(canvas, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
-  cv::putText(canvas, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5,
-              result.valid ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 0, 255), 1, cv::LINE_AA);
+  drawCaption(canvas, text, result.valid ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 0, 255));
   return canvas;
 }
 

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <opencv2/core.hpp>
 
+#include "docking_perception/debug_caption.h"
 #include "docking_perception/mono/debug_drawing.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
 #include "synthetic_scene.h"
@@ -540,4 +541,32 @@ TEST(DebugDrawing, DrawsTheProjectedModelOnlyForAValidPose) {
   const cv::Vec3b pixel = lost_drawn.at<cv::Vec3b>(cvRound(origin.y()), cvRound(origin.x()));
   EXPECT_EQ(pixel[0], pixel[1]);
   EXPECT_EQ(pixel[1], pixel[2]);
+}
+
+// The debug images' caption (issue 54: unreadable at rviz's panel size): a font that scales with the image,
+// wrapped at spaces to at most kMaxCaptionLines lines that fit the width, on a darkened band at the top;
+// the image below the band untouched.
+TEST(DebugCaption, WrapsToFitAndLeavesTheImageBelowAlone) {
+  const std::string text =
+      "no pose: too few matches (9 < 10); direct alignment: no prior (tracking or hint); far throttle off";
+  const double scale = docking_perception::kCaptionScalePer640Px;
+  const std::vector<std::string> lines = docking_perception::captionLines(text, scale, 2, 620);
+  ASSERT_EQ(static_cast<int>(lines.size()), docking_perception::kMaxCaptionLines);
+  EXPECT_EQ(lines.back().substr(lines.back().size() - 3), "...");
+  int baseline = 0;
+  for (std::size_t i = 0; i + 1 < lines.size(); ++i) {
+    EXPECT_LE(cv::getTextSize(lines[i], cv::FONT_HERSHEY_SIMPLEX, scale, 2, &baseline).width, 620) << lines[i];
+  }
+  cv::Mat image(480, 640, CV_8UC3, cv::Scalar(200, 200, 200));
+  docking_perception::drawCaption(image, "1.234 m  45 inliers", cv::Scalar(0, 255, 0));
+  EXPECT_LT(image.at<cv::Vec3b>(2, 630)[0], 100);            // the band, darkened
+  EXPECT_EQ(image.at<cv::Vec3b>(400, 320), cv::Vec3b(200, 200, 200));  // below it, as it was
+  int green = 0;  // the text, drawn in the band at a readable size
+  for (int row = 0; row < 120; ++row) {
+    for (int col = 0; col < 640; ++col) {
+      const cv::Vec3b pixel = image.at<cv::Vec3b>(row, col);
+      green += pixel[1] > 200 && pixel[2] < 100;
+    }
+  }
+  EXPECT_GT(green, 2000);
 }

@@ -1,22 +1,25 @@
 #!/usr/bin/env python3
-"""Issue 13: record.launch then replay.launch lossless:=true, on masters of their own.
+"""Issues 13 and 54: record.launch beside a simulator docking, then replay.launch lossless:=true, on masters
+of their own.
 
-1. The simulator (still_3m, real-time factor 0.3, 15 Hz cameras, no perception) runs with record.launch
-   images:=both (duration ~record_s of sim time, the simulator's truth added): a bag with absolute topic
-   names holding each camera's raw and compressed (JPEG, record.launch's default) frames.
+1. scripts/tune/record_sim_bag.py --dock --images both (still_3m, real-time factor 0.3, 15 Hz cameras):
+   the simulator runs the whole stack and docks, so that its right camera runs at the block matcher's rate
+   (7.5 Hz: every second frame) as in any live docking, and record.launch records ~record_s of sim time,
+   nothing added: the simulator's truth is in its default list.
 2. replay.launch lossless:=true replays it twice from the compressed frames (decoded by republish), once
    from the raw ones, and once with loop:=true passes:=2, each time recording what it made.
    The four run two at a time (compressed1 beside raw, then compressed2 beside loop), each on a master
    of its own.
-Asserts: the bag holds /stereo/left/image_raw and its /compressed (absolute); each replay processed all
-but at most ~max_lost_frames images per camera (the bag's first and last frames can be incomplete); the
-two compressed replays' estimators' estimates are identical (same stamps, validity and numbers; the
-arbiter's fused output, which depends on the order in which the estimators answer, is reported); the
+Asserts: the bag holds /stereo/left/image_raw and its /compressed (absolute) and the truth; each replay
+skipped no frame (the player's summary: 0 skipped) and every estimator answered every frame it could feed:
+as many visible poses as left frames, disparity estimates as pairs, IR poses as IR frames (complete in the
+bag); the two compressed replays' estimators' estimates are identical (same stamps, validity and numbers;
+the arbiter's fused output, which depends on the order in which the estimators answer, is reported); the
 disparity ranges of the compressed and of the raw replay agree with the truth (median within
 ~max_range_error_m); the looped replay's second pass, its stamps one bag length later, is estimated as
-well as the first (no estimate refused for its time). The raw-vs-compressed differences are printed.
+well as the first (no estimate refused for its time). The raw-vs-compressed differences, and the replay
+against the estimates the stack made live, are printed.
 """
-import glob
 import math
 import os
 import shutil
@@ -29,11 +32,13 @@ import unittest
 import rosbag
 import rospkg
 import rostest
+import yaml
 
 PKG = "docking_perception"
 # One free_port for every script that starts a master of its own (scripts/tune/launch_runner.py).
 sys.path.insert(0, os.path.join(rospkg.RosPack().get_path(PKG), "..", "..", "scripts", "tune"))
 from launch_runner import free_port  # noqa: E402
+import record_sim_bag  # noqa: E402
 ESTIMATE_TOPICS = ("/perception/disparity/estimate", "/perception/mono_visible/estimate",
                    "/perception/mono_ir/estimate", "/target/estimate")
 
@@ -93,43 +98,20 @@ class ReplayLossless(unittest.TestCase):
         import rospy  # the test node's own master: only for parameters
         rospy.init_node("replay_lossless_check")
         record_s = rospy.get_param("~record_s", 4.0)
-        # The simulator in the background, record.launch in the foreground on the same master (it ends
-        # after record_s of sim time).
-        port = free_port()
-        env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port)
-        sim_log = open(os.path.join(self.dir, "sim.log"), "w")
-        sim_proc = subprocess.Popen(
-            ["roslaunch", "-p", str(port), os.path.join(self.launch_dir, "sim.launch"), "scenario:=still_3m",
-             "real_time_factor:=0.3", "camera_rate_hz:=15.0", "perception:=false", "output:=log"],
-            env=env, stdout=sim_log, stderr=subprocess.STDOUT, start_new_session=True)
+        # The documented tool (docs/TUNING.md step 1): the simulator docking, record.launch beside it.
+        bags = [os.path.join(self.dir, "rec.bag")]
         try:
-            # The simulator's cameras running first: the recorder's duration counts from its start, on the
-            # sim clock, and must not run out before the first image arrives.
-            # (rostopic fails at once while the simulator's master is not up yet: asked again until then.)
-            deadline = time.time() + 240.0
-            while subprocess.call(["rostopic", "echo", "-n", "1", "/stereo/left/camera_info"], env=env,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=240) != 0:
-                self.assertLess(time.time(), deadline, "the simulator's cameras did not start")
-                time.sleep(1.0)
-            with open(os.path.join(self.dir, "record.log"), "w") as log:
-                rc = subprocess.call(
-                    ["roslaunch", os.path.join(self.launch_dir, "record.launch"),
-                     "path:=" + os.path.join(self.dir, "rec"), "duration:=%gs" % record_s, "images:=both",
-                     "extra_topics:=/sim/truth/stereo_left /sim/truth/ir"],
-                    env=env, stdout=log, stderr=subprocess.STDOUT, timeout=300)
-        finally:
-            os.killpg(sim_proc.pid, 2)
-            sim_proc.wait(timeout=60)
-        bags = glob.glob(os.path.join(self.dir, "rec_*.bag"))
-        self.assertEqual(rc, 0, "record.launch failed: %s" % open(os.path.join(self.dir, "record.log")).read()[-2000:])
-        self.assertEqual(len(bags), 1, "bags recorded: %s" % bags)
+            record_sim_bag.record("still_3m", record_s, 15.0, 0.3, bags[0], images="both", dock=True)
+        except (RuntimeError, subprocess.TimeoutExpired) as err:
+            self.fail("record_sim_bag failed: %s" % err)
         with rosbag.Bag(bags[0]) as bag:
             counts = {t: i.message_count for t, i in bag.get_type_and_topic_info().topics.items()}
-        for topic in ("/stereo/left/image_raw", "/stereo/left/image_raw/compressed"):
-            self.assertIn(topic, counts, "absolute topic names expected: %s" % sorted(counts))
+        for topic in ("/stereo/left/image_raw", "/stereo/left/image_raw/compressed", "/sim/truth/stereo_left"):
+            self.assertIn(topic, counts, "absolute topic names and the truth expected: %s" % sorted(counts))
         frames = counts["/stereo/left/image_raw"]
         self.assertGreater(frames, 20)
-        self.assertEqual(counts["/stereo/left/image_raw/compressed"], frames)
+        complete = complete_frames(bags[0])
+        self.assertLess(complete["pairs"], complete["left"], "the right camera ran at the left's rate: %s" % complete)
 
         # The four replays two at a time, each on a master of its own (was one after the other: ~15 s wall
         # each, most of it starting and stopping launches). Lossless replays process every frame whatever
@@ -144,16 +126,22 @@ class ReplayLossless(unittest.TestCase):
             for (name, _), rc in zip(pair, codes):
                 log = os.path.join(self.dir, name + ".log")
                 self.assertEqual(rc, 0, "replay %s: %s" % (name, open(log).read()[-2000:]))
-                summary = [line.strip() for line in open(log) if line.startswith("replay_paced:")]
+                summary = [line.strip() for line in open(log) if line.startswith("replay_paced: ") and "played" in line]
                 print("replay_lossless_check: %s: %s" % (name, "; ".join(summary)), flush=True)
+                # The compressed frames: rosbag record can drop raw ones under load (4 of 60 once, two CPU hogs).
+                if name.startswith("compressed"):
+                    self.assertTrue(summary and " 0 skipped (incomplete)" in summary[-1], "%s: %s" % (name, summary))
+                self.assertNotIn("REQUIRED process", open(log).read(), "replay %s did not end quietly" % name)
                 runs[name] = estimates(os.path.join(self.dir, name + ".bag"))
         outs = [runs["compressed1"], runs["compressed2"]]
 
         max_lost = rospy.get_param("~max_lost_frames", 2)
         first, second = outs
-        for topic in ESTIMATE_TOPICS[:3]:
-            self.assertGreaterEqual(len(first.get(topic, {})), frames - max_lost,
-                                    "%s: %d estimates for %d frames" % (topic, len(first.get(topic, {})), frames))
+        expected = {ESTIMATE_TOPICS[0]: complete["pairs"], ESTIMATE_TOPICS[1]: complete["left"],
+                    ESTIMATE_TOPICS[2]: complete["ir"]}
+        for topic, count in expected.items():  # every frame that could feed the estimator, answered once
+            self.assertEqual(len(first.get(topic, {})), count, "%s: %d estimates for %d frames that feed it" % (
+                topic, len(first.get(topic, {})), count))
         for topic in ESTIMATE_TOPICS[:3]:  # the estimators; the arbiter fuses in arrival order (reported)
             self.assertEqual(first.get(topic), second.get(topic), "%s differs between two lossless replays: %s" % (
                 topic, first_difference(first.get(topic, {}), second.get(topic, {}))))
@@ -169,7 +157,7 @@ class ReplayLossless(unittest.TestCase):
         for name in ("compressed1", "raw"):
             errors = sorted(abs(v[4] - truth[s]) for s, v in runs[name]["/perception/disparity/estimate"].items()
                             if v[0] and s in truth)
-            self.assertGreater(len(errors), frames // 2, "%s: valid disparity estimates with a truth: %d" % (
+            self.assertGreater(len(errors), complete["pairs"] // 2, "%s: valid disparity estimates with a truth: %d" % (
                 name, len(errors)))
             medians[name] = errors[len(errors) // 2]
             self.assertLess(medians[name], rospy.get_param("~max_range_error_m", 0.2), name)
@@ -185,13 +173,19 @@ class ReplayLossless(unittest.TestCase):
         # CPU hogs; the compressed ones complete), which both passes skip alike.
         self.assertGreaterEqual(len(second_pass), len(first_pass) - max_lost,
                                 "second pass: %d estimates, first pass %d" % (len(second_pass), len(first_pass)))
-        self.assertGreater(len(first_pass), frames // 2, "first pass: %d estimates for %d frames" % (
-            len(first_pass), frames))
-        self.assertGreaterEqual(valid_second, valid_first - max_lost,
+        self.assertGreater(len(first_pass), complete["pairs"] // 2, "first pass: %d estimates for %d pairs" % (
+            len(first_pass), complete["pairs"]))
+        # The chaser docks while the bag runs: at the second pass the target jumps back to where it was at the
+        # first frame, and the detector's track gate holds that jump invalid until track_confirm_frames confirm it.
+        with open(os.path.join(self.launch_dir, "..", "config", "disparity_detector.yaml")) as stream:
+            confirm = yaml.safe_load(stream)["track_confirm_frames"]
+        self.assertGreaterEqual(valid_second, valid_first - max_lost - confirm,
                                 "valid disparity estimates: first pass %d, second %d" % (valid_first, valid_second))
         fused_second = [s for s in runs["loop"].get(ESTIMATE_TOPICS[3], {}) if s in second_pass]
         self.assertGreater(len(fused_second), 0, "the arbiter fused nothing in the second pass")
 
+        print("replay_lossless_check: replay against the estimates made live: %s" % replay_vs_live(bags[0], first),
+              flush=True)
         print("replay_lossless_check: %d frames recorded; compressed replays processed %s; identical twice; "
               "disparity range error median %.4f m (compressed) / %.4f m (raw); compressed minus raw: %s; "
               "loop: %d/%d valid disparity estimates in passes 1/2, %d fused in pass 2; fused estimates differing "
@@ -200,6 +194,33 @@ class ReplayLossless(unittest.TestCase):
                   medians["raw"], raw_vs_compressed(runs["raw"], first), valid_first, valid_second,
                   len(fused_second), len(fused)),
               flush=True)
+
+
+def complete_frames(path):
+    """Frames of the bag whose compressed image and camera_info are both there: left, stereo pairs, IR."""
+    topics = ["/stereo/left/image_raw/compressed", "/stereo/left/camera_info", "/stereo/right/image_raw/compressed",
+              "/stereo/right/camera_info", "/ir/image_raw/compressed", "/ir/camera_info"]
+    stamps = {t: set() for t in topics}
+    with rosbag.Bag(path) as bag:
+        for topic, msg, _ in bag.read_messages(topics=topics):
+            stamps[topic].add(msg.header.stamp.to_nsec())
+    left = stamps[topics[0]] & stamps[topics[1]]
+    right = stamps[topics[2]] & stamps[topics[3]]
+    return {"left": len(left), "pairs": len(left & right), "ir": len(stamps[topics[4]] & stamps[topics[5]])}
+
+
+def replay_vs_live(path, replayed):
+    """Per estimator: frames the live stack estimated, frames valid live and in the replay, and their median
+    position difference (mm). Live, perception skips frames when late and saw raw images: not asserted."""
+    live = estimates(path)
+    report = {}
+    for topic in ESTIMATE_TOPICS[:3]:
+        a, b = live.get(topic, {}), replayed.get(topic, {})
+        both = [s for s in set(a) & set(b) if a[s][0] and b[s][0]]
+        diffs = sorted(1000.0 * math.dist(a[s][1:4], b[s][1:4]) for s in both)
+        report[topic.split("/")[2]] = "live %d, replay %d, both valid %d, median %.1f mm" % (
+            len(a), len(b), len(both), diffs[len(diffs) // 2] if diffs else float("nan"))
+    return report
 
 
 def first_difference(a, b):

@@ -11,12 +11,15 @@
 //   DOCKED   within the docked tolerances: zero velocity for that cycle, then IDLE
 //   HOLD     target lost (or odometry bad): zero velocity; back to where it was when the target
 //            returns; after hold_timeout_s ABORT (inside the safe circle) or SEARCH. Perception gone
-//            (no estimate message, or the arbiter says no estimator talks): HOLD for as long as it
-//            lasts, with no timeout, then the usual hold from the moment it returns
+//            (no estimate message, the arbiter says no estimator talks, or a camera reports a fault
+//            while the target is not seen): HOLD still, no SEARCH or ABORT (both need eyes), until it
+//            returns (then the usual hold from that moment) or until the search timeout has passed:
+//            then the docking ends, PERCEPTION_LOST, naming what is missing
 //   ABORT    lost too long near the target, or errors growing: back off to the safe circle on the held
 //            target pose, then SEARCH
-// A docking runs from start() until it ends: DOCKED, cancel(), its time budget spent, or no target for
-// its search timeout; every end goes back to IDLE and the cycle it ends in reports the outcome.
+// A docking runs from start() until it ends: DOCKED, cancel(), its time budget spent, no target for its
+// search timeout, or perception gone for as long; every end goes back to IDLE and the cycle it ends in
+// reports the outcome.
 // Every failure path commands zero velocity: bad odometry, NaN, no target, HOLD, DOCKED, IDLE.
 #pragma once
 
@@ -53,7 +56,8 @@ enum class DockingOutcome : std::uint8_t {
   kTargetLost = 4,
   kClientGone = 5,
   kRejected = 6,
-  kShutdown = 7
+  kShutdown = 7,
+  kPerceptionLost = 8
 };
 const char* outcomeName(DockingOutcome outcome);
 
@@ -80,7 +84,8 @@ struct PlannerConfig {
   double orientation_timeout_s{20.0};      ///< a held port axis older than this is forgotten (>= max_blind_s)
   double search_wait_s{2.0};               ///< SEARCH: stand still this long before turning
   double search_yaw_rate_radps{0.3};       ///< SEARCH: then turn in place at this rate
-  double search_timeout_s{60.0};           ///< SEARCH this long without a target: the docking ends (IDLE)
+  /// SEARCH this long without a target, or HOLD this long with perception gone: the docking ends (IDLE)
+  double search_timeout_s{60.0};
   double hold_timeout_s{3.0};              ///< HOLD: then ABORT or SEARCH
   double abort_timeout_s{20.0};            ///< ABORT: give up backing off after this (-> SEARCH)
   double approach_goal_tolerance_m{0.05};  ///< APPROACH -> ALIGN within this of the goal on the circle
@@ -166,7 +171,12 @@ class DockingPlanner {
   /// sources_silent: it says that no estimator has published (perception stalled or gone).
   void notePerception(double now_s, bool sources_silent);
 
-  /// Why perception counts as gone at `now_s` (empty: it is there).
+  /// What the inputs' own diagnostics say is wrong now (e.g. a camera: its source unreadable), empty when
+  /// nothing: cited while perception is gone and in the reason a docking ends with. With the target not
+  /// seen, such a fault counts as perception gone (HOLD still: searching needs that camera).
+  void setInputProblem(const std::string& problem) { input_problem_ = problem; }
+
+  /// Why perception counts as gone at `now_s` (empty: it is there), with the inputs' faults.
   std::string perceptionProblem(double now_s) const;
 
   /// One planner cycle at time `now_s` with the latest odometry (absent: none received yet).
@@ -227,6 +237,8 @@ class DockingPlanner {
   double last_perception_s_{-1e300};  // receipt time of the last estimate message, valid or not
   bool sources_silent_{false};        // the last one said that no estimator talks
   bool perception_down_{false};       // the last update() found perception gone
+  double perception_down_since_s_{0.0};  // since when (the search timeout counts from there)
+  std::string input_problem_;          // setInputProblem()
 };
 
 }  // namespace docking_planner

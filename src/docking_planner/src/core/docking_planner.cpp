@@ -86,6 +86,8 @@ const char* outcomeName(DockingOutcome outcome) {
       return "REJECTED";
     case DockingOutcome::kShutdown:
       return "SHUTDOWN";
+    case DockingOutcome::kPerceptionLost:
+      return "PERCEPTION_LOST";
   }
   return "UNKNOWN";
 }
@@ -310,12 +312,13 @@ void DockingPlanner::notePerception(double now_s, bool sources_silent) {
 }
 
 std::string DockingPlanner::perceptionProblem(double now_s) const {
-  if (sources_silent_) return "perception silent: no estimator publishes (stalled or gone)";
+  const std::string inputs = input_problem_.empty() ? "" : "; " + input_problem_;
+  if (sources_silent_) return "perception silent: no estimator publishes (stalled or gone)" + inputs;
   const double age = now_s - last_perception_s_;
   if (age >= 0.0 && age <= config_.perception_timeout_s) return "";
-  if (last_perception_s_ < -1e299) return "perception silent: no target estimate message yet";
+  if (last_perception_s_ < -1e299) return "perception silent: no target estimate message yet" + inputs;
   if (age < 0.0) return "";  // the clock went back (a bag looped): the next message decides
-  return fmt("perception silent: no target estimate message for %.1f s", age);
+  return fmt("perception silent: no target estimate message for %.1f s", age) + inputs;
 }
 
 PlannerOutput DockingPlanner::stop(PlannerOutput out, const std::string& reason) const {
@@ -423,14 +426,23 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
     }
     return finish(stop(out, odom_problem));
   }
-  const std::string perception_problem = perceptionProblem(now_s);
+  std::string perception_problem = perceptionProblem(now_s);
+  if (perception_problem.empty() && !input_problem_.empty() && !out.target_visible) {
+    perception_problem = "target not seen with a camera at fault: " + input_problem_;
+  }
   if (!perception_problem.empty()) {
-    // Stop and wait, without the hold's timeout: searching or backing off needs eyes.
+    // Stop and wait, without the hold's timeout: searching or backing off needs eyes. Not for ever:
+    // after the search timeout the docking ends, saying what is missing.
+    if (!perception_down_) perception_down_since_s_ = now_s;
+    perception_down_ = true;
+    const double limit_s = limits_.search_timeout_s > 0.0 ? limits_.search_timeout_s : config_.search_timeout_s;
+    if (now_s - perception_down_since_s_ > limit_s) {
+      return end(out, DockingOutcome::kPerceptionLost, fmt("no usable estimate for %.0f s: ", limit_s) + perception_problem);
+    }
     if (state_ != DockingPhase::kHold && state_ != DockingPhase::kDocked) {
       resume_state_ = state_;
       enter(DockingPhase::kHold, now_s, perception_problem);
     }
-    perception_down_ = true;
     return finish(stop(out, "holding: " + perception_problem));
   }
   if (perception_down_) {

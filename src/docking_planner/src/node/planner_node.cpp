@@ -4,6 +4,7 @@
 // action server docking/dock (docking_msgs/Dock) starts it; until then, and after every end, the
 // planner is IDLE with zero velocity. Parameters: config/planner.yaml (see README.md); a missing or
 // invalid one stops the node, naming it.
+#include <cmath>
 #include <csignal>
 #include <deque>
 #include <map>
@@ -14,6 +15,7 @@
 
 #include <actionlib/server/simple_action_server.h>
 #include <actionlib_msgs/GoalID.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <docking_msgs/DockAction.h>
 #include <docking_msgs/DockingState.h>
@@ -153,7 +155,8 @@ static_assert(static_cast<int>(DockingOutcome::kDocked) == DockResultMsg::DOCKED
                   static_cast<int>(DockingOutcome::kTargetLost) == DockResultMsg::TARGET_LOST &&
                   static_cast<int>(DockingOutcome::kClientGone) == DockResultMsg::CLIENT_GONE &&
                   static_cast<int>(DockingOutcome::kRejected) == DockResultMsg::REJECTED &&
-                  static_cast<int>(DockingOutcome::kShutdown) == DockResultMsg::SHUTDOWN,
+                  static_cast<int>(DockingOutcome::kShutdown) == DockResultMsg::SHUTDOWN &&
+                  static_cast<int>(DockingOutcome::kPerceptionLost) == DockResultMsg::PERCEPTION_LOST,
               "DockingOutcome is numbered as docking_msgs/DockResult");
 static_assert(static_cast<int>(DockingPhase::kIdle) == docking_msgs::DockingState::IDLE,
               "DockingPhase is numbered as docking_msgs/DockingState");
@@ -188,6 +191,9 @@ class PlannerNode {
                                  ros::TransportHints().tcpNoDelay());
     odom_sub_ = nh.subscribe(docking_msgs::topics::kOdom, 10, &PlannerNode::onOdometryEvent, this,
                              ros::TransportHints().tcpNoDelay());
+    // The cameras' own word on their sources, cited when perception is gone (diagnostic_updater publishes
+    // on the absolute /diagnostics).
+    diagnostics_sub_ = nh.subscribe("/diagnostics", 20, &PlannerNode::onDiagnostics, this);
 
     reset_service_ = pnh.advertiseService("reset", &PlannerNode::onReset, this);
 
@@ -357,6 +363,35 @@ class PlannerNode {
       dock_server_.publishFeedback(feedback);
       last_feedback_s_ = now;
     }
+  }
+
+  /// Keeps the camera statuses that are not OK (docking_msgs/names.h kCameraCapture); an OK one clears its
+  /// camera's.
+  void onDiagnostics(const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
+    const std::string suffix = std::string(": ") + docking_msgs::diagnostics::kCameraCapture;
+    for (const auto& status : msg->status) {
+      const auto& name = status.name;
+      if (name.size() < suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) continue;
+      if (status.level == diagnostic_msgs::DiagnosticStatus::OK) {
+        camera_faults_.erase(name);
+      } else {
+        camera_faults_[name] = CameraFault{"camera " + name.substr(0, name.size() - suffix.size()) + ": " +
+                                               status.message,
+                                           ros::Time::now().toSec()};
+      }
+    }
+  }
+
+  /// The camera faults reported within the last few seconds, joined (empty: none). A camera that stopped
+  /// reporting is not cited: its process is gone or restarting (the respawned one reports afresh).
+  std::string cameraFaults(double now_s) const {
+    constexpr double kFreshS = 5.0;  // diagnostic_updater reports every second
+    std::string text;
+    for (const auto& [name, fault] : camera_faults_) {
+      if (std::abs(now_s - fault.received_s) > kFreshS) continue;
+      text += (text.empty() ? "" : "; ") + fault.text;
+    }
+    return text;
   }
 
   // Nothing a message contains may end the node: what the algorithm code throws drops that message,
@@ -612,6 +647,7 @@ class PlannerNode {
   // image's), for the image -> cmd_vel latency; zero for a step of the timer alone.
   void runCycle(const ros::Time& image_stamp = ros::Time()) {
     const ros::Time now = ros::Time::now();
+    planner_.setInputProblem(cameraFaults(now.toSec()));
     last_ = planner_.update(now.toSec(), odometry_);
 
     geometry_msgs::Twist cmd;
@@ -633,9 +669,12 @@ class PlannerNode {
     const double unknown = std::numeric_limits<double>::quiet_NaN();  // no target pose held
     state.range_m = last_.has_target ? last_.geometry.range_m : unknown;
     state.goal_distance_m = last_.has_target ? last_.goal_distance_m : unknown;
-    state.lateral_error_m = last_.has_target ? last_.geometry.lateral_m : unknown;
-    state.axial_distance_m = last_.has_target ? last_.geometry.axial_m : unknown;
-    state.yaw_error_rad = last_.has_target ? last_.geometry.yaw_error_rad : unknown;
+    // Against the port axis: unknown while only the port's position is held (the law then takes the line
+    // of sight as the axis, and these would read as a perfect zero).
+    const bool axis_known = last_.has_target && last_.port_orientation_known;
+    state.lateral_error_m = axis_known ? last_.geometry.lateral_m : unknown;
+    state.axial_distance_m = axis_known ? last_.geometry.axial_m : unknown;
+    state.yaw_error_rad = axis_known ? last_.geometry.yaw_error_rad : unknown;
     state.bearing_rad = last_.has_target ? last_.geometry.bearing_rad : unknown;
     state_pub_.publish(state);
     last_state_msg_ = state;
@@ -726,7 +765,12 @@ class PlannerNode {
   tf2_ros::TransformListener tf_listener_;
   diagnostic_updater::Updater diagnostics_;
   ros::Publisher cmd_pub_, state_pub_, path_pub_, geometry_pub_;
-  ros::Subscriber estimate_sub_, odom_sub_;
+  ros::Subscriber estimate_sub_, odom_sub_, diagnostics_sub_;
+  struct CameraFault {
+    std::string text;      ///< "<status name>: <message>"
+    double received_s{0};  ///< ROS time of its last report
+  };
+  std::map<std::string, CameraFault> camera_faults_;  ///< by status name: cameras whose last word was not OK
   ros::ServiceServer reset_service_;
   ros::Timer timer_;
   DockServer dock_server_;

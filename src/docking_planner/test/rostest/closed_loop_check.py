@@ -5,6 +5,14 @@ Every docking starts through the docking action (docking/dock), as an operator s
 > 0 the check first waits that long without a goal and asserts that nothing moved: the planner IDLE,
 every cmd_vel zero, the chaser (truth) within 1 mm of where it was.
 
+With ~client: true the dockings are started, followed and aborted by the operator's client, as an
+operator types them (`rosrun docking_planner dock start|watch|abort`), after the idle wait: the clock is
+then past the client's 10 s server timeout, which it once took as a deadline on ROS time (issue 54). A
+first `dock start` is aborted by `dock abort` once the chaser moves: abort must exit 0 saying the goal was
+cancelled, that start must end with its `dock: ABORTED` line, the planner go IDLE and cmd_vel zero. Then a
+second `dock start` docks and must end with `dock: DOCKED after ...`, exit status 0; `dock watch`, running
+throughout, must have printed the DOCKED state on its own line and both ends.
+
 mode "dock": the planner must reach DOCKED within ~timeout_s (sim); at that moment the TRUE probe tip
   (base_link x = robot.yaml's docking_probe_x_m on tf world -> chaser_truth) must be within max_position_error_m of the TRUE
   port origin (tf world -> target_truth) in the floor plane, and the chaser's x axis within
@@ -18,9 +26,12 @@ mode "lost": this node relays the arbiter's target/estimate to the planner (rema
 """
 import faulthandler
 import math
+import re
 import signal
+import subprocess
 import sys
 import threading
+import time
 import unittest
 
 import actionlib
@@ -31,6 +42,37 @@ from docking_msgs.msg import DockAction, DockGoal, DockResult, DockingState, Tar
 from geometry_msgs.msg import Twist
 
 PKG = "docking_planner"
+MOVING = (DockingState.APPROACH, DockingState.ALIGN, DockingState.FINAL)
+STATE_LINE = re.compile(r"^\s*(?:-|[0-9.]+ s)\s+([A-Z]+)\b")  # the client's state lines: elapsed, state, ...
+
+
+class Client:
+    """One `rosrun docking_planner dock ...` process, its output gathered line by line."""
+
+    def __init__(self, *args):
+        self.proc = subprocess.Popen(["rosrun", PKG, "dock"] + list(args), stdout=subprocess.PIPE,
+                                     stderr=subprocess.STDOUT, text=True)
+        self.lines = []
+        self.reader = threading.Thread(target=self.read, daemon=True)
+        self.reader.start()
+
+    def read(self):
+        for line in self.proc.stdout:
+            self.lines.append(line.rstrip("\n"))
+
+    def finish(self, timeout_s, interrupt=False):
+        """Exit status (None: still running after timeout_s of wall time); interrupt: Ctrl-C first."""
+        if interrupt:
+            self.proc.send_signal(signal.SIGINT)
+        try:
+            code = self.proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            return None
+        self.reader.join(5.0)
+        return code
+
+    def text(self):
+        return "\n".join(self.lines)
 
 
 def yaw_of(q):
@@ -136,10 +178,56 @@ class ClosedLoopCheck(unittest.TestCase):
             self.assertLess(moved, 0.001, "the chaser moved %.4f m (truth) without a goal" % moved)
             print("closed_loop_check: %.0f s (sim) without a goal: IDLE, %d zero cmd_vel, chaser moved %.5f m" % (
                 idle_s, len(cmds), moved), flush=True)
+        if rospy.get_param("~client", False):
+            self.abort_a_docking()
+            self.docking = Client("start")
+            return rospy.get_time()
         self.client = actionlib.SimpleActionClient("docking/dock", DockAction)
         self.assertTrue(self.client.wait_for_server(rospy.Duration(60.0)), "no docking action server")
         self.client.send_goal(DockGoal())
         return rospy.get_time()
+
+    def abort_a_docking(self):
+        """The operator's client: watch, start, abort once the chaser moves; checks every end (see above)."""
+        self.watch = Client("watch")
+        first = Client("start")
+        deadline = rospy.get_time() + 60.0
+        while rospy.get_time() < deadline:
+            s = self.latest_state()
+            with self.lock:
+                moving = self.cmds and abs(self.cmds[-1][1].linear.x) + abs(self.cmds[-1][1].linear.y) > 0.01
+            if s is not None and s.state in MOVING and moving:
+                break
+            self.assertIsNone(first.proc.poll(), "dock start ended before the chaser moved:\n" + first.text())
+            rospy.sleep(0.1)
+        self.assertIn(self.latest_state().state, MOVING, "the first docking never moved: " + first.text())
+        abort = Client("abort")
+        self.assertEqual(abort.finish(60.0), 0, "dock abort failed:\n" + abort.text())
+        self.assertIn("dock: ABORTED: docking goal", abort.text())
+        t_abort = rospy.get_time()
+        self.assertEqual(first.finish(30.0), 1, "dock start after the abort:\n" + first.text())
+        self.assertTrue(first.lines and first.lines[-1].startswith("dock: ABORTED after"), first.text())
+        rospy.sleep(1.0)
+        with self.lock:
+            after = [c for t, c in self.cmds if t > t_abort + 0.2]
+        self.assertEqual(self.latest_state().state, DockingState.IDLE, "not IDLE after dock abort")
+        self.assertTrue(after and all(c.linear.x == 0 and c.linear.y == 0 and c.angular.z == 0 for c in after),
+                        "non-zero cmd_vel after dock abort")
+        print("closed_loop_check: dock abort: %s; dock start: %s" % (abort.lines[-1], first.lines[-1]), flush=True)
+
+    def check_client_ends(self):
+        """The second `dock start` ends DOCKED (its last line, exit 0); watch saw every end."""
+        code = self.docking.finish(30.0)
+        self.assertEqual(code, 0, "dock start:\n" + self.docking.text())
+        self.assertTrue(self.docking.lines[-1].startswith("dock: DOCKED after"), self.docking.text())
+        time.sleep(1.0)
+        self.watch.finish(10.0, interrupt=True)
+        watched = self.watch.lines
+        states = [m.group(1) for m in (STATE_LINE.match(line) for line in watched) if m]
+        self.assertIn("DOCKED", states, "dock watch printed no DOCKED line:\n" + self.watch.text())
+        self.assertTrue(any(l.startswith("dock: DOCKED after") for l in watched), self.watch.text())
+        self.assertTrue(any(l.startswith("dock: ABORTED after") for l in watched), self.watch.text())
+        print("closed_loop_check: %s" % self.docking.lines[-1], flush=True)
 
     def test_closed_loop(self):
         mode = rospy.get_param("~mode")
@@ -185,9 +273,12 @@ class ClosedLoopCheck(unittest.TestCase):
         self.assertLessEqual(tip_err, max_pos, "true probe-tip error %.1f mm > %.1f mm" % (1000 * tip_err, 1000 * max_pos))
         self.assertLessEqual(yaw_err, max_yaw, "true yaw error %.2f deg > %.2f deg" % (yaw_err, max_yaw))
         # The action's result says so, and the planner is IDLE (zero velocity) afterwards.
-        self.assertTrue(self.client.wait_for_result(rospy.Duration(10.0)), "no action result after DOCKED")
-        result = self.client.get_result()
-        self.assertEqual(result.outcome, DockResult.DOCKED, "action result %d: %s" % (result.outcome, result.reason))
+        if rospy.get_param("~client", False):
+            self.check_client_ends()
+        else:
+            self.assertTrue(self.client.wait_for_result(rospy.Duration(10.0)), "no action result after DOCKED")
+            result = self.client.get_result()
+            self.assertEqual(result.outcome, DockResult.DOCKED, "action result %d: %s" % (result.outcome, result.reason))
         rospy.sleep(1.0)
         self.assertEqual(self.latest_state().state, DockingState.IDLE, "not IDLE after the docking ended")
 

@@ -1,15 +1,18 @@
 #!/usr/bin/env python3
 """robot.launch in bench mode, end to end, with no hardware (wall time: there is no simulator clock).
 
-The cameras read image sequences that the simulator's renderer wrote (render_bench_frames), perception
-and the planner run as on the robot, omni_base drives the fake motor board over a pseudo-terminal; the
-board's ~wheels topic is the truth of what the wheels do. Asserts:
+The cameras read image sequences that the simulator's renderer wrote (render_bench_frames, run by the launch
+itself), perception and the planner run as on the robot, omni_base drives the fake motor board over a
+pseudo-terminal; the board's ~wheels topic is the truth of what the wheels do. Asserts:
   1. frames in: images on the three camera topics, and valid target estimates from them;
   2. no goal: for idle_s the planner is IDLE, every cmd_vel is zero, no wheel turns and odometry moves
      less than 1 mm;
   3. a goal (the docking action): non-zero wheel speeds reach the board;
   4. cancel: the goal ends CANCELLED, the planner goes IDLE and the wheels stop within stop_within_s;
-  5. a client that dies (kill -9) mid-docking: the planner ends the docking, the wheels stop.
+  5. a client that dies (kill -9) mid-docking: the planner ends the docking, the wheels stop;
+  6. the cameras unplugged mid-docking (their frames taken away): within the hold limit (the client's
+     --search-timeout) the docking ends PERCEPTION_LOST, `dock start`'s last line names the camera and its
+     source's fault, and the wheels stop.
 """
 import math
 import os
@@ -53,11 +56,6 @@ class RobotBench(unittest.TestCase):
         rospy.Subscriber("fake_motor_board/wheels", JointState, cls.on_wheels, queue_size=50)
         rospy.Subscriber("cmd_vel", Twist, cls.on_cmd, queue_size=50)
         rospy.Subscriber("docking/state", DockingState, cls.on_state, queue_size=50)
-        frames = rospy.get_param("~frames_dir")
-        render = WORKSPACE / "src" / "docking_sim" / "scripts" / "render_bench_frames"
-        done = subprocess.run([sys.executable, str(render), frames, "--scenario", rospy.get_param("~scenario"),
-                               "--frames", "5"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        assert done.returncode == 0, "render_bench_frames failed: " + done.stdout
 
     @classmethod
     def count_image(cls, topic):
@@ -185,6 +183,37 @@ class RobotBench(unittest.TestCase):
             last = self.states[-1][1]
         self.assertEqual(last.state, DockingState.IDLE, last.reason)
         rospy.loginfo("robot_bench_check: client killed -> wheels stopped after %.2f s (%s)", stop_s, last.reason)
+
+        # 6. The cameras unplugged mid-docking: the docking ends within the hold limit, naming the cameras.
+        self.unplug_cameras_mid_docking(stop_within)
+
+    def unplug_cameras_mid_docking(self, stop_within):
+        hold_limit = rospy.get_param("~hold_limit_s", 5.0)
+        frames = pathlib.Path(rospy.get_param("~frames_dir"))
+        proc = subprocess.Popen(["rosrun", PKG, "dock", "start", "--search-timeout", str(hold_limit)],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        t_goal = time.time()
+        self.wait_for("wheels turning after dock start", lambda: any(t > t_goal and w > 2.0 for t, w in self.wheels), 60.0)
+        unplugged = frames.with_name(frames.name + ".unplugged")
+        frames.rename(unplugged)
+        t_unplug = time.time()
+        try:
+            out = proc.communicate(timeout=hold_limit + 60.0)[0]
+        finally:
+            unplugged.rename(frames)
+        t_end = time.time()
+        last = out.strip().splitlines()[-1] if out.strip() else ""
+        self.assertEqual(proc.returncode, 1, out)
+        self.assertTrue(last.startswith("dock: FAILED after") and "PERCEPTION_LOST" in last, out)
+        self.assertIn("camera stereo_camera", last, "the result does not name the stereo camera: " + last)
+        self.assertIn("no readable image matches", last, "the result does not say what is wrong with it: " + last)
+        stop_s = self.wheels_stopped_since(t_unplug)
+        self.assertIsNotNone(stop_s, "the wheels never stopped after the cameras were unplugged")
+        with self.lock:
+            turning_late = [t for t, w in self.wheels if t > t_end and w > STOPPED_RAD_S]
+        self.assertFalse(turning_late, "wheels turning after the docking ended")
+        print("robot_bench_check: cameras unplugged -> ended after %.1f s, wheels stopped after %.2f s: %s" % (
+            t_end - t_unplug, stop_s, last), flush=True)
 
 
 if __name__ == "__main__":

@@ -31,6 +31,8 @@ class ChaserBase {
   void step(double now_s, double dt_s);
 
   const omni_base::Pose2D& pose() const { return pose_; }
+  /// Puts the base at `pose` (tools rendering a given path: sim_render --approach); wheels untouched.
+  void place(const omni_base::Pose2D& pose) { pose_ = pose; }
   /// Body twist from the current wheel speeds (base_link).
   omni_base::Twist2D twist() const;
   std::vector<int32_t> encoderCounts() const;

@@ -47,6 +47,9 @@ class Simulation {
     return chaser_.command(enable, wheel_rad_s, time_s_);
   }
   const ChaserBase& chaser() const { return chaser_; }
+  /// Puts the chaser at `pose` (world, base_link on the floor) without moving it there: for tools that
+  /// render a path of their own (sim_render --approach).
+  void placeChaser(const omni_base::Pose2D& pose) { chaser_.place(pose); }
 
   Eigen::Isometry3d worldTChaser() const;          ///< base_link, on the floor
   Eigen::Isometry3d worldTTargetRobot() const { return worldTTargetRobotAt(time_s_); }

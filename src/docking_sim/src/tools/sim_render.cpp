@@ -8,6 +8,11 @@
 //       sees them (image_rect: grey, rectified): FOLDER/left_rect_NNNN.png (ir: ir_rect_NNNN.png) and FOLDER/sequence.json
 //       (intrinsics of the rectified image, and per frame the stamp, the pose of the docking port in the
 //       rectified optical frame and its linear and angular velocity in that frame).
+//   sim_render --config DIR --scenario NAME --approach FILE --out FOLDER
+//       the three raw cameras (as the camera nodes would publish them) with the chaser on the docking port's
+//       axis, facing the port, at the distances of FILE: one line "t_s distance_m" per frame (base_link to
+//       the port centre; the scene at sim time t_s): FOLDER/frame_NNNN_{stereo_left,stereo_right,ir}.png
+//       (robot.launch's bench frames: src/docking_sim/scripts/render_bench_frames)
 //   --target FILE   another target model instead of DIR/target.yaml (e.g. config/target_tagged.yaml)
 //
 // DIR is the workspace's config folder (sim.yaml, target.yaml, robot.yaml, omni_base.yaml, scenarios/).
@@ -17,6 +22,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -41,8 +47,45 @@ double cpuSeconds() {
 int usage() {
   std::cerr << "usage: sim_render --config DIR --scenario NAME [--target FILE] [--time S] [--out PREFIX] [--bench N]\n"
                "       sim_render --config DIR --scenario NAME [--target FILE] --sequence N [--dt S] [--time T0] "
-               "[--camera stereo_left|ir] --out FOLDER\n";
+               "[--camera stereo_left|ir] --out FOLDER\n"
+               "       sim_render --config DIR --scenario NAME [--target FILE] --approach FILE --out FOLDER\n";
   return 2;
+}
+
+/// --approach: the three raw cameras with the chaser on the port axis at each line's distance (see the top).
+int renderApproach(docking_sim::Simulation& sim, const std::string& path_file, const std::string& folder) {
+  std::ifstream lines(path_file);
+  if (!lines) {
+    std::cerr << "cannot read " << path_file << "\n";
+    return 1;
+  }
+  ::mkdir(folder.c_str(), 0755);
+  const char* names[3] = {"stereo_left", "stereo_right", "ir"};
+  double t_s = 0.0, distance_m = 0.0;
+  int frame = 0;
+  while (lines >> t_s >> distance_m) {
+    if (!(t_s >= sim.time() - 1e-9) || !(distance_m > 0.0)) {
+      std::cerr << path_file << ": line " << frame + 1 << ": times must not decrease and distances be positive\n";
+      return 1;
+    }
+    if (t_s > sim.time()) sim.advance(t_s - sim.time());
+    const Eigen::Isometry3d port = sim.worldTPort();
+    const Eigen::Vector3d axis = port.linear().col(0);  // x out of the port face
+    const Eigen::Vector3d base = port.translation() + distance_m * axis;
+    sim.placeChaser(omni_base::Pose2D{base.x(), base.y(), std::atan2(-axis.y(), -axis.x())});
+    const auto images = sim.renderCameras({{true, true, true}}, sim.settings().render_threads);
+    for (int cam = 0; cam < 3; ++cam) {
+      char name[64];
+      std::snprintf(name, sizeof(name), "/frame_%04d_%s.png", frame, names[cam]);
+      if (!cv::imwrite(folder + name, *images[static_cast<std::size_t>(cam)])) {
+        std::cerr << "cannot write " << folder << name << "\n";
+        return 1;
+      }
+    }
+    ++frame;
+  }
+  std::cout << "rendered " << frame << " frames of the approach to " << folder << "\n";
+  return frame > 0 ? 0 : 1;
 }
 
 std::string num(double v) {
@@ -202,7 +245,7 @@ int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, co
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string config_dir, scenario = "default", out = "frame", target_file;
+  std::string config_dir, scenario = "default", out = "frame", target_file, approach_file;
   double time_s = 0.0, dt_s = 1.0 / 30.0;
   int bench = 0, sequence = 0, sequence_camera = docking_sim::RobotModel::kStereoLeft;
   for (int i = 1; i < argc; ++i) {
@@ -217,6 +260,7 @@ int main(int argc, char** argv) {
     else if (arg == "--sequence") sequence = std::stoi(value);
     else if (arg == "--dt") dt_s = std::stod(value);
     else if (arg == "--target") target_file = value;
+    else if (arg == "--approach") approach_file = value;
     else if (arg == "--camera" && (value == "stereo_left" || value == "ir"))
       sequence_camera = value == "ir" ? docking_sim::RobotModel::kIr : docking_sim::RobotModel::kStereoLeft;
     else return usage();
@@ -234,6 +278,7 @@ int main(int argc, char** argv) {
     docking_sim::Simulation sim(files);
     while (sim.time() < time_s - 1e-9) sim.advance(std::min(0.005, time_s - sim.time()));
     if (sequence > 0) return renderSequence(sim, scenario, files.target_config, sequence_camera, sequence, dt_s, out);
+    if (!approach_file.empty()) return renderApproach(sim, approach_file, out);
     const char* names[3] = {"stereo_left", "stereo_right", "ir"};
     if (bench > 0) {
       std::cout << "scenario " << scenario << ", " << bench << " frames per camera, 640x480\n";

@@ -28,6 +28,7 @@
 #include "docking_viz/palette.h"
 #include "docking_viz/planner_drawing.h"
 #include "docking_viz/state_label.h"
+#include "docking_viz/target_mockup.h"
 
 namespace docking_viz {
 namespace {
@@ -60,6 +61,9 @@ constexpr double kMinDrawnSpeedMps = 1e-3;
 enum EstimateMarkerId { kEstimateDot = 0, kEstimateEllipsoid = 1, kEstimateAxis = 2 };
 enum PlannerMarkerId { kSafeCircle = 0, kSearchOrbit = 1, kPortAxis = 2, kGoal = 3 };
 constexpr char kPlannerNamespace[] = "planner";
+constexpr char kMockupNamespace[] = "target_mockup";
+// The target's URDF, as launch/description.launch loads it (docking_description's make_urdf.py target).
+constexpr char kTargetDescriptionParam[] = "target_description";
 constexpr char kCommandNamespace[] = "cmd_vel";
 constexpr char kStateNamespace[] = "state";
 std::string estimateNamespace(std::uint8_t source) { return std::string("estimate/") + sourceStyle(source).key; }
@@ -135,7 +139,8 @@ class MarkersNode {
   MarkersNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       : nh_(nh),
         config_(loadConfig(pnh)),
-        radii_(loadPlannerRadii(ros::NodeHandle(nh, config_.planner_namespace))) {
+        radii_(loadPlannerRadii(ros::NodeHandle(nh, config_.planner_namespace))),
+        mockup_(loadMockup(nh)) {
     const ros::SubscriberStatusCallback on_change = [this](const ros::SingleSubscriberPublisher&) {
       updateSubscriptions();
     };
@@ -197,6 +202,7 @@ class MarkersNode {
     const ros::Time now = ros::Time::now();
     visualization_msgs::MarkerArray array;
     addEstimates(now, &array);
+    addMockup(now, &array);
     addPlanner(now, &array);
     addCommand(now, &array);
     addLabel(now, &array);
@@ -316,6 +322,60 @@ class MarkersNode {
     return m;
   }
 
+  /// The target mockup at the fused estimate, only while that estimate claims an orientation: before, the
+  /// stack knows the position alone (the ellipsoid shows it), and nothing is drawn where it believes nothing.
+  void addMockup(const ros::Time& now, visualization_msgs::MarkerArray* array) {
+    const auto fused = estimates_.find(TargetEstimate::SOURCE_FUSED);
+    const TargetEstimate* estimate = nullptr;
+    if (fused != estimates_.end() && fused->second.fresh(now, config_.input_timeout_s)) estimate = &*fused->second.message;
+    const bool drawn = estimate && estimate->valid && estimate->position_valid && estimate->orientation_valid &&
+                       usable(*estimate, kMockupNamespace);
+    for (std::size_t i = 0; i < mockup_.size(); ++i) {
+      if (!drawn) {
+        array->markers.push_back(deletion(kMockupNamespace, static_cast<int>(i)));
+        continue;
+      }
+      const MockupPart& part = mockup_[i];
+      const auto& p = estimate->pose.pose.position;
+      const auto& q = estimate->pose.pose.orientation;
+      const Eigen::Isometry3d camera_T_part =
+          Eigen::Translation3d(p.x, p.y, p.z) * Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized() * part.root_T_part;
+      Marker m = slot(kMockupNamespace, static_cast<int>(i), estimate->header.frame_id, estimate->header.stamp);
+      m.type = part.shape == MockupPart::Shape::kBox ? Marker::CUBE
+               : part.shape == MockupPart::Shape::kCylinder ? Marker::CYLINDER : Marker::SPHERE;
+      m.pose.position = toPoint(camera_T_part.translation().x(), camera_T_part.translation().y(),
+                                camera_T_part.translation().z());
+      const Eigen::Quaterniond r(camera_T_part.linear());
+      m.pose.orientation.x = r.x();
+      m.pose.orientation.y = r.y();
+      m.pose.orientation.z = r.z();
+      m.pose.orientation.w = r.w();
+      m.scale.x = part.scale.x();
+      m.scale.y = part.scale.y();
+      m.scale.z = part.scale.z();
+      m.color = toColour(part.colour, part.colour.a);
+      array->markers.push_back(m);
+    }
+  }
+
+  /// The mockup's parts from the target's URDF; none (said once) when there is no such parameter or it is
+  /// not a mockup of primitives: the rest of the view does not need it.
+  static std::vector<MockupPart> loadMockup(const ros::NodeHandle& nh) {
+    std::string urdf_xml;
+    if (!nh.getParam(kTargetDescriptionParam, urdf_xml)) {
+      ROS_WARN("markers: no parameter %s (launch/description.launch): the target mockup is not drawn",
+               nh.resolveName(kTargetDescriptionParam).c_str());
+      return {};
+    }
+    try {
+      return mockupFromUrdf(urdf_xml);
+    } catch (const std::invalid_argument& e) {
+      ROS_ERROR("markers: %s: %s: the target mockup is not drawn", nh.resolveName(kTargetDescriptionParam).c_str(),
+                e.what());
+      return {};
+    }
+  }
+
   void addPlanner(const ros::Time& now, visualization_msgs::MarkerArray* array) {
     std::optional<PlannerDrawing> drawing;
     if (geometry_.fresh(now, config_.input_timeout_s) && geometry_.message->has_port) {
@@ -423,6 +483,7 @@ class MarkersNode {
   ros::NodeHandle nh_;
   MarkerConfig config_;
   PlannerRadii radii_;
+  std::vector<MockupPart> mockup_;  // the target's parts in its port frame (empty: not drawn)
   ros::Publisher markers_pub_;
   ros::Timer timer_;
   std::vector<ros::Subscriber> subscribers_;  // empty while nobody subscribes to the markers
