@@ -1,5 +1,6 @@
 // The generated header of test/example_settings.yaml: defaults, keys, the YAML loader's checks, and
 // dynamic_reconfigure's message applied to the live settings.
+#include <docking_settings/example_importer.h>
 #include <docking_settings/example_settings.h>
 #include <docking_settings/reconfigure.h>
 #include <docking_settings/yaml_loader.h>
@@ -84,4 +85,14 @@ TEST(GeneratedSettings, ReconfigureSetsOnlyTheLiveSettings) {
   EXPECT_EQ(s.inner.mode, "slow");
   EXPECT_EQ(s.count, 7);
   EXPECT_DOUBLE_EQ(s.rate_hz, 50.0);
+}
+
+TEST(GeneratedSettings, AnImportedStructIsVisitedUnderItsPrefix) {
+  docking_settings::example::ImporterSettings s;
+  EXPECT_DOUBLE_EQ(s.retry.initial_s, 0.5);
+  std::map<std::string, double> seen;
+  docking_settings::example::visitSettings(s, [&](const SettingInfo&, const std::string& key, auto& field) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(field)>, double>) seen[key] = field;
+  });
+  EXPECT_EQ(seen, (std::map<std::string, double>{{"rate_hz", 15.0}, {"retry/initial_s", 0.5}, {"retry/factor", 2.0}}));
 }

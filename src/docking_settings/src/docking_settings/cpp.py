@@ -88,6 +88,8 @@ def header(declaration, source_name):
         "",
         "#include <docking_settings/setting_info.h>",
         "",
+    ] + ["#include <%s>" % imported.header for imported in declaration.imports] + [
+        "",
         "#include <limits>",
         "#include <string>",
         "#include <vector>",
@@ -98,9 +100,10 @@ def header(declaration, source_name):
     lines.append("")
     for name in declaration.ordered_structs():
         lines.extend(struct_code(declaration, name))
-    lines.append("/// The path of this declaration in the workspace, for messages and tests.")
-    lines.append("constexpr const char* k%sDeclaration = %s;" % (declaration.root, c_string(source_name)))
-    lines.append("")
+    if declaration.root:
+        lines.append("/// The path of this declaration in the workspace, for messages and tests.")
+        lines.append("constexpr const char* k%sDeclaration = %s;" % (declaration.root, c_string(source_name)))
+        lines.append("")
     for part in reversed(declaration.namespace.split("::")):
         lines.append("}  // namespace %s" % part)
     return "\n".join(lines) + "\n"

@@ -7,6 +7,8 @@ validator (docking_settings/ros_loader.h, yaml_loader.h), dynamic_reconfigure's 
 (reconfigure.add_live_settings), and the README's table (tables.py). See the package README.
 
     cpp: {header: pkg/node_settings.h, namespace: pkg::sub}
+    imports: [src/pkg/settings/common.yaml]   # structs declared in another declaration (its header is included;
+                                       # one without node/root only declares structs for others)
     node: arbiter                      # the node (for the README heading)
     config: [config/arbiter.yaml]      # the shipped files that set them (overrides of the defaults only)
     defaults_from: config/omni_base.yaml   # instead of `default:` per setting: a file that describes
@@ -135,40 +137,68 @@ class Declaration:
         self.path = pathlib.Path(path)
         spec = yaml.safe_load(self.path.read_text())
         where = str(self.path)
-        for required in ("cpp", "node", "structs", "root"):
+        for required in ("cpp", "structs"):
             if required not in spec:
                 raise DeclarationError("%s: no '%s'" % (where, required))
+        if ("node" in spec) != ("root" in spec):
+            raise DeclarationError("%s: a node's declaration has both 'node' and 'root'; a struct library neither" % where)
         self.header = spec["cpp"]["header"]
         self.namespace = spec["cpp"]["namespace"]
-        self.node = spec["node"]
+        self.node = spec.get("node")
         self.config = list(spec.get("config") or [])
         self.readme = spec.get("readme")
-        self.root = spec["root"]
+        self.root = spec.get("root")
         self.doc = spec.get("doc", "")
         self.workspace = self.path.resolve().parents[3]  # src/<package>/settings/<node>.yaml
+        self.imports = [Declaration(self.workspace / i) for i in spec.get("imports") or []]
+        for imported in self.imports:
+            if imported.namespace != spec["cpp"]["namespace"]:
+                raise DeclarationError("%s: imports %s of another namespace" % (where, imported.path))
         self.defaults_from = spec.get("defaults_from")
         self.default_values = None
         if self.defaults_from:
             self.default_values = flatten(yaml.safe_load((self.workspace / self.defaults_from).read_text()) or {})
         self.structs = {name: Struct(name, s, where) for name, s in spec["structs"].items()}
-        if self.root not in self.structs:
-            raise DeclarationError("%s: root %s is not declared" % (where, self.root))
+        self.imported_structs = {}
+        for imported in self.imports:
+            self.imported_structs.update(imported.structs)
+            self.imported_structs.update(imported.imported_structs)
+        clash = set(self.structs) & set(self.imported_structs)
+        if clash:
+            raise DeclarationError("%s: %s declared here and imported" % (where, sorted(clash)))
         self.settings = {}  # key -> Setting, every setting reachable from the root
-        self._collect(self.root, "", [])
+        if self.root is None:
+            self._resolve_library()
+        else:
+            if self.root not in self.structs:
+                raise DeclarationError("%s: root %s is not declared" % (where, self.root))
+            self._collect(self.root, "", [])
         for key, setting in self.settings.items():
             if setting.live and "/" in key:
                 raise DeclarationError("%s: %s: a live setting's key cannot hold '/'" % (where, key))
 
+    def _resolve_library(self):
+        """A struct library's settings, each with the default its spec gives (no keys: no node reads it as such)."""
+        if self.defaults_from:
+            raise DeclarationError("%s: a struct library declares its defaults (no defaults_from)" % self.path)
+        for name, struct in self.structs.items():
+            for index, field in enumerate(struct.fields):
+                if isinstance(field, str):
+                    field_spec, here = struct.specs[field]
+                    struct.fields[index] = Setting(name, field, field_spec, here)
+
     def _collect(self, struct_name, prefix, path):
         if struct_name in path:
             raise DeclarationError("%s: %s contains itself" % (self.path, struct_name))
-        if struct_name not in self.structs:
+        struct = self.structs.get(struct_name) or self.imported_structs.get(struct_name)
+        if struct is None:
             raise DeclarationError("%s: struct %s is not declared" % (self.path, struct_name))
-        struct = self.structs[struct_name]
         for index, field in enumerate(struct.fields):
             if isinstance(field, Member):
                 self._collect(field.struct, prefix + field.prefix, path + [struct_name])
                 continue
+            if struct_name in self.imported_structs and isinstance(field, str):
+                raise DeclarationError("%s: imported struct %s is not resolved" % (self.path, struct_name))
             if isinstance(field, Setting) and self.default_values is not None:
                 raise DeclarationError("%s: %s is used twice: its defaults cannot come from one file (defaults_from)"
                                        % (self.path, struct_name))
@@ -192,7 +222,7 @@ class Declaration:
         done, order = set(), []
 
         def visit(name):
-            if name in done:
+            if name in done or name not in self.structs:  # imported structs come with their own header
                 return
             for field in self.structs[name].fields:
                 if isinstance(field, Member):
@@ -206,8 +236,9 @@ class Declaration:
 
 
 def find_declarations(workspace):
-    """Every settings declaration of the workspace's packages."""
-    return [Declaration(p) for p in sorted(pathlib.Path(workspace).glob("src/*/settings/*.yaml"))]
+    """Every node's settings declaration of the workspace's packages (struct libraries left out)."""
+    declarations = [Declaration(p) for p in sorted(pathlib.Path(workspace).glob("src/*/settings/*.yaml"))]
+    return [d for d in declarations if d.node is not None]
 
 
 def flatten(mapping, prefix=""):
