@@ -3,19 +3,20 @@
 # Targets: ${PROJECT_NAME}_camera_core, ${PROJECT_NAME}_camera_nodelets (nodelet_plugins.xml),
 # stereo_camera, ir_camera. The camera frames come from the robot model (docking_description).
 
-# ROS-free logic: source parsing, reconnect backoff, the capture rig, frame formats, calibration checks.
+# ROS-free logic: source parsing, the capture rig, frame formats, calibration checks.
 add_library(${PROJECT_NAME}_camera_core
   src/camera/calibration_check.cpp
   src/camera/capture_rig.cpp
   src/camera/frame_format.cpp
-  src/camera/reconnect_backoff.cpp
   src/camera/source_spec.cpp
 )
 target_link_libraries(${PROJECT_NAME}_camera_core ${OpenCV_LIBRARIES} yaml-cpp)
 
+docking_settings_generate(settings/camera_capture.yaml settings/stereo_camera.yaml settings/ir_camera.yaml)
 add_library(${PROJECT_NAME}_camera_nodelets src/camera/capture_nodelet.cpp)
 target_link_libraries(${PROJECT_NAME}_camera_nodelets ${PROJECT_NAME}_camera_core ${catkin_LIBRARIES})
-add_dependencies(${PROJECT_NAME}_camera_nodelets ${catkin_EXPORTED_TARGETS})
+add_dependencies(${PROJECT_NAME}_camera_nodelets ${catkin_EXPORTED_TARGETS} ${PROJECT_NAME}_settings_stereo_camera
+                 ${PROJECT_NAME}_settings_ir_camera ${PROJECT_NAME}_settings_camera_capture)
 
 add_executable(stereo_camera src/camera/stereo_camera_main.cpp)
 target_link_libraries(stereo_camera ${catkin_LIBRARIES})
@@ -36,7 +37,6 @@ if(CATKIN_ENABLE_TESTING)
     test/camera/test_calibration_check.cpp
     test/camera/test_capture_rig.cpp
     test/camera/test_frame_format.cpp
-    test/camera/test_reconnect_backoff.cpp
     test/camera/test_source_spec.cpp
   )
   if(TARGET ${PROJECT_NAME}_camera_core_test)

@@ -70,8 +70,12 @@ bool convertValue(const XmlRpc::XmlRpcValue& value, bool* out) {
 }
 
 bool convertValue(const XmlRpc::XmlRpcValue& value, std::string* out) {
-  if (value.getType() != XmlRpc::XmlRpcValue::TypeString) return false;
   XmlRpc::XmlRpcValue copy = value;
+  if (value.getType() == XmlRpc::XmlRpcValue::TypeInt) {  // YAML's 0 for a device "0": a string takes its text
+    *out = std::to_string(static_cast<int>(copy));
+    return true;
+  }
+  if (value.getType() != XmlRpc::XmlRpcValue::TypeString) return false;
   *out = static_cast<std::string>(copy);
   return true;
 }

@@ -13,8 +13,11 @@ sys.path.insert(0, str(WORKSPACE / "src" / "docking_settings" / "src"))
 from docking_settings import consistency  # noqa: E402
 from docking_settings.declarations import find_declarations  # noqa: E402
 
-# Data, not a node's settings: what the robot, the target and the cameras are.
-DATA_FILES = {"robot.yaml", "target.yaml", "target_tagged.yaml", "target_tagged_inset.yaml"}
+# Not a node's settings: what the robot and the target are (data every node reads); the simulated world
+# (docking_sim's own loader checks every key); Debian's stereo_image_proc's parameters; the image_transport
+# plugin's settings per camera topic (their meaning: src/docking_image_transport/README.md).
+DATA_FILES = {"robot.yaml", "target.yaml", "target_tagged.yaml", "target_tagged_inset.yaml", "sim.yaml",
+              "stereo_image_proc.yaml", "stereo_image_proc_tracking.yaml", "image_transport.yaml"}
 
 
 class SettingsConsistency(unittest.TestCase):

@@ -32,6 +32,7 @@ TEST(ParamReader, ReadsEveryTypeAndTakesAnIntegerAsANumber) {
   EXPECT_EQ(p.require<int>("count"), 3);
   EXPECT_TRUE(p.require<bool>("enabled"));
   EXPECT_EQ(p.require<std::string>("name"), "serial");
+  EXPECT_EQ(p.require<std::string>("count"), "3");  // a device index written as a number
   EXPECT_EQ(p.require<std::vector<double>>("gains"), (std::vector<double>{1.0, 2.5, 3.0}));
   EXPECT_EQ(p.require<std::vector<std::string>>("names"), (std::vector<std::string>{"a", "b"}));
   EXPECT_DOUBLE_EQ(p.optional<double>("not_there", 7.0), 7.0);

@@ -135,17 +135,3 @@ TEST(BaseController, TimeGoingBackwardsRestartsFromRest) {
   EXPECT_EQ(maxWheel(out), 0.0);
 }
 
-#include "omni_base/reconnect_backoff.h"
-
-TEST(ReconnectBackoff, DoublesUpToTheMaximumAndResets) {
-  omni_base::ReconnectBackoff b(0.1, 1.0);
-  EXPECT_DOUBLE_EQ(b.nextDelay(), 0.1);
-  EXPECT_DOUBLE_EQ(b.nextDelay(), 0.2);
-  EXPECT_DOUBLE_EQ(b.nextDelay(), 0.4);
-  EXPECT_DOUBLE_EQ(b.nextDelay(), 0.8);
-  EXPECT_DOUBLE_EQ(b.nextDelay(), 1.0);
-  EXPECT_DOUBLE_EQ(b.nextDelay(), 1.0);
-  b.reset();
-  EXPECT_DOUBLE_EQ(b.nextDelay(), 0.1);
-  EXPECT_THROW(omni_base::ReconnectBackoff(0.0, 1.0), std::invalid_argument);
-}

@@ -2,6 +2,9 @@
 
 #include <docking_msgs/names.h>
 #include <docking_perception/camera/calibration_check.h>
+#include <docking_perception/camera/ir_camera_settings.h>
+#include <docking_perception/camera/stereo_camera_settings.h>
+#include <docking_settings/ros_loader.h>
 
 #include <cv_bridge/cv_bridge.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -13,44 +16,8 @@
 namespace docking_perception {
 namespace {
 
-// A parameter that stops the nodelet: the message names it with its full name.
-class ParameterError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
 double steadySeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-template <typename T>
-T requiredParam(const ros::NodeHandle& nh, const std::string& name, const char* expected) {
-  T value;
-  if (!nh.hasParam(name)) throw ParameterError("missing parameter " + nh.resolveName(name));
-  if (!nh.getParam(name, value)) {
-    throw ParameterError("parameter " + nh.resolveName(name) + " must be " + expected);
-  }
-  return value;
-}
-
-template <typename T>
-T optionalParam(const ros::NodeHandle& nh, const std::string& name, const T& fallback, const char* expected) {
-  if (!nh.hasParam(name)) return fallback;
-  T value;
-  if (!nh.getParam(name, value)) {
-    throw ParameterError("parameter " + nh.resolveName(name) + " must be " + expected);
-  }
-  return value;
-}
-
-// A source may be written as a number (device index) or a string.
-std::string sourceParam(const ros::NodeHandle& nh, const std::string& name) {
-  XmlRpc::XmlRpcValue value;
-  if (!nh.getParam(name, value)) throw ParameterError("missing parameter " + nh.resolveName(name));
-  if (value.getType() == XmlRpc::XmlRpcValue::TypeInt) return std::to_string(static_cast<int>(value));
-  if (value.getType() == XmlRpc::XmlRpcValue::TypeString) return static_cast<std::string>(value);
-  throw ParameterError("parameter " + nh.resolveName(name) +
-                       " must be a device index, a /dev path, a video file or an image pattern");
 }
 
 }  // namespace
@@ -71,62 +38,56 @@ CaptureNodelet::~CaptureNodelet() {
 
 void CaptureNodelet::readParameters() {
   const ros::NodeHandle& pnh = getPrivateNodeHandle();
-  settings_.width = requiredParam<int>(pnh, "width", "an integer number of pixels");
-  settings_.height = requiredParam<int>(pnh, "height", "an integer number of pixels");
-  if (settings_.width <= 0 || settings_.height <= 0) {
-    throw ParameterError("parameters " + pnh.resolveName("width") + " and " + pnh.resolveName("height") +
-                         " must be positive");
-  }
-  rate_hz_ = requiredParam<double>(pnh, "rate_hz", "a number (frames per second)");
-  if (!(rate_hz_ > 0.0 && rate_hz_ <= 240.0)) {
-    throw ParameterError("parameter " + pnh.resolveName("rate_hz") + " must be in (0, 240] Hz");
-  }
-  settings_.fps = rate_hz_;
-  settings_.fourcc = optionalParam<std::string>(pnh, "fourcc", "", "a string");
-  settings_.loop_files = optionalParam<bool>(pnh, "loop_files", true, "true or false");
-  settings_.max_consecutive_empty = optionalParam<int>(pnh, "max_consecutive_empty", 30, "an integer");
-  try {
-    camera::validateCaptureSettings(settings_);
-  } catch (const std::invalid_argument& e) {
-    throw ParameterError("parameters of " + pnh.getNamespace() + ": " + e.what());
-  }
+  const docking_settings::ParamReader reader(pnh);
+  const CameraSettings loaded = loadSettings(pnh);
+  const camera::CaptureNodeSettings& c = loaded.capture;
+  settings_.width = c.width;
+  settings_.height = c.height;
+  settings_.fps = rate_hz_ = c.rate_hz;
+  settings_.fourcc = c.fourcc;
+  settings_.loop_files = c.loop_files;
+  settings_.max_consecutive_empty = c.max_consecutive_empty;
+  reader.validated([&] { camera::validateCaptureSettings(settings_); });
+  backoff_ = camera::BackoffParams{c.retry.initial_s, c.retry.max_s, c.retry.factor};
+  reader.validated([&] { camera::validateBackoffParams(backoff_); });
+  rate_tolerance_ = c.rate_tolerance;
+  for (std::size_t i = 0; i < channels_.size(); ++i) readChannel(reader, loaded.channels.at(i), channels_[i]);
+}
 
-  backoff_.initial_s = optionalParam<double>(pnh, "retry/initial_s", backoff_.initial_s, "a number of seconds");
-  backoff_.max_s = optionalParam<double>(pnh, "retry/max_s", backoff_.max_s, "a number of seconds");
-  backoff_.factor = optionalParam<double>(pnh, "retry/factor", backoff_.factor, "a number");
+void CaptureNodelet::readChannel(const docking_settings::ParamReader& reader, const camera::ChannelSettings& settings,
+                                 Channel& channel) {
+  const std::string& prefix = channel.defaults.param_prefix;
   try {
-    camera::validateBackoffParams(backoff_);
+    channel.source = camera::parseSourceSpec(settings.source);
   } catch (const std::invalid_argument& e) {
-    throw ParameterError("parameter " + pnh.resolveName("retry") + "/" + e.what());
+    reader.invalid(prefix + "source", e.what());
   }
-  rate_tolerance_ = optionalParam<double>(pnh, "rate_tolerance", 0.2, "a fraction");
-  if (!(rate_tolerance_ >= 0.0 && rate_tolerance_ < 1.0)) {
-    throw ParameterError("parameter " + pnh.resolveName("rate_tolerance") + " must be in [0, 1)");
-  }
+  channel.frame_id = settings.frame_id.empty() ? channel.defaults.frame_id : settings.frame_id;
+  if (!settings.camera_name.empty()) channel.defaults.camera_name = settings.camera_name;
+  channel.calibration_url = settings.camera_info_url;
+}
 
-  for (Channel& channel : channels_) {
-    const std::string& prefix = channel.defaults.param_prefix;
-    const std::string source_param = prefix + "source";
-    try {
-      channel.source = camera::parseSourceSpec(sourceParam(pnh, source_param));
-    } catch (const std::invalid_argument& e) {
-      throw ParameterError("parameter " + pnh.resolveName(source_param) + ": " + e.what());
-    }
-    channel.frame_id = optionalParam<std::string>(pnh, prefix + "frame_id", channel.defaults.frame_id, "a string");
-    channel.defaults.camera_name =
-        optionalParam<std::string>(pnh, prefix + "camera_name", channel.defaults.camera_name, "a string");
-    channel.calibration_url = optionalParam<std::string>(pnh, prefix + "camera_info_url", "", "a URL string");
-    if (channel.frame_id.empty()) throw ParameterError("parameter " + pnh.resolveName(prefix + "frame_id") + " is empty");
-  }
+CaptureNodelet::CameraSettings StereoCameraNodelet::loadSettings(const ros::NodeHandle& pnh) const {
+  camera::StereoCameraSettings s;
+  docking_settings::loadSettings(pnh, s);
+  docking_settings::warnUnknownKeys(pnh, s);
+  return {s.capture, {s.left, s.right}};
+}
+
+CaptureNodelet::CameraSettings IrCameraNodelet::loadSettings(const ros::NodeHandle& pnh) const {
+  camera::IrCameraSettings s;
+  docking_settings::loadSettings(pnh, s);
+  docking_settings::warnUnknownKeys(pnh, s);
+  return {s.capture, {s.channel}};
 }
 
 void CaptureNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   try {
     readParameters();
-  } catch (const ParameterError& e) {
+  } catch (const docking_settings::ConfigError& e) {
     NODELET_FATAL("%s: not starting", e.what());
-    throw;  // nodelet::Loader drops the nodelet; the standalone executable exits with an error
+    throw;  // nodelet::Loader drops the nodelet; the standalone executable parks (docking_settings::runNode)
   }
 
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
@@ -143,7 +104,7 @@ void CaptureNodelet::onInit() {
       const std::string param = getPrivateNodeHandle().resolveName(channel.defaults.param_prefix + "camera_info_url");
       NODELET_FATAL("parameter %s: '%s' is not a valid calibration URL (file:///path.yaml): not starting",
                     param.c_str(), channel.calibration_url.c_str());
-      throw ParameterError("invalid " + param);
+      throw docking_settings::ConfigError(param, docking_settings::ConfigProblem::kInvalid, "not a calibration URL");
     }
     channel.info_manager->loadCameraInfo(channel.calibration_url);
     channel.calibration_file = channel.calibration_url.empty()

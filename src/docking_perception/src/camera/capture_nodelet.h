@@ -2,10 +2,12 @@
 // rig (core library) in its own thread, publish image + camera_info pairs, report diagnostics.
 #pragma once
 
+#include <docking_perception/camera/camera_capture_settings.h>
 #include <docking_perception/camera/capture_rig.h>
 #include <docking_perception/camera/frame_format.h>
 
 #include <camera_info_manager/camera_info_manager.h>
+#include <docking_settings/param_reader.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <diagnostic_updater/update_functions.h>
 #include <image_transport/image_transport.h>
@@ -20,9 +22,9 @@
 
 namespace docking_perception {
 
-// What differs between the cameras: where their parameters and topics are, and their defaults.
+// What differs between the cameras: where their settings and topics are, and their defaults.
 struct CameraChannelDefaults {
-  std::string param_prefix;  // "left/", "right/", or "" (parameters directly under ~)
+  std::string param_prefix;  // "left/", "right/", or "" (settings directly under ~)
   std::string image_topic;   // names.h constant, e.g. "stereo/left/image_raw"
   std::string camera_name;   // camera_info_manager name, e.g. "stereo_left"
   std::string frame_id;      // names.h optical frame
@@ -35,6 +37,14 @@ class CaptureNodelet : public nodelet::Nodelet {
  protected:
   CaptureNodelet(std::vector<CameraChannelDefaults> channels, camera::ColourMode colour_mode);
   void onInit() override;
+
+  /// The node's settings (settings/stereo_camera.yaml, settings/ir_camera.yaml): the capture and one
+  /// ChannelSettings per channel, in the order of the channels given to the constructor.
+  struct CameraSettings {
+    camera::CaptureNodeSettings capture;
+    std::vector<camera::ChannelSettings> channels;
+  };
+  virtual CameraSettings loadSettings(const ros::NodeHandle& pnh) const = 0;
 
  private:
   struct Channel {
@@ -49,6 +59,8 @@ class CaptureNodelet : public nodelet::Nodelet {
   enum class State { kStarting, kStreaming, kWaiting, kRefused, kEnded };
 
   void readParameters();
+  void readChannel(const docking_settings::ParamReader& reader, const camera::ChannelSettings& settings,
+                   Channel& channel);
   void captureLoop();
   void handleFrames(const std::vector<cv::Mat>& frames, const ros::Time& stamp);
   void diagnoseCapture(diagnostic_updater::DiagnosticStatusWrapper& status);
@@ -84,12 +96,18 @@ class CaptureNodelet : public nodelet::Nodelet {
 class StereoCameraNodelet : public CaptureNodelet {
  public:
   StereoCameraNodelet();
+
+ protected:
+  CameraSettings loadSettings(const ros::NodeHandle& pnh) const override;
 };
 
 // One source published as ir/{image_raw,camera_info}, always mono8.
 class IrCameraNodelet : public CaptureNodelet {
  public:
   IrCameraNodelet();
+
+ protected:
+  CameraSettings loadSettings(const ros::NodeHandle& pnh) const override;
 };
 
 }  // namespace docking_perception

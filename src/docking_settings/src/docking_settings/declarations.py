@@ -92,8 +92,8 @@ class Setting:
                 return "expected an integer, got %r" % (v,)
             if kind == "double" and (isinstance(v, bool) or not isinstance(v, (int, float))):
                 return "expected a number, got %r" % (v,)
-            if kind == "string" and not isinstance(v, str):
-                return "expected a string, got %r" % (v,)
+            if kind == "string" and not (isinstance(v, str) or (isinstance(v, int) and not isinstance(v, bool))):
+                return "expected a string (or an integer, taken as its text), got %r" % (v,)
             if self.range and kind in ("int", "double") and not (self.range[0] <= v <= self.range[1]):
                 return "%r is outside [%r, %r]" % (v, self.range[0], self.range[1])
             if self.choices and v not in self.choices:

@@ -5,7 +5,7 @@
 namespace omni_base {
 
 SerialMotorBackend::SerialMotorBackend(const SerialBackendConfig& config)
-    : config_(config), backoff_(config.backoff_min_s, config.backoff_max_s) {
+    : config_(config), backoff_(docking_msgs::BackoffParams{config.backoff_min_s, config.backoff_max_s, 2.0}) {
   if (SerialPort::baudConstant(config_.baud) == 0) {
     throw std::runtime_error("serial/baud " + std::to_string(config_.baud) + " is not a supported baud rate");
   }

@@ -7,7 +7,7 @@
 #include "omni_base/board_session.h"
 #include "omni_base/motor.h"
 #include "omni_base/motor_protocol.h"
-#include "omni_base/reconnect_backoff.h"
+#include <docking_msgs/reconnect_backoff.h>
 #include "omni_base/serial_port.h"
 
 namespace omni_base {
@@ -45,7 +45,7 @@ class SerialMotorBackend : public MotorBackend {
   SerialBackendConfig config_;
   SerialPort port_;
   protocol::StreamDecoder decoder_;
-  ReconnectBackoff backoff_;
+  docking_msgs::ReconnectBackoff backoff_;
   std::vector<uint8_t> rx_;
   bool link_up_{false};
   EnableHandshake enable_;

@@ -3,7 +3,7 @@
 // ROS-free: time comes in as a monotonic number of seconds, so tests drive it without sleeping.
 #pragma once
 
-#include <docking_perception/camera/reconnect_backoff.h>
+#include <docking_msgs/reconnect_backoff.h>
 #include <docking_perception/camera/source_spec.h>
 
 #include <opencv2/core.hpp>
@@ -15,6 +15,10 @@
 
 namespace docking_perception {
 namespace camera {
+
+using docking_msgs::BackoffParams;
+using docking_msgs::ReconnectBackoff;
+using docking_msgs::validateBackoffParams;
 
 struct CaptureSettings {
   int width = 640;          // requested from devices; files and sequences keep their own size

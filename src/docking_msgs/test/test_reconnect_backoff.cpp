@@ -1,12 +1,12 @@
-#include <docking_perception/camera/reconnect_backoff.h>
+#include <docking_msgs/reconnect_backoff.h>
 
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 #include <string>
 
-using docking_perception::camera::BackoffParams;
-using docking_perception::camera::ReconnectBackoff;
+using docking_msgs::BackoffParams;
+using docking_msgs::ReconnectBackoff;
 
 TEST(ReconnectBackoff, DoublesUpToTheMaximum) {
   ReconnectBackoff backoff(BackoffParams{0.5, 3.0, 2.0});
