@@ -6,6 +6,14 @@
 
 namespace docking_perception {
 namespace mono {
+namespace {
+
+// The search disc is at least this wide (a far dot is a few pixels), and the refined centre may move at
+// most one dot radius (+1 px) from the prediction: farther, it is something else.
+constexpr double kMinSearchRadiusPx = 3.0;
+constexpr double kMaxShiftInRadii = 1.0;
+
+}  // namespace
 
 bool DarkDotLocator::locate(const cv::Mat& gray, const Eigen::Vector2d& predicted, double radius_px,
                             Eigen::Vector2d* centre, std::string* reason) const {
@@ -13,7 +21,7 @@ bool DarkDotLocator::locate(const cv::Mat& gray, const Eigen::Vector2d& predicte
     if (reason) *reason = "image is not 8-bit gray";
     return false;
   }
-  const double search_radius = std::max(params_.min_search_radius_px, params_.search_radius_factor * radius_px);
+  const double search_radius = std::max(kMinSearchRadiusPx, params_.search_radius_factor * radius_px);
   Eigen::Vector2d current = predicted;
   std::vector<uint8_t> values;
   for (int iteration = 0; iteration < 2; ++iteration) {
@@ -73,7 +81,7 @@ bool DarkDotLocator::locate(const cv::Mat& gray, const Eigen::Vector2d& predicte
     }
     current = {sum_x / sum_w, sum_y / sum_w};
   }
-  if ((current - predicted).norm() > params_.max_shift_factor * std::max(radius_px, 1.0) + 1.0) {
+  if ((current - predicted).norm() > kMaxShiftInRadii * std::max(radius_px, 1.0) + 1.0) {
     if (reason) *reason = "marker centre far from its predicted position";
     return false;
   }

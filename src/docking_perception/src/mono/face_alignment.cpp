@@ -167,15 +167,6 @@ double eccAtLevel(const cv::Mat& templ, const cv::Mat& image, const cv::TermCrit
 
 }  // namespace
 
-std::string validateDirectAlignmentParams(const DirectAlignmentParams& p) {
-  if (!(p.min_correlation > 0.0 && p.min_correlation < 1.0)) return "direct_min_correlation must be in (0, 1)";
-  if (!(p.working_face_width_px >= 48.0 && p.working_face_width_px <= 1024.0)) return "direct_working_face_width_px must be 48..1024";
-  if (p.pyramid_levels < 1 || p.pyramid_levels > 5) return "direct_pyramid_levels must be 1..5";
-  if (p.max_iterations < 1 || p.max_iterations > 200) return "direct_max_iterations must be 1..200";
-  if (p.grid_columns < 3 || p.grid_rows < 3 || p.grid_columns > 32 || p.grid_rows > 32) return "direct_grid_columns and direct_grid_rows must be 3..32";
-  return "";
-}
-
 cv::Matx33d faceHomography(const Eigen::Matrix3d& texture_to_face, const CameraIntrinsics& camera,
                            const PoseWithCovariance& pose) {
   // A face point (0, y, z) lands at K (y r1 + z r2 + t); textureToFace gives (y, z, 1) from (u, v, 1).

@@ -839,7 +839,7 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
   for (size_t q = 0; q < pairs.size(); ++q) {
     const HammingPair& pair = pairs[q];
     if (pair.best_index < 0 || pair.second_distance >= (1 << 30)) continue;
-    if (pair.best_distance >= params_.ratio * pair.second_distance) continue;
+    if (pair.best_distance >= params_.feature_ratio * pair.second_distance) continue;
     // Half resolution: pyrDown's pixel x is its 5-tap kernel centred on full-resolution pixel 2x.
     const cv::Point2f p = half ? 2.0f * keypoints[q].pt : keypoints[q].pt;
     texture_points.push_back(model_points_[static_cast<size_t>(pair.best_index)]);
@@ -876,7 +876,7 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
   cv::perspectiveTransform(corners, result.face_outline, homography);
   result.status = outlineProblem(result.face_outline);
   if (!result.status.empty()) return result;
-  if (params_.refine) {
+  if (params_.refine_matches) {
     refine(gray, &result);
     cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
   }

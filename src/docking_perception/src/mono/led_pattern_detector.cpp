@@ -9,6 +9,9 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
+// The two arms of a pattern must not look parallel: a degenerate view, or two triples of one line.
+constexpr double kMinArmAngleDeg = 15.0;
+
 double cross2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 struct Triple {
@@ -182,7 +185,7 @@ std::vector<LedPatternCandidate> LedPatternDetector::identifyPattern(const std::
       }
     }
   }
-  const double min_sin = std::sin(params_.min_arm_angle_deg * M_PI / 180.0);
+  const double min_sin = std::sin(kMinArmAngleDeg * M_PI / 180.0);
   for (size_t i = 0; i < triples.size(); ++i) {
     for (size_t j = i + 1; j < triples.size(); ++j) {
       const Triple& t1 = triples[i];

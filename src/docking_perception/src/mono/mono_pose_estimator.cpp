@@ -5,22 +5,19 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "docking_settings/config_error.h"
+#include "docking_settings/setting_info.h"
+
 namespace docking_perception {
 namespace mono {
 namespace {
 
-// The longest row smear the refinement tries: the 11 px patches searched +-3 px hold no longer one.
-constexpr int kMaxRowSmearPx = 15;
 // The longest gap over which the last pose's image position still gives the face's image speed.
 constexpr double kMotionSmearMaxGapS = 0.25;
 
 Eigen::Vector2d applyHomography(const cv::Matx33d& h, const Eigen::Vector2d& p) {
   const cv::Vec3d q = h * cv::Vec3d(p.x(), p.y(), 1.0);
   return {q[0] / q[2], q[1] / q[2]};
-}
-
-std::string positive(const std::string& name, double value) {
-  return value > 0.0 ? std::string() : name + " must be positive (got " + std::to_string(value) + ")";
 }
 
 }  // namespace
@@ -54,75 +51,37 @@ std::string toString(VelocityMethod method) {
   return method == VelocityMethod::kFilter ? "kalman" : "frame_difference";
 }
 
-std::string validateParams(const MonoPoseParams& p) {
-  const std::vector<std::string> checks = {
-      positive("max_reprojection_px", p.max_reprojection_px),
-      positive("min_pixel_sigma", p.min_pixel_sigma),
-      positive("min_range_m", p.min_range_m),
-      p.max_range_m > p.min_range_m ? "" : "max_range_m must exceed min_range_m",
-      p.tracking_margin_px >= 0.0 ? "" : "tracking_margin_px must not be negative",
-      p.filtered_orientation_correlated_fraction >= 0.0 && p.filtered_orientation_correlated_fraction <= 1.0
-          ? ""
-          : "filtered_orientation_correlated_fraction must be in [0, 1]",
-      p.max_pattern_candidates >= 1 ? "" : "max_pattern_candidates must be at least 1",
-      p.features.brisk_threshold > 0 ? "" : "brisk_threshold must be positive",
-      p.features.brisk_octaves >= 0 && p.features.brisk_octaves <= 8 ? "" : "brisk_octaves must be 0..8",
-      p.features.max_image_keypoints >= 10 ? "" : "max_image_keypoints must be at least 10",
-      p.features.model_widths_px.empty() ? "model_widths_px must not be empty" : "",
-      p.features.ratio > 0.0 && p.features.ratio <= 1.0 ? "" : "feature_ratio must be in (0, 1]",
-      positive("ransac_threshold_px", p.features.ransac_threshold_px),
-      p.features.min_inliers >= 4 ? "" : "min_inliers must be at least 4",
-      p.leds.threshold >= 1 && p.leds.threshold <= 255 ? "" : "led_threshold must be 1..255",
-      p.leds.max_area_px > p.leds.min_area_px ? "" : "led_max_area_px must exceed led_min_area_px",
-      p.leds.max_blobs >= kMarkerCount ? "" : "led_max_blobs must be at least 5",
-      p.leds.min_contrast >= 0.0 ? "" : "led_min_contrast must not be negative",
-      positive("led_collinearity_tolerance", p.leds.collinearity_tolerance),
-      positive("led_midpoint_tolerance", p.leds.midpoint_tolerance),
-      positive("dot_search_radius_factor", p.dots.search_radius_factor),
-      positive("dot_min_contrast", p.dots.min_contrast),
-      p.pnp.ambiguity_ratio >= 1.0 ? "" : "pnp_ambiguity_ratio must be at least 1",
-      positive("accel_noise", p.filter.accel_noise),
-      positive("angular_accel_noise", p.filter.angular_accel_noise),
-      positive("max_gap_s", p.filter.max_gap_s),
-      p.filter.gate_chi2 >= 0.0 ? "" : "gate_chi2 must not be negative",
-      p.filter.max_rejections >= 1 ? "" : "max_rejections must be at least 1",
-      p.features.max_refined_points >= 0 ? "" : "max_refined_points must not be negative",
-      p.features.refine_passes >= 1 && p.features.refine_passes <= 5 ? "" : "refine_passes must be 1..5",
-      p.features.refine_again_move_px >= 0.0 ? "" : "refine_again_move_px must not be negative",
-      p.features.fast_threshold > 0 ? "" : "fast_threshold must be positive",
-      p.features.max_model_keypoints_per_level >= 10 ? "" : "max_model_keypoints_per_level must be at least 10",
-      p.features.blurred_model_sigma_px >= 0.0 && p.features.blurred_model_sigma_px <= 5.0 ? "" : "blurred_model_sigma_px must be 0..5",
-      p.features.keypoint_grid >= 0 && p.features.keypoint_grid <= 16 ? "" : "keypoint_grid must be 0..16",
-      p.features.min_face_area_px >= 0.0 ? "" : "min_face_area_px must not be negative",
-      p.features.min_correlation >= -1.0 && p.features.min_correlation <= 1.0 ? "" : "min_correlation must be in [-1, 1]",
-      p.leds.min_fill_ratio >= 0.0 && p.leds.min_fill_ratio <= 1.0 ? "" : "led_min_fill_ratio must be in [0, 1]",
-      p.leds.max_aspect_ratio >= 1.0 ? "" : "led_max_aspect_ratio must be at least 1",
-      p.pnp.ambiguity_floor_px >= 0.0 ? "" : "pnp_ambiguity_floor_px must not be negative",
-  };
-  for (const std::string& check : checks) {
-    if (!check.empty()) return check;
+MonoMode modeOf(const MonoPoseParams& params) {
+  MonoMode mode = MonoMode::kVisible;
+  parseMonoMode(params.mode, &mode);
+  return mode;
+}
+
+PoseSolverType solverOf(const MonoPoseParams& params) {
+  PoseSolverType solver = PoseSolverType::kPnp;
+  parsePoseSolver(params.solver, &solver);
+  return solver;
+}
+
+VelocityMethod velocityOf(const MonoPoseParams& params) {
+  VelocityMethod method = VelocityMethod::kFilter;
+  parseVelocityMethod(params.velocity_method, &method);
+  return method;
+}
+
+void validate(const MonoPoseParams& p) {
+  using docking_settings::ConfigError;
+  using docking_settings::ConfigProblem;
+  docking_settings::validateSettings(p);
+  if (!(p.max_range_m > p.min_range_m)) throw ConfigError("max_range_m", ConfigProblem::kInvalid, "must exceed min_range_m");
+  if (p.features.model_widths_px.empty()) throw ConfigError("model_widths_px", ConfigProblem::kInvalid, "is empty");
+  if (!(p.leds.max_area_px > p.leds.min_area_px)) {
+    throw ConfigError("led_max_area_px", ConfigProblem::kInvalid, "must exceed led_min_area_px");
   }
-  if (!(p.predicted_face_min_kept_fraction >= 0.0 && p.predicted_face_min_kept_fraction <= 1.0)) {
-    return "predicted_face_min_kept_fraction must be in [0, 1]";
+  const ConsistencyParams& c = p.consistency;
+  if (c.max_hint_disagreement_fraction > 0.0 && c.hint_recovery_fraction > c.max_hint_disagreement_fraction) {
+    throw ConfigError("hint_recovery_fraction", ConfigProblem::kInvalid, "must be at most max_hint_disagreement_fraction");
   }
-  if (!(p.region_hint_max_age_s >= 0.0)) return "region_hint_max_age_s must not be negative";
-  if (!(p.region_hint_radius_m > 0.0)) return "region_hint_radius_m must be positive";
-  if (p.direct_yaw_hypotheses < 1 || p.direct_yaw_hypotheses > 15) return "direct_yaw_hypotheses must be 1..15";
-  if (!(p.direct_max_yaw_deg >= 0.0 && p.direct_max_yaw_deg <= 60.0)) return "direct_max_yaw_deg must be 0..60";
-  const std::string direct = validateDirectAlignmentParams(p.direct);
-  if (!direct.empty()) return direct;
-  const std::string consistency = validateConsistencyParams(p.consistency);
-  if (!consistency.empty()) return consistency;
-  for (const int width : p.features.model_widths_px) {
-    if (width < 32) return "model_widths_px entries must be at least 32";
-  }
-  if (p.features.search_row_smear_px < 0 || p.features.search_row_smear_px > kMaxRowSmearPx) {
-    return "search_row_smear_px must be 0.." + std::to_string(kMaxRowSmearPx);
-  }
-  for (const int smear : p.features.refinement_row_smears_px) {
-    if (smear < 2 || smear > kMaxRowSmearPx) return "refinement_row_smears_px entries must be 2.." + std::to_string(kMaxRowSmearPx);
-  }
-  return validateInnerPatternParams(p.inner_pattern);
 }
 
 MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntrinsics& camera,
@@ -130,19 +89,21 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
     : model_(model),
       camera_(camera),
       params_(params),
+      mode_(modeOf(params)),
+      solver_(solverOf(params)),
+      velocity_(velocityOf(params)),
       matcher_(params.features),
       led_detector_(model.markers(), params.leds),
       dot_locator_(params.dots),
       five_point_solver_(model.markers()),
-      pnp_solver_(params.pnp),
+      pnp_solver_(params.pnp, params.min_pixel_sigma),
       filter_(params.filter),
       innovation_scale_(params.consistency.innovation_window_frames),
       frame_difference_(params.filter.max_gap_s) {
-  const std::string invalid = validateParams(params);
-  if (!invalid.empty()) throw std::invalid_argument(invalid);
+  validate(params);
   std::string reason;
   if (!camera.isValid(&reason)) throw std::invalid_argument("camera intrinsics: " + reason);
-  if (params.mode == MonoMode::kVisible) {
+  if (mode_ == MonoMode::kVisible) {
     if (!model.hasTexture()) throw std::invalid_argument("visible mode needs the target texture");
     if (!matcher_.buildModel(model.textureGray(), &reason)) throw std::invalid_argument(reason);
     if (model.hasInnerPattern()) inner_pattern_ = std::make_unique<InnerPatternDetector>(model.innerPattern(), params.inner_pattern);
@@ -152,10 +113,9 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
 }
 
 void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
-  const std::string invalid = validateParams(params);
-  if (!invalid.empty()) throw std::invalid_argument(invalid);
-  if (params.mode != params_.mode) {
-    if (params.mode == MonoMode::kVisible) {
+  validate(params);
+  if (modeOf(params) != mode_) {
+    if (modeOf(params) == MonoMode::kVisible) {
       if (!model_.hasTexture()) throw std::invalid_argument("visible mode needs the target texture");
       matcher_ = FeatureMatcher(params.features);
       std::string reason;
@@ -164,11 +124,14 @@ void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
     reset();
   }
   params_ = params;
+  mode_ = modeOf(params);
+  solver_ = solverOf(params);
+  velocity_ = velocityOf(params);
   if (model_.hasTexture()) direct_aligner_ = DirectFaceAligner(model_, params.direct);
   matcher_.setParams(params.features);
   led_detector_.setParams(params.leds);
   dot_locator_.setParams(params.dots);
-  pnp_solver_.setParams(params.pnp);
+  pnp_solver_.setParams(params.pnp, params.min_pixel_sigma);
   filter_.setParams(params.filter);
   frame_difference_.setMaxGap(params.filter.max_gap_s);
   innovation_scale_.setWindow(params.consistency.innovation_window_frames);
@@ -252,7 +215,7 @@ cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_p
   if (!params_.use_tracking_region || !tracking_) return cv::Rect();
   const PoseWithCovariance predicted = predictedPose(stamp_s);
   std::vector<Eigen::Vector3d> outline;
-  if (params_.mode == MonoMode::kVisible) {
+  if (mode_ == MonoMode::kVisible) {
     outline = model_.faceCorners();
   } else {
     outline.assign(model_.markers().begin(), model_.markers().end());
@@ -269,7 +232,7 @@ cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_p
     max_x = std::max(max_x, pixel.x());
     max_y = std::max(max_y, pixel.y());
   }
-  if (params_.mode == MonoMode::kVisible) {
+  if (mode_ == MonoMode::kVisible) {
     // Apparent width of the face (top and bottom edges), to pick the model levels to match against.
     *face_width_px = 0.5 * ((pixels[1] - pixels[0]).norm() + (pixels[2] - pixels[3]).norm());
   }
@@ -336,7 +299,7 @@ bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& reg
   // Tracking with a claimed orientation (the face's place and perspective are known): refine it there.
   // A prediction that does not hold, or a pose failing a check, falls back to the feature search below
   // from a clean result.
-  if (params_.predict_face_when_tracking && params_.solver == PoseSolverType::kPnp && region.area() > 0 &&
+  if (params_.predict_face_when_tracking && solver_ == PoseSolverType::kPnp && region.area() > 0 &&
       last_orientation_claimed_) {
     const MonoPoseResult before = *result;
     const FaceMatch predicted = matchPredictedFace(gray, result->stamp_s);
@@ -460,7 +423,7 @@ DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool trackin
 bool MonoPoseEstimator::poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px,
                                       MonoPoseResult* result) {
   std::string reason;
-  if (params_.solver == PoseSolverType::kPnp) {
+  if (solver_ == PoseSolverType::kPnp) {
     std::vector<Eigen::Vector3d> model_points;
     std::vector<Eigen::Vector2d> image_points;
     model_points.reserve(match.inlier_texture_points.size());
@@ -589,8 +552,8 @@ bool MonoPoseEstimator::refineIrPose(const MarkerPixels& pixels, double median_s
   // residual of five points cannot show: the covariance grows with the streaks beyond a still spot's.
   const double still = params_.consistency.led_still_streak_px;
   trial->blur_sigma_px = std::sqrt(std::max(0.0, median_streak_px * median_streak_px - still * still));
-  if (params_.solver != PoseSolverType::kPnp) {
-    const double blur_factor = 1.0 + params_.consistency.blur_gain * trial->blur_sigma_px;
+  if (solver_ != PoseSolverType::kPnp) {
+    const double blur_factor = 1.0 + params_.consistency.covariance_blur_gain * trial->blur_sigma_px;
     trial->pose.covariance *= blur_factor * blur_factor;
     return true;
   }
@@ -610,7 +573,7 @@ bool MonoPoseEstimator::refineIrPose(const MarkerPixels& pixels, double median_s
   OrientationHistory history;
   history.claimed = claimed_previous;
   trial->ambiguity_deg = modelPnpCovariance(camera_, solution, history, model, solution.reprojection_rms_px,
-                                             solution.reprojection_rms_px, params_.pnp.min_pixel_sigma,
+                                             solution.reprojection_rms_px, params_.min_pixel_sigma,
                                              trial->blur_sigma_px, params_.consistency, &trial->pose);
   return true;
 }
@@ -655,7 +618,7 @@ bool MonoPoseEstimator::updateVelocities(MonoPoseResult* result) {
   result->twist_filter = filter_.twist();
   result->twist_frame_difference = frame_difference_.twist();
   if (!filter_ok) result->twist_filter.valid = false;  // this pose was not fused: no fresh velocity
-  if (params_.velocity == VelocityMethod::kFilter) {
+  if (velocity_ == VelocityMethod::kFilter) {
     result->twist = result->twist_filter;
     result->velocity_status = filter_note;
   } else {
@@ -718,7 +681,7 @@ cv::Rect MonoPoseEstimator::predictedInnerPatternRegion(double stamp_s) const {
 }
 
 void MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result) {
-  if (!inner_pattern_ || !params_.inner_pattern.enabled || params_.mode != MonoMode::kVisible) return;
+  if (!inner_pattern_ || !params_.inner_pattern.enabled || mode_ != MonoMode::kVisible) return;
   const double near = params_.inner_pattern.use_range_m;
   const bool face_near = result->valid && result->pose.translation.norm() < near;
   // Only near the target (the last pose, from any solver, or this image's face pose): the tag is too
@@ -788,7 +751,7 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   const double start_ms = threadCpuTimeMs();
   MonoPoseResult result;
   result.stamp_s = stamp_s;
-  result.solver = toString(params_.solver);
+  result.solver = params_.solver;
   cv::Mat gray;
   if (image.empty()) {
     result.status = "empty image";
@@ -814,7 +777,7 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
       result.status = "face search skipped: near contact the inner pattern gives the pose";
       result.reject_reason = RejectReason::kNotFound;
     } else {
-      result.valid = params_.mode == MonoMode::kVisible ? estimateVisible(gray, region, face_width_px, &result)
+      result.valid = mode_ == MonoMode::kVisible ? estimateVisible(gray, region, face_width_px, &result)
                                                         : estimateIr(gray, region, &result);
     }
     applyInnerPattern(gray, &result);
@@ -925,10 +888,10 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
     history.claimed = previousRotation(result->stamp_s, &previous_storage);
     result->ambiguity_deg =
         modelPnpCovariance(camera_, *pnp, history, model_points, result->reprojection_error_px, pixel_sigma_px,
-                           params_.pnp.min_pixel_sigma, appearance.blur_sigma_px, c, &result->pose);
+                           params_.min_pixel_sigma, appearance.blur_sigma_px, c, &result->pose);
   } else {
     // The 5-point covariance (its own Jacobian) scaled for blur, plus the floor.
-    const double blur_factor = 1.0 + c.blur_gain * appearance.blur_sigma_px;
+    const double blur_factor = 1.0 + c.covariance_blur_gain * appearance.blur_sigma_px;
     result->pose.covariance *= blur_factor * blur_factor;
     const double position_floor = c.position_floor_fraction * result->pose.translation.norm();
     const double rotation_floor = c.rotation_floor_deg * M_PI / 180.0;

@@ -116,7 +116,7 @@ bool PlanarPnpSolver::solve(const CameraIntrinsics& camera, const std::vector<Ei
   const double residual_variance =
       solution->reprojection_rms_px * solution->reprojection_rms_px * 2.0 * static_cast<double>(model_points.size()) /
       dof / 2.0;
-  const double variance = std::max(residual_variance, params_.min_pixel_sigma * params_.min_pixel_sigma);
+  const double variance = std::max(residual_variance, min_pixel_sigma_px_ * min_pixel_sigma_px_);
   leastSquaresPoseCovariance(camera, solution->pose.rotation, solution->pose.translation, model_points, variance,
                              &solution->pose.covariance);
   return true;

@@ -305,11 +305,11 @@ struct RefinementScene {
     cv::filter2D(sharp, out, -1, linearMotionKernel(length_px, 0.0), cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
     return out;
   }
-  // The deployed blur models: round 1.5 px, and row smears of 5, 9 and 13 px.
+  // The shipped blur models (round 1.5 px, row smears of 5, 9 and 13 px) without the pass more
+  // (refine_again_move_px 0): one refinement pass, as the tests below compare.
   static FeatureMatcherParams smearParams() {
     FeatureMatcherParams params;
-    params.blurred_model_sigma_px = 1.5;
-    params.refinement_row_smears_px = {5, 9, 13};
+    params.refine_again_move_px = 0.0;
     return params;
   }
 };
@@ -418,7 +418,9 @@ TEST(FeatureMatcher, SharesOneBriskPerParametersAndMatchesConcurrently) {
   const cv::Mat image = synthetic::renderVisible(model, camera, synthetic::facingRotation(0.2, 0.1, -0.1),
                                                  Eigen::Vector3d(-0.03, 0.01, 0.9), 5);
   std::string reason;
-  FeatureMatcher upright;
+  FeatureMatcherParams upright_params;
+  upright_params.blurred_model_sigma_px = 0.0;  // no blurred model (the shipped one is described by BRISK)
+  FeatureMatcher upright(upright_params);
   ASSERT_TRUE(upright.buildModel(model.textureGray(), &reason)) << reason;
   EXPECT_EQ(upright.descriptorExtractor(), nullptr);
 

@@ -5,6 +5,7 @@
 
 #include "docking_perception/mono/debug_drawing.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
+#include "docking_settings/yaml_loader.h"
 #include "synthetic_scene.h"
 
 using namespace docking_perception::mono;  // NOLINT: test file
@@ -19,11 +20,23 @@ struct ViewCase {
   Eigen::Vector3d t;
 };
 
+// The shipped configuration of the mode (config/mono_pose_<mode>.yaml) with the solver under test.
 MonoPoseParams paramsFor(MonoMode mode, PoseSolverType solver) {
-  MonoPoseParams params;
-  params.mode = mode;
-  params.solver = solver;
+  MonoPoseParams params = docking_settings::shippedSettings<MonoPoseNodeSettings>(
+                              std::string(CONFIG_DIR) + "/mono_pose_" + toString(mode) + ".yaml")
+                              .core;
+  params.solver = toString(solver);
   return params;
+}
+
+// The key of the first setting validate() refuses; empty when it accepts them.
+std::string refusedKey(const MonoPoseParams& params) {
+  try {
+    validate(params);
+  } catch (const docking_settings::ConfigError& e) {
+    return e.key();
+  }
+  return "";
 }
 
 }  // namespace
@@ -282,7 +295,7 @@ TEST(MonoPoseEstimator, APoseThatDisagreesWithAFreshPositionHintIsNotValid) {
   unchecked.setPositionHint(1.08 * t, 1.93);
   EXPECT_TRUE(unchecked.process(image, 2.0).valid);
   params.consistency.max_hint_disagreement_fraction = 1.0;
-  EXPECT_NE(validateParams(params).find("max_hint_disagreement_fraction"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "max_hint_disagreement_fraction");
 }
 
 // After a pose disagreed with a fresh hint, a pose with no fresh hint to check it is refused for
@@ -335,10 +348,10 @@ TEST(MonoPoseEstimator, ADisagreementHoldsUntilAHintAgreesOrTheHoldEnds) {
   EXPECT_FALSE(unheld.process(image, 2.0).valid);
   EXPECT_TRUE(unheld.process(image, 2.5).valid);
   params.consistency.hint_disagreement_hold_s = -1.0;
-  EXPECT_NE(validateParams(params).find("hint_disagreement_hold_s"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "hint_disagreement_hold_s");
   params.consistency.hint_disagreement_hold_s = 1.0;
   params.consistency.hint_recovery_fraction = 0.05;  // looser than the first refusal's limit
-  EXPECT_NE(validateParams(params).find("hint_recovery_fraction"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "hint_recovery_fraction");
 }
 
 TEST(MonoPoseEstimator, ReportsWhyNothingWasFound) {
@@ -474,6 +487,7 @@ TEST(MonoPoseEstimator, AnUncertainPositionIsWithheldButStillTracked) {
   const Eigen::Matrix3d rotation = synthetic::facingRotation(0.2);
   const Eigen::Vector3d position(0.02, 0.0, 1.2);
   MonoPoseParams params = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
+  params.consistency.position_sigma_check_max_range_m = 0.0;  // every range: the view is at 1.2 m, past the shipped 1 m
   MonoPoseEstimator unlimited(model, camera, params);
   const MonoPoseResult reference = unlimited.process(synthetic::renderVisible(model, camera, rotation, position, 320), 10.0);
   ASSERT_TRUE(reference.valid) << reference.status;
@@ -501,13 +515,13 @@ TEST(MonoPoseEstimator, AnUncertainPositionIsWithheldButStillTracked) {
 
 TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
   MonoPoseParams params;
-  params.features.ratio = 1.5;
-  EXPECT_NE(validateParams(params).find("feature_ratio"), std::string::npos);
+  params.features.feature_ratio = 1.5;
+  EXPECT_EQ(refusedKey(params), "feature_ratio");
   params = MonoPoseParams();
   params.max_range_m = 0.05;
-  EXPECT_NE(validateParams(params).find("max_range_m"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "max_range_m");
   EXPECT_THROW(MonoPoseEstimator(synthetic::makeModel(1), synthetic::defaultCamera(), params), std::invalid_argument);
-  EXPECT_TRUE(validateParams(MonoPoseParams()).empty());
+  EXPECT_EQ(refusedKey(MonoPoseParams()), "");
   MonoMode mode;
   EXPECT_TRUE(parseMonoMode("ir", &mode));
   EXPECT_EQ(mode, MonoMode::kIr);

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "docking_perception/mono/mono_pose_settings.h"
 #include "docking_perception/mono/upright_descriptor.h"
 
 namespace docking_perception {
@@ -32,59 +33,13 @@ namespace mono {
 // a robot's yaw or drive during the exposure).
 enum class ModelSet { kSharp, kBlurred, kRowSmeared };
 
-struct FeatureMatcherParams {
-  bool use_brisk_detector = false;  // false: FAST corners (the descriptors: upright_descriptors)
-  // true: UprightRingDescriptor for the sharp model and its searches (no orientation: the test bed's
-  // cameras do not roll; ~7 k instructions a keypoint against BRISK's ~65 k); false: OpenCV's
-  // rotation-invariant BRISK descriptors (a camera that rolls; they also use the scale that
-  // use_brisk_detector's keypoints carry, which the upright descriptor ignores). The blurred model keeps
-  // BRISK either way: with upright descriptors it found more faces under 9 px of motion blur, but some
-  // 10-35 deg off with a small covariance (stress seeds 100-139 and 400-439: 2 confident wrong in 120
-  // frames, BRISK none).
-  bool upright_descriptors = true;
-  int fast_threshold = 20;
-  int brisk_threshold = 30;         // AGAST score threshold of BRISK's detector
-  int brisk_octaves = 3;
-  int max_image_keypoints = 300;    // strongest kept before descriptors are computed (bounds the time)
-  int max_model_keypoints_per_level = 400;  // bounds the matching time (image x model descriptors)
-  std::vector<int> model_widths_px = {400, 280, 200, 140, 100, 70};  // texture widths of the model pyramid
-  double ratio = 0.8;               // Lowe's ratio test
-  double ransac_threshold_px = 3.0;
-  int min_inliers = 12;
-  double min_face_area_px = 600.0;  // the matched face outline must be at least this big
-  bool refine = true;               // sub-pixel refinement of the inliers
-  double min_correlation = 0.75;    // refined points below this correlation are dropped
-  int max_refined_points = 150;     // inliers plus model corners of the nearest level, refined by NCC
-  // Refinement passes: each later pass re-renders the texture with the homography of the previous
-  // one and correlates the points it kept again, so the parabolic peak fit works near zero offset,
-  // where it is unbiased (a first pass with offsets up to +-3 px leans toward whole pixels).
-  int refine_passes = 1;
-  // One pass more when the last one moved a corner of the face by more than this (px): its patches were
-  // drawn at a homography that far off (a tracking prediction through a turn reversal, a feature match on
-  // a blurred face), which leaves each point off in its own way. Steady tracking moves the face by less,
-  // and pays nothing. 0: never.
-  double refine_again_move_px = 0.0;
-  // Refinement with the blurred model's patches too (when there is one), keeping them when they correlate
-  // clearly better with the image: a blurred image refined against sharp patches gives biased points.
-  bool blur_matched_refinement = true;
-  // Lengths (px) of motion blur along the image rows that the refinement also tries, each as a model
-  // smeared by that much, when the blurred model already correlated better than the sharp one (a blurred
-  // image): the smear that correlates best gives the points. Robots on a floor yaw and drive, so their
-  // images smear along the rows, and a round (Gaussian) blur matched to a row smear still leaves each
-  // point off in its own way. Empty: none.
-  std::vector<int> refinement_row_smears_px;
-  // Keypoint budget spread over a keypoint_grid x keypoint_grid grid of the search region (0: the
-  // strongest max_image_keypoints of the whole region). Over a busy background the strongest corners
-  // are the background's; a grid keeps a share for every part of the image, the target's included.
-  int keypoint_grid = 0;
-  // > 0: a second model pyramid of the texture blurred by this sigma (px at each level), matched by the
-  // searches for blurred faces (defocus, motion): their corners have the blurred texture's descriptors.
-  double blurred_model_sigma_px = 0.0;
-  // > 0 (with a blurred model): a third model pyramid, the blurred one also smeared along its rows by this
-  // many px, matched by a search of its own (FaceSearch): the corners of a face smeared by motion have
-  // the smeared texture's descriptors.
-  int search_row_smear_px = 0;
-};
+// FeatureMatcherParams is declared in settings/mono_pose.yaml (generated header). upright_descriptors: the
+// UprightRingDescriptor for the sharp model and its searches (no orientation: ~7 k instructions a keypoint
+// against BRISK's ~65 k); false: OpenCV's rotation-invariant BRISK descriptors. The blurred model keeps BRISK
+// either way: with upright descriptors it found more faces under 9 px of motion blur, but some 10-35 deg off
+// with a small covariance (stress seeds 100-139 and 400-439: 2 confident wrong in 120 frames, BRISK none).
+// refine_passes: each later pass re-renders the texture with the previous pass's homography and correlates
+// its points again, so the parabolic peak fit works near zero offset, where it is unbiased.
 
 struct FaceMatch {
   bool found = false;

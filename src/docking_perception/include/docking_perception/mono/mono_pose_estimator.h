@@ -22,6 +22,7 @@
 #include "docking_perception/mono/feature_matcher.h"
 #include "docking_perception/mono/inner_pattern_detector.h"
 #include "docking_perception/mono/led_pattern_detector.h"
+#include "docking_perception/mono/mono_pose_settings.h"
 #include "docking_perception/mono/planar_pnp_solver.h"
 #include "docking_perception/mono/pose_consistency.h"
 #include "docking_perception/mono/pose_types.h"
@@ -45,57 +46,30 @@ std::string toString(MonoMode mode);
 std::string toString(PoseSolverType solver);
 std::string toString(VelocityMethod method);
 
-struct MonoPoseParams {
-  MonoMode mode = MonoMode::kVisible;
-  PoseSolverType solver = PoseSolverType::kPnp;
-  VelocityMethod velocity = VelocityMethod::kFilter;
-  // The published orientation is the velocity filter's posterior at the image's stamp (this image's pose
-  // fused with the ones before it) once the filter has fused at least two poses since its last restart and
-  // accepted this one; otherwise the image's own. Single images under blur scatter by degrees about the
-  // truth, frame to frame; their fused orientation does not. The position stays the image's own: a turning
-  // camera moves the target on a curve in its frame, which a constant-velocity filter follows with a lag.
-  bool publish_filtered_orientation = true;
-  // The fraction of an image's orientation error (1-sigma) that persists over images, which no filtering
-  // averages out: the published rotation covariance is the filter's plus this squared times the image's.
-  double filtered_orientation_correlated_fraction = 0.5;
-  bool use_tracking_region = true;
-  double tracking_margin_px = 40.0;    // added around the predicted face outline
-  double max_reprojection_px = 3.0;    // a pose whose RMS reprojection error is larger is rejected
-  double min_pixel_sigma = 0.3;        // floor of the pixel noise that scales the covariances
-  double min_range_m = 0.1;
-  double max_range_m = 5.0;
-  int max_pattern_candidates = 6;      // IR: candidate LED patterns tried, best first
-  bool use_half_resolution = false;    // visible: also search the half-resolution image (blur)
-  // Tracking (visible): the face refined where the pose predicted by the velocity filter puts it, without
-  // the feature search (FeatureMatcher::matchAtPrediction), when the last image claimed its orientation;
-  // the feature search runs when fewer than predicted_face_min_kept_fraction of the refined points hold,
-  // or the pose fails a check.
-  bool predict_face_when_tracking = true;
-  double predicted_face_min_kept_fraction = 0.5;
-  double region_hint_max_age_s = 0.2;  // an external region hint older than this (image time) is ignored
-  double region_hint_radius_m = 0.2;   // a position hint's search region: this radius around it (the face's
-                                       // half-diagonal is 0.19 m; tracking_margin_px covers the blob's offset)
-  // Visible: when the features find no face and a prior exists (the tracked pose, or a region/position
-  // hint), align the texture with the image directly (face_alignment.h).
-  bool use_direct_alignment = true;
-  int direct_yaw_hypotheses = 5;       // a hint gives no orientation: face yaws tried, evenly over +-max
-  double direct_max_yaw_deg = 30.0;    // the largest yaw tried from a hint (the ECC basin covers ~10 deg more)
-  DirectAlignmentParams direct;
-  FeatureMatcherParams features;
-  LedDetectorParams leds;
-  DarkDotParams dots;
-  PlanarPnpParams pnp;
-  ConstantVelocityFilterParams filter;
-  InnerPatternParams inner_pattern;    // visible mode, a target with an inner pattern (target.yaml)
-  ConsistencyParams consistency;
-};
+// MonoPoseParams, the estimator's settings (its components' nested), is declared in settings/mono_pose.yaml
+// (generated header). publish_filtered_orientation: the published orientation is the velocity filter's
+// posterior at the image's stamp once the filter has fused at least two poses since its last restart and
+// accepted this one; otherwise the image's own. Single images under blur scatter by degrees about the truth,
+// frame to frame; their fused orientation does not. The position stays the image's own: a turning camera
+// moves the target on a curve in its frame, which a constant-velocity filter follows with a lag.
+// predict_face_when_tracking (visible): the face refined where the filter's predicted pose puts it
+// (FeatureMatcher::matchAtPrediction), without the feature search, when the last image claimed its
+// orientation; the search runs when fewer than predicted_face_min_kept_fraction of the refined points hold,
+// or the pose fails a check. use_direct_alignment (visible): when the features find no face and a prior
+// exists (the tracked pose, or a region/position hint), the texture is aligned with the image directly
+// (face_alignment.h).
+
+// The settings' choices as the estimator uses them.
+MonoMode modeOf(const MonoPoseParams& params);
+PoseSolverType solverOf(const MonoPoseParams& params);
+VelocityMethod velocityOf(const MonoPoseParams& params);
 
 // MonoPoseResult::solver when the pose comes from the inner pattern.
 constexpr const char* kInnerPatternSolverName = "inner_pattern";
 
-// Empty when the parameters are usable, else a message naming the first bad parameter by its name in
-// config/mono_pose_<mode>.yaml (e.g. "feature_ratio must be in (0, 1]").
-std::string validateParams(const MonoPoseParams& params);
+// Throws docking_settings::ConfigError (a std::invalid_argument) naming the first setting its declaration
+// does not allow (its key in config/mono_pose_<mode>.yaml, e.g. "feature_ratio"), or two that contradict.
+void validate(const MonoPoseParams& params);
 
 struct MonoPoseResult {
   double stamp_s = 0.0;
@@ -249,6 +223,10 @@ class MonoPoseEstimator {
   TargetModel model_;
   CameraIntrinsics camera_;
   MonoPoseParams params_;
+  // params_'s choices, parsed.
+  MonoMode mode_ = MonoMode::kVisible;
+  PoseSolverType solver_ = PoseSolverType::kPnp;
+  VelocityMethod velocity_ = VelocityMethod::kFilter;
   FeatureMatcher matcher_;
   LedPatternDetector led_detector_;
   DarkDotLocator dot_locator_;
