@@ -20,6 +20,7 @@ set(MONO_CORE_SOURCES
   src/mono/apriltag_pose.cpp
   src/mono/inner_pattern_detector.cpp
   src/mono/reject_reason.cpp
+  src/mono/stages.cpp
   src/mono/pose_consistency.cpp
   src/mono/face_search.cpp
   src/mono/face_alignment.cpp)

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <boost/thread/recursive_mutex.hpp>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -36,8 +37,19 @@
 #include "docking_perception/mono/debug_drawing.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
 #include "docking_perception/mono/mono_pose_settings.h"
+#include "docking_perception/mono/stages.h"
 
 namespace docking_perception {
+
+// The message's REJECT_* constants mirror mono::RejectReason, in the same order.
+static_assert(docking_msgs::TargetEstimate::REJECT_APPEARANCE == static_cast<int>(mono::RejectReason::kAppearance) &&
+                  docking_msgs::TargetEstimate::REJECT_DOT_APPEARANCE == static_cast<int>(mono::RejectReason::kDotAppearance) &&
+                  docking_msgs::TargetEstimate::REJECT_HINT_DISAGREEMENT ==
+                      static_cast<int>(mono::RejectReason::kHintDisagreement) &&
+                  docking_msgs::TargetEstimate::REJECT_POSITION_UNCERTAIN ==
+                      static_cast<int>(mono::RejectReason::kPositionUncertain),
+              "TargetEstimate REJECT_* and mono::RejectReason differ");
+static_assert(docking_msgs::TargetEstimate::STAGE_PASSED == 0, "a stage's outcome 0 is 'passed' (mono/stages.h)");
 
 class MonoPoseNodelet : public nodelet::Nodelet {
  public:
@@ -53,6 +65,16 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   void reconfigure(MonoPoseConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void publishEstimate(const std_msgs::Header& header, const mono::MonoPoseResult& result);
+  docking_msgs::TargetEstimate toMessage(const std_msgs::Header& header, const mono::MonoPoseResult& result) const;
+  // The stage of an image refused before the estimator (camera_info, encoding, an exception).
+  static void refuseInput(mono::InputOutcome outcome, const std::string& status, mono::MonoPoseResult* result);
+  // The estimator for camera_info's intrinsics (made, or told of new ones); false (refused) when unusable.
+  bool readyFor(const sensor_msgs::CameraInfo& info, mono::MonoPoseResult* result);
+  bool converted(const sensor_msgs::ImageConstPtr& image, cv_bridge::CvImageConstPtr* cv_image,
+                 mono::MonoPoseResult* result);
+  // Visible mode: the latest disparity estimate older than this image, as the estimator's position hint.
+  void applyDisparityHint(const std_msgs::Header& image_header);
+  void publishDebugImage(const std_msgs::Header& header, const cv::Mat& image, const mono::MonoPoseResult& result);
   // Visible mode: the disparity detector's estimate (same camera) as the region to search first.
   void disparityCallback(const docking_msgs::TargetEstimateConstPtr& estimate);
   // Far throttle (issue 15): the arbiter's output says whether the target is far and on disparity.
@@ -105,6 +127,8 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   image_guard::RateCap far_rate_cap_;
   duty::FusedRangeState far_state_ = duty::FusedRangeState::kNoFusedEstimate;  // as last applied
   unsigned long images_throttled_far_ = 0;
+  // Estimates published per deciding (stage, outcome) (mono/stages.h): the diagnostics' counts.
+  std::map<std::pair<uint8_t, uint8_t>, unsigned long> decided_;
 };
 
 void MonoPoseNodelet::loadSettings() {
@@ -247,8 +271,7 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
       std::lock_guard<std::mutex> lock(mutex_);
       mono::MonoPoseResult result;
       result.solver = settings_.core.solver;
-      result.status = std::string("image dropped: ") + e.what();
-      result.reject_reason = mono::RejectReason::kBadInput;
+      refuseInput(mono::InputOutcome::kDropped, std::string("image dropped: ") + e.what(), &result);
       publishEstimate(image->header, result);
     } catch (const std::exception& again) {
       NODELET_ERROR_THROTTLE(5.0, "mono_pose: could not report the dropped image: %s", again.what());
@@ -259,24 +282,50 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
 void MonoPoseNodelet::processImage(const sensor_msgs::ImageConstPtr& image,
                                    const sensor_msgs::CameraInfoConstPtr& info) {
   std::lock_guard<std::mutex> lock(mutex_);
-  // Intrinsics of the rectified image: the projection matrix P.
-  mono::CameraIntrinsics camera;
-  camera.fx = info->P[0];
-  camera.cx = info->P[2];
-  camera.fy = info->P[5];
-  camera.cy = info->P[6];
-  camera.width = static_cast<int>(info->width);
-  camera.height = static_cast<int>(info->height);
   mono::MonoPoseResult result;
   result.solver = settings_.core.solver;
+  cv_bridge::CvImageConstPtr cv_image;
+  if (!readyFor(*info, &result) || !converted(image, &cv_image, &result)) {
+    publishEstimate(image->header, result);
+    return;
+  }
+  applyDisparityHint(image->header);
+  // Time comes from the image: live, simulated and replayed alike.
+  result = estimator_->process(cv_image->image, image->header.stamp.toSec());
+  ++images_;
+  found_ += result.valid ? 1 : 0;
+  last_valid_ = result.valid;
+  last_status_ = result.valid ? "found" : result.status;
+  last_processing_ms_ = result.processing_time_ms;
+  last_inliers_ = result.feature_inliers;
+  publishEstimate(image->header, result);
+  if (settings_.publish_debug_image && debug_publisher_.getNumSubscribers() > 0) {
+    publishDebugImage(image->header, cv_image->image, result);
+  }
+}
+
+void MonoPoseNodelet::refuseInput(mono::InputOutcome outcome, const std::string& status, mono::MonoPoseResult* result) {
+  result->status = status;
+  result->reject_reason = mono::RejectReason::kBadInput;
+  result->stage = mono::Stage::kInput;
+  result->stage_outcome = static_cast<uint8_t>(outcome);
+}
+
+bool MonoPoseNodelet::readyFor(const sensor_msgs::CameraInfo& info, mono::MonoPoseResult* result) {
+  // Intrinsics of the rectified image: the projection matrix P.
+  mono::CameraIntrinsics camera;
+  camera.fx = info.P[0];
+  camera.cx = info.P[2];
+  camera.fy = info.P[5];
+  camera.cy = info.P[6];
+  camera.width = static_cast<int>(info.width);
+  camera.height = static_cast<int>(info.height);
   std::string reason;
   if (!camera.isValid(&reason)) {
     camera_error_ = "camera_info on " + image_topic_ + ": " + reason;
-    result.status = camera_error_;
-    result.reject_reason = mono::RejectReason::kBadInput;
+    refuseInput(mono::InputOutcome::kBadCameraInfo, camera_error_, result);
     NODELET_WARN_THROTTLE(5.0, "mono_pose: %s", camera_error_.c_str());
-    publishEstimate(image->header, result);
-    return;
+    return false;
   }
   camera_error_.clear();
   try {
@@ -290,61 +339,68 @@ void MonoPoseNodelet::processImage(const sensor_msgs::ImageConstPtr& image,
     }
   } catch (const std::exception& e) {
     camera_error_ = e.what();
-    result.status = camera_error_;
-    result.reject_reason = mono::RejectReason::kBadInput;
+    refuseInput(mono::InputOutcome::kBadCameraInfo, camera_error_, result);
     NODELET_ERROR_THROTTLE(5.0, "mono_pose: %s", e.what());
-    publishEstimate(image->header, result);
-    return;
+    return false;
   }
+  return true;
+}
 
-  cv_bridge::CvImageConstPtr cv_image;
+bool MonoPoseNodelet::converted(const sensor_msgs::ImageConstPtr& image, cv_bridge::CvImageConstPtr* cv_image,
+                                mono::MonoPoseResult* result) {
   try {
-    const std::string& encoding = image->encoding;
-    const bool mono8 = encoding == sensor_msgs::image_encodings::MONO8;
-    cv_image = cv_bridge::toCvShare(image, mono8 ? sensor_msgs::image_encodings::MONO8
-                                                 : sensor_msgs::image_encodings::BGR8);
+    const bool mono8 = image->encoding == sensor_msgs::image_encodings::MONO8;
+    *cv_image = cv_bridge::toCvShare(image, mono8 ? sensor_msgs::image_encodings::MONO8
+                                                  : sensor_msgs::image_encodings::BGR8);
   } catch (const cv_bridge::Exception& e) {
-    result.status = std::string("cannot convert the image: ") + e.what();
-    result.reject_reason = mono::RejectReason::kBadInput;
-    publishEstimate(image->header, result);
-    return;
+    refuseInput(mono::InputOutcome::kNotConvertible, std::string("cannot convert the image: ") + e.what(), result);
+    return false;
   }
+  return true;
+}
+
+void MonoPoseNodelet::applyDisparityHint(const std_msgs::Header& image_header) {
   // Only a hint older than this image: the disparity of this very frame races with it, and which one
   // won would make the result depend on thread timing (a lossless replay would not repeat itself). A
   // same-frame hint waits for the next image (live, the disparity is the slower one anyway).
-  if (disparity_hint_ && disparity_hint_->header.stamp < image->header.stamp) {
-    if (disparity_hint_->header.frame_id == image->header.frame_id) {
-      const auto& position = disparity_hint_->pose.pose.position;
-      estimator_->setPositionHint(Eigen::Vector3d(position.x, position.y, position.z),
-                                  disparity_hint_->header.stamp.toSec());
-      ++hints_used_;
-    } else {
-      NODELET_WARN_THROTTLE(10.0, "mono_pose: disparity estimate in frame '%s', image in '%s': not used as a search hint",
-                            disparity_hint_->header.frame_id.c_str(), image->header.frame_id.c_str());
-    }
-    disparity_hint_.reset();
+  if (!disparity_hint_ || !(disparity_hint_->header.stamp < image_header.stamp)) return;
+  if (disparity_hint_->header.frame_id == image_header.frame_id) {
+    const auto& position = disparity_hint_->pose.pose.position;
+    estimator_->setPositionHint(Eigen::Vector3d(position.x, position.y, position.z),
+                                disparity_hint_->header.stamp.toSec());
+    ++hints_used_;
+  } else {
+    NODELET_WARN_THROTTLE(10.0, "mono_pose: disparity estimate in frame '%s', image in '%s': not used as a search hint",
+                          disparity_hint_->header.frame_id.c_str(), image_header.frame_id.c_str());
   }
-  // Time comes from the image: live, simulated and replayed alike.
-  result = estimator_->process(cv_image->image, image->header.stamp.toSec());
-  ++images_;
-  found_ += result.valid ? 1 : 0;
-  last_valid_ = result.valid;
-  last_status_ = result.valid ? "found" : result.status;
-  last_processing_ms_ = result.processing_time_ms;
-  last_inliers_ = result.feature_inliers;
-  publishEstimate(image->header, result);
-
-  if (settings_.publish_debug_image && debug_publisher_.getNumSubscribers() > 0) {
-    const double cpu_start_ms = docking_msgs::threadCpuMs();
-    cv_bridge::CvImage debug(image->header, sensor_msgs::image_encodings::BGR8,
-                             mono::drawDebugImage(cv_image->image, result, estimator_->camera(), *model_));
-    debug_publisher_.publish(debug.toImageMsg());
-    ++debug_images_;
-    debug_image_cpu_ms_total_ += docking_msgs::threadCpuMs() - cpu_start_ms;
-  }
+  disparity_hint_.reset();
 }
 
+void MonoPoseNodelet::publishDebugImage(const std_msgs::Header& header, const cv::Mat& image,
+                                        const mono::MonoPoseResult& result) {
+  const double cpu_start_ms = docking_msgs::threadCpuMs();
+  cv_bridge::CvImage debug(header, sensor_msgs::image_encodings::BGR8,
+                           mono::drawDebugImage(image, result, estimator_->camera(), *model_));
+  debug_publisher_.publish(debug.toImageMsg());
+  ++debug_images_;
+  debug_image_cpu_ms_total_ += docking_msgs::threadCpuMs() - cpu_start_ms;
+}
 void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono::MonoPoseResult& result) {
+  docking_msgs::TargetEstimate msg = toMessage(header, result);
+  // What the arbiter would refuse (a NaN, a non-unit quaternion) leaves here as not valid, with the code.
+  const auto problem = docking_msgs::checks::withdrawIfMalformed(&msg);
+  if (problem != docking_msgs::checks::EstimateProblem::kNone) {
+    NODELET_ERROR_THROTTLE(5.0, "mono_pose: estimate withdrawn: %s", docking_msgs::checks::estimateProblemName(problem));
+    msg.stage = static_cast<uint8_t>(mono::Stage::kSolve);  // as its reject_reason says: an implausible pose
+    msg.stage_outcome = static_cast<uint8_t>(mono::SolveOutcome::kImplausible);
+  }
+  ++decided_[{msg.stage, msg.stage_outcome}];
+  estimate_publisher_.publish(msg);
+  if (!header.stamp.isZero()) latency_.add((ros::Time::now() - header.stamp).toSec());
+}
+
+docking_msgs::TargetEstimate MonoPoseNodelet::toMessage(const std_msgs::Header& header,
+                                                        const mono::MonoPoseResult& result) const {
   docking_msgs::TargetEstimate msg;
   msg.header = header;
   msg.source = source_;
@@ -385,25 +441,11 @@ void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono
   msg.processing_time_ms = result.processing_time_ms;
   msg.solver = result.solver;
   msg.status = result.status;  // a valid result's status says what part is withheld, if any
-  // The message's REJECT_* constants mirror mono::RejectReason, in the same order.
-  static_assert(docking_msgs::TargetEstimate::REJECT_APPEARANCE == static_cast<int>(mono::RejectReason::kAppearance) &&
-                    docking_msgs::TargetEstimate::REJECT_DOT_APPEARANCE ==
-                        static_cast<int>(mono::RejectReason::kDotAppearance) &&
-                    docking_msgs::TargetEstimate::REJECT_HINT_DISAGREEMENT ==
-                        static_cast<int>(mono::RejectReason::kHintDisagreement) &&
-                    docking_msgs::TargetEstimate::REJECT_POSITION_UNCERTAIN ==
-                        static_cast<int>(mono::RejectReason::kPositionUncertain),
-                "TargetEstimate REJECT_* and mono::RejectReason differ");
   msg.reject_reason = static_cast<uint8_t>(result.valid ? mono::RejectReason::kNone : result.reject_reason);
-  // What the arbiter would refuse (a NaN, a non-unit quaternion) leaves here as not valid, with the code.
-  const auto problem = docking_msgs::checks::withdrawIfMalformed(&msg);
-  if (problem != docking_msgs::checks::EstimateProblem::kNone) {
-    NODELET_ERROR_THROTTLE(5.0, "mono_pose: estimate withdrawn: %s", docking_msgs::checks::estimateProblemName(problem));
-  }
-  estimate_publisher_.publish(msg);
-  if (!header.stamp.isZero()) latency_.add((ros::Time::now() - header.stamp).toSec());
+  msg.stage = static_cast<uint8_t>(result.stage);  // the stage that decided and its code (mono/stages.h)
+  msg.stage_outcome = result.stage_outcome;
+  return msg;
 }
-
 void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!camera_error_.empty()) {
@@ -429,6 +471,11 @@ void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("images left out far", images_throttled_far_);
   status.add("debug images drawn", debug_images_);
   status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
+  for (const auto& [decision, count] : decided_) {
+    const auto stage = static_cast<mono::Stage>(decision.first);
+    status.add(std::string("decided at ") + mono::stageName(stage) + ": " + mono::outcomeName(stage, decision.second),
+               count);
+  }
   docking_msgs::addLatency(status, "image->estimate", latency_);
 }
 

@@ -27,6 +27,7 @@
 #include "docking_perception/mono/pose_consistency.h"
 #include "docking_perception/mono/pose_types.h"
 #include "docking_perception/mono/reject_reason.h"
+#include "docking_perception/mono/stages.h"
 #include "docking_perception/mono/target_model.h"
 #include "docking_perception/mono/velocity_estimators.h"
 
@@ -78,7 +79,9 @@ struct MonoPoseResult {
   // valid result, only the position (and the velocities) may be used.
   bool orientation_valid = false;
   std::string status;                  // why not valid, or what part is withheld (for people); else empty
-  RejectReason reject_reason = RejectReason::kNone;  // the same as a code (for programs)
+  RejectReason reject_reason = RejectReason::kNone;  // the same as a coarse code (for programs)
+  Stage stage = Stage::kNone;          // the stage that decided (stages.h) ...
+  std::uint8_t stage_outcome = 0;      // ... and its outcome code there (0: passed)
   std::string solver;                  // "paper_5point" or "pnp"
   PoseWithCovariance pose;             // camera <- target: what is published (see publish_filtered_orientation)
   PoseWithCovariance measured_pose;    // this image's own pose (equal to `pose` unless orientation_filtered)
@@ -151,18 +154,63 @@ class MonoPoseEstimator {
   void setPositionHint(const Eigen::Vector3d& position_camera, double stamp_s);
 
  private:
-  bool estimateVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px, MonoPoseResult* result);
-  bool estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
-  bool solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason, RejectReason* code) const;
-  bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
-  // False (with the code and reason in *result) when a fresh position hint's range and the pose's differ
-  // by more than consistency.max_hint_disagreement_fraction of the range.
-  // Without a fresh hint, a pose at least hint_check_min_range_m away is refused for
-  // hint_disagreement_hold_s after a pose that disagreed.
-  bool agreesWithPositionHint(MonoPoseResult* result);
+  // What an IR search over the LED patterns learned, for the reason when none gave a pose.
+  struct LedSearch {
+    std::string reason;
+    bool blob_rejected = false;       // a pattern's blob was merged with a reflection
+    bool candidate_unsolved = false;  // a pattern of LED-like blobs gave no plausible pose
+  };
+
+  // The stages of process() (stages.h), in order.
+  InputOutcome readImage(const cv::Mat& image, cv::Mat* gray, MonoPoseResult* result) const;
+  // Near contact (inner_pattern.face_retry_every): this image's face search is skipped.
+  FindOutcome skipFaceSearch(MonoPoseResult* result);
+  // Find, solve and vet: the face's pose (visible) or the LEDs' (IR); result->valid when it passed them.
+  StageOutcome measurePose(const cv::Mat& gray, MonoPoseResult* result);
+  // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
+  InnerPatternOutcome applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
+  // A fresh position hint's range against the pose's (consistency.max_hint_disagreement_fraction); without a
+  // fresh hint, a pose at least hint_check_min_range_m away is refused for hint_disagreement_hold_s after a
+  // pose that disagreed.
+  HintOutcome checkPositionHint(MonoPoseResult* result);
+  // The pose is valid: its covariance scaled by the innovation, and whether its orientation is claimed.
+  OrientationOutcome claimOrientation(MonoPoseResult* result);
+  // Velocities, the tracking state, and the published (filtered) orientation.
+  void trackPose(MonoPoseResult* result);
   // A tracked pose whose position sigma is above consistency.max_position_sigma_fraction of its range is
   // published not valid (kPositionUncertain), though it stays the tracked pose.
-  void withholdUncertainPosition(MonoPoseResult* result) const;
+  PositionOutcome claimPosition(MonoPoseResult* result) const;
+
+  // Visible: the face at its predicted place, else searched (features, then the direct alignment), then
+  // its pose.
+  StageOutcome measureVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px, MonoPoseResult* result);
+  // Tracking with a claimed orientation (predict_face_when_tracking): true when the face refined at its
+  // predicted place gave a pose that passed; else the result is as it was.
+  bool posedAtPredictedFace(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
+  // The face by features in the predicted region, the hint's region, the full frame, then by direct alignment.
+  StageOutcome findFace(const cv::Mat& gray, const cv::Rect& region, double face_width_px, FaceMatch* match,
+                        double* direct_sigma_px, MonoPoseResult* result);
+  void alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, FaceMatch* match, double* direct_sigma_px,
+                         MonoPoseResult* result);
+  // The pose from a face match (features or direct alignment): PnP or the 5 dots, then the checks.
+  StageOutcome poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px, MonoPoseResult* result);
+  StageOutcome pnpPoseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px,
+                                MonoPoseResult* result);
+  StageOutcome fivePointPoseFromMatch(const cv::Mat& gray, const FaceMatch& match, MonoPoseResult* result);
+  void correspondences(const FaceMatch& match, std::vector<Eigen::Vector3d>* model_points,
+                       std::vector<Eigen::Vector2d>* image_points) const;
+  // paper_5point: where the homography puts printed dot marker_index, and its apparent radius.
+  Eigen::Vector2d predictedDot(const cv::Matx33d& homography, int marker_index, double* radius_px) const;
+  // IR: the LED patterns in the region (empty: the whole image), best first, until one gives a pose.
+  StageOutcome measureIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
+  bool poseFromLeds(const cv::Mat& gray, const cv::Rect& roi, LedSearch* search, MonoPoseResult* result) const;
+  SolveOutcome solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason) const;
+  bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
+  HintOutcome hintOutcome(MonoPoseResult* result);
+  OrientationOutcome orientationOutcome(MonoPoseResult* result) const;
+  // The inner tag's pose (with the covariance model of every PnP pose) where the tracked pose puts it, then
+  // in the whole image; not valid when not found.
+  InnerPatternResult findInnerTag(const cv::Mat& gray, double* ambiguity_deg, MonoPoseResult* result) const;
   // An external hint is set and at most region_hint_max_age_s from this image's stamp.
   bool hintFresh(double stamp_s) const;
   // The region where the target should appear (empty: search the whole image) and, in visible mode,
@@ -183,35 +231,30 @@ class MonoPoseEstimator {
   // published one (publish_filtered_orientation); measured_pose keeps the image's own.
   void publishFilteredOrientation(bool fused, MonoPoseResult* result) const;
   void scaleByInnovation(MonoPoseResult* result);
-  bool claimOrientation(MonoPoseResult& result) const;
   bool directSearchDue();
   void noteDirectSearch(bool from_hint, bool found);
-  // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
   // After an image whose face was not found while the inner pattern gave the pose: skip the face's search
   // for the next inner_pattern.face_retry_every - 1 images; any invalid image ends the skipping.
   void updateFaceRetry(bool face_skipped, const MonoPoseResult& result);
-  void applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
   cv::Rect predictedInnerPatternRegion(double stamp_s) const;
   // The smear the face's image motion since the last pose gives over motion_smear_exposure_s (px; 0 without
   // a pose at most kMotionSmearMaxGapS before).
   double motionSmearPx(const Eigen::Vector3d& translation, double stamp_s) const;
-  // The consistency checks and honest covariance of a visible pose (pose_consistency.h); false with the
+  // The consistency checks and honest covariance of a visible pose (pose_consistency.h); refused with the
   // reason in result when the pose cannot be trusted.
   // pixel_sigma_px: the noise of the pose points (the PnP residual for features, the fit's own for the
   // direct alignment).
-  bool vetVisiblePose(const cv::Mat& gray, const FaceMatch& match, const std::vector<Eigen::Vector3d>& model_points,
-                      const PlanarPnpSolution* pnp, double pixel_sigma_px, MonoPoseResult* result) const;
-  // The pose from a face match (features or direct alignment): PnP or the 5 dots, then the checks.
-  bool poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px, MonoPoseResult* result);
+  StageOutcome vetVisiblePose(const cv::Mat& gray, const FaceMatch& match, const std::vector<Eigen::Vector3d>& model_points,
+                              const PlanarPnpSolution* pnp, double pixel_sigma_px, MonoPoseResult* result) const;
   // The direct alignment from the tracked pose or the hint; found == false when no prior or no match.
   DirectAlignment alignDirect(const cv::Mat& gray, bool tracking_prior, bool hint_fresh, double stamp_s) const;
   // A hint's position: the position hint's, or one from the region hint's box.
   Eigen::Vector3d hintPosition() const;
   // paper_5point: the located dots against the homography, and the 5-point pose against the inlier PnP.
-  bool vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
-                        const std::vector<Eigen::Vector3d>& model_points, const std::vector<Eigen::Vector2d>& image_points,
-                        MonoPoseResult* result) const;
+  StageOutcome vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
+                                const std::vector<Eigen::Vector3d>& model_points,
+                                const std::vector<Eigen::Vector2d>& image_points, MonoPoseResult* result) const;
   // IR: the pose of an identified pattern after its 5-point solve (trial->pose): the blur from the LEDs'
   // streaks, then (pnp) the PnP pose with its covariance and IPPE's undecided alternative. False with the
   // reason when PnP fails or its pose is implausible.
