@@ -116,6 +116,32 @@ class FeatureMatcher {
     int first_row;     // this level's rows in model_descriptors_
     int row_count;
   };
+  // The rows of model_descriptors_ a search matches against.
+  struct ModelRows {
+    int first = 0;
+    int count = 0;
+  };
+  // The region to search (roi, or the whole image when empty), clipped; *problem says why none.
+  cv::Rect searchRegion(const cv::Mat& gray, const cv::Rect& roi, std::string* problem) const;
+  // Keypoints and descriptors of the region (half: at half resolution), of the kind the model set has.
+  void describeRegion(const cv::Mat& gray, const cv::Rect& roi, bool half, bool blurred_set,
+                      std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors) const;
+  // The levels of one model set, those within a factor 1.6 of the expected width when it is known (> 0)
+  // and there are any.
+  ModelRows modelRows(ModelSet set, double expected_face_width_px) const;
+  // The image keypoints whose nearest model descriptor passes the ratio test, as texture and image points
+  // (full resolution, offset by the region's corner).
+  void ratioTestMatches(const cv::Mat& descriptors, const std::vector<cv::KeyPoint>& keypoints, const ModelRows& rows,
+                        bool half, cv::Point offset, std::vector<cv::Point2f>* texture_points,
+                        std::vector<cv::Point2f>* image_points) const;
+  // The RANSAC homography and its inliers into *result; false (with the status) when none or too few.
+  bool fitHomography(const std::vector<cv::Point2f>& texture_points, const std::vector<cv::Point2f>& image_points,
+                     bool half, FaceMatch* result) const;
+  // One level of the model pyramid: the texture at `width`, blurred / smeared as its set is, its keypoints
+  // and descriptors appended to the model's.
+  void addModelLevel(const cv::Mat& texture_gray, ModelSet set, int width);
+  // The sharp levels smeared along their rows (refinement_row_smears_px; refinement only).
+  void addRowSmearedLevels();
   void detect(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, int max_keypoints) const;
   // Descriptors of the keypoints (those too near the border for them are removed), of the kind the
   // model set (sharp or blurred_set) was described with.
@@ -146,6 +172,11 @@ class FeatureMatcher {
   RefinedPoints refineAgainstRowSmears(const cv::Mat& gray, double apparent_width,
                                        const std::vector<cv::Point2f>& candidates, const cv::Matx33d& homography,
                                        const cv::Rect& face_box, const RefinedPoints& to_beat, int* smear_px) const;
+  // The candidates refined against the sharp model, or against the blurred one (or its row smears) when
+  // those patches correlate clearly better (blur_matched_refinement); match notes which.
+  RefinedPoints refineAgainstBestModel(const cv::Mat& gray, double apparent_width,
+                                       const std::vector<cv::Point2f>& candidates, const cv::Rect& face_box,
+                                       FaceMatch* match) const;
   // Each candidate's patch, drawn from `level` with the homography, located in the image by NCC.
   RefinedPoints refineAgainst(const cv::Mat& gray, const ModelLevel& level, const std::vector<cv::Point2f>& candidates,
                               const cv::Matx33d& homography, const cv::Rect& face_box) const;

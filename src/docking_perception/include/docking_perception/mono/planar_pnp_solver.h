@@ -49,6 +49,10 @@ class PlanarPnpSolver {
              PlanarPnpSolution* solution, std::string* reason) const;
 
  private:
+  // The chosen pose refined by Levenberg-Marquardt, its RMS and its Gauss-Newton covariance.
+  void refineWithCovariance(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& model_points,
+                            const std::vector<Eigen::Vector2d>& image_points, PlanarPnpSolution* solution) const;
+
   PlanarPnpParams params_;
   double min_pixel_sigma_px_;
 };
