@@ -10,7 +10,7 @@
 //
 // --set: override a key of the mono_pose YAML files (both modes) for experiments.
 //
-// --baseline: the behaviour before issue 11 (no half-resolution search, no keypoint grid, no consistency
+// --baseline: the behaviour before issue 11 (no half-resolution search, no blurred model, no consistency
 // checks, the solver's own covariance), for the "before" tables.
 //
 // Seeds: 100:40 is the tuning range, 500:40 the report range (never used for tuning).
@@ -97,7 +97,6 @@ int main(int argc, char** argv) {
   if (baseline) {
     for (mono::MonoPoseParams* p : {&visible_params, &ir_params}) {
       p->use_half_resolution = false;
-      p->features.keypoint_grid = 0;
       p->features.blurred_model_sigma_px = 0.0;
       p->consistency.min_inlier_spread = 0.0;
       p->consistency.min_appearance_ncc = -1.0;

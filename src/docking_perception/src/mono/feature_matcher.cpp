@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <map>
 #include <memory>
 #include <mutex>
 #include <utility>
@@ -27,15 +26,18 @@ namespace {
 // pattern for 64 scales x 1024 rotations, 46 MB (measured), and the visible and IR mono_pose nodelets
 // in one perception process would otherwise hold one each. Sharing is safe: OpenCV's BRISK detect and
 // compute are const and keep their buffers on the stack. Held weakly: the last matcher frees it.
-cv::Ptr<cv::BRISK> sharedBrisk(int threshold, int octaves) {
+cv::Ptr<cv::BRISK> sharedBrisk() {
+  // Only BRISK's descriptors are used (FAST detects): its detector's threshold and octaves, OpenCV's
+  // defaults, play no part.
+  constexpr int kAgastThreshold = 30;
+  constexpr int kOctaves = 3;
   static std::mutex mutex;
-  static std::map<std::pair<int, int>, std::weak_ptr<cv::BRISK>> instances;
+  static std::weak_ptr<cv::BRISK> instance;
   const std::lock_guard<std::mutex> lock(mutex);
-  std::weak_ptr<cv::BRISK>& slot = instances[{threshold, octaves}];
-  std::shared_ptr<cv::BRISK> brisk = slot.lock();
+  std::shared_ptr<cv::BRISK> brisk = instance.lock();
   if (!brisk) {
-    brisk = cv::BRISK::create(threshold, octaves);
-    slot = brisk;
+    brisk = cv::BRISK::create(kAgastThreshold, kOctaves);
+    instance = brisk;
   }
   return cv::Ptr<cv::BRISK>(brisk);
 }
@@ -403,10 +405,7 @@ bool renderModelPatch(const cv::Mat& model, const cv::Matx33d& image_to_model, c
 FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(params) {}
 
 void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
-  const bool rebuild = params.brisk_threshold != params_.brisk_threshold ||
-                       params.brisk_octaves != params_.brisk_octaves ||
-                       params.use_brisk_detector != params_.use_brisk_detector ||
-                       params.upright_descriptors != params_.upright_descriptors ||
+  const bool rebuild = params.upright_descriptors != params_.upright_descriptors ||
                        params.fast_threshold != params_.fast_threshold ||
                        params.max_model_keypoints_per_level != params_.max_model_keypoints_per_level ||
                        params.model_widths_px != params_.model_widths_px ||
@@ -419,40 +418,10 @@ void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
 
 void FeatureMatcher::detect(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, int max_keypoints) const {
   keypoints->clear();
-  if (params_.use_brisk_detector) {
-    brisk_->detect(image, *keypoints);
-  } else {
-    cv::FAST(image, *keypoints, params_.fast_threshold, true);
+  cv::FAST(image, *keypoints, params_.fast_threshold, true);
+  if (max_keypoints > 0 && static_cast<int>(keypoints->size()) > max_keypoints) {
+    cv::KeyPointsFilter::retainBest(*keypoints, max_keypoints);
   }
-  if (max_keypoints <= 0 || static_cast<int>(keypoints->size()) <= max_keypoints) return;
-  const int grid = params_.keypoint_grid;
-  if (grid > 1) {
-    // The strongest of each cell (an equal share of the budget), then the strongest overall if the
-    // shares of sparse cells left room.
-    std::vector<std::vector<cv::KeyPoint>> cells(static_cast<size_t>(grid * grid));
-    for (const cv::KeyPoint& kp : *keypoints) {
-      const int cx = std::min(grid - 1, static_cast<int>(kp.pt.x * grid / image.cols));
-      const int cy = std::min(grid - 1, static_cast<int>(kp.pt.y * grid / image.rows));
-      cells[static_cast<size_t>(cy * grid + cx)].push_back(kp);
-    }
-    const int share = std::max(1, max_keypoints / (grid * grid));
-    std::vector<cv::KeyPoint> kept;
-    std::vector<cv::KeyPoint> rest;
-    for (std::vector<cv::KeyPoint>& cell : cells) {
-      std::sort(cell.begin(), cell.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
-      const size_t n = std::min(cell.size(), static_cast<size_t>(share));
-      kept.insert(kept.end(), cell.begin(), cell.begin() + static_cast<std::ptrdiff_t>(n));
-      rest.insert(rest.end(), cell.begin() + static_cast<std::ptrdiff_t>(n), cell.end());
-    }
-    const int room = max_keypoints - static_cast<int>(kept.size());
-    if (room > 0 && !rest.empty()) {
-      if (static_cast<int>(rest.size()) > room) cv::KeyPointsFilter::retainBest(rest, room);
-      kept.insert(kept.end(), rest.begin(), rest.end());
-    }
-    *keypoints = kept;
-    return;
-  }
-  cv::KeyPointsFilter::retainBest(*keypoints, max_keypoints);
 }
 
 void FeatureMatcher::describe(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors,
@@ -475,9 +444,7 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
     if (reason) *reason = "the model texture must be a non-empty 8-bit gray image";
     return false;
   }
-  brisk_ = params_.use_brisk_detector || !params_.upright_descriptors || hasBlurredModel()
-               ? sharedBrisk(params_.brisk_threshold, params_.brisk_octaves)
-               : cv::Ptr<cv::BRISK>();
+  brisk_ = !params_.upright_descriptors || hasBlurredModel() ? sharedBrisk() : cv::Ptr<cv::BRISK>();
   std::vector<int> widths = params_.model_widths_px;
   std::sort(widths.rbegin(), widths.rend());
   // The sharp levels, then (blurred_model_sigma_px > 0) the same widths blurred: the descriptors a
@@ -573,13 +540,9 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
     }
   }
   match->refine_candidates = static_cast<int>(candidates.size());
-  cv::Matx33d drawn_at = match->homography;
+  const cv::Matx33d drawn_at = match->homography;
   if (!refinePass(gray, candidates, match)) return;
   match->first_pass_kept = static_cast<int>(match->inlier_image_points.size());
-  for (int pass = 1; pass < params_.refine_passes; ++pass) {
-    drawn_at = match->homography;
-    if (!refineKeptAgain(gray, 0.0, match)) return;
-  }
   if (params_.refine_again_move_px > 0.0 &&
       largestCornerMove(drawn_at, match->homography) > params_.refine_again_move_px) {
     // Kept only when its points still span most of what the first pass's did: on a small blurred face (2 m)

@@ -184,8 +184,6 @@ int main(int argc, char** argv) {
 
   MonoPoseParams tracking_features = tracking;  // predict_face_when_tracking off: the feature search every frame
   tracking_features.predict_face_when_tracking = false;
-  MonoPoseParams tracking_two_passes = tracking;  // refine_passes: 2 (not deployed; its cost)
-  tracking_two_passes.features.refine_passes = 2;
   struct StagePlan {
     const char* name;
     const MonoPoseParams* params;
@@ -197,7 +195,6 @@ int main(int argc, char** argv) {
                                         {"mono_tracking_near", &tracking, &near_contact, true},
                                         {"mono_tracking_features", &tracking_features, &visible, true},
                                         {"mono_full_paper_5point", &five_point, &visible, false},
-                                        {"mono_tracking_2_passes", &tracking_two_passes, &visible, true},
                                         {"mono_ir", &ir, &infrared, false}};
   std::vector<StageFigures> stages;
   for (const StagePlan& plan : plans) {

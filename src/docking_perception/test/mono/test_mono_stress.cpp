@@ -68,7 +68,6 @@ TEST(MonoStress, RegionHintFindsTheTargetOverClutterThatTheFullFrameMisses) {
   c.min_range_m = 1.4;
   mono::MonoPoseParams old_params = params("visible");
   old_params.use_half_resolution = false;
-  old_params.features.keypoint_grid = 0;
   const mono::MonoPoseParams new_params = params("visible");
   int full_frame_found = 0;
   int hinted_found = 0;

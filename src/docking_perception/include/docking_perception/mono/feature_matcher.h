@@ -38,8 +38,6 @@ enum class ModelSet { kSharp, kBlurred, kRowSmeared };
 // against BRISK's ~65 k); false: OpenCV's rotation-invariant BRISK descriptors. The blurred model keeps BRISK
 // either way: with upright descriptors it found more faces under 9 px of motion blur, but some 10-35 deg off
 // with a small covariance (stress seeds 100-139 and 400-439: 2 confident wrong in 120 frames, BRISK none).
-// refine_passes: each later pass re-renders the texture with the previous pass's homography and correlates
-// its points again, so the parabolic peak fit works near zero offset, where it is unbiased.
 
 struct FaceMatch {
   bool found = false;
@@ -76,10 +74,8 @@ class FeatureMatcher {
   void setParams(const FeatureMatcherParams& params);
   const FeatureMatcherParams& params() const { return params_; }
   int modelKeypointCount() const { return static_cast<int>(model_points_.size()); }
-  // The BRISK object in use: null until buildModel, then (when BRISK detects or describes:
-  // use_brisk_detector, upright_descriptors false, or a blurred model) one per (brisk_threshold,
-  // brisk_octaves) in the process, shared by every matcher with those parameters (its pattern tables
-  // take 46 MB).
+  // The BRISK object in use: null until buildModel, then (when BRISK describes: upright_descriptors false,
+  // or a blurred model) the one of the process, shared by every matcher (its pattern tables take 46 MB).
   const cv::BRISK* descriptorExtractor() const { return brisk_.get(); }
 
   // Matches in roi (empty: the whole image) of an 8-bit gray image. expected_face_width_px > 0 (from
@@ -98,7 +94,7 @@ class FeatureMatcher {
 
   // Tracking without features (issue 15): the face where a predicted homography (texture pixel -> image
   // pixel, from the tracked pose) puts it; the model corners of the level nearest its apparent size are
-  // refined by NCC as after a feature match (up to max_refined_points, refine_passes). No FAST, BRISK or
+  // refined by NCC as after a feature match (up to max_refined_points). No FAST, BRISK or
   // Hamming matching: a third of a feature search's instructions. found when the predicted outline is a
   // plausible view and at least max(min_inliers, min_kept_fraction x the points tried) survive the
   // correlation and the refinement's RANSAC; a prediction off by more than the NCC search (+-3 px) keeps
