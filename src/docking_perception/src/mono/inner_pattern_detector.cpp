@@ -86,9 +86,10 @@ void InnerPatternDetector::refineGrid(const cv::Mat& gray, const std::array<Eige
 
 void InnerPatternDetector::setParams(const InnerPatternParams& params) {
   docking_settings::validateSettings(params);  // ConfigError (a std::invalid_argument) naming the setting
-  if (!detector_ || params.quad_decimate != params_.quad_decimate) {
-    detector_ = std::make_unique<TagDetector>(tag_, 1, params.quad_decimate);
-  }
+  // apriltag's quad_decimate: where the tag is looked for (inner_pattern.use_range_m) it is >= 50 px wide,
+  // which half resolution finds.
+  constexpr double kQuadDecimate = 2.0;
+  if (!detector_) detector_ = std::make_unique<TagDetector>(tag_, 1, kQuadDecimate);
   params_ = params;
   PlanarPnpParams pnp;
   // 30-40 grid corners: let the residuals choose between IPPE's two poses unless they really are

@@ -215,8 +215,9 @@ std::vector<LedBlob> LedPatternDetector::detectBlobs(const cv::Mat& gray, const 
     if (measureBlob(view, labels, stats, label, roi.tl(), params_.min_contrast, &blob)) blobs.push_back(blob);
   }
   // Keep the largest blobs: LEDs are among the brightest, biggest spots, and the search is O(n^3).
+  constexpr size_t kMaxBlobs = 16;
   std::sort(blobs.begin(), blobs.end(), [](const LedBlob& a, const LedBlob& b) { return a.area_px > b.area_px; });
-  if (static_cast<int>(blobs.size()) > params_.max_blobs) blobs.resize(static_cast<size_t>(params_.max_blobs));
+  if (blobs.size() > kMaxBlobs) blobs.resize(kMaxBlobs);
   return blobs;
 }
 std::vector<LedPatternCandidate> LedPatternDetector::identifyPattern(const std::vector<LedBlob>& blobs,

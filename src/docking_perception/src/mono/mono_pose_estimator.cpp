@@ -579,7 +579,9 @@ bool MonoPoseEstimator::poseFromLeds(const cv::Mat& gray, const cv::Rect& roi, L
   result->blob_pixels.clear();
   for (const LedBlob& blob : blobs) result->blob_pixels.push_back(blob.centroid);
   const std::vector<LedPatternCandidate> candidates = led_detector_.identifyPattern(blobs, &search->reason);
-  const int tries = std::min(static_cast<int>(candidates.size()), params_.max_pattern_candidates);
+  // Patterns tried per image, best first: the rest are made of reflections, and each costs a solve.
+  constexpr int kMaxPatternCandidates = 6;
+  const int tries = std::min(static_cast<int>(candidates.size()), kMaxPatternCandidates);
   for (int c = 0; c < tries; ++c) {
     const LedPatternCandidate& candidate = candidates[static_cast<size_t>(c)];
     if (!vetLedBlobs(blobs, candidate, &search->reason)) {

@@ -147,6 +147,22 @@ TEST(MonoPoseEstimator, TrackingUsesThePredictedRegionAndGivesAVelocity) {
   ASSERT_TRUE(result.twist.valid);
   ASSERT_TRUE(result.twist_frame_difference.valid);
   EXPECT_LT((result.twist.linear - velocity).norm(), 0.05);
+
+  // The paper's velocity, kept for comparison (velocity_method frame_difference): the one published.
+  MonoPoseParams paper = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
+  paper.velocity_method = "frame_difference";
+  MonoPoseEstimator differencing(model, camera, paper);
+  for (int frame = 0; frame < 3; ++frame) {
+    const double t = frame / 30.0;
+    const Eigen::Vector3d position = Eigen::Vector3d(0.0, 0.0, 1.0) + velocity * t;
+    result = differencing.process(synthetic::renderVisible(model, camera, synthetic::facingRotation(0.2), position, 300 + frame),
+                                  10.0 + t);
+    ASSERT_TRUE(result.valid) << "frame " << frame << ": " << result.status;
+  }
+  ASSERT_TRUE(result.twist.valid) << result.velocity_status;
+  EXPECT_EQ(result.twist.linear, result.twist_frame_difference.linear);
+  EXPECT_EQ(result.twist.angular, result.twist_frame_difference.angular);
+  EXPECT_LT((result.twist.linear - velocity).norm(), 0.2);  // one difference of two poses: noisier
 }
 
 // Tracking without features (issue 15): after the first image, the face is refined where the filter
