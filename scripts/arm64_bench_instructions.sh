@@ -138,7 +138,13 @@ build() {  # build ARCH OUT
   else
     cxx=g++ ar=ar inc="-isystem /usr/include/opencv4 -isystem /usr/include/eigen3" libdir=/usr/lib/x86_64-linux-gnu
   fi
-  local flags="-O3 -DNDEBUG -Wall -Wextra -std=gnu++17 -I$P/include $inc"
+  local flags="-O3 -DNDEBUG -Wall -Wextra -std=gnu++17 -I$P/include -I$out/include -I$SRC/src/docking_settings/include $inc"
+  # The package's settings structs, generated from their declarations as docking_settings_generate() does.
+  local declaration
+  for declaration in $P/settings/*.yaml; do
+    python3 $SRC/src/docking_settings/scripts/generate_settings.py "$declaration" "$out/include/$(python3 -c \
+      "import sys, yaml; print(yaml.safe_load(open(sys.argv[1]))['cpp']['header'])" "$declaration")" "$declaration"
+  done
   local cv="-lopencv_videoio -lopencv_imgcodecs -lopencv_video -lopencv_calib3d -lopencv_features2d -lopencv_flann
     -lopencv_imgproc -lopencv_core -lyaml-cpp -lapriltag"
   # The sources of docking_perception_mono_core and _disparity_core (cmake/mono_pose.cmake, cmake/disparity.cmake).
@@ -153,6 +159,8 @@ build() {  # build ARCH OUT
     if [ ${#pids[@]} -ge "$JOBS" ]; then wait "${pids[0]}"; pids=("${pids[@]:1}"); fi
   }
   for f in $mono; do compile $P/$f $out/obj/mono_$(basename $f .cpp).o -fPIC -Ddocking_perception_mono_core_EXPORTS; done
+  # The settings' range checks (docking_settings_core's), linked into the mono core as catkin links it.
+  compile $SRC/src/docking_settings/src/setting_info.cpp $out/obj/mono_setting_info.o -fPIC
   for f in $disp; do compile $P/$f $out/obj/disp_$(basename $f .cpp).o -fPIC; done
   compile $P/test/mono/synthetic_scene.cpp $out/obj/synthetic_scene.o
   compile $P/test/disparity/synthetic_stereo.cpp $out/obj/synthetic_stereo.o
@@ -173,7 +181,8 @@ build() {  # build ARCH OUT
   # The shims that mark the stages for callgrind (arm64_bench_instructions.py; valgrind/callgrind.h from the
   # valgrind package: the sysroot's for arm64, the host's for x86).
   for f in mono_shim far_shim; do
-    $cxx -O2 -std=gnu++17 -shared -fPIC -I$P/include $inc -o $out/$f.so $REPO/scripts/arm64_bench_shims/$f.cpp -ldl
+    $cxx -O2 -std=gnu++17 -shared -fPIC -I$P/include -I$out/include -I$SRC/src/docking_settings/include $inc \
+      -o $out/$f.so $REPO/scripts/arm64_bench_shims/$f.cpp -ldl
   done
 }
 step "build arm64"

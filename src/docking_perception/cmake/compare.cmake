@@ -1,5 +1,5 @@
 # Evaluation (issue 5): our monocular pose beside AprilTag 3 on the same rendered frames.
-#   docking_perception_compare  sequence reader, mono parameters from yaml, AprilTag wrapper (tag ->
+#   docking_perception_compare  sequence reader, AprilTag wrapper (tag ->
 #                               target), synthetic tag views, error statistics (ROS-free)
 #   compare_mono                both solvers, both velocity methods and AprilTag on sim_render sequences
 #   bench_apriltag              AprilTag detection + pose on one 640x480 frame (make bench, stage apriltag)
@@ -12,7 +12,6 @@
 
 add_library(docking_perception_compare STATIC
   src/compare/sequence_io.cpp
-  src/compare/mono_params_yaml.cpp
   src/compare/tag_pose.cpp
   src/compare/synthetic_tag_view.cpp
   src/compare/error_stats.cpp)

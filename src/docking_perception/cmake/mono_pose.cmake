@@ -20,6 +20,7 @@ set(MONO_CORE_SOURCES
   src/mono/apriltag_pose.cpp
   src/mono/inner_pattern_detector.cpp
   src/mono/reject_reason.cpp
+  src/mono/stages.cpp
   src/mono/pose_consistency.cpp
   src/mono/face_search.cpp
   src/mono/face_alignment.cpp)
@@ -30,7 +31,10 @@ pkg_check_modules(APRILTAG REQUIRED apriltag)
 
 add_library(docking_perception_mono_core ${MONO_CORE_SOURCES})
 target_include_directories(docking_perception_mono_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR} ${APRILTAG_INCLUDE_DIRS})
-target_link_libraries(docking_perception_mono_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES} ${APRILTAG_LIBRARIES})
+# The settings (settings/mono_pose.yaml): the generated structs, validated and loaded by docking_settings.
+target_link_libraries(docking_perception_mono_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES} ${APRILTAG_LIBRARIES}
+  ${docking_settings_LIBRARIES})
+add_dependencies(docking_perception_mono_core ${PROJECT_NAME}_settings_headers)
 
 # Synthetic targets and views, shared by the tests and the benchmark.
 add_library(docking_perception_mono_synthetic STATIC test/mono/synthetic_scene.cpp)

@@ -8,10 +8,9 @@ target_link_libraries(docking_perception_target_print docking_perception_mono_co
 
 add_executable(make_target_print src/target_print/make_target_print_main.cpp)
 target_link_libraries(make_target_print docking_perception_target_print)
-# The mono_pose parameters from YAML without ROS: compare's reader (one copy of it).
+# The mono_pose settings from config/mono_pose_visible.yaml without ROS (docking_settings::shippedSettings).
 add_executable(check_target_print src/target_print/check_target_print_main.cpp)
-target_include_directories(check_target_print PRIVATE src/compare)
-target_link_libraries(check_target_print docking_perception_target_print docking_perception_compare)
+target_link_libraries(check_target_print docking_perception_target_print)
 install(TARGETS docking_perception_target_print make_target_print check_target_print
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
@@ -20,9 +19,7 @@ install(TARGETS docking_perception_target_print make_target_print check_target_p
 if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_target_print test/target_print/test_target_print.cpp)
   if(TARGET test_target_print)
-    target_include_directories(test_target_print PRIVATE src/compare)
-    target_link_libraries(test_target_print docking_perception_target_print docking_perception_compare
-      gtest_main)
+    target_link_libraries(test_target_print docking_perception_target_print gtest_main)
     target_compile_definitions(test_target_print PRIVATE
       TARGET_PRINT_CONFIG_DIR="${PROJECT_SOURCE_DIR}/../../config")
   endif()

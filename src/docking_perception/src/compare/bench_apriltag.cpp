@@ -28,7 +28,7 @@
 
 #include "docking_perception/mono/mono_pose_estimator.h"
 #include "error_stats.h"
-#include "mono_params_yaml.h"
+#include "docking_settings/yaml_loader.h"
 #include "sequence_io.h"
 #include "synthetic_tag_view.h"
 #include "tag_pose.h"
@@ -223,9 +223,7 @@ int main(int argc, char** argv) {
     if (wanted(options, kAprilTagStage)) stages.push_back(benchAprilTag(options, spec, frame));
     if (!options.mono_yaml.empty() && (wanted(options, kMonoFullStage) || wanted(options, kMonoTrackingStage))) {
       if (options.target_yaml.empty()) throw std::invalid_argument("--mono-params needs --target (the model)");
-      mono::MonoPoseParams params;
-      std::string error;
-      if (!cmp::loadMonoParams(options.mono_yaml, &params, &error)) throw std::invalid_argument(error);
+      const mono::MonoPoseParams params = docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(options.mono_yaml).core;
       const mono::TargetModel model = mono::TargetModel::loadFromYaml(options.target_yaml);
       if (wanted(options, kMonoFullStage))
         stages.push_back(benchMono(kMonoFullStage, model, frame, params, false, options.frames));

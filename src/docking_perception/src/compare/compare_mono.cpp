@@ -26,7 +26,7 @@
 #include "docking_perception/mono/mono_pose_estimator.h"
 #include "docking_perception/mono/velocity_estimators.h"
 #include "error_stats.h"
-#include "mono_params_yaml.h"
+#include "docking_settings/yaml_loader.h"
 #include "sequence_io.h"
 #include "tag_pose.h"
 
@@ -182,12 +182,9 @@ int main(int argc, char** argv) {
     std::vector<cv::Mat> images;
     for (const auto& f : truth) images.push_back(readGray(f.image_path));
 
-    dp::mono::MonoPoseParams params;
-    std::string error;
-    if (!cmp::loadMonoParams(mono_yaml, &params, &error)) {
-      std::cerr << error << "\n";
-      return 1;
-    }
+    // The shipped configuration (the declared defaults with the file's overrides, checked).
+    const dp::mono::MonoPoseParams params =
+        docking_settings::shippedSettings<dp::mono::MonoPoseNodeSettings>(mono_yaml).core;
     const dp::mono::TargetModel model = dp::mono::TargetModel::loadFromYaml(target_yaml);
 
     std::vector<double> range;
@@ -210,7 +207,7 @@ int main(int argc, char** argv) {
     bool first = true;
     for (const dp::mono::PoseSolverType solver : {dp::mono::PoseSolverType::kPaperFivePoint, dp::mono::PoseSolverType::kPnp}) {
       dp::mono::MonoPoseParams p = params;
-      p.solver = solver;
+      p.solver = dp::mono::toString(solver);
       dp::mono::MonoPoseEstimator estimator(model, seq.camera, p);
       std::vector<Outcome> out;
       for (std::size_t i = 0; i < truth.size(); ++i) {
@@ -231,6 +228,7 @@ int main(int argc, char** argv) {
 
     if (!tagged_dir.empty()) {
       const cmp::Sequence tagged = cmp::readSequence(tagged_dir);
+      std::string error;
       if (!cmp::sameTrajectory(seq, tagged, 1e-9, 1e-9, &error)) {
         std::cerr << "the tagged sequence is not the same trajectory: " << error << "\n";
         return 1;

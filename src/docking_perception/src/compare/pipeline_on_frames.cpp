@@ -25,7 +25,7 @@
 
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
-#include "mono_params_yaml.h"
+#include "docking_settings/yaml_loader.h"
 #include "synthetic_stereo.h"
 
 namespace dp = docking_perception;
@@ -131,12 +131,8 @@ int main(int argc, char** argv) {
     const char* mono_files[2] = {"/mono_pose_visible.yaml", "/mono_pose_ir.yaml"};
     const Rectifier* mono_rect[2] = {&left_rect, &ir_rect};
     for (int m = 0; m < 2; ++m) {
-      dp::mono::MonoPoseParams params;
-      std::string error;
-      if (!dp::compare::loadMonoParams(config + mono_files[m], &params, &error)) {
-        std::cerr << error << "\n";
-        return 1;
-      }
+      const dp::mono::MonoPoseParams params =
+          docking_settings::shippedSettings<dp::mono::MonoPoseNodeSettings>(config + mono_files[m]).core;
       mono[m] = std::make_unique<dp::mono::MonoPoseEstimator>(model, mono_rect[m]->intrinsics, params);
     }
 

@@ -10,7 +10,7 @@
 //
 // --set: override a key of the mono_pose YAML files (both modes) for experiments.
 //
-// --baseline: the behaviour before issue 11 (no half-resolution search, no keypoint grid, no consistency
+// --baseline: the behaviour before issue 11 (no half-resolution search, no blurred model, no consistency
 // checks, the solver's own covariance), for the "before" tables.
 //
 // Seeds: 100:40 is the tuning range, 500:40 the report range (never used for tuning).
@@ -25,8 +25,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "docking_perception/mono/mono_pose_param_keys.h"
-#include "mono_params_yaml.h"
+#include "docking_settings/yaml_loader.h"
 #include "mono_stress.h"
 
 namespace mono = docking_perception::mono;
@@ -77,10 +76,11 @@ int main(int argc, char** argv) {
   }
   mono::MonoPoseParams visible_params;
   mono::MonoPoseParams ir_params;
-  std::string error;
-  if (!docking_perception::compare::loadMonoParams(visible_yaml, &visible_params, &error) ||
-      !docking_perception::compare::loadMonoParams(ir_yaml, &ir_params, &error)) {
-    std::cerr << "stress_mono: " << error << "\n";
+  try {
+    visible_params = docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(visible_yaml).core;
+    ir_params = docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(ir_yaml).core;
+  } catch (const std::exception& e) {
+    std::cerr << "stress_mono: " << e.what() << "\n";
     return 1;
   }
   mono::PoseSolverType solver_type;
@@ -88,8 +88,8 @@ int main(int argc, char** argv) {
     std::cerr << "--solver must be pnp or paper_5point\n";
     return 2;
   }
-  visible_params.solver = solver_type;
-  ir_params.solver = solver_type;
+  visible_params.solver = solver;
+  ir_params.solver = solver;
   bool baseline = false;
   bool verbose = false;
   for (int i = 1; i < argc; ++i) verbose = verbose || std::string(argv[i]) == "--verbose";
@@ -97,13 +97,12 @@ int main(int argc, char** argv) {
   if (baseline) {
     for (mono::MonoPoseParams* p : {&visible_params, &ir_params}) {
       p->use_half_resolution = false;
-      p->features.keypoint_grid = 0;
       p->features.blurred_model_sigma_px = 0.0;
       p->consistency.min_inlier_spread = 0.0;
       p->consistency.min_appearance_ncc = -1.0;
       p->consistency.max_ambiguity_deg = 360.0;
       p->consistency.ambiguity_chi2 = 0.0;
-      p->consistency.blur_gain = 0.0;
+      p->consistency.covariance_blur_gain = 0.0;
       p->consistency.position_floor_fraction = 0.0;
       p->consistency.rotation_floor_deg = 0.0;
       p->consistency.max_dot_offset_factor = 1e6;
@@ -128,18 +127,19 @@ int main(int argc, char** argv) {
     const std::string value = assignment.substr(eq + 1);
     bool known = false;
     for (mono::MonoPoseParams* p : {&visible_params, &ir_params}) {
-      mono::visitMonoPoseParams(*p, [&](const char* name, auto* field) {
-        using Field = std::decay_t<decltype(*field)>;
+      mono::visitSettings(*p, [&](const docking_settings::SettingInfo&, const std::string& name, auto& field) {
+        using Field = std::decay_t<decltype(field)>;
         if (key != name) return;
         known = true;
-        if constexpr (std::is_same_v<Field, bool>) *field = value == "true" || value == "1";
-        else if constexpr (std::is_same_v<Field, int>) *field = std::stoi(value);
-        else if constexpr (std::is_same_v<Field, double>) *field = std::stod(value);
+        if constexpr (std::is_same_v<Field, bool>) field = value == "true" || value == "1";
+        else if constexpr (std::is_same_v<Field, int>) field = std::stoi(value);
+        else if constexpr (std::is_same_v<Field, double>) field = std::stod(value);
+        else if constexpr (std::is_same_v<Field, std::string>) field = value;
         else if constexpr (std::is_same_v<Field, std::vector<int>>) {
           // A comma-separated list ("" or "none": empty).
-          field->clear();
+          field.clear();
           std::stringstream list(value == "none" ? std::string() : value);
-          for (std::string item; std::getline(list, item, ',');) field->push_back(std::stoi(item));
+          for (std::string item; std::getline(list, item, ',');) field.push_back(std::stoi(item));
         } else known = false;
       });
     }
@@ -149,9 +149,10 @@ int main(int argc, char** argv) {
     }
   }
   for (const mono::MonoPoseParams* p : {&visible_params, &ir_params}) {
-    const std::string invalid = mono::validateParams(*p);
-    if (!invalid.empty()) {
-      std::cerr << "stress_mono: " << invalid << "\n";
+    try {
+      mono::validate(*p);
+    } catch (const std::invalid_argument& e) {
+      std::cerr << "stress_mono: " << e.what() << "\n";
       return 2;
     }
   }

@@ -1,4 +1,4 @@
-// Tests of the comparison tools: the sequence reader, the mono parameter loader, the tag texture and
+// Tests of the comparison tools: the sequence reader, the shipped mono settings they read, the tag texture and
 // AprilTag's pose carried into frame `target` on synthetic views with a known answer.
 #include <gtest/gtest.h>
 
@@ -8,13 +8,15 @@
 #include <fstream>
 #include <string>
 #include <unistd.h>
+#include <utility>
+#include <vector>
 
 #include <set>
 #include <yaml-cpp/yaml.h>
 
-#include "docking_perception/mono/mono_pose_param_keys.h"
+#include "docking_perception/mono/mono_pose_estimator.h"
+#include "docking_settings/yaml_loader.h"
 #include "error_stats.h"
-#include "mono_params_yaml.h"
 #include "sequence_io.h"
 #include "synthetic_tag_view.h"
 #include "tag_pose.h"
@@ -109,56 +111,36 @@ TEST(SequenceReader, NamesTheBadField) {
   EXPECT_THROW(cmp::readSequence(folder + "/missing"), cmp::SequenceError);
 }
 
-TEST(MonoParams, LoadsTheShippedFileAndNamesAMissingKey) {
-  mono::MonoPoseParams params;
-  std::string error;
-  ASSERT_TRUE(cmp::loadMonoParams(std::string(CONFIG_DIR) + "/mono_pose_visible.yaml", &params, &error)) << error;
-  EXPECT_EQ(params.mode, mono::MonoMode::kVisible);
+// The tools read config/mono_pose_<mode>.yaml as the node does: the declared defaults with the file's
+// overrides (docking_settings::shippedSettings). The IR file makes an IR estimator.
+TEST(MonoParams, ShippedFilesGiveEachInstanceItsMode) {
+  const auto visible =
+      docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(std::string(CONFIG_DIR) + "/mono_pose_visible.yaml");
+  const auto ir = docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(std::string(CONFIG_DIR) + "/mono_pose_ir.yaml");
+  EXPECT_EQ(mono::modeOf(visible.core), mono::MonoMode::kVisible);
+  EXPECT_EQ(mono::modeOf(ir.core), mono::MonoMode::kIr);
+  EXPECT_NO_THROW(mono::validate(visible.core));
+  EXPECT_NO_THROW(mono::validate(ir.core));
+}
+
+// A value its declaration refuses, a wrong type and a key nobody reads are refused, naming the key.
+TEST(MonoParams, AFileWithABadValueIsRefusedNamingTheKey) {
   const TempFolder temp("params");
-  const std::string& folder = temp.path;
-  std::ifstream in(std::string(CONFIG_DIR) + "/mono_pose_visible.yaml");
-  std::ofstream out(folder + "/p.yaml");
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind("min_inliers:", 0) != 0) out << line << "\n";
-  out.close();
-  EXPECT_FALSE(cmp::loadMonoParams(folder + "/p.yaml", &params, &error));
-  EXPECT_NE(error.find("min_inliers"), std::string::npos) << error;
-}
-
-// Every key of the shipped files is one the node reads (the parameter list, plus the strings the node
-// reads itself), and every listed parameter is in both files: a key added on one side only fails here.
-TEST(MonoParams, ShippedFilesHoldExactlyTheListedKeys) {
-  std::set<std::string> listed = {"mode", "target_yaml", "solver", "velocity_method", "publish_debug_image"};
-  mono::MonoPoseParams params;
-  mono::visitMonoPoseParams(params, [&](const char* key, auto*) { listed.insert(key); });
-  mono::FarThrottleSettings far;
-  mono::visitFarThrottleSettings(far, [&](const char* key, double*) { listed.insert(key); });
-  for (const std::string file : {"mono_pose_visible.yaml", "mono_pose_ir.yaml"}) {
-    const YAML::Node root = YAML::LoadFile(std::string(CONFIG_DIR) + "/" + file);
-    std::set<std::string> in_file;
-    for (const auto& entry : root) in_file.insert(entry.first.as<std::string>());
-    for (const auto& key : in_file) EXPECT_TRUE(listed.count(key)) << file << ": '" << key << "' is read by nobody";
-    for (const auto& key : listed) EXPECT_TRUE(in_file.count(key)) << file << ": '" << key << "' is missing";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"far_throttle_max_rate_hz: -1.0", "far_throttle_max_rate_hz"},
+      {"min_inliers: many", "min_inliers"},
+      {"led_threshold: 300", "led_threshold"},
+      {"no_such_setting: 1", "no_such_setting"}};
+  for (const auto& [line, key] : cases) {
+    const std::string path = temp.path + "/p.yaml";
+    std::ofstream(path) << line << "\n";
+    try {
+      docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(path);
+      ADD_FAILURE() << line << ": accepted";
+    } catch (const docking_settings::ConfigError& e) {
+      EXPECT_NE(e.key().find(key), std::string::npos) << e.what();
+    }
   }
-}
-
-// The far throttle's settings: zeros turn it off; a negative or non-finite value, or a zero age, is refused
-// naming the key.
-TEST(MonoParams, FarThrottleSettingsAreChecked) {
-  mono::FarThrottleSettings ok;
-  ok.far.range_m = 2.6;
-  ok.max_rate_hz = 10.0;
-  EXPECT_EQ(mono::validateFarThrottle(ok), "");
-  EXPECT_EQ(mono::validateFarThrottle(mono::FarThrottleSettings()), "");  // off
-  mono::FarThrottleSettings negative = ok;
-  negative.max_rate_hz = -1.0;
-  EXPECT_EQ(mono::validateFarThrottle(negative).rfind("far_throttle_max_rate_hz", 0), 0u);
-  mono::FarThrottleSettings not_finite = ok;
-  not_finite.far.range_m = std::nan("");
-  EXPECT_EQ(mono::validateFarThrottle(not_finite).rfind("far_throttle_beyond_range_m", 0), 0u);
-  mono::FarThrottleSettings no_age = ok;
-  no_age.far.max_fused_age_s = 0.0;
-  EXPECT_EQ(mono::validateFarThrottle(no_age), "far_throttle_max_fused_age_s must be > 0");
 }
 
 TEST(Stats, Percentile) {

@@ -6,6 +6,65 @@
 
 namespace docking_perception {
 namespace mono {
+namespace {
+
+// The search disc is at least this wide (a far dot is a few pixels), and the refined centre may move at
+// most one dot radius (+1 px) from the prediction: farther, it is something else.
+constexpr double kMinSearchRadiusPx = 3.0;
+constexpr double kMaxShiftInRadii = 1.0;
+
+// The pixels of the disc of `radius` around `centre` (in the image: checked by the caller).
+template <typename Visit>
+void forDisc(const cv::Mat& gray, const Eigen::Vector2d& centre, double radius, const cv::Rect& box, Visit&& visit) {
+  const double r2 = radius * radius;
+  for (int y = box.y; y < box.y + box.height; ++y) {
+    const uint8_t* row = gray.ptr<uint8_t>(y);
+    for (int x = box.x; x < box.x + box.width; ++x) {
+      const double dx = x - centre.x();
+      const double dy = y - centre.y();
+      if (dx * dx + dy * dy <= r2) visit(x, y, row[x]);
+    }
+  }
+}
+
+// One step: the centroid of the disc's pixels darker than the midpoint of its background (80th percentile)
+// and its darkest pixel, each weighted by how much darker, becomes *current. The reason when it cannot.
+const char* recentre(const cv::Mat& gray, double search_radius, double min_contrast, Eigen::Vector2d* current) {
+  const int x0 = static_cast<int>(std::floor(current->x() - search_radius));
+  const int y0 = static_cast<int>(std::floor(current->y() - search_radius));
+  const int x1 = static_cast<int>(std::ceil(current->x() + search_radius));
+  const int y1 = static_cast<int>(std::ceil(current->y() + search_radius));
+  if (x0 < 0 || y0 < 0 || x1 >= gray.cols || y1 >= gray.rows) return "marker search disc leaves the image";
+  const cv::Rect box(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+  std::vector<uint8_t> values;
+  uint8_t darkest = 255;
+  forDisc(gray, *current, search_radius, box, [&](int, int, uint8_t value) {
+    values.push_back(value);
+    darkest = std::min(darkest, value);
+  });
+  if (values.size() < 5) return "marker search disc is empty";
+  // The dot covers about 1 / factor^2 (~45 %) of the disc: the 80th percentile is background.
+  const size_t k = values.size() * 4 / 5;
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());
+  const double background = values[k];
+  if (background - darkest < min_contrast) return "marker has too little contrast";
+  const double threshold = 0.5 * (background + darkest);
+  double sum_w = 0.0;
+  double sum_x = 0.0;
+  double sum_y = 0.0;
+  forDisc(gray, *current, search_radius, box, [&](int x, int y, uint8_t value) {
+    const double weight = threshold - value;
+    if (weight <= 0.0) return;
+    sum_w += weight;
+    sum_x += weight * x;
+    sum_y += weight * y;
+  });
+  if (sum_w <= 0.0) return "marker not found";
+  *current = {sum_x / sum_w, sum_y / sum_w};
+  return nullptr;
+}
+
+}  // namespace
 
 bool DarkDotLocator::locate(const cv::Mat& gray, const Eigen::Vector2d& predicted, double radius_px,
                             Eigen::Vector2d* centre, std::string* reason) const {
@@ -13,67 +72,16 @@ bool DarkDotLocator::locate(const cv::Mat& gray, const Eigen::Vector2d& predicte
     if (reason) *reason = "image is not 8-bit gray";
     return false;
   }
-  const double search_radius = std::max(params_.min_search_radius_px, params_.search_radius_factor * radius_px);
+  const double search_radius = std::max(kMinSearchRadiusPx, params_.search_radius_factor * radius_px);
   Eigen::Vector2d current = predicted;
-  std::vector<uint8_t> values;
   for (int iteration = 0; iteration < 2; ++iteration) {
-    const int x0 = static_cast<int>(std::floor(current.x() - search_radius));
-    const int y0 = static_cast<int>(std::floor(current.y() - search_radius));
-    const int x1 = static_cast<int>(std::ceil(current.x() + search_radius));
-    const int y1 = static_cast<int>(std::ceil(current.y() + search_radius));
-    if (x0 < 0 || y0 < 0 || x1 >= gray.cols || y1 >= gray.rows) {
-      if (reason) *reason = "marker search disc leaves the image";
+    const char* problem = recentre(gray, search_radius, params_.min_contrast, &current);
+    if (problem != nullptr) {
+      if (reason) *reason = problem;
       return false;
     }
-    const double r2 = search_radius * search_radius;
-    values.clear();
-    uint8_t darkest = 255;
-    for (int y = y0; y <= y1; ++y) {
-      const uint8_t* row = gray.ptr<uint8_t>(y);
-      for (int x = x0; x <= x1; ++x) {
-        const double dx = x - current.x();
-        const double dy = y - current.y();
-        if (dx * dx + dy * dy > r2) continue;
-        values.push_back(row[x]);
-        darkest = std::min(darkest, row[x]);
-      }
-    }
-    if (values.size() < 5) {
-      if (reason) *reason = "marker search disc is empty";
-      return false;
-    }
-    // The dot covers about 1 / factor^2 (~45 %) of the disc: the 80th percentile is background.
-    const size_t k = values.size() * 4 / 5;
-    std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());
-    const double background = values[k];
-    if (background - darkest < params_.min_contrast) {
-      if (reason) *reason = "marker has too little contrast";
-      return false;
-    }
-    const double threshold = 0.5 * (background + darkest);
-    double sum_w = 0.0;
-    double sum_x = 0.0;
-    double sum_y = 0.0;
-    for (int y = y0; y <= y1; ++y) {
-      const uint8_t* row = gray.ptr<uint8_t>(y);
-      for (int x = x0; x <= x1; ++x) {
-        const double dx = x - current.x();
-        const double dy = y - current.y();
-        if (dx * dx + dy * dy > r2) continue;
-        const double weight = threshold - row[x];
-        if (weight <= 0.0) continue;
-        sum_w += weight;
-        sum_x += weight * x;
-        sum_y += weight * y;
-      }
-    }
-    if (sum_w <= 0.0) {
-      if (reason) *reason = "marker not found";
-      return false;
-    }
-    current = {sum_x / sum_w, sum_y / sum_w};
   }
-  if ((current - predicted).norm() > params_.max_shift_factor * std::max(radius_px, 1.0) + 1.0) {
+  if ((current - predicted).norm() > kMaxShiftInRadii * std::max(radius_px, 1.0) + 1.0) {
     if (reason) *reason = "marker centre far from its predicted position";
     return false;
   }

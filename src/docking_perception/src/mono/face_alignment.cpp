@@ -26,6 +26,14 @@ constexpr double kMaxAreaChange = 3.0;
 constexpr double kResidualCorrelationPixels = 4.0;
 constexpr int kEccGaussianSize = 5;
 constexpr double kEccEpsilon = 1e-4;
+// The working scale: the image is shrunk until the face is at most this wide (the CPU a frame), and ECC
+// runs coarse to fine over this many levels (each half the previous), this many iterations a level.
+constexpr double kWorkingFaceWidthPx = 128.0;
+constexpr int kPyramidLevels = 3;
+constexpr int kMaxIterations = 25;
+// The aligned face goes to PnP as this grid of points.
+constexpr int kGridColumns = 8;
+constexpr int kGridRows = 6;
 
 cv::Point2d apply(const cv::Matx33d& h, const cv::Point2d& p) {
   const cv::Vec3d q = h * cv::Vec3d(p.x, p.y, 1.0);
@@ -167,15 +175,6 @@ double eccAtLevel(const cv::Mat& templ, const cv::Mat& image, const cv::TermCrit
 
 }  // namespace
 
-std::string validateDirectAlignmentParams(const DirectAlignmentParams& p) {
-  if (!(p.min_correlation > 0.0 && p.min_correlation < 1.0)) return "direct_min_correlation must be in (0, 1)";
-  if (!(p.working_face_width_px >= 48.0 && p.working_face_width_px <= 1024.0)) return "direct_working_face_width_px must be 48..1024";
-  if (p.pyramid_levels < 1 || p.pyramid_levels > 5) return "direct_pyramid_levels must be 1..5";
-  if (p.max_iterations < 1 || p.max_iterations > 200) return "direct_max_iterations must be 1..200";
-  if (p.grid_columns < 3 || p.grid_rows < 3 || p.grid_columns > 32 || p.grid_rows > 32) return "direct_grid_columns and direct_grid_rows must be 3..32";
-  return "";
-}
-
 cv::Matx33d faceHomography(const Eigen::Matrix3d& texture_to_face, const CameraIntrinsics& camera,
                            const PoseWithCovariance& pose) {
   // A face point (0, y, z) lands at K (y r1 + z r2 + t); textureToFace gives (y, z, 1) from (u, v, 1).
@@ -202,7 +201,7 @@ DirectAlignment DirectFaceAligner::align(const cv::Mat& gray, const CameraIntrin
 }
 
 // The working frames of one alignment: the image window around the prior, shrunk until the face is at
-// most working_face_width_px wide, and the texture resampled to the face's size there.
+// most kWorkingFaceWidthPx wide, and the texture resampled to the face's size there.
 struct DirectFaceAligner::Frames {
   cv::Mat image;                 // CV_32F
   cv::Mat templ;                 // CV_32F
@@ -232,7 +231,7 @@ bool DirectFaceAligner::makeFrames(const cv::Mat& gray, const cv::Matx33d& initi
     *why = "face mostly outside the image at the prior";
     return false;
   }
-  frames->scale = std::max(1.0, face_width / params_.working_face_width_px);
+  frames->scale = std::max(1.0, face_width / kWorkingFaceWidthPx);
   const cv::Size work_size(std::max(1, static_cast<int>(std::lround(window.width / frames->scale))),
                            std::max(1, static_cast<int>(std::lround(window.height / frames->scale))));
   cv::Mat work;
@@ -257,7 +256,7 @@ DirectAlignment DirectFaceAligner::align(const cv::Mat& gray, const cv::Matx33d&
   if (!makeFrames(gray, initial, &frames, &result.status)) return result;
   result.image_scale = frames.scale;
   // Levels: as many as asked while the template stays wide enough to align on.
-  int levels = params_.pyramid_levels;
+  int levels = kPyramidLevels;
   while (levels > 1 && frames.templ.cols / std::pow(2.0, levels - 1) < kMinTemplateWidthPx) --levels;
   const int finest = coarse_only && levels > 1 ? 1 : 0;
   std::vector<cv::Mat> templ_pyramid, image_pyramid;
@@ -269,7 +268,7 @@ DirectAlignment DirectFaceAligner::align(const cv::Mat& gray, const cv::Matx33d&
   const cv::Matx33d up(coarsest, 0.0, 0.0, 0.0, coarsest, 0.0, 0.0, 0.0, 1.0);
   cv::Matx33d warp = down * frames.image_to_work * initial * frames.texture_to_templ.inv() * up;
   const cv::Matx33d finer(2.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 1.0);
-  const cv::TermCriteria stop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, params_.max_iterations, kEccEpsilon);
+  const cv::TermCriteria stop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, kMaxIterations, kEccEpsilon);
   warp = warpAtBestShift(templ_pyramid[levels - 1], image_pyramid[levels - 1], warp);
   for (int level = levels - 1; level >= finest; --level) {
     try {
@@ -310,7 +309,7 @@ DirectAlignment DirectFaceAligner::finish(const cv::Matx33d& initial, const Fram
     result.status = "direct alignment correlation " + std::to_string(result.correlation) + " below direct_min_correlation";
     return result;
   }
-  const int grid_points = params_.grid_columns * params_.grid_rows;
+  const int grid_points = kGridColumns * kGridRows;
   const double sigma_work = fitPixelSigma(templ, image, warp, grid_points);
   // Template pixels are working pixels at the face's scale; working pixels are `scale` image pixels.
   const double level_scale = double(frames.templ.cols) / templ.cols;
@@ -319,10 +318,9 @@ DirectAlignment DirectFaceAligner::finish(const cv::Matx33d& initial, const Fram
     result.status = "direct alignment: no texture where the face is";
     return result;
   }
-  for (int r = 0; r < params_.grid_rows; ++r) {
-    for (int c = 0; c < params_.grid_columns; ++c) {
-      const cv::Point2d t((c + 0.5) * texture_.cols / params_.grid_columns - 0.5,
-                          (r + 0.5) * texture_.rows / params_.grid_rows - 0.5);
+  for (int r = 0; r < kGridRows; ++r) {
+    for (int c = 0; c < kGridColumns; ++c) {
+      const cv::Point2d t((c + 0.5) * texture_.cols / kGridColumns - 0.5, (r + 0.5) * texture_.rows / kGridRows - 0.5);
       result.texture_points.emplace_back(t);
       result.image_points.emplace_back(apply(result.homography, t));
     }

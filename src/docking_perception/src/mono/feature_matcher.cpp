@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <map>
 #include <memory>
 #include <mutex>
 #include <utility>
@@ -27,15 +26,18 @@ namespace {
 // pattern for 64 scales x 1024 rotations, 46 MB (measured), and the visible and IR mono_pose nodelets
 // in one perception process would otherwise hold one each. Sharing is safe: OpenCV's BRISK detect and
 // compute are const and keep their buffers on the stack. Held weakly: the last matcher frees it.
-cv::Ptr<cv::BRISK> sharedBrisk(int threshold, int octaves) {
+cv::Ptr<cv::BRISK> sharedBrisk() {
+  // Only BRISK's descriptors are used (FAST detects): its detector's threshold and octaves, OpenCV's
+  // defaults, play no part.
+  constexpr int kAgastThreshold = 30;
+  constexpr int kOctaves = 3;
   static std::mutex mutex;
-  static std::map<std::pair<int, int>, std::weak_ptr<cv::BRISK>> instances;
+  static std::weak_ptr<cv::BRISK> instance;
   const std::lock_guard<std::mutex> lock(mutex);
-  std::weak_ptr<cv::BRISK>& slot = instances[{threshold, octaves}];
-  std::shared_ptr<cv::BRISK> brisk = slot.lock();
+  std::shared_ptr<cv::BRISK> brisk = instance.lock();
   if (!brisk) {
-    brisk = cv::BRISK::create(threshold, octaves);
-    slot = brisk;
+    brisk = cv::BRISK::create(kAgastThreshold, kOctaves);
+    instance = brisk;
   }
   return cv::Ptr<cv::BRISK>(brisk);
 }
@@ -403,10 +405,7 @@ bool renderModelPatch(const cv::Mat& model, const cv::Matx33d& image_to_model, c
 FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(params) {}
 
 void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
-  const bool rebuild = params.brisk_threshold != params_.brisk_threshold ||
-                       params.brisk_octaves != params_.brisk_octaves ||
-                       params.use_brisk_detector != params_.use_brisk_detector ||
-                       params.upright_descriptors != params_.upright_descriptors ||
+  const bool rebuild = params.upright_descriptors != params_.upright_descriptors ||
                        params.fast_threshold != params_.fast_threshold ||
                        params.max_model_keypoints_per_level != params_.max_model_keypoints_per_level ||
                        params.model_widths_px != params_.model_widths_px ||
@@ -419,40 +418,10 @@ void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
 
 void FeatureMatcher::detect(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, int max_keypoints) const {
   keypoints->clear();
-  if (params_.use_brisk_detector) {
-    brisk_->detect(image, *keypoints);
-  } else {
-    cv::FAST(image, *keypoints, params_.fast_threshold, true);
+  cv::FAST(image, *keypoints, params_.fast_threshold, true);
+  if (max_keypoints > 0 && static_cast<int>(keypoints->size()) > max_keypoints) {
+    cv::KeyPointsFilter::retainBest(*keypoints, max_keypoints);
   }
-  if (max_keypoints <= 0 || static_cast<int>(keypoints->size()) <= max_keypoints) return;
-  const int grid = params_.keypoint_grid;
-  if (grid > 1) {
-    // The strongest of each cell (an equal share of the budget), then the strongest overall if the
-    // shares of sparse cells left room.
-    std::vector<std::vector<cv::KeyPoint>> cells(static_cast<size_t>(grid * grid));
-    for (const cv::KeyPoint& kp : *keypoints) {
-      const int cx = std::min(grid - 1, static_cast<int>(kp.pt.x * grid / image.cols));
-      const int cy = std::min(grid - 1, static_cast<int>(kp.pt.y * grid / image.rows));
-      cells[static_cast<size_t>(cy * grid + cx)].push_back(kp);
-    }
-    const int share = std::max(1, max_keypoints / (grid * grid));
-    std::vector<cv::KeyPoint> kept;
-    std::vector<cv::KeyPoint> rest;
-    for (std::vector<cv::KeyPoint>& cell : cells) {
-      std::sort(cell.begin(), cell.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
-      const size_t n = std::min(cell.size(), static_cast<size_t>(share));
-      kept.insert(kept.end(), cell.begin(), cell.begin() + static_cast<std::ptrdiff_t>(n));
-      rest.insert(rest.end(), cell.begin() + static_cast<std::ptrdiff_t>(n), cell.end());
-    }
-    const int room = max_keypoints - static_cast<int>(kept.size());
-    if (room > 0 && !rest.empty()) {
-      if (static_cast<int>(rest.size()) > room) cv::KeyPointsFilter::retainBest(rest, room);
-      kept.insert(kept.end(), rest.begin(), rest.end());
-    }
-    *keypoints = kept;
-    return;
-  }
-  cv::KeyPointsFilter::retainBest(*keypoints, max_keypoints);
 }
 
 void FeatureMatcher::describe(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors,
@@ -475,9 +444,7 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
     if (reason) *reason = "the model texture must be a non-empty 8-bit gray image";
     return false;
   }
-  brisk_ = params_.use_brisk_detector || !params_.upright_descriptors || hasBlurredModel()
-               ? sharedBrisk(params_.brisk_threshold, params_.brisk_octaves)
-               : cv::Ptr<cv::BRISK>();
+  brisk_ = !params_.upright_descriptors || hasBlurredModel() ? sharedBrisk() : cv::Ptr<cv::BRISK>();
   std::vector<int> widths = params_.model_widths_px;
   std::sort(widths.rbegin(), widths.rend());
   // The sharp levels, then (blurred_model_sigma_px > 0) the same widths blurred: the descriptors a
@@ -486,44 +453,60 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
   std::vector<ModelSet> sets = {ModelSet::kSharp};
   if (hasBlurredModel()) sets.push_back(ModelSet::kBlurred);
   if (hasRowSmearedModel()) sets.push_back(ModelSet::kRowSmeared);
-  for (const ModelSet set : sets)
-  for (const int width : widths) {
-    if (width <= 16) continue;
-    ModelLevel level;
-    level.set = set;
-    level.width_px = width;
-    level.scale = static_cast<double>(width) / texture_gray.cols;
-    if (std::abs(level.scale - 1.0) < 1e-3) {
-      level.image = texture_gray;
-    } else {
-      cv::resize(texture_gray, level.image, cv::Size(), level.scale, level.scale,
-                 level.scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+  for (const ModelSet set : sets) {
+    for (const int width : widths) {
+      if (width > 16) addModelLevel(texture_gray, set, width);
     }
-    if (set != ModelSet::kSharp) {
-      cv::Mat blurred;
-      cv::GaussianBlur(level.image, blurred, cv::Size(0, 0), params_.blurred_model_sigma_px);
-      level.image = blurred;
-    }
-    if (set == ModelSet::kRowSmeared) {
-      cv::Mat smeared;
-      cv::filter2D(level.image, smeared, -1, linearMotionKernel(params_.search_row_smear_px, 0.0), cv::Point(-1, -1),
-                   0, cv::BORDER_REPLICATE);
-      level.image = smeared;
-    }
-    std::vector<cv::KeyPoint> keypoints;
-    cv::Mat descriptors;
-    detect(level.image, &keypoints, params_.max_model_keypoints_per_level);
-    describe(level.image, &keypoints, &descriptors, level.set != ModelSet::kSharp);
-    level.first_row = model_descriptors_.rows;
-    level.row_count = descriptors.rows;
-    for (const cv::KeyPoint& kp : keypoints) {
-      // Back to full-texture pixels (pixel centres at integers in both).
-      model_points_.emplace_back(static_cast<float>((kp.pt.x + 0.5) / level.scale - 0.5),
-                                 static_cast<float>((kp.pt.y + 0.5) / level.scale - 0.5));
-    }
-    if (!descriptors.empty()) model_descriptors_.push_back(descriptors);
-    levels_.push_back(level);
   }
+  addRowSmearedLevels();
+  if (static_cast<int>(model_points_.size()) < params_.min_inliers) {
+    if (reason) {
+      *reason = "the model texture gives only " + std::to_string(model_points_.size()) +
+                " keypoints (need at least min_inliers = " + std::to_string(params_.min_inliers) + ")";
+    }
+    return false;
+  }
+  return true;
+}
+
+void FeatureMatcher::addModelLevel(const cv::Mat& texture_gray, ModelSet set, int width) {
+  ModelLevel level;
+  level.set = set;
+  level.width_px = width;
+  level.scale = static_cast<double>(width) / texture_gray.cols;
+  if (std::abs(level.scale - 1.0) < 1e-3) {
+    level.image = texture_gray;
+  } else {
+    cv::resize(texture_gray, level.image, cv::Size(), level.scale, level.scale,
+               level.scale < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR);
+  }
+  if (set != ModelSet::kSharp) {
+    cv::Mat blurred;
+    cv::GaussianBlur(level.image, blurred, cv::Size(0, 0), params_.blurred_model_sigma_px);
+    level.image = blurred;
+  }
+  if (set == ModelSet::kRowSmeared) {
+    cv::Mat smeared;
+    cv::filter2D(level.image, smeared, -1, linearMotionKernel(params_.search_row_smear_px, 0.0), cv::Point(-1, -1), 0,
+                 cv::BORDER_REPLICATE);
+    level.image = smeared;
+  }
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  detect(level.image, &keypoints, params_.max_model_keypoints_per_level);
+  describe(level.image, &keypoints, &descriptors, level.set != ModelSet::kSharp);
+  level.first_row = model_descriptors_.rows;
+  level.row_count = descriptors.rows;
+  for (const cv::KeyPoint& kp : keypoints) {
+    // Back to full-texture pixels (pixel centres at integers in both).
+    model_points_.emplace_back(static_cast<float>((kp.pt.x + 0.5) / level.scale - 0.5),
+                               static_cast<float>((kp.pt.y + 0.5) / level.scale - 0.5));
+  }
+  if (!descriptors.empty()) model_descriptors_.push_back(descriptors);
+  levels_.push_back(level);
+}
+
+void FeatureMatcher::addRowSmearedLevels() {
   // The sharp levels smeared along their rows: the level nearest the face's width has about the image's
   // scale, so a smear in level pixels is about the same in image pixels.
   for (const int smear : params_.refinement_row_smears_px) {
@@ -539,16 +522,7 @@ bool FeatureMatcher::buildModel(const cv::Mat& texture_gray, std::string* reason
       smeared_levels_.push_back(level);
     }
   }
-  if (static_cast<int>(model_points_.size()) < params_.min_inliers) {
-    if (reason) {
-      *reason = "the model texture gives only " + std::to_string(model_points_.size()) +
-                " keypoints (need at least min_inliers = " + std::to_string(params_.min_inliers) + ")";
-    }
-    return false;
-  }
-  return true;
 }
-
 void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   if (levels_.empty()) return;
   // Candidates: the inliers, plus the model corners of the level nearest the face's apparent size
@@ -566,13 +540,9 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
     }
   }
   match->refine_candidates = static_cast<int>(candidates.size());
-  cv::Matx33d drawn_at = match->homography;
+  const cv::Matx33d drawn_at = match->homography;
   if (!refinePass(gray, candidates, match)) return;
   match->first_pass_kept = static_cast<int>(match->inlier_image_points.size());
-  for (int pass = 1; pass < params_.refine_passes; ++pass) {
-    drawn_at = match->homography;
-    if (!refineKeptAgain(gray, 0.0, match)) return;
-  }
   if (params_.refine_again_move_px > 0.0 &&
       largestCornerMove(drawn_at, match->homography) > params_.refine_again_move_px) {
     // Kept only when its points still span most of what the first pass's did: on a small blurred face (2 m)
@@ -718,40 +688,7 @@ bool FeatureMatcher::refinePass(const cv::Mat& gray, const std::vector<cv::Point
   const double apparent_width = 0.5 * (cv::norm(outline[1] - outline[0]) + cv::norm(outline[2] - outline[3]));
   const cv::Rect face_box = cv::boundingRect(outline) & cv::Rect(0, 0, gray.cols, gray.rows);
   if (face_box.area() <= 0) return false;
-  // A sharp patch correlated with a blurred image peaks off the point, each texture detail its own way,
-  // and those offsets do not cancel over the face (under 2 px of defocus at 1.4 m the tilt was 1.7 deg
-  // off); a blurred patch correlated with a sharp image does the same. The set (sharp or blurred model)
-  // whose patches match the image better gives the points.
-  RefinedPoints refined =
-      refineAgainst(gray, refinementLevel(apparent_width, ModelSet::kSharp), candidates, match->homography, face_box);
-  if (params_.blur_matched_refinement && hasBlurredModel()) {
-    RefinedPoints blurred =
-        refineAgainst(gray, refinementLevel(apparent_width, ModelSet::kBlurred), candidates, match->homography, face_box);
-    // Near sharp faces the blurred patches may correlate as well or a little better and still locate the
-    // points less precisely (their peaks are broader): they must win clearly. 0.05 kept every sharp
-    // condition of the stress harness's tuning seeds as it was (seeds 100-139; docs/PERFORMANCE.md).
-    // The correlation is averaged over every candidate (a point dropped counts 0): over the points each
-    // kept, the sharp patches on a blurred face keep only the few that still correlate, and correlate
-    // well, and won at the exact homography (half the points, 0.52 px off, against 0.15 px).
-    constexpr double kBlurredRefinementMinGain = 0.05;
-    auto per_candidate = [&candidates](const RefinedPoints& points) {
-      return points.mean_correlation * static_cast<double>(points.image_points.size()) /
-             static_cast<double>(std::max<size_t>(1, candidates.size()));
-    };
-    if (static_cast<int>(blurred.image_points.size()) >= params_.min_inliers &&
-        per_candidate(blurred) > per_candidate(refined) + kBlurredRefinementMinGain) {
-      refined = std::move(blurred);
-      match->refined_with_blurred_model = true;
-      // A blurred image: its blur may be a smear along the rows rather than round.
-      int smear_px = 0;
-      RefinedPoints smeared =
-          refineAgainstRowSmears(gray, apparent_width, candidates, match->homography, face_box, refined, &smear_px);
-      if (smear_px > 0) {
-        refined = std::move(smeared);
-        match->refined_with_row_smear_px = smear_px;
-      }
-    }
-  }
+  const RefinedPoints refined = refineAgainstBestModel(gray, apparent_width, candidates, face_box, match);
   const std::vector<cv::Point2f>& texture_points = refined.texture_points;
   const std::vector<cv::Point2f>& image_points = refined.image_points;
   if (static_cast<int>(image_points.size()) < params_.min_inliers) return false;  // keep the unrefined ones
@@ -774,50 +711,110 @@ bool FeatureMatcher::refinePass(const cv::Mat& gray, const std::vector<cv::Point
   return true;
 }
 
+FeatureMatcher::RefinedPoints FeatureMatcher::refineAgainstBestModel(const cv::Mat& gray, double apparent_width,
+                                                                     const std::vector<cv::Point2f>& candidates,
+                                                                     const cv::Rect& face_box, FaceMatch* match) const {
+  // A sharp patch correlated with a blurred image peaks off the point, each texture detail its own way,
+  // and those offsets do not cancel over the face (under 2 px of defocus at 1.4 m the tilt was 1.7 deg
+  // off); a blurred patch correlated with a sharp image does the same. The set (sharp or blurred model)
+  // whose patches match the image better gives the points.
+  RefinedPoints refined =
+      refineAgainst(gray, refinementLevel(apparent_width, ModelSet::kSharp), candidates, match->homography, face_box);
+  if (!params_.blur_matched_refinement || !hasBlurredModel()) return refined;
+  RefinedPoints blurred =
+      refineAgainst(gray, refinementLevel(apparent_width, ModelSet::kBlurred), candidates, match->homography, face_box);
+  // Near sharp faces the blurred patches may correlate as well or a little better and still locate the
+  // points less precisely (their peaks are broader): they must win clearly. 0.05 kept every sharp
+  // condition of the stress harness's tuning seeds as it was (seeds 100-139; docs/PERFORMANCE.md).
+  // The correlation is averaged over every candidate (a point dropped counts 0): over the points each
+  // kept, the sharp patches on a blurred face keep only the few that still correlate, and correlate
+  // well, and won at the exact homography (half the points, 0.52 px off, against 0.15 px).
+  constexpr double kBlurredRefinementMinGain = 0.05;
+  auto per_candidate = [&candidates](const RefinedPoints& points) {
+    return points.mean_correlation * static_cast<double>(points.image_points.size()) /
+           static_cast<double>(std::max<size_t>(1, candidates.size()));
+  };
+  if (static_cast<int>(blurred.image_points.size()) < params_.min_inliers ||
+      !(per_candidate(blurred) > per_candidate(refined) + kBlurredRefinementMinGain)) {
+    return refined;
+  }
+  match->refined_with_blurred_model = true;
+  // A blurred image: its blur may be a smear along the rows rather than round.
+  int smear_px = 0;
+  RefinedPoints smeared =
+      refineAgainstRowSmears(gray, apparent_width, candidates, match->homography, face_box, blurred, &smear_px);
+  if (smear_px <= 0) return blurred;
+  match->refined_with_row_smear_px = smear_px;
+  return smeared;
+}
 FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, double expected_face_width_px,
                                 int pyramid_level, ModelSet model_set) const {
   FaceMatch result;
-  if (model_descriptors_.empty()) {
-    result.status = "no model features";
-    return result;
-  }
-  if (gray.empty() || gray.type() != CV_8UC1) {
-    result.status = "image is not 8-bit gray";
-    return result;
-  }
-  const cv::Rect full(0, 0, gray.cols, gray.rows);
-  const cv::Rect roi = roi_in.area() > 0 ? (roi_in & full) : full;
-  if (roi.width < 16 || roi.height < 16) {
-    result.status = "search region too small";
-    return result;
-  }
-  std::vector<cv::KeyPoint> keypoints;
+  const cv::Rect roi = searchRegion(gray, roi_in, &result.status);
+  if (!result.status.empty()) return result;
   const ModelSet set = hasModelSet(model_set) ? model_set : ModelSet::kSharp;
-  const bool use_blurred = set != ModelSet::kSharp;
   result.model_set = set;
-  // BRISK's descriptor code mis-reads sub-matrix views (measured: almost no matches on a region view,
-  // normal matches on its copy), so it gets a continuous copy; FAST and the upright descriptor read
-  // the view itself.
-  cv::Mat view = roi == full || (params_.upright_descriptors && !use_blurred) ? gray(roi) : gray(roi).clone();
   const bool half = pyramid_level > 0;
   result.pyramid_level = half ? 1 : 0;
-  if (half) {
-    cv::pyrDown(view, view);
-    expected_face_width_px *= 0.5;
-  }
-  detect(view, &keypoints, params_.max_image_keypoints);
+  std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
-  describe(view, &keypoints, &descriptors, use_blurred);
+  describeRegion(gray, roi, half, set != ModelSet::kSharp, &keypoints, &descriptors);
   result.keypoints = static_cast<int>(keypoints.size());
   if (keypoints.size() < 4) {
     result.status = "too few image keypoints (" + std::to_string(keypoints.size()) + ")";
     return result;
   }
+  std::vector<cv::Point2f> texture_points;
+  std::vector<cv::Point2f> image_points;
+  const ModelRows rows = modelRows(set, half ? 0.5 * expected_face_width_px : expected_face_width_px);
+  ratioTestMatches(descriptors, keypoints, rows, half, roi.tl(), &texture_points, &image_points);
+  result.matches = static_cast<int>(image_points.size());
+  result.matched_image_points = image_points;
+  if (result.matches < params_.min_inliers) {
+    result.status = "too few matches (" + std::to_string(result.matches) + " < " +
+                    std::to_string(params_.min_inliers) + ")";
+    return result;
+  }
+  if (!fitHomography(texture_points, image_points, half, &result)) return result;
+  const std::vector<cv::Point2f> corners = textureCorners();
+  cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
+  result.status = outlineProblem(result.face_outline);
+  if (!result.status.empty()) return result;
+  if (params_.refine_matches) {
+    refine(gray, &result);
+    cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
+  }
+  result.found = true;
+  return result;
+}
 
-  // Model rows to search: the levels of the requested set (sharp / blurred), all of them or those near
-  // the expected apparent width.
-  int first_row = 0;
-  int row_count = 0;
+cv::Rect FeatureMatcher::searchRegion(const cv::Mat& gray, const cv::Rect& roi_in, std::string* problem) const {
+  if (model_descriptors_.empty()) {
+    *problem = "no model features";
+  } else if (gray.empty() || gray.type() != CV_8UC1) {
+    *problem = "image is not 8-bit gray";
+  }
+  if (!problem->empty()) return cv::Rect();
+  const cv::Rect full(0, 0, gray.cols, gray.rows);
+  const cv::Rect roi = roi_in.area() > 0 ? (roi_in & full) : full;
+  if (roi.width < 16 || roi.height < 16) *problem = "search region too small";
+  return roi;
+}
+
+void FeatureMatcher::describeRegion(const cv::Mat& gray, const cv::Rect& roi, bool half, bool blurred_set,
+                                    std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors) const {
+  // BRISK's descriptor code mis-reads sub-matrix views (measured: almost no matches on a region view,
+  // normal matches on its copy), so it gets a continuous copy; FAST and the upright descriptor read
+  // the view itself.
+  const bool full = roi == cv::Rect(0, 0, gray.cols, gray.rows);
+  cv::Mat view = full || (params_.upright_descriptors && !blurred_set) ? gray(roi) : gray(roi).clone();
+  if (half) cv::pyrDown(view, view);
+  detect(view, keypoints, params_.max_image_keypoints);
+  describe(view, keypoints, descriptors, blurred_set);
+}
+
+FeatureMatcher::ModelRows FeatureMatcher::modelRows(ModelSet set, double expected_face_width_px) const {
+  // The levels of the requested set (sharp / blurred), all of them or those near the expected apparent width.
   for (const bool by_width : {expected_face_width_px > 0.0, false}) {
     int begin = -1;
     int end = -1;
@@ -827,63 +824,51 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
       if (begin < 0) begin = level.first_row;
       end = level.first_row + level.row_count;
     }
-    if (begin >= 0) {
-      first_row = begin;
-      row_count = end - begin;
-      break;
-    }
+    if (begin >= 0) return ModelRows{begin, end - begin};
   }
-  const std::vector<HammingPair> pairs = hammingKnn2(descriptors, model_descriptors_, first_row, row_count);
-  std::vector<cv::Point2f> texture_points;
-  std::vector<cv::Point2f> image_points;
+  return ModelRows{};
+}
+
+void FeatureMatcher::ratioTestMatches(const cv::Mat& descriptors, const std::vector<cv::KeyPoint>& keypoints,
+                                      const ModelRows& rows, bool half, cv::Point offset,
+                                      std::vector<cv::Point2f>* texture_points,
+                                      std::vector<cv::Point2f>* image_points) const {
+  const std::vector<HammingPair> pairs = hammingKnn2(descriptors, model_descriptors_, rows.first, rows.count);
   for (size_t q = 0; q < pairs.size(); ++q) {
     const HammingPair& pair = pairs[q];
     if (pair.best_index < 0 || pair.second_distance >= (1 << 30)) continue;
-    if (pair.best_distance >= params_.ratio * pair.second_distance) continue;
+    if (pair.best_distance >= params_.feature_ratio * pair.second_distance) continue;
     // Half resolution: pyrDown's pixel x is its 5-tap kernel centred on full-resolution pixel 2x.
     const cv::Point2f p = half ? 2.0f * keypoints[q].pt : keypoints[q].pt;
-    texture_points.push_back(model_points_[static_cast<size_t>(pair.best_index)]);
-    image_points.emplace_back(p.x + roi.x, p.y + roi.y);
+    texture_points->push_back(model_points_[static_cast<size_t>(pair.best_index)]);
+    image_points->emplace_back(p.x + offset.x, p.y + offset.y);
   }
-  result.matches = static_cast<int>(image_points.size());
-  result.matched_image_points = image_points;
-  if (result.matches < params_.min_inliers) {
-    result.status = "too few matches (" + std::to_string(result.matches) + " < " +
-                    std::to_string(params_.min_inliers) + ")";
-    return result;
-  }
+}
+
+bool FeatureMatcher::fitHomography(const std::vector<cv::Point2f>& texture_points,
+                                   const std::vector<cv::Point2f>& image_points, bool half, FaceMatch* result) const {
   std::vector<unsigned char> inlier_mask;
   const cv::Mat homography = cv::findHomography(texture_points, image_points, cv::RANSAC,
                                                 params_.ransac_threshold_px * (half ? 2.0 : 1.0), inlier_mask, 2000,
                                                 0.995);
   if (homography.empty()) {
-    result.status = "no homography";
-    return result;
+    result->status = "no homography";
+    return false;
   }
   for (size_t i = 0; i < inlier_mask.size(); ++i) {
     if (!inlier_mask[i]) continue;
-    result.inlier_texture_points.push_back(texture_points[i]);
-    result.inlier_image_points.push_back(image_points[i]);
+    result->inlier_texture_points.push_back(texture_points[i]);
+    result->inlier_image_points.push_back(image_points[i]);
   }
-  result.inliers = static_cast<int>(result.inlier_image_points.size());
-  if (result.inliers < params_.min_inliers) {
-    result.status = "too few inliers (" + std::to_string(result.inliers) + " < " +
-                    std::to_string(params_.min_inliers) + ")";
-    return result;
+  result->inliers = static_cast<int>(result->inlier_image_points.size());
+  if (result->inliers < params_.min_inliers) {
+    result->status = "too few inliers (" + std::to_string(result->inliers) + " < " +
+                     std::to_string(params_.min_inliers) + ")";
+    return false;
   }
-  result.homography = cv::Matx33d(homography);
-  const std::vector<cv::Point2f> corners = textureCorners();
-  cv::perspectiveTransform(corners, result.face_outline, homography);
-  result.status = outlineProblem(result.face_outline);
-  if (!result.status.empty()) return result;
-  if (params_.refine) {
-    refine(gray, &result);
-    cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
-  }
-  result.found = true;
-  return result;
+  result->homography = cv::Matx33d(homography);
+  return true;
 }
-
 std::vector<cv::Point2f> FeatureMatcher::textureCorners() const {
   const float w = static_cast<float>(texture_size_.width) - 0.5f;
   const float h = static_cast<float>(texture_size_.height) - 0.5f;

@@ -7,6 +7,8 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "docking_settings/setting_info.h"
+
 namespace docking_perception {
 namespace mono {
 namespace {
@@ -18,20 +20,6 @@ std::string fmt(const char* format, double a, double b) {
 }
 
 }  // namespace
-
-std::string validateInnerPatternParams(const InnerPatternParams& p) {
-  if (!(p.use_range_m > 0.0)) return "inner_pattern_use_range_m must be positive";
-  if (!(p.quad_decimate >= 1.0 && p.quad_decimate <= 8.0)) return "inner_pattern_quad_decimate must be in [1, 8]";
-  if (!(p.max_reprojection_px > 0.0)) return "inner_pattern_max_reprojection_px must be positive";
-  if (!(p.min_pixel_sigma > 0.0)) return "inner_pattern_min_pixel_sigma must be positive";
-  if (!(p.min_decision_margin >= 0.0)) return "inner_pattern_min_decision_margin must not be negative";
-  if (!(p.min_tag_edge_px >= 8.0)) return "inner_pattern_min_tag_edge_px must be at least 8";
-  if (p.min_points < 4) return "inner_pattern_min_points must be at least 4";
-  if (!(p.cross_check_position_m > 0.0)) return "inner_pattern_cross_check_position_m must be positive";
-  if (!(p.cross_check_angle_rad > 0.0)) return "inner_pattern_cross_check_angle_rad must be positive";
-  if (p.face_retry_every < 1 || p.face_retry_every > 100) return "inner_pattern_face_retry_every must be in [1, 100]";
-  return "";
-}
 
 InnerPatternDetector::InnerPatternDetector(const TagSpec& tag, const InnerPatternParams& params) : tag_(tag) {
   if (!(tag.size_m > 0.0)) throw TagError("inner pattern: size_m must be positive");
@@ -97,19 +85,18 @@ void InnerPatternDetector::refineGrid(const cv::Mat& gray, const std::array<Eige
 }
 
 void InnerPatternDetector::setParams(const InnerPatternParams& params) {
-  const std::string invalid = validateInnerPatternParams(params);
-  if (!invalid.empty()) throw std::invalid_argument(invalid);
-  if (!detector_ || params.quad_decimate != params_.quad_decimate) {
-    detector_ = std::make_unique<TagDetector>(tag_, 1, params.quad_decimate);
-  }
+  docking_settings::validateSettings(params);  // ConfigError (a std::invalid_argument) naming the setting
+  // apriltag's quad_decimate: where the tag is looked for (inner_pattern.use_range_m) it is >= 50 px wide,
+  // which half resolution finds.
+  constexpr double kQuadDecimate = 2.0;
+  if (!detector_) detector_ = std::make_unique<TagDetector>(tag_, 1, kQuadDecimate);
   params_ = params;
   PlanarPnpParams pnp;
-  pnp.min_pixel_sigma = params.min_pixel_sigma;
   // 30-40 grid corners: let the residuals choose between IPPE's two poses unless they really are
   // alike; the previous pose (itself from a coarse tag pose at 0.2-0.3 m) decided wrongly by degrees
   // when both fitted within the face's 0.5 px floor.
   pnp.ambiguity_floor_px = 0.05;
-  pnp_.setParams(pnp);
+  pnp_.setParams(pnp, params.min_pixel_sigma);
 }
 
 InnerPatternResult InnerPatternDetector::detect(const cv::Mat& gray, const CameraIntrinsics& camera,

@@ -9,6 +9,9 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
+// The two arms of a pattern must not look parallel: a degenerate view, or two triples of one line.
+constexpr double kMinArmAngleDeg = 15.0;
+
 double cross2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 struct Triple {
@@ -17,6 +20,68 @@ struct Triple {
   int end_b;
   double residual;  // normalised collinearity + midpoint residuals
 };
+
+// All collinear triples with the middle blob near the midpoint (ends stored unordered: a < b).
+std::vector<Triple> collinearTriples(const std::vector<LedBlob>& blobs, const LedDetectorParams& params) {
+  const int n = static_cast<int>(blobs.size());
+  std::vector<Triple> triples;
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b) {
+      const Eigen::Vector2d pa = blobs[static_cast<size_t>(a)].centroid;
+      const Eigen::Vector2d pb = blobs[static_cast<size_t>(b)].centroid;
+      const Eigen::Vector2d ab = pb - pa;
+      const double length = ab.norm();
+      if (length < 3.0) continue;
+      for (int m = 0; m < n; ++m) {
+        if (m == a || m == b) continue;
+        const Eigen::Vector2d am = blobs[static_cast<size_t>(m)].centroid - pa;
+        const double along = am.dot(ab) / (length * length);
+        const double off_line = std::abs(cross2d(ab, am)) / length / length;
+        const double midpoint_error = std::abs(along - 0.5);
+        if (off_line > params.collinearity_tolerance || midpoint_error > params.midpoint_tolerance) continue;
+        triples.push_back({a, m, b, off_line / params.collinearity_tolerance + midpoint_error / params.midpoint_tolerance});
+      }
+    }
+  }
+  return triples;
+}
+
+// The patterns two collinear triples make when they share one end and nothing else (none, or one per shared
+// end), their arms not parallel; appended to *candidates. expected_handedness: the sign of cross(arm 2->0,
+// arm 2->4) in the image of a front-facing face.
+void addPatterns(const std::vector<LedBlob>& blobs, const Triple& t1, const Triple& t2, double expected_handedness,
+                 std::vector<LedPatternCandidate>* candidates) {
+  const double min_sin = std::sin(kMinArmAngleDeg * M_PI / 180.0);
+  // The shared blob must be an end of both triples, and it must be the only shared blob.
+  const int ends1[2] = {t1.end_a, t1.end_b};
+  const int ends2[2] = {t2.end_a, t2.end_b};
+  for (int e1 = 0; e1 < 2; ++e1) {
+    for (int e2 = 0; e2 < 2; ++e2) {
+      if (ends1[e1] != ends2[e2]) continue;
+      const int shared = ends1[e1];
+      const int far1 = ends1[1 - e1];
+      const int far2 = ends2[1 - e2];
+      if (far1 == far2 || t1.middle == t2.middle || t1.middle == far2 || t2.middle == far1) continue;
+      const Eigen::Vector2d ps = blobs[static_cast<size_t>(shared)].centroid;
+      const Eigen::Vector2d arm1 = blobs[static_cast<size_t>(far1)].centroid - ps;
+      const Eigen::Vector2d arm2 = blobs[static_cast<size_t>(far2)].centroid - ps;
+      const double sin_angle = cross2d(arm1, arm2) / (arm1.norm() * arm2.norm());
+      if (std::abs(sin_angle) < min_sin) continue;
+      // Handedness decides which arm is A (2 -> 0) and which is B (2 -> 4).
+      const bool first_is_a = sin_angle * expected_handedness > 0.0;
+      const Triple& ta = first_is_a ? t1 : t2;
+      const Triple& tb = first_is_a ? t2 : t1;
+      LedPatternCandidate candidate;
+      candidate.blob_indices = {first_is_a ? far1 : far2, ta.middle, shared, tb.middle, first_is_a ? far2 : far1};
+      for (int k = 0; k < kMarkerCount; ++k) {
+        candidate.pixels[static_cast<size_t>(k)] =
+            blobs[static_cast<size_t>(candidate.blob_indices[static_cast<size_t>(k)])].centroid;
+      }
+      candidate.score = ta.residual + tb.residual;
+      candidates->push_back(candidate);
+    }
+  }
+}
 
 }  // namespace
 
@@ -68,6 +133,50 @@ ComponentShape componentShape(const cv::Mat& labels, int label, const cv::Rect& 
   return shape;
 }
 
+// The blob of component `label` of `view` (the search region, at `roi_corner` in the image): its sub-pixel
+// centre, intensity-weighted over its box grown by 2 px above the level of that box's border (the skirt
+// below the threshold keeps the precision a saturated, flat-topped core alone would lose), its peak and its
+// shape. False when it is no brighter than its border, or not min_contrast brighter: a patch of bright
+// texture or wall that merely crosses the threshold is no LED.
+bool measureBlob(const cv::Mat& view, const cv::Mat& labels, const cv::Mat& stats, int label, cv::Point roi_corner,
+                 double min_contrast, LedBlob* blob) {
+  const int w = stats.at<int>(label, cv::CC_STAT_WIDTH);
+  const int h = stats.at<int>(label, cv::CC_STAT_HEIGHT);
+  const cv::Rect component(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP), w, h);
+  const cv::Rect box = cv::Rect(component.x - 2, component.y - 2, w + 4, h + 4) & cv::Rect(0, 0, view.cols, view.rows);
+  double border_sum = 0.0;
+  int border_count = 0;
+  for (int y = box.y; y < box.y + box.height; ++y) {
+    const uint8_t* row = view.ptr<uint8_t>(y);
+    for (int x = box.x; x < box.x + box.width; ++x) {
+      if (y != box.y && y != box.y + box.height - 1 && x != box.x && x != box.x + box.width - 1) continue;
+      border_sum += row[x];
+      ++border_count;
+    }
+  }
+  const double background = border_count > 0 ? border_sum / border_count : 0.0;
+  double sum_w = 0.0, sum_x = 0.0, sum_y = 0.0, peak = 0.0;
+  for (int y = box.y; y < box.y + box.height; ++y) {
+    const uint8_t* row = view.ptr<uint8_t>(y);
+    for (int x = box.x; x < box.x + box.width; ++x) {
+      const double weight = static_cast<double>(row[x]) - background;
+      if (weight <= 0.0) continue;
+      sum_w += weight;
+      sum_x += weight * x;
+      sum_y += weight * y;
+      peak = std::max(peak, static_cast<double>(row[x]));
+    }
+  }
+  if (sum_w <= 0.0 || peak - background < min_contrast) return false;
+  const ComponentShape shape = componentShape(labels, label, component);
+  blob->elongation = shape.elongation;
+  blob->streak_sigma_px = shape.streak_sigma_px;
+  blob->centroid = {sum_x / sum_w + roi_corner.x, sum_y / sum_w + roi_corner.y};
+  blob->area_px = stats.at<int>(label, cv::CC_STAT_AREA);
+  blob->peak = peak;
+  return true;
+}
+
 }  // namespace
 
 double medianStreakSigma(const std::vector<LedBlob>& blobs, const LedPatternCandidate& candidate) {
@@ -102,57 +211,15 @@ std::vector<LedBlob> LedPatternDetector::detectBlobs(const cv::Mat& gray, const 
     if (area < params_.min_area_px || area > params_.max_area_px) continue;
     if (static_cast<double>(area) / (w * h) < params_.min_fill_ratio) continue;
     if (static_cast<double>(std::max(w, h)) / std::min(w, h) > params_.max_aspect_ratio) continue;
-    // Sub-pixel centre: intensity-weighted over the blob's box grown by 2 px, above the level of the
-    // box's border. Including the blob's skirt below the threshold keeps the precision that a
-    // saturated (flat-topped) core alone would lose.
-    const cv::Rect box = cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT) - 2, stats.at<int>(label, cv::CC_STAT_TOP) - 2,
-                                  w + 4, h + 4) & cv::Rect(0, 0, view.cols, view.rows);
-    double border_sum = 0.0;
-    int border_count = 0;
-    for (int y = box.y; y < box.y + box.height; ++y) {
-      const uint8_t* row = view.ptr<uint8_t>(y);
-      for (int x = box.x; x < box.x + box.width; ++x) {
-        if (y != box.y && y != box.y + box.height - 1 && x != box.x && x != box.x + box.width - 1) continue;
-        border_sum += row[x];
-        ++border_count;
-      }
-    }
-    const double background = border_count > 0 ? border_sum / border_count : 0.0;
-    double sum_w = 0.0;
-    double sum_x = 0.0;
-    double sum_y = 0.0;
-    double peak = 0.0;
-    for (int y = box.y; y < box.y + box.height; ++y) {
-      const uint8_t* row = view.ptr<uint8_t>(y);
-      for (int x = box.x; x < box.x + box.width; ++x) {
-        const double weight = static_cast<double>(row[x]) - background;
-        if (weight <= 0.0) continue;
-        sum_w += weight;
-        sum_x += weight * x;
-        sum_y += weight * y;
-        peak = std::max(peak, static_cast<double>(row[x]));
-      }
-    }
-    if (sum_w <= 0.0) continue;
-    // An LED is a spot brighter than what surrounds it; a patch of bright texture or wall that merely
-    // crosses the threshold is not.
-    if (peak - background < params_.min_contrast) continue;
     LedBlob blob;
-    const ComponentShape shape = componentShape(
-        labels, label, cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP), w, h));
-    blob.elongation = shape.elongation;
-    blob.streak_sigma_px = shape.streak_sigma_px;
-    blob.centroid = {sum_x / sum_w + roi.x, sum_y / sum_w + roi.y};
-    blob.area_px = area;
-    blob.peak = peak;
-    blobs.push_back(blob);
+    if (measureBlob(view, labels, stats, label, roi.tl(), params_.min_contrast, &blob)) blobs.push_back(blob);
   }
   // Keep the largest blobs: LEDs are among the brightest, biggest spots, and the search is O(n^3).
+  constexpr size_t kMaxBlobs = 16;
   std::sort(blobs.begin(), blobs.end(), [](const LedBlob& a, const LedBlob& b) { return a.area_px > b.area_px; });
-  if (static_cast<int>(blobs.size()) > params_.max_blobs) blobs.resize(static_cast<size_t>(params_.max_blobs));
+  if (blobs.size() > kMaxBlobs) blobs.resize(kMaxBlobs);
   return blobs;
 }
-
 std::vector<LedPatternCandidate> LedPatternDetector::identifyPattern(const std::vector<LedBlob>& blobs,
                                                                      std::string* reason) const {
   std::vector<LedPatternCandidate> candidates;
@@ -161,63 +228,10 @@ std::vector<LedPatternCandidate> LedPatternDetector::identifyPattern(const std::
     if (reason) *reason = "found " + std::to_string(n) + " LED blobs, the pattern needs 5";
     return candidates;
   }
-  // All collinear triples with the middle blob near the midpoint (ends stored unordered: a < b).
-  std::vector<Triple> triples;
-  for (int a = 0; a < n; ++a) {
-    for (int b = a + 1; b < n; ++b) {
-      const Eigen::Vector2d pa = blobs[static_cast<size_t>(a)].centroid;
-      const Eigen::Vector2d pb = blobs[static_cast<size_t>(b)].centroid;
-      const Eigen::Vector2d ab = pb - pa;
-      const double length = ab.norm();
-      if (length < 3.0) continue;
-      for (int m = 0; m < n; ++m) {
-        if (m == a || m == b) continue;
-        const Eigen::Vector2d am = blobs[static_cast<size_t>(m)].centroid - pa;
-        const double along = am.dot(ab) / (length * length);
-        const double off_line = std::abs(cross2d(ab, am)) / length / length;
-        const double midpoint_error = std::abs(along - 0.5);
-        if (off_line > params_.collinearity_tolerance || midpoint_error > params_.midpoint_tolerance) continue;
-        triples.push_back({a, m, b,
-                           off_line / params_.collinearity_tolerance + midpoint_error / params_.midpoint_tolerance});
-      }
-    }
-  }
-  const double min_sin = std::sin(params_.min_arm_angle_deg * M_PI / 180.0);
+  const std::vector<Triple> triples = collinearTriples(blobs, params_);
   for (size_t i = 0; i < triples.size(); ++i) {
     for (size_t j = i + 1; j < triples.size(); ++j) {
-      const Triple& t1 = triples[i];
-      const Triple& t2 = triples[j];
-      // The shared blob must be an end of both triples, and it must be the only shared blob.
-      const int ends1[2] = {t1.end_a, t1.end_b};
-      const int ends2[2] = {t2.end_a, t2.end_b};
-      for (int e1 = 0; e1 < 2; ++e1) {
-        for (int e2 = 0; e2 < 2; ++e2) {
-          if (ends1[e1] != ends2[e2]) continue;
-          const int shared = ends1[e1];
-          const int far1 = ends1[1 - e1];
-          const int far2 = ends2[1 - e2];
-          if (far1 == far2 || t1.middle == t2.middle || t1.middle == far2 || t2.middle == far1) continue;
-          const Eigen::Vector2d ps = blobs[static_cast<size_t>(shared)].centroid;
-          const Eigen::Vector2d arm1 = blobs[static_cast<size_t>(far1)].centroid - ps;
-          const Eigen::Vector2d arm2 = blobs[static_cast<size_t>(far2)].centroid - ps;
-          const double sin_angle = cross2d(arm1, arm2) / (arm1.norm() * arm2.norm());
-          if (std::abs(sin_angle) < min_sin) continue;
-          // Handedness decides which arm is A (2 -> 0) and which is B (2 -> 4).
-          const bool first_is_a = sin_angle * expected_handedness_ > 0.0;
-          const Triple& ta = first_is_a ? t1 : t2;
-          const Triple& tb = first_is_a ? t2 : t1;
-          const int far_a = first_is_a ? far1 : far2;
-          const int far_b = first_is_a ? far2 : far1;
-          LedPatternCandidate candidate;
-          candidate.blob_indices = {far_a, ta.middle, shared, tb.middle, far_b};
-          for (int k = 0; k < kMarkerCount; ++k) {
-            candidate.pixels[static_cast<size_t>(k)] =
-                blobs[static_cast<size_t>(candidate.blob_indices[static_cast<size_t>(k)])].centroid;
-          }
-          candidate.score = ta.residual + tb.residual;
-          candidates.push_back(candidate);
-        }
-      }
+      addPatterns(blobs, triples[i], triples[j], expected_handedness_, &candidates);
     }
   }
   std::sort(candidates.begin(), candidates.end(),

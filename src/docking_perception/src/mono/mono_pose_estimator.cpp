@@ -5,22 +5,56 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "docking_settings/config_error.h"
+#include "docking_settings/setting_info.h"
+
 namespace docking_perception {
 namespace mono {
 namespace {
 
-// The longest row smear the refinement tries: the 11 px patches searched +-3 px hold no longer one.
-constexpr int kMaxRowSmearPx = 15;
 // The longest gap over which the last pose's image position still gives the face's image speed.
 constexpr double kMotionSmearMaxGapS = 0.25;
+
+// Marks the result refused at outcome's stage: the code for programs (stage, reject_reason), the reason for
+// people (status). Returns the outcome.
+StageOutcome refuse(MonoPoseResult* result, StageOutcome outcome, RejectReason reason, const std::string& status) {
+  result->stage = outcome.stage;
+  result->stage_outcome = outcome.code;
+  result->reject_reason = reason;
+  result->status = status;
+  return outcome;
+}
+
+// A stage's outcome into the result: a code other than 0 decides (until a later stage decides).
+template <typename Outcome>
+bool record(MonoPoseResult* result, Stage stage, Outcome code) {
+  if (code == Outcome{}) return true;
+  result->stage = stage;
+  result->stage_outcome = static_cast<std::uint8_t>(code);
+  return false;
+}
+
+bool record(MonoPoseResult* result, StageOutcome outcome) {
+  if (outcome.passed()) return true;
+  result->stage = outcome.stage;
+  result->stage_outcome = outcome.code;
+  return false;
+}
+
+RejectReason rejectReasonOf(SolveOutcome outcome) {
+  switch (outcome) {
+    case SolveOutcome::kReprojection: return RejectReason::kReprojection;
+    case SolveOutcome::kImplausible: return RejectReason::kImplausiblePose;
+    case SolveOutcome::kDotNotLocated: return RejectReason::kDotAppearance;
+    case SolveOutcome::kSolverFailed:
+    case SolveOutcome::kPassed: break;
+  }
+  return RejectReason::kSolverFailed;
+}
 
 Eigen::Vector2d applyHomography(const cv::Matx33d& h, const Eigen::Vector2d& p) {
   const cv::Vec3d q = h * cv::Vec3d(p.x(), p.y(), 1.0);
   return {q[0] / q[2], q[1] / q[2]};
-}
-
-std::string positive(const std::string& name, double value) {
-  return value > 0.0 ? std::string() : name + " must be positive (got " + std::to_string(value) + ")";
 }
 
 }  // namespace
@@ -54,75 +88,37 @@ std::string toString(VelocityMethod method) {
   return method == VelocityMethod::kFilter ? "kalman" : "frame_difference";
 }
 
-std::string validateParams(const MonoPoseParams& p) {
-  const std::vector<std::string> checks = {
-      positive("max_reprojection_px", p.max_reprojection_px),
-      positive("min_pixel_sigma", p.min_pixel_sigma),
-      positive("min_range_m", p.min_range_m),
-      p.max_range_m > p.min_range_m ? "" : "max_range_m must exceed min_range_m",
-      p.tracking_margin_px >= 0.0 ? "" : "tracking_margin_px must not be negative",
-      p.filtered_orientation_correlated_fraction >= 0.0 && p.filtered_orientation_correlated_fraction <= 1.0
-          ? ""
-          : "filtered_orientation_correlated_fraction must be in [0, 1]",
-      p.max_pattern_candidates >= 1 ? "" : "max_pattern_candidates must be at least 1",
-      p.features.brisk_threshold > 0 ? "" : "brisk_threshold must be positive",
-      p.features.brisk_octaves >= 0 && p.features.brisk_octaves <= 8 ? "" : "brisk_octaves must be 0..8",
-      p.features.max_image_keypoints >= 10 ? "" : "max_image_keypoints must be at least 10",
-      p.features.model_widths_px.empty() ? "model_widths_px must not be empty" : "",
-      p.features.ratio > 0.0 && p.features.ratio <= 1.0 ? "" : "feature_ratio must be in (0, 1]",
-      positive("ransac_threshold_px", p.features.ransac_threshold_px),
-      p.features.min_inliers >= 4 ? "" : "min_inliers must be at least 4",
-      p.leds.threshold >= 1 && p.leds.threshold <= 255 ? "" : "led_threshold must be 1..255",
-      p.leds.max_area_px > p.leds.min_area_px ? "" : "led_max_area_px must exceed led_min_area_px",
-      p.leds.max_blobs >= kMarkerCount ? "" : "led_max_blobs must be at least 5",
-      p.leds.min_contrast >= 0.0 ? "" : "led_min_contrast must not be negative",
-      positive("led_collinearity_tolerance", p.leds.collinearity_tolerance),
-      positive("led_midpoint_tolerance", p.leds.midpoint_tolerance),
-      positive("dot_search_radius_factor", p.dots.search_radius_factor),
-      positive("dot_min_contrast", p.dots.min_contrast),
-      p.pnp.ambiguity_ratio >= 1.0 ? "" : "pnp_ambiguity_ratio must be at least 1",
-      positive("accel_noise", p.filter.accel_noise),
-      positive("angular_accel_noise", p.filter.angular_accel_noise),
-      positive("max_gap_s", p.filter.max_gap_s),
-      p.filter.gate_chi2 >= 0.0 ? "" : "gate_chi2 must not be negative",
-      p.filter.max_rejections >= 1 ? "" : "max_rejections must be at least 1",
-      p.features.max_refined_points >= 0 ? "" : "max_refined_points must not be negative",
-      p.features.refine_passes >= 1 && p.features.refine_passes <= 5 ? "" : "refine_passes must be 1..5",
-      p.features.refine_again_move_px >= 0.0 ? "" : "refine_again_move_px must not be negative",
-      p.features.fast_threshold > 0 ? "" : "fast_threshold must be positive",
-      p.features.max_model_keypoints_per_level >= 10 ? "" : "max_model_keypoints_per_level must be at least 10",
-      p.features.blurred_model_sigma_px >= 0.0 && p.features.blurred_model_sigma_px <= 5.0 ? "" : "blurred_model_sigma_px must be 0..5",
-      p.features.keypoint_grid >= 0 && p.features.keypoint_grid <= 16 ? "" : "keypoint_grid must be 0..16",
-      p.features.min_face_area_px >= 0.0 ? "" : "min_face_area_px must not be negative",
-      p.features.min_correlation >= -1.0 && p.features.min_correlation <= 1.0 ? "" : "min_correlation must be in [-1, 1]",
-      p.leds.min_fill_ratio >= 0.0 && p.leds.min_fill_ratio <= 1.0 ? "" : "led_min_fill_ratio must be in [0, 1]",
-      p.leds.max_aspect_ratio >= 1.0 ? "" : "led_max_aspect_ratio must be at least 1",
-      p.pnp.ambiguity_floor_px >= 0.0 ? "" : "pnp_ambiguity_floor_px must not be negative",
-  };
-  for (const std::string& check : checks) {
-    if (!check.empty()) return check;
+MonoMode modeOf(const MonoPoseParams& params) {
+  MonoMode mode = MonoMode::kVisible;
+  parseMonoMode(params.mode, &mode);
+  return mode;
+}
+
+PoseSolverType solverOf(const MonoPoseParams& params) {
+  PoseSolverType solver = PoseSolverType::kPnp;
+  parsePoseSolver(params.solver, &solver);
+  return solver;
+}
+
+VelocityMethod velocityOf(const MonoPoseParams& params) {
+  VelocityMethod method = VelocityMethod::kFilter;
+  parseVelocityMethod(params.velocity_method, &method);
+  return method;
+}
+
+void validate(const MonoPoseParams& p) {
+  using docking_settings::ConfigError;
+  using docking_settings::ConfigProblem;
+  docking_settings::validateSettings(p);
+  if (!(p.max_range_m > p.min_range_m)) throw ConfigError("max_range_m", ConfigProblem::kInvalid, "must exceed min_range_m");
+  if (p.features.model_widths_px.empty()) throw ConfigError("model_widths_px", ConfigProblem::kInvalid, "is empty");
+  if (!(p.leds.max_area_px > p.leds.min_area_px)) {
+    throw ConfigError("led_max_area_px", ConfigProblem::kInvalid, "must exceed led_min_area_px");
   }
-  if (!(p.predicted_face_min_kept_fraction >= 0.0 && p.predicted_face_min_kept_fraction <= 1.0)) {
-    return "predicted_face_min_kept_fraction must be in [0, 1]";
+  const ConsistencyParams& c = p.consistency;
+  if (c.max_hint_disagreement_fraction > 0.0 && c.hint_recovery_fraction > c.max_hint_disagreement_fraction) {
+    throw ConfigError("hint_recovery_fraction", ConfigProblem::kInvalid, "must be at most max_hint_disagreement_fraction");
   }
-  if (!(p.region_hint_max_age_s >= 0.0)) return "region_hint_max_age_s must not be negative";
-  if (!(p.region_hint_radius_m > 0.0)) return "region_hint_radius_m must be positive";
-  if (p.direct_yaw_hypotheses < 1 || p.direct_yaw_hypotheses > 15) return "direct_yaw_hypotheses must be 1..15";
-  if (!(p.direct_max_yaw_deg >= 0.0 && p.direct_max_yaw_deg <= 60.0)) return "direct_max_yaw_deg must be 0..60";
-  const std::string direct = validateDirectAlignmentParams(p.direct);
-  if (!direct.empty()) return direct;
-  const std::string consistency = validateConsistencyParams(p.consistency);
-  if (!consistency.empty()) return consistency;
-  for (const int width : p.features.model_widths_px) {
-    if (width < 32) return "model_widths_px entries must be at least 32";
-  }
-  if (p.features.search_row_smear_px < 0 || p.features.search_row_smear_px > kMaxRowSmearPx) {
-    return "search_row_smear_px must be 0.." + std::to_string(kMaxRowSmearPx);
-  }
-  for (const int smear : p.features.refinement_row_smears_px) {
-    if (smear < 2 || smear > kMaxRowSmearPx) return "refinement_row_smears_px entries must be 2.." + std::to_string(kMaxRowSmearPx);
-  }
-  return validateInnerPatternParams(p.inner_pattern);
 }
 
 MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntrinsics& camera,
@@ -130,19 +126,21 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
     : model_(model),
       camera_(camera),
       params_(params),
+      mode_(modeOf(params)),
+      solver_(solverOf(params)),
+      velocity_(velocityOf(params)),
       matcher_(params.features),
       led_detector_(model.markers(), params.leds),
       dot_locator_(params.dots),
       five_point_solver_(model.markers()),
-      pnp_solver_(params.pnp),
+      pnp_solver_(params.pnp, params.min_pixel_sigma),
       filter_(params.filter),
       innovation_scale_(params.consistency.innovation_window_frames),
       frame_difference_(params.filter.max_gap_s) {
-  const std::string invalid = validateParams(params);
-  if (!invalid.empty()) throw std::invalid_argument(invalid);
+  validate(params);
   std::string reason;
   if (!camera.isValid(&reason)) throw std::invalid_argument("camera intrinsics: " + reason);
-  if (params.mode == MonoMode::kVisible) {
+  if (mode_ == MonoMode::kVisible) {
     if (!model.hasTexture()) throw std::invalid_argument("visible mode needs the target texture");
     if (!matcher_.buildModel(model.textureGray(), &reason)) throw std::invalid_argument(reason);
     if (model.hasInnerPattern()) inner_pattern_ = std::make_unique<InnerPatternDetector>(model.innerPattern(), params.inner_pattern);
@@ -152,10 +150,9 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
 }
 
 void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
-  const std::string invalid = validateParams(params);
-  if (!invalid.empty()) throw std::invalid_argument(invalid);
-  if (params.mode != params_.mode) {
-    if (params.mode == MonoMode::kVisible) {
+  validate(params);
+  if (modeOf(params) != mode_) {
+    if (modeOf(params) == MonoMode::kVisible) {
       if (!model_.hasTexture()) throw std::invalid_argument("visible mode needs the target texture");
       matcher_ = FeatureMatcher(params.features);
       std::string reason;
@@ -164,11 +161,14 @@ void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
     reset();
   }
   params_ = params;
+  mode_ = modeOf(params);
+  solver_ = solverOf(params);
+  velocity_ = velocityOf(params);
   if (model_.hasTexture()) direct_aligner_ = DirectFaceAligner(model_, params.direct);
   matcher_.setParams(params.features);
   led_detector_.setParams(params.leds);
   dot_locator_.setParams(params.dots);
-  pnp_solver_.setParams(params.pnp);
+  pnp_solver_.setParams(params.pnp, params.min_pixel_sigma);
   filter_.setParams(params.filter);
   frame_difference_.setMaxGap(params.filter.max_gap_s);
   innovation_scale_.setWindow(params.consistency.innovation_window_frames);
@@ -252,7 +252,7 @@ cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_p
   if (!params_.use_tracking_region || !tracking_) return cv::Rect();
   const PoseWithCovariance predicted = predictedPose(stamp_s);
   std::vector<Eigen::Vector3d> outline;
-  if (params_.mode == MonoMode::kVisible) {
+  if (mode_ == MonoMode::kVisible) {
     outline = model_.faceCorners();
   } else {
     outline.assign(model_.markers().begin(), model_.markers().end());
@@ -269,7 +269,7 @@ cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_p
     max_x = std::max(max_x, pixel.x());
     max_y = std::max(max_y, pixel.y());
   }
-  if (params_.mode == MonoMode::kVisible) {
+  if (mode_ == MonoMode::kVisible) {
     // Apparent width of the face (top and bottom edges), to pick the model levels to match against.
     *face_width_px = 0.5 * ((pixels[1] - pixels[0]).norm() + (pixels[2] - pixels[3]).norm());
   }
@@ -303,98 +303,109 @@ bool MonoPoseEstimator::checkPose(const PoseWithCovariance& pose, std::string* r
   return true;
 }
 
-bool MonoPoseEstimator::solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result,
-                                       std::string* reason, RejectReason* code) const {
-  *code = RejectReason::kSolverFailed;
+SolveOutcome MonoPoseEstimator::solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result,
+                                               std::string* reason) const {
   FivePointSolution solution;
   Matrix6d covariance;
   // First the pose (for the residual), then the covariance scaled by the residual variance (5 points,
   // 10 coordinates, 6 parameters: 4 degrees of freedom), floored at min_pixel_sigma.
-  if (!five_point_solver_.solve(camera_, pixels, &solution, reason)) return false;
+  if (!five_point_solver_.solve(camera_, pixels, &solution, reason)) return SolveOutcome::kSolverFailed;
   const double residual_variance = solution.reprojection_rms_px * solution.reprojection_rms_px * kMarkerCount / 4.0;
   const double variance = std::max(residual_variance, params_.min_pixel_sigma * params_.min_pixel_sigma);
   std::string covariance_note;
   five_point_solver_.solveWithCovariance(camera_, pixels, variance, &solution, &covariance, &covariance_note);
   if (solution.reprojection_rms_px > params_.max_reprojection_px) {
-    *code = RejectReason::kReprojection;
     *reason = "5-point reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large";
-    return false;
+    return SolveOutcome::kReprojection;
   }
   PoseWithCovariance pose;
   pose.rotation = solution.rotation;
   pose.translation = solution.translation;
   pose.covariance = covariance;
-  *code = RejectReason::kImplausiblePose;
-  if (!checkPose(pose, reason)) return false;
+  if (!checkPose(pose, reason)) return SolveOutcome::kImplausible;
   result->pose = pose;
   result->reprojection_error_px = solution.reprojection_rms_px;
-  return true;
+  return SolveOutcome::kPassed;
+}
+StageOutcome MonoPoseEstimator::measureVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px,
+                                               MonoPoseResult* result) {
+  if (posedAtPredictedFace(gray, region, result)) return {};
+  FaceMatch match;
+  double direct_sigma_px = 0.0;
+  const StageOutcome found = findFace(gray, region, face_width_px, &match, &direct_sigma_px, result);
+  if (!found.passed()) return found;
+  return poseFromMatch(gray, match, direct_sigma_px, result);
 }
 
-bool MonoPoseEstimator::estimateVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px,
-                                        MonoPoseResult* result) {
+bool MonoPoseEstimator::posedAtPredictedFace(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result) {
   // Tracking with a claimed orientation (the face's place and perspective are known): refine it there.
-  // A prediction that does not hold, or a pose failing a check, falls back to the feature search below
-  // from a clean result.
-  if (params_.predict_face_when_tracking && params_.solver == PoseSolverType::kPnp && region.area() > 0 &&
-      last_orientation_claimed_) {
-    const MonoPoseResult before = *result;
-    const FaceMatch predicted = matchPredictedFace(gray, result->stamp_s);
-    if (predicted.found) {
-      result->used_tracking_region = true;
-      result->used_predicted_face = true;
-      result->search_region = region;
-      result->feature_inliers = predicted.inliers;
-      result->inlier_points = predicted.inlier_image_points;
-      result->face_outline = predicted.face_outline;
-      if (poseFromMatch(gray, predicted, 0.0, result)) return true;
-      *result = before;
-    }
+  // A prediction that does not hold, or a pose failing a check, falls back to the feature search from a
+  // clean result.
+  if (!params_.predict_face_when_tracking || solver_ != PoseSolverType::kPnp || region.area() <= 0 ||
+      !last_orientation_claimed_) {
+    return false;
   }
+  const MonoPoseResult before = *result;
+  const FaceMatch predicted = matchPredictedFace(gray, result->stamp_s);
+  if (!predicted.found) return false;
+  result->used_tracking_region = true;
+  result->used_predicted_face = true;
+  result->search_region = region;
+  result->feature_inliers = predicted.inliers;
+  result->inlier_points = predicted.inlier_image_points;
+  result->face_outline = predicted.face_outline;
+  if (poseFromMatch(gray, predicted, 0.0, result).passed()) return true;
+  *result = before;
+  return false;
+}
+
+StageOutcome MonoPoseEstimator::findFace(const cv::Mat& gray, const cv::Rect& region, double face_width_px,
+                                         FaceMatch* match, double* direct_sigma_px, MonoPoseResult* result) {
   std::vector<SearchRegion> priors = {{region, face_width_px}};
   const bool hint_fresh = hintFresh(result->stamp_s);
   if (hint_fresh && region.area() <= 0) priors.push_back({hint_region_, 0.0});
   const FaceSearchOutcome search = searchFace(matcher_, gray, priors, params_.use_half_resolution, &preferred_level_);
-  FaceMatch match = search.match;
-  result->used_tracking_region = match.found && search.prior_index == 0;
-  result->used_region_hint = match.found && search.prior_index == 1;
+  *match = search.match;
+  result->used_tracking_region = match->found && search.prior_index == 0;
+  result->used_region_hint = match->found && search.prior_index == 1;
   result->search_region = search.region;
-  result->pyramid_level = match.pyramid_level;
-  result->feature_matches = match.matches;
-  result->feature_inliers = match.inliers;
-  result->matched_points = match.matched_image_points;
-  result->inlier_points = match.inlier_image_points;
-  result->face_outline = match.face_outline;
-  double direct_sigma_px = 0.0;
-  if (!match.found && params_.use_direct_alignment && directSearchDue()) {
-    const DirectAlignment direct = alignDirect(gray, tracking_, hint_fresh, result->stamp_s);
-    noteDirectSearch(!tracking_ && hint_fresh, direct.found);
-    result->direct_correlation = direct.correlation;
-    if (direct.found) {
-      match.found = true;
-      match.homography = direct.homography;
-      match.inlier_texture_points = direct.texture_points;
-      match.inlier_image_points = direct.image_points;
-      match.face_outline = direct.face_outline;
-      match.inliers = static_cast<int>(direct.image_points.size());
-      result->used_direct_alignment = true;
-      result->used_tracking_region = tracking_;
-      result->used_region_hint = !tracking_;
-      result->inlier_points = direct.image_points;
-      result->face_outline = direct.face_outline;
-      direct_sigma_px = direct.pixel_sigma_px;
-    } else if (!direct.status.empty()) {
-      match.status += "; direct alignment: " + direct.status;
-    }
+  result->pyramid_level = match->pyramid_level;
+  result->feature_matches = match->matches;
+  result->feature_inliers = match->inliers;
+  result->matched_points = match->matched_image_points;
+  result->inlier_points = match->inlier_image_points;
+  result->face_outline = match->face_outline;
+  if (!match->found && params_.use_direct_alignment && directSearchDue()) {
+    alignFaceDirectly(gray, hint_fresh, match, direct_sigma_px, result);
   }
-  if (!match.found) {
-    result->status = match.status;
-    result->reject_reason = RejectReason::kNotFound;
-    return false;
+  if (!match->found) {
+    return refuse(result, outcomeOf(Stage::kFind, FindOutcome::kFaceNotFound), RejectReason::kNotFound, match->status);
   }
-  return poseFromMatch(gray, match, direct_sigma_px, result);
+  return {};
 }
 
+void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, FaceMatch* match, double* direct_sigma_px,
+                                          MonoPoseResult* result) {
+  const DirectAlignment direct = alignDirect(gray, tracking_, hint_fresh, result->stamp_s);
+  noteDirectSearch(!tracking_ && hint_fresh, direct.found);
+  result->direct_correlation = direct.correlation;
+  if (!direct.found) {
+    if (!direct.status.empty()) match->status += "; direct alignment: " + direct.status;
+    return;
+  }
+  match->found = true;
+  match->homography = direct.homography;
+  match->inlier_texture_points = direct.texture_points;
+  match->inlier_image_points = direct.image_points;
+  match->face_outline = direct.face_outline;
+  match->inliers = static_cast<int>(direct.image_points.size());
+  result->used_direct_alignment = true;
+  result->used_tracking_region = tracking_;
+  result->used_region_hint = !tracking_;
+  result->inlier_points = direct.image_points;
+  result->face_outline = direct.face_outline;
+  *direct_sigma_px = direct.pixel_sigma_px;
+}
 // The search from a hint tries every yaw hypothesis (~25-35 ms on a blurred 2 m face) and, where the face
 // cannot be found (glare), would do so on every frame: after each failure it waits 1, 2, then 3 frames
 // (kMaxDirectBackoffFrames) before the next try, so a blind stretch costs ~a quarter of that on average.
@@ -457,140 +468,147 @@ DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool trackin
   return direct_aligner_.align(gray, best.homography);
 }
 
-bool MonoPoseEstimator::poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px,
-                                      MonoPoseResult* result) {
-  std::string reason;
-  if (params_.solver == PoseSolverType::kPnp) {
-    std::vector<Eigen::Vector3d> model_points;
-    std::vector<Eigen::Vector2d> image_points;
-    model_points.reserve(match.inlier_texture_points.size());
-    for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
-      model_points.push_back(model_.texturePixelToPoint(match.inlier_texture_points[i]));
-      image_points.emplace_back(match.inlier_image_points[i].x, match.inlier_image_points[i].y);
-    }
-    Eigen::Matrix3d previous_storage;
-    PlanarPnpSolution solution;
-    if (!pnp_solver_.solve(camera_, model_points, image_points, previousRotation(result->stamp_s, &previous_storage),
-                           &solution, &reason)) {
-      result->status = reason;
-      result->reject_reason = RejectReason::kSolverFailed;
-      return false;
-    }
-    result->pnp_ambiguous = solution.ambiguous;
-    result->pose_points = static_cast<int>(model_points.size());
-    result->reprojection_error_px = solution.reprojection_rms_px;
-    if (solution.reprojection_rms_px > params_.max_reprojection_px) {
-      result->status = "PnP reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large";
-      result->reject_reason = RejectReason::kReprojection;
-      return false;
-    }
-    if (!checkPose(solution.pose, &reason)) {
-      result->status = reason;
-      result->reject_reason = RejectReason::kImplausiblePose;
-      return false;
-    }
-    result->pose = solution.pose;
-    const double pixel_sigma = result->used_direct_alignment ? direct_sigma_px : solution.reprojection_rms_px;
-    return vetVisiblePose(gray, match, model_points, &solution, pixel_sigma, result);
-  }
+StageOutcome MonoPoseEstimator::poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px,
+                                              MonoPoseResult* result) {
+  return solver_ == PoseSolverType::kPnp ? pnpPoseFromMatch(gray, match, direct_sigma_px, result)
+                                         : fivePointPoseFromMatch(gray, match, result);
+}
 
+StageOutcome MonoPoseEstimator::pnpPoseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px,
+                                                 MonoPoseResult* result) {
+  std::string reason;
+  std::vector<Eigen::Vector3d> model_points;
+  std::vector<Eigen::Vector2d> image_points;
+  correspondences(match, &model_points, &image_points);
+  Eigen::Matrix3d previous_storage;
+  PlanarPnpSolution solution;
+  if (!pnp_solver_.solve(camera_, model_points, image_points, previousRotation(result->stamp_s, &previous_storage),
+                         &solution, &reason)) {
+    return refuse(result, outcomeOf(Stage::kSolve, SolveOutcome::kSolverFailed), RejectReason::kSolverFailed, reason);
+  }
+  result->pnp_ambiguous = solution.ambiguous;
+  result->pose_points = static_cast<int>(model_points.size());
+  result->reprojection_error_px = solution.reprojection_rms_px;
+  if (solution.reprojection_rms_px > params_.max_reprojection_px) {
+    return refuse(result, outcomeOf(Stage::kSolve, SolveOutcome::kReprojection), RejectReason::kReprojection,
+                  "PnP reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large");
+  }
+  if (!checkPose(solution.pose, &reason)) {
+    return refuse(result, outcomeOf(Stage::kSolve, SolveOutcome::kImplausible), RejectReason::kImplausiblePose, reason);
+  }
+  result->pose = solution.pose;
+  const double pixel_sigma = result->used_direct_alignment ? direct_sigma_px : solution.reprojection_rms_px;
+  return vetVisiblePose(gray, match, model_points, &solution, pixel_sigma, result);
+}
+
+void MonoPoseEstimator::correspondences(const FaceMatch& match, std::vector<Eigen::Vector3d>* model_points,
+                                        std::vector<Eigen::Vector2d>* image_points) const {
+  model_points->reserve(match.inlier_texture_points.size());
+  for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
+    model_points->push_back(model_.texturePixelToPoint(match.inlier_texture_points[i]));
+    image_points->emplace_back(match.inlier_image_points[i].x, match.inlier_image_points[i].y);
+  }
+}
+
+StageOutcome MonoPoseEstimator::fivePointPoseFromMatch(const cv::Mat& gray, const FaceMatch& match,
+                                                       MonoPoseResult* result) {
   // paper_5point: the printed dots, where the homography says they are.
   MarkerPixels pixels;
   MarkerPixels predicted;
   double dot_radius_px = 0.0;
+  std::string reason;
   for (int i = 0; i < kMarkerCount; ++i) {
-    const Eigen::Vector3d& marker = model_.markers()[static_cast<size_t>(i)];
-    const cv::Point2d texture_pixel = model_.pointToTexturePixel(marker);
-    const Eigen::Vector2d centre = applyHomography(match.homography, {texture_pixel.x, texture_pixel.y});
-    const cv::Point2d texture_edge =
-        model_.pointToTexturePixel(marker + Eigen::Vector3d(0.0, model_.markerRadius(), 0.0));
-    const cv::Point2d texture_edge_z =
-        model_.pointToTexturePixel(marker + Eigen::Vector3d(0.0, 0.0, model_.markerRadius()));
-    const double radius_px =
-        std::max((applyHomography(match.homography, {texture_edge.x, texture_edge.y}) - centre).norm(),
-                 (applyHomography(match.homography, {texture_edge_z.x, texture_edge_z.y}) - centre).norm());
-    Eigen::Vector2d located;
-    predicted[static_cast<size_t>(i)] = centre;
+    double radius_px = 0.0;
+    predicted[static_cast<size_t>(i)] = predictedDot(match.homography, i, &radius_px);
     dot_radius_px = std::max(dot_radius_px, radius_px);
-    if (!dot_locator_.locate(gray, centre, radius_px, &located, &reason)) {
-      result->status = "marker " + std::to_string(i) + ": " + reason;
-      result->reject_reason = RejectReason::kDotAppearance;
-      return false;
+    if (!dot_locator_.locate(gray, predicted[static_cast<size_t>(i)], radius_px, &pixels[static_cast<size_t>(i)], &reason)) {
+      return refuse(result, outcomeOf(Stage::kSolve, SolveOutcome::kDotNotLocated), RejectReason::kDotAppearance,
+                    "marker " + std::to_string(i) + ": " + reason);
     }
-    pixels[static_cast<size_t>(i)] = located;
   }
   result->marker_pixels.assign(pixels.begin(), pixels.end());
   result->pose_points = kMarkerCount;
-  RejectReason code = RejectReason::kNone;
-  if (!solveFivePoint(pixels, result, &reason, &code)) {
-    result->status = reason;
-    result->reject_reason = code;
-    return false;
+  const SolveOutcome solved = solveFivePoint(pixels, result, &reason);
+  if (solved != SolveOutcome::kPassed) {
+    return refuse(result, outcomeOf(Stage::kSolve, solved), rejectReasonOf(solved), reason);
   }
   std::vector<Eigen::Vector3d> model_points;
   std::vector<Eigen::Vector2d> image_points;
-  for (size_t i = 0; i < match.inlier_texture_points.size(); ++i) {
-    model_points.push_back(model_.texturePixelToPoint(match.inlier_texture_points[i]));
-    image_points.emplace_back(match.inlier_image_points[i].x, match.inlier_image_points[i].y);
-  }
-  if (!vetFivePointPose(predicted, pixels, dot_radius_px, model_points, image_points, result)) return false;
+  correspondences(match, &model_points, &image_points);
+  const StageOutcome vetted = vetFivePointPose(predicted, pixels, dot_radius_px, model_points, image_points, result);
+  if (!vetted.passed()) return vetted;
   const std::vector<Eigen::Vector3d> markers(model_.markers().begin(), model_.markers().end());
   return vetVisiblePose(gray, match, markers, nullptr, result->reprojection_error_px, result);
 }
 
-bool MonoPoseEstimator::estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result) {
-  std::string reason;
-  bool blob_rejected = false;
-  auto attempt = [&](const cv::Rect& search) -> bool {
-    const std::vector<LedBlob> blobs = led_detector_.detectBlobs(gray, search);
-    result->feature_matches = static_cast<int>(blobs.size());
-    result->blob_pixels.clear();
-    for (const LedBlob& blob : blobs) result->blob_pixels.push_back(blob.centroid);
-    const std::vector<LedPatternCandidate> candidates = led_detector_.identifyPattern(blobs, &reason);
-    const int tries = std::min(static_cast<int>(candidates.size()), params_.max_pattern_candidates);
-    for (int c = 0; c < tries; ++c) {
-      const MarkerPixels& pixels = candidates[static_cast<size_t>(c)].pixels;
-      if (!vetLedBlobs(blobs, candidates[static_cast<size_t>(c)], &reason)) {
-        blob_rejected = true;
-        continue;
-      }
-      // The 5-point solve also validates the identification (scale consistency, face orientation).
-      MonoPoseResult trial = *result;
-      RejectReason code = RejectReason::kNone;
-      if (!solveFivePoint(pixels, &trial, &reason, &code)) continue;
-      if (!refineIrPose(pixels, medianStreakSigma(blobs, candidates[static_cast<size_t>(c)]), &trial, &reason)) {
-        continue;
-      }
-      *result = trial;
-      result->feature_inliers = kMarkerCount;
-      result->pose_points = kMarkerCount;
-      result->marker_pixels.assign(pixels.begin(), pixels.end());
-      return true;
-    }
-    return false;
-  };
+Eigen::Vector2d MonoPoseEstimator::predictedDot(const cv::Matx33d& homography, int marker_index, double* radius_px) const {
+  const Eigen::Vector3d& marker = model_.markers()[static_cast<size_t>(marker_index)];
+  const cv::Point2d texture_pixel = model_.pointToTexturePixel(marker);
+  const Eigen::Vector2d centre = applyHomography(homography, {texture_pixel.x, texture_pixel.y});
+  const cv::Point2d texture_edge = model_.pointToTexturePixel(marker + Eigen::Vector3d(0.0, model_.markerRadius(), 0.0));
+  const cv::Point2d texture_edge_z = model_.pointToTexturePixel(marker + Eigen::Vector3d(0.0, 0.0, model_.markerRadius()));
+  *radius_px = std::max((applyHomography(homography, {texture_edge.x, texture_edge.y}) - centre).norm(),
+                        (applyHomography(homography, {texture_edge_z.x, texture_edge_z.y}) - centre).norm());
+  return centre;
+}
+StageOutcome MonoPoseEstimator::measureIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result) {
+  LedSearch search;
   if (region.area() > 0) {
     result->search_region = region;
-    if (attempt(region)) {
+    if (poseFromLeds(gray, region, &search, result)) {
       result->used_tracking_region = true;
-      return true;
+      return {};
     }
   }
   result->search_region = cv::Rect(0, 0, gray.cols, gray.rows);
-  if (attempt(cv::Rect())) return true;
-  result->status = reason.empty() ? "LED pattern not found" : reason;
-  result->reject_reason = blob_rejected ? RejectReason::kLedBlobShape : RejectReason::kNotFound;
-  return false;
+  if (poseFromLeds(gray, cv::Rect(), &search, result)) return {};
+  const std::string status = search.reason.empty() ? "LED pattern not found" : search.reason;
+  if (search.blob_rejected) {
+    return refuse(result, outcomeOf(Stage::kFind, FindOutcome::kLedBlobShape), RejectReason::kLedBlobShape, status);
+  }
+  // A pattern whose pose failed is still "not found" for the coarse code: no LED pattern gave a pose.
+  const StageOutcome outcome = search.candidate_unsolved ? outcomeOf(Stage::kSolve, SolveOutcome::kSolverFailed)
+                                                         : outcomeOf(Stage::kFind, FindOutcome::kNoLedPattern);
+  return refuse(result, outcome, RejectReason::kNotFound, status);
 }
 
+bool MonoPoseEstimator::poseFromLeds(const cv::Mat& gray, const cv::Rect& roi, LedSearch* search,
+                                     MonoPoseResult* result) const {
+  const std::vector<LedBlob> blobs = led_detector_.detectBlobs(gray, roi);
+  result->feature_matches = static_cast<int>(blobs.size());
+  result->blob_pixels.clear();
+  for (const LedBlob& blob : blobs) result->blob_pixels.push_back(blob.centroid);
+  const std::vector<LedPatternCandidate> candidates = led_detector_.identifyPattern(blobs, &search->reason);
+  // Patterns tried per image, best first: the rest are made of reflections, and each costs a solve.
+  constexpr int kMaxPatternCandidates = 6;
+  const int tries = std::min(static_cast<int>(candidates.size()), kMaxPatternCandidates);
+  for (int c = 0; c < tries; ++c) {
+    const LedPatternCandidate& candidate = candidates[static_cast<size_t>(c)];
+    if (!vetLedBlobs(blobs, candidate, &search->reason)) {
+      search->blob_rejected = true;
+      continue;
+    }
+    // The 5-point solve also validates the identification (scale consistency, face orientation).
+    MonoPoseResult trial = *result;
+    search->candidate_unsolved = true;
+    if (solveFivePoint(candidate.pixels, &trial, &search->reason) != SolveOutcome::kPassed) continue;
+    if (!refineIrPose(candidate.pixels, medianStreakSigma(blobs, candidate), &trial, &search->reason)) continue;
+    *result = trial;
+    result->feature_inliers = kMarkerCount;
+    result->pose_points = kMarkerCount;
+    result->marker_pixels.assign(candidate.pixels.begin(), candidate.pixels.end());
+    return true;
+  }
+  return false;
+}
 bool MonoPoseEstimator::refineIrPose(const MarkerPixels& pixels, double median_streak_px, MonoPoseResult* trial,
                                      std::string* reason) const {
   // Motion smears each LED into a streak whose centroid the blur moves by a fraction of a pixel that the
   // residual of five points cannot show: the covariance grows with the streaks beyond a still spot's.
   const double still = params_.consistency.led_still_streak_px;
   trial->blur_sigma_px = std::sqrt(std::max(0.0, median_streak_px * median_streak_px - still * still));
-  if (params_.solver != PoseSolverType::kPnp) {
-    const double blur_factor = 1.0 + params_.consistency.blur_gain * trial->blur_sigma_px;
+  if (solver_ != PoseSolverType::kPnp) {
+    const double blur_factor = 1.0 + params_.consistency.covariance_blur_gain * trial->blur_sigma_px;
     trial->pose.covariance *= blur_factor * blur_factor;
     return true;
   }
@@ -610,30 +628,42 @@ bool MonoPoseEstimator::refineIrPose(const MarkerPixels& pixels, double median_s
   OrientationHistory history;
   history.claimed = claimed_previous;
   trial->ambiguity_deg = modelPnpCovariance(camera_, solution, history, model, solution.reprojection_rms_px,
-                                             solution.reprojection_rms_px, params_.pnp.min_pixel_sigma,
+                                             solution.reprojection_rms_px, params_.min_pixel_sigma,
                                              trial->blur_sigma_px, params_.consistency, &trial->pose);
   return true;
 }
 
-bool MonoPoseEstimator::claimOrientation(MonoPoseResult& result) const {
-  if (result.ambiguity_deg > params_.consistency.max_ambiguity_deg) {
-    result.status = "orientation withheld: IPPE's two poses fit alike and differ by " +
-                    std::to_string(result.ambiguity_deg) + " deg (max_ambiguity_deg)";
-    return false;
-  }
-  const double gate = params_.consistency.max_rotation_innovation_chi2;
-  if (gate > 0.0 && result.rotation_innovation_chi2 > gate) {
-    result.status = "orientation withheld: it jumps from the tracked orientation (chi2 " +
-                    std::to_string(result.rotation_innovation_chi2) + " > max_rotation_innovation_chi2)";
-    return false;
-  }
-  if (params_.consistency.confirm_new_orientation && !result.rotation_innovation_checked) {
-    result.status = "orientation withheld: a first pose, nothing to confirm it yet (confirm_new_orientation)";
-    return false;
-  }
-  return orientationClaimed(result.pose, params_.consistency, &result.status);
+OrientationOutcome MonoPoseEstimator::claimOrientation(MonoPoseResult* result) {
+  // A valid pose: nothing refused it (a stage before may have, and the inner pattern answered instead).
+  result->status.clear();
+  result->reject_reason = RejectReason::kNone;
+  result->stage = Stage::kNone;
+  result->stage_outcome = 0;
+  scaleByInnovation(result);
+  const OrientationOutcome outcome = orientationOutcome(result);
+  result->orientation_valid = outcome == OrientationOutcome::kClaimed;
+  return outcome;
 }
 
+OrientationOutcome MonoPoseEstimator::orientationOutcome(MonoPoseResult* result) const {
+  if (result->ambiguity_deg > params_.consistency.max_ambiguity_deg) {
+    result->status = "orientation withheld: IPPE's two poses fit alike and differ by " +
+                     std::to_string(result->ambiguity_deg) + " deg (max_ambiguity_deg)";
+    return OrientationOutcome::kAmbiguous;
+  }
+  const double gate = params_.consistency.max_rotation_innovation_chi2;
+  if (gate > 0.0 && result->rotation_innovation_chi2 > gate) {
+    result->status = "orientation withheld: it jumps from the tracked orientation (chi2 " +
+                     std::to_string(result->rotation_innovation_chi2) + " > max_rotation_innovation_chi2)";
+    return OrientationOutcome::kJumps;
+  }
+  if (params_.consistency.confirm_new_orientation && !result->rotation_innovation_checked) {
+    result->status = "orientation withheld: a first pose, nothing to confirm it yet (confirm_new_orientation)";
+    return OrientationOutcome::kUnconfirmed;
+  }
+  return orientationClaimed(result->pose, params_.consistency, &result->status) ? OrientationOutcome::kClaimed
+                                                                                 : OrientationOutcome::kUncertain;
+}
 void MonoPoseEstimator::scaleByInnovation(MonoPoseResult* result) {
   // The running mean survives a lost frame or a filter restart: blur that broke tracking is still there.
   PoseWithCovariance predicted;
@@ -655,7 +685,7 @@ bool MonoPoseEstimator::updateVelocities(MonoPoseResult* result) {
   result->twist_filter = filter_.twist();
   result->twist_frame_difference = frame_difference_.twist();
   if (!filter_ok) result->twist_filter.valid = false;  // this pose was not fused: no fresh velocity
-  if (params_.velocity == VelocityMethod::kFilter) {
+  if (velocity_ == VelocityMethod::kFilter) {
     result->twist = result->twist_filter;
     result->velocity_status = filter_note;
   } else {
@@ -717,35 +747,16 @@ cv::Rect MonoPoseEstimator::predictedInnerPatternRegion(double stamp_s) const {
   return region & cv::Rect(0, 0, camera_.width, camera_.height);
 }
 
-void MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result) {
-  if (!inner_pattern_ || !params_.inner_pattern.enabled || params_.mode != MonoMode::kVisible) return;
+InnerPatternOutcome MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result) {
+  if (!inner_pattern_ || !params_.inner_pattern.enabled || mode_ != MonoMode::kVisible) return {};
   const double near = params_.inner_pattern.use_range_m;
   const bool face_near = result->valid && result->pose.translation.norm() < near;
   // Only near the target (the last pose, from any solver, or this image's face pose): the tag is too
   // small to help farther, and the search costs CPU.
-  if (!face_near && !(last_valid_range_m_ < near)) return;
-  Eigen::Matrix3d previous_storage;
-  const Eigen::Matrix3d* previous = previousRotation(result->stamp_s, &previous_storage);
-  // Where the tracked pose puts the print, then (if not found there) the whole image: the region
-  // saves most of apriltag's CPU time near contact.
-  const cv::Rect region = predictedInnerPatternRegion(result->stamp_s);
-  InnerPatternResult tag = inner_pattern_->detect(gray, camera_, previous, region);
-  if (!tag.valid && region.area() > 0) tag = inner_pattern_->detect(gray, camera_, previous);
-  result->inner_pattern_status = tag.valid ? "" : tag.status;
-  if (tag.valid) result->inner_pattern_corners.assign(tag.corners_px.begin(), tag.corners_px.end());
-  if (!tag.valid) return;  // the face's result stands, valid or not
-  // The tag's pose takes the covariance model of every PnP pose. Its fit's covariance alone claimed
-  // ~3 deg at 0.3-0.45 m when IPPE's other solution, 10-13 deg away, fitted as well and no claimed
-  // orientation decided: one of those was the pose, and it was 11 deg off. The tag's own poses often
-  // claim no orientation there (sigma above max_rotation_sigma_deg), so the tracked orientation, claimed
-  // or not, weighs in by its covariance: it keeps a smooth approach decided.
-  OrientationHistory history;
-  history.claimed = previous;
-  PoseWithCovariance tracked;
-  if (trackedPose(result->stamp_s, &tracked)) history.tracked = &tracked;
-  const double tag_ambiguity_deg =
-      modelPnpCovariance(camera_, tag.pnp, history, tag.model_points, tag.reprojection_rms_px, tag.reprojection_rms_px,
-                         params_.inner_pattern.min_pixel_sigma, 0.0, params_.consistency, &tag.pose);
+  if (!face_near && !(last_valid_range_m_ < near)) return {};
+  double tag_ambiguity_deg = 0.0;
+  InnerPatternResult tag = findInnerTag(gray, &tag_ambiguity_deg, result);
+  if (!tag.valid) return {};  // the face's result stands, valid or not
   if (result->valid) {
     // Both valid: they must agree, else one of them is wrong and nothing here says which.
     // The tolerances widen by 3 sigma of the tag's own pose: 4 cm of tag at 0.3-0.45 m gives the
@@ -757,12 +768,13 @@ void MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* r
     if (!(apart_m <= params_.inner_pattern.cross_check_position_m + 3.0 * tag_position_sigma) ||
         !(apart_rad <= params_.inner_pattern.cross_check_angle_rad + 3.0 * tag_angle_sigma)) {
       result->valid = false;
-      result->reject_reason = RejectReason::kSolverDisagreement;
-      result->status = "face pose and inner pattern disagree by " + std::to_string(apart_m * 1000.0) + " mm, " +
-                       std::to_string(apart_rad * 180.0 / M_PI) + " deg";
-      return;
+      refuse(result, outcomeOf(Stage::kInnerPattern, InnerPatternOutcome::kDisagreesWithFace),
+             RejectReason::kSolverDisagreement,
+             "face pose and inner pattern disagree by " + std::to_string(apart_m * 1000.0) + " mm, " +
+                 std::to_string(apart_rad * 180.0 / M_PI) + " deg");
+      return InnerPatternOutcome::kDisagreesWithFace;
     }
-    return;  // the face's pose (hundreds of points) stands, confirmed
+    return {};  // the face's pose (hundreds of points) stands, confirmed
   }
   result->valid = true;
   result->status.clear();
@@ -774,8 +786,35 @@ void MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* r
   result->reprojection_error_px = tag.reprojection_rms_px;
   result->pnp_ambiguous = tag.pnp.ambiguous;
   result->ambiguity_deg = tag_ambiguity_deg;
+  return {};
 }
 
+InnerPatternResult MonoPoseEstimator::findInnerTag(const cv::Mat& gray, double* ambiguity_deg,
+                                                   MonoPoseResult* result) const {
+  Eigen::Matrix3d previous_storage;
+  const Eigen::Matrix3d* previous = previousRotation(result->stamp_s, &previous_storage);
+  // Where the tracked pose puts the print, then (if not found there) the whole image: the region
+  // saves most of apriltag's CPU time near contact.
+  const cv::Rect region = predictedInnerPatternRegion(result->stamp_s);
+  InnerPatternResult tag = inner_pattern_->detect(gray, camera_, previous, region);
+  if (!tag.valid && region.area() > 0) tag = inner_pattern_->detect(gray, camera_, previous);
+  result->inner_pattern_status = tag.valid ? "" : tag.status;
+  if (!tag.valid) return tag;
+  result->inner_pattern_corners.assign(tag.corners_px.begin(), tag.corners_px.end());
+  // The tag's pose takes the covariance model of every PnP pose. Its fit's covariance alone claimed
+  // ~3 deg at 0.3-0.45 m when IPPE's other solution, 10-13 deg away, fitted as well and no claimed
+  // orientation decided: one of those was the pose, and it was 11 deg off. The tag's own poses often
+  // claim no orientation there (sigma above max_rotation_sigma_deg), so the tracked orientation, claimed
+  // or not, weighs in by its covariance: it keeps a smooth approach decided.
+  OrientationHistory history;
+  history.claimed = previous;
+  PoseWithCovariance tracked;
+  if (trackedPose(result->stamp_s, &tracked)) history.tracked = &tracked;
+  *ambiguity_deg =
+      modelPnpCovariance(camera_, tag.pnp, history, tag.model_points, tag.reprojection_rms_px, tag.reprojection_rms_px,
+                         params_.inner_pattern.min_pixel_sigma, 0.0, params_.consistency, &tag.pose);
+  return tag;
+}
 void MonoPoseEstimator::updateFaceRetry(bool face_skipped, const MonoPoseResult& result) {
   if (!result.valid) {
     face_searches_skipped_left_ = 0;  // nothing to stand on: the next image searches the face again
@@ -784,57 +823,30 @@ void MonoPoseEstimator::updateFaceRetry(bool face_skipped, const MonoPoseResult&
   }
 }
 
+// The pipeline (stages.h; README "mono_pose", "Stages"): each stage's outcome is recorded in the result, the
+// one that decides goes on the wire.
 MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) {
   const double start_ms = threadCpuTimeMs();
   MonoPoseResult result;
   result.stamp_s = stamp_s;
-  result.solver = toString(params_.solver);
+  result.solver = params_.solver;
   cv::Mat gray;
-  if (image.empty()) {
-    result.status = "empty image";
-  } else if (image.cols != camera_.width || image.rows != camera_.height) {
-    result.status = "image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                    ", camera_info says " + std::to_string(camera_.width) + "x" + std::to_string(camera_.height);
-  } else if (image.type() == CV_8UC1) {
-    gray = image;
-  } else if (image.type() == CV_8UC3) {
-    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
-  } else {
-    result.status = "unsupported image type (need 8-bit gray or BGR)";
-  }
-
-  if (gray.empty()) result.reject_reason = RejectReason::kBadInput;
-  if (!gray.empty()) {
-    double face_width_px = 0.0;
-    const cv::Rect region = predictedRegion(stamp_s, &face_width_px);
+  if (record(&result, Stage::kInput, readImage(image, &gray, &result))) {
     const bool skip_face = face_searches_skipped_left_ > 0;
     if (skip_face) {
-      --face_searches_skipped_left_;
-      result.face_search_skipped = true;
-      result.status = "face search skipped: near contact the inner pattern gives the pose";
-      result.reject_reason = RejectReason::kNotFound;
+      record(&result, Stage::kFind, skipFaceSearch(&result));
     } else {
-      result.valid = params_.mode == MonoMode::kVisible ? estimateVisible(gray, region, face_width_px, &result)
-                                                        : estimateIr(gray, region, &result);
+      record(&result, measurePose(gray, &result));  // find, solve, vet
     }
-    applyInnerPattern(gray, &result);
+    record(&result, Stage::kInnerPattern, applyInnerPattern(gray, &result));
     updateFaceRetry(skip_face, result);
-    if (result.valid) result.valid = agreesWithPositionHint(&result);
+    record(&result, Stage::kHint, checkPositionHint(&result));
   }
   if (result.valid) {
-    result.status.clear();
-    result.reject_reason = RejectReason::kNone;
-    scaleByInnovation(&result);
-    result.orientation_valid = claimOrientation(result);
-    result.range_m = result.pose.translation.norm();
-    const bool fused = updateVelocities(&result);
-    tracking_ = true;
-    last_orientation_claimed_ = result.orientation_valid;
-    last_valid_range_m_ = result.range_m;
-    last_pose_ = result.pose;
-    last_stamp_s_ = stamp_s;
-    publishFilteredOrientation(fused, &result);
-    withholdUncertainPosition(&result);
+    record(&result, Stage::kOrientation, claimOrientation(&result));
+    trackPose(&result);
+    record(&result, Stage::kPosition, claimPosition(&result));
+    if (result.stage == Stage::kNone) result.stage = kLastStage;  // every stage passed
   } else {
     tracking_ = false;
     result.velocity_status = "no pose";
@@ -843,38 +855,93 @@ MonoPoseResult MonoPoseEstimator::process(const cv::Mat& image, double stamp_s) 
   return result;
 }
 
-void MonoPoseEstimator::withholdUncertainPosition(MonoPoseResult* result) const {
+InputOutcome MonoPoseEstimator::readImage(const cv::Mat& image, cv::Mat* gray, MonoPoseResult* result) const {
+  InputOutcome outcome = InputOutcome::kPassed;
+  if (image.empty()) {
+    result->status = "empty image";
+    outcome = InputOutcome::kEmpty;
+  } else if (image.cols != camera_.width || image.rows != camera_.height) {
+    result->status = "image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                     ", camera_info says " + std::to_string(camera_.width) + "x" + std::to_string(camera_.height);
+    outcome = InputOutcome::kWrongSize;
+  } else if (image.type() == CV_8UC1) {
+    *gray = image;
+  } else if (image.type() == CV_8UC3) {
+    cv::cvtColor(image, *gray, cv::COLOR_BGR2GRAY);
+  } else {
+    result->status = "unsupported image type (need 8-bit gray or BGR)";
+    outcome = InputOutcome::kWrongType;
+  }
+  if (outcome != InputOutcome::kPassed) result->reject_reason = RejectReason::kBadInput;
+  return outcome;
+}
+
+FindOutcome MonoPoseEstimator::skipFaceSearch(MonoPoseResult* result) {
+  --face_searches_skipped_left_;
+  result->face_search_skipped = true;
+  result->status = "face search skipped: near contact the inner pattern gives the pose";
+  result->reject_reason = RejectReason::kNotFound;
+  return FindOutcome::kFaceSearchSkipped;
+}
+
+StageOutcome MonoPoseEstimator::measurePose(const cv::Mat& gray, MonoPoseResult* result) {
+  double face_width_px = 0.0;
+  const cv::Rect region = predictedRegion(result->stamp_s, &face_width_px);
+  const StageOutcome outcome = mode_ == MonoMode::kVisible ? measureVisible(gray, region, face_width_px, result)
+                                                           : measureIr(gray, region, result);
+  result->valid = outcome.passed();
+  return outcome;
+}
+
+void MonoPoseEstimator::trackPose(MonoPoseResult* result) {
+  result->range_m = result->pose.translation.norm();
+  const bool fused = updateVelocities(result);
+  tracking_ = true;
+  last_orientation_claimed_ = result->orientation_valid;
+  last_valid_range_m_ = result->range_m;
+  last_pose_ = result->pose;
+  last_stamp_s_ = result->stamp_s;
+  publishFilteredOrientation(fused, result);
+}
+PositionOutcome MonoPoseEstimator::claimPosition(MonoPoseResult* result) const {
   // After the tracking state took the pose: it is a measurement with an honest, wide covariance, and the
   // filter, the search region and the covariance's innovation scale go on learning from it (were they
   // not fed, the scale that widened the sigma could never shrink again). Only the claim is withheld.
   std::string note;
-  if (positionClaimed(result->pose, params_.consistency, &note)) return;
+  if (positionClaimed(result->pose, params_.consistency, &note)) return PositionOutcome::kClaimed;
   result->valid = false;
   result->orientation_valid = false;
   result->reject_reason = RejectReason::kPositionUncertain;
   result->status = note;
+  return PositionOutcome::kUncertain;
 }
-
 bool MonoPoseEstimator::hintFresh(double stamp_s) const {
   return hint_region_.area() > 0 && std::abs(stamp_s - hint_stamp_s_) <= params_.region_hint_max_age_s;
 }
 
-bool MonoPoseEstimator::agreesWithPositionHint(MonoPoseResult* result) {
+HintOutcome MonoPoseEstimator::checkPositionHint(MonoPoseResult* result) {
+  if (!result->valid) return HintOutcome::kPassed;
+  const HintOutcome outcome = hintOutcome(result);
+  result->valid = outcome == HintOutcome::kPassed;
+  return outcome;
+}
+
+HintOutcome MonoPoseEstimator::hintOutcome(MonoPoseResult* result) {
   const ConsistencyParams& c = params_.consistency;
   const double limit = c.max_hint_disagreement_fraction;
-  if (limit <= 0.0) return true;
+  if (limit <= 0.0) return HintOutcome::kPassed;
   const double range = result->pose.translation.norm();
   const double since_s = result->stamp_s - last_hint_disagreement_s_;
   const bool holding = since_s >= 0.0 && since_s <= c.hint_disagreement_hold_s;
   if (!hint_has_position_ || !hintFresh(result->stamp_s)) {
-    if (range < c.hint_check_min_range_m || !holding) return true;
+    if (range < c.hint_check_min_range_m || !holding) return HintOutcome::kPassed;
     result->reject_reason = RejectReason::kHintDisagreement;
     result->status = "no fresh disparity estimate to check the position against, and one " + std::to_string(since_s) +
                      " s ago disagreed (hint_disagreement_hold_s)";
-    return false;
+    return HintOutcome::kHeldWithoutHint;
   }
   const double hint_range = hint_position_.norm();
-  if (hint_range < c.hint_check_min_range_m) return true;
+  if (hint_range < c.hint_check_min_range_m) return HintOutcome::kPassed;
   // Ranges, not positions: the check is for the face's scale bias, which lies along the line of sight,
   // and the hint is up to region_hint_max_age_s old. A turning chaser moves the target's bearing, not
   // its range: at 27 deg/s and 2 m a hint two frames old is 0.06 m to the side of a pose 0.2 % off the
@@ -884,36 +951,32 @@ bool MonoPoseEstimator::agreesWithPositionHint(MonoPoseResult* result) {
   const double fraction = holding ? c.hint_recovery_fraction : limit;
   if (apart <= fraction * range) {
     last_hint_disagreement_s_ = kNoHintDisagreement;
-    return true;
+    return HintOutcome::kPassed;
   }
   last_hint_disagreement_s_ = result->stamp_s;
   result->reject_reason = RejectReason::kHintDisagreement;
   result->status = "range " + std::to_string(range) + " m differs from the disparity estimate's " +
                    std::to_string(hint_range) + " m by more than " +
                    (holding ? "hint_recovery_fraction" : "max_hint_disagreement_fraction") + " of it";
-  return false;
+  return holding ? HintOutcome::kNotRecovered : HintOutcome::kRangeDisagrees;
 }
 
-bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& match,
+StageOutcome MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& match,
                                        const std::vector<Eigen::Vector3d>& model_points, const PlanarPnpSolution* pnp,
-                                       double pixel_sigma_px, MonoPoseResult* result) const {
+                                               double pixel_sigma_px, MonoPoseResult* result) const {
   const ConsistencyParams& c = params_.consistency;
-  auto reject = [result](RejectReason code, const std::string& text) {
-    result->reject_reason = code;
-    result->status = text;
-    return false;
-  };
   result->inlier_spread = inlierSpread(match.inlier_texture_points, model_.textureGray().size());
   if (result->inlier_spread < c.min_inlier_spread) {
-    return reject(RejectReason::kInlierSpread, "pose points cover only " + std::to_string(result->inlier_spread) +
-                                                   " of the face (min_inlier_spread)");
+    return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kInlierSpread), RejectReason::kInlierSpread,
+                  "pose points cover only " + std::to_string(result->inlier_spread) + " of the face (min_inlier_spread)");
   }
   const AppearanceScore appearance = appearance_.score(gray, camera_, result->pose);
   result->appearance_ncc = appearance.median_ncc;
   result->blur_sigma_px = appearance.blur_sigma_px;
   if (c.min_appearance_ncc >= 0.0 && appearance.median_ncc < c.min_appearance_ncc) {
-    return reject(RejectReason::kAppearance, "the face does not look like the model at this pose (NCC " +
-                                                 std::to_string(appearance.median_ncc) + ", min_appearance_ncc)");
+    return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kAppearance), RejectReason::kAppearance,
+                  "the face does not look like the model at this pose (NCC " + std::to_string(appearance.median_ncc) +
+                      ", min_appearance_ncc)");
   }
   if (pnp != nullptr) {
     // IPPE's flag compares raw RMS values; with a hundred refined points an alternative at 0.4 px against
@@ -925,10 +988,10 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
     history.claimed = previousRotation(result->stamp_s, &previous_storage);
     result->ambiguity_deg =
         modelPnpCovariance(camera_, *pnp, history, model_points, result->reprojection_error_px, pixel_sigma_px,
-                           params_.pnp.min_pixel_sigma, appearance.blur_sigma_px, c, &result->pose);
+                           params_.min_pixel_sigma, appearance.blur_sigma_px, c, &result->pose);
   } else {
     // The 5-point covariance (its own Jacobian) scaled for blur, plus the floor.
-    const double blur_factor = 1.0 + c.blur_gain * appearance.blur_sigma_px;
+    const double blur_factor = 1.0 + c.covariance_blur_gain * appearance.blur_sigma_px;
     result->pose.covariance *= blur_factor * blur_factor;
     const double position_floor = c.position_floor_fraction * result->pose.translation.norm();
     const double rotation_floor = c.rotation_floor_deg * M_PI / 180.0;
@@ -941,7 +1004,7 @@ bool MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& mat
   const double shape_bias_px = smearShapeBiasPx(c, result->used_direct_alignment, match.refined_with_row_smear_px,
                                                 motionSmearPx(result->pose.translation, result->stamp_s));
   addFaceShapeBias(camera_, model_.faceCorners(), shape_bias_px, &result->pose);
-  return true;
+  return {};
 }
 
 double MonoPoseEstimator::motionSmearPx(const Eigen::Vector3d& translation, double stamp_s) const {
@@ -953,7 +1016,7 @@ double MonoPoseEstimator::motionSmearPx(const Eigen::Vector3d& translation, doub
   return (camera_.project(translation) - camera_.project(last_pose_.translation)).norm() / since_s * exposure_s;
 }
 
-bool MonoPoseEstimator::vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
+StageOutcome MonoPoseEstimator::vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
                                          const std::vector<Eigen::Vector3d>& model_points,
                                          const std::vector<Eigen::Vector2d>& image_points,
                                          MonoPoseResult* result) const {
@@ -963,23 +1026,21 @@ bool MonoPoseEstimator::vetFivePointPose(const MarkerPixels& predicted, const Ma
   for (int i = 0; i < kMarkerCount; ++i) {
     const double offset = (located[static_cast<size_t>(i)] - predicted[static_cast<size_t>(i)]).norm();
     if (offset > max_offset) {
-      result->reject_reason = RejectReason::kDotAppearance;
-      result->status = "marker " + std::to_string(i) + " found " + std::to_string(offset) +
-                       " px from where the face puts it (max_dot_offset_factor)";
-      return false;
+      return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kDotOffset), RejectReason::kDotAppearance,
+                    "marker " + std::to_string(i) + " found " + std::to_string(offset) +
+                        " px from where the face puts it (max_dot_offset_factor)");
     }
   }
   PlanarPnpSolution pnp;
   std::string reason;
-  if (!pnp_solver_.solve(camera_, model_points, image_points, &result->pose.rotation, &pnp, &reason)) return true;
+  if (!pnp_solver_.solve(camera_, model_points, image_points, &result->pose.rotation, &pnp, &reason)) return {};
   const double disagreement_deg = rotationAngleBetween(pnp.pose.rotation, result->pose.rotation) * 180.0 / M_PI;
   if (disagreement_deg > c.max_solver_disagreement_deg) {
-    result->reject_reason = RejectReason::kSolverDisagreement;
-    result->status = "the 5-point pose and the face's PnP pose differ by " + std::to_string(disagreement_deg) +
-                     " deg (max_solver_disagreement_deg)";
-    return false;
+    return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kSolverDisagreement), RejectReason::kSolverDisagreement,
+                  "the 5-point pose and the face's PnP pose differ by " + std::to_string(disagreement_deg) +
+                      " deg (max_solver_disagreement_deg)");
   }
-  return true;
+  return {};
 }
 
 bool MonoPoseEstimator::vetLedBlobs(const std::vector<LedBlob>& blobs, const LedPatternCandidate& candidate,

@@ -1,8 +1,10 @@
-// MonoPoseNodelet: the ROS shell around mono::MonoPoseEstimator. Reads and validates its parameters
-// (config/mono_pose_<mode>.yaml), subscribes lazily to a rectified image + camera_info, publishes a
+// MonoPoseNodelet: the ROS shell around mono::MonoPoseEstimator. Loads its settings (declared in
+// settings/mono_pose.yaml; config/mono_pose_<mode>.yaml holds what differs from the defaults), subscribes lazily to a rectified image + camera_info, publishes a
 // TargetEstimate per image (valid = false with the reason when the target is not found), a debug image,
 // diagnostics, and takes dynamic_reconfigure updates. No algorithm lives here.
 #include <docking_settings/param_reader.h>
+#include <docking_settings/reconfigure.h>
+#include <docking_settings/ros_loader.h>
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -17,6 +19,7 @@
 #include <cmath>
 #include <boost/thread/recursive_mutex.hpp>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -33,9 +36,20 @@
 #include "docking_perception/image_guard/rate_cap.h"
 #include "docking_perception/mono/debug_drawing.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
-#include "docking_perception/mono/mono_pose_param_keys.h"
+#include "docking_perception/mono/mono_pose_settings.h"
+#include "docking_perception/mono/stages.h"
 
 namespace docking_perception {
+
+// The message's REJECT_* constants mirror mono::RejectReason, in the same order.
+static_assert(docking_msgs::TargetEstimate::REJECT_APPEARANCE == static_cast<int>(mono::RejectReason::kAppearance) &&
+                  docking_msgs::TargetEstimate::REJECT_DOT_APPEARANCE == static_cast<int>(mono::RejectReason::kDotAppearance) &&
+                  docking_msgs::TargetEstimate::REJECT_HINT_DISAGREEMENT ==
+                      static_cast<int>(mono::RejectReason::kHintDisagreement) &&
+                  docking_msgs::TargetEstimate::REJECT_POSITION_UNCERTAIN ==
+                      static_cast<int>(mono::RejectReason::kPositionUncertain),
+              "TargetEstimate REJECT_* and mono::RejectReason differ");
+static_assert(docking_msgs::TargetEstimate::STAGE_PASSED == 0, "a stage's outcome 0 is 'passed' (mono/stages.h)");
 
 class MonoPoseNodelet : public nodelet::Nodelet {
  public:
@@ -43,15 +57,24 @@ class MonoPoseNodelet : public nodelet::Nodelet {
 
  private:
   void onInit() override;
-  bool readParameters(std::vector<std::string>* errors);
-  template <typename T>
-  void require(const std::string& name, T* value, std::vector<std::string>* errors);
+  // The settings (ConfigError naming the first bad one) and the target model they name.
+  void loadSettings();
   void connectionChanged();
   void imageCallback(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
   void processImage(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
   void reconfigure(MonoPoseConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void publishEstimate(const std_msgs::Header& header, const mono::MonoPoseResult& result);
+  docking_msgs::TargetEstimate toMessage(const std_msgs::Header& header, const mono::MonoPoseResult& result) const;
+  // The stage of an image refused before the estimator (camera_info, encoding, an exception).
+  static void refuseInput(mono::InputOutcome outcome, const std::string& status, mono::MonoPoseResult* result);
+  // The estimator for camera_info's intrinsics (made, or told of new ones); false (refused) when unusable.
+  bool readyFor(const sensor_msgs::CameraInfo& info, mono::MonoPoseResult* result);
+  bool converted(const sensor_msgs::ImageConstPtr& image, cv_bridge::CvImageConstPtr* cv_image,
+                 mono::MonoPoseResult* result);
+  // Visible mode: the latest disparity estimate older than this image, as the estimator's position hint.
+  void applyDisparityHint(const std_msgs::Header& image_header);
+  void publishDebugImage(const std_msgs::Header& header, const cv::Mat& image, const mono::MonoPoseResult& result);
   // Visible mode: the disparity detector's estimate (same camera) as the region to search first.
   void disparityCallback(const docking_msgs::TargetEstimateConstPtr& estimate);
   // Far throttle (issue 15): the arbiter's output says whether the target is far and on disparity.
@@ -78,13 +101,11 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   std::mutex connect_mutex_;
   std::atomic<bool> subscribed_{false};
   std::mutex mutex_;  // guards everything below (image, reconfigure and diagnostics callbacks)
-  std::string mode_name_;
   std::string image_topic_;
   uint8_t source_ = docking_msgs::TargetEstimate::SOURCE_MONO_VISIBLE;
-  mono::MonoPoseParams params_;
+  mono::MonoPoseNodeSettings settings_;
   std::unique_ptr<mono::TargetModel> model_;
   std::unique_ptr<mono::MonoPoseEstimator> estimator_;
-  bool publish_debug_image_ = true;
   // For diagnostics.
   std::string last_status_ = "no image yet";
   bool last_valid_ = false;
@@ -106,78 +127,45 @@ class MonoPoseNodelet : public nodelet::Nodelet {
   image_guard::RateCap far_rate_cap_;
   duty::FusedRangeState far_state_ = duty::FusedRangeState::kNoFusedEstimate;  // as last applied
   unsigned long images_throttled_far_ = 0;
+  // Estimates published per deciding (stage, outcome) (mono/stages.h): the diagnostics' counts.
+  std::map<std::pair<uint8_t, uint8_t>, unsigned long> decided_;
 };
 
-template <typename T>
-void MonoPoseNodelet::require(const std::string& name, T* value, std::vector<std::string>* errors) {
-  try {
-    *value = docking_settings::ParamReader(private_nh_).require<T>(name);
-  } catch (const docking_settings::ConfigError& e) {
-    errors->push_back(e.what());
-  }
-}
-
-bool MonoPoseNodelet::readParameters(std::vector<std::string>* errors) {
-  std::string target_yaml;
-  std::string solver;
-  std::string velocity;
-  require("mode", &mode_name_, errors);
-  require("target_yaml", &target_yaml, errors);
-  require("solver", &solver, errors);
-  require("velocity_method", &velocity, errors);
-  mono::MonoPoseParams& p = params_;
-  mono::visitMonoPoseParams(p, [&](const char* key, auto* field) { require(key, field, errors); });
-  require("publish_debug_image", &publish_debug_image_, errors);
-  mono::FarThrottleSettings far;
-  mono::visitFarThrottleSettings(far, [&](const char* key, double* field) { require(key, field, errors); });
-  if (!errors->empty()) return false;
-  const std::string far_problem = mono::validateFarThrottle(far);
-  if (!far_problem.empty()) errors->push_back("parameter " + private_nh_.getNamespace() + "/" + far_problem);
-  far_.setParams(far.far);
+void MonoPoseNodelet::loadSettings() {
+  docking_settings::loadSettings(private_nh_, settings_);
+  docking_settings::warnUnknownKeys(private_nh_, settings_);
+  docking_settings::ParamReader(private_nh_).validated([&] { mono::validate(settings_.core); });
+  const mono::FarThrottleSettings& far = settings_.far_throttle;
+  duty::FusedRangeConditionParams far_params;
+  far_params.range_m = far.beyond_range_m;
+  far_params.hysteresis_m = far.hysteresis_m;
+  far_params.max_fused_age_s = far.max_fused_age_s;
+  far_.setParams(far_params);
   far_rate_cap_ = image_guard::RateCap(far.max_rate_hz);
-
-  mono::MonoMode mode;
-  if (!mono::parseMonoMode(mode_name_, &mode)) {
-    errors->push_back("parameter 'mode' must be 'visible' or 'ir', got '" + mode_name_ + "'");
-  }
-  if (!mono::parsePoseSolver(solver, &p.solver)) {
-    errors->push_back("parameter 'solver' must be 'paper_5point' or 'pnp', got '" + solver + "'");
-  }
-  if (!mono::parseVelocityMethod(velocity, &p.velocity)) {
-    errors->push_back("parameter 'velocity_method' must be 'kalman' or 'frame_difference', got '" + velocity + "'");
-  }
-  if (!errors->empty()) return false;
-  p.mode = mode;
-  p.pnp.min_pixel_sigma = p.min_pixel_sigma;
-  const std::string invalid = mono::validateParams(p);
-  if (!invalid.empty()) errors->push_back("parameter " + invalid);
   try {
     model_ = std::make_unique<mono::TargetModel>(
-        mono::TargetModel::loadFromYaml(target_yaml, mode == mono::MonoMode::kVisible));
+        mono::TargetModel::loadFromYaml(settings_.target_yaml, mono::modeOf(settings_.core) == mono::MonoMode::kVisible));
   } catch (const mono::TargetModelError& e) {
-    errors->push_back(std::string("parameter 'target_yaml': ") + e.what());
+    docking_settings::ParamReader(private_nh_).invalid("target_yaml", e.what());
   }
-  return errors->empty();
 }
 
 void MonoPoseNodelet::onInit() {
   nh_ = getNodeHandle();
   private_nh_ = getPrivateNodeHandle();
-  std::vector<std::string> errors;
-  if (!readParameters(&errors)) {
-    for (const std::string& error : errors) NODELET_FATAL("mono_pose: %s", error.c_str());
+  try {
+    loadSettings();
+  } catch (const docking_settings::ConfigError& e) {
     // Thrown, not ros::requestShutdown(): the nodelet loader catches it, refuses this nodelet and
     // says so (perception_host runs without it; a `nodelet load` process exits non-zero), while the
-    // process keeps running. A shutdown
-    // requested from inside the loader's service call tore the manager down with the loader's mutex
-    // still locked (boost::lock_error on the way out).
+    // process keeps running. A shutdown requested from inside the loader's service call tore the
+    // manager down with the loader's mutex still locked (boost::lock_error on the way out).
     // nodelet::Loader logs the exception's message at DEBUG only: said here first.
-    const std::string message =
-        "mono_pose: invalid or missing parameters (see above; all are listed in config/mono_pose_<mode>.yaml)";
-    NODELET_FATAL("%s", message.c_str());
-    throw std::runtime_error(message);
+    NODELET_FATAL("mono_pose: %s (settings: src/docking_perception/settings/mono_pose.yaml)", e.what());
+    throw std::runtime_error(std::string("mono_pose: ") + e.what());
   }
-  const bool visible = params_.mode == mono::MonoMode::kVisible;
+  const bool visible = mono::modeOf(settings_.core) == mono::MonoMode::kVisible;
+  const std::string& mode_name = settings_.core.mode;
   source_ = visible ? docking_msgs::TargetEstimate::SOURCE_MONO_VISIBLE : docking_msgs::TargetEstimate::SOURCE_MONO_IR;
   image_topic_ = visible ? docking_msgs::topics::kStereoLeftImageRect : docking_msgs::topics::kIrImageRect;
   const std::string estimate_topic =
@@ -187,8 +175,8 @@ void MonoPoseNodelet::onInit() {
 
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh_);
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, private_nh_, getName());
-  diagnostics_->setHardwareID("mono_pose_" + mode_name_);
-  diagnostics_->add("mono_pose " + mode_name_, this, &MonoPoseNodelet::diagnose);
+  diagnostics_->setHardwareID("mono_pose_" + mode_name);
+  diagnostics_->add("mono_pose " + mode_name, this, &MonoPoseNodelet::diagnose);
   diagnostics_timer_ = nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
 
   // Lazy: the camera is subscribed only while someone listens to the estimate or the debug image.
@@ -212,8 +200,8 @@ void MonoPoseNodelet::onInit() {
                                     ros::TransportHints().tcpNoDelay());  // small and timely: no Nagle delay
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<MonoPoseConfig>>(reconfigure_mutex_, private_nh_);
   reconfigure_server_->setCallback([this](MonoPoseConfig& config, uint32_t level) { reconfigure(config, level); });
-  NODELET_INFO("mono_pose (%s, %s): %s -> %s, debug image on %s", mode_name_.c_str(),
-               mono::toString(params_.solver).c_str(), nh_.resolveName(image_topic_).c_str(),
+  NODELET_INFO("mono_pose (%s, %s): %s -> %s, debug image on %s", mode_name.c_str(),
+               settings_.core.solver.c_str(), nh_.resolveName(image_topic_).c_str(),
                nh_.resolveName(estimate_topic).c_str(), nh_.resolveName(debug_topic).c_str());
   connectionChanged();
 }
@@ -232,43 +220,19 @@ void MonoPoseNodelet::connectionChanged() {
 
 void MonoPoseNodelet::reconfigure(MonoPoseConfig& config, uint32_t /*level*/) {
   std::lock_guard<std::mutex> lock(mutex_);
-  mono::MonoPoseParams next = params_;
-  if (!mono::parsePoseSolver(config.solver, &next.solver) ||
-      !mono::parseVelocityMethod(config.velocity_method, &next.velocity)) {
-    NODELET_ERROR("mono_pose: reconfigure: unknown solver '%s' or velocity_method '%s'; keeping the old ones",
-                  config.solver.c_str(), config.velocity_method.c_str());
-    config.solver = mono::toString(params_.solver);
-    config.velocity_method = mono::toString(params_.velocity);
-    return;
-  }
-  next.use_tracking_region = config.use_tracking_region;
-  next.tracking_margin_px = config.tracking_margin_px;
-  next.max_reprojection_px = config.max_reprojection_px;
-  next.min_pixel_sigma = config.min_pixel_sigma;
-  next.pnp.min_pixel_sigma = config.min_pixel_sigma;
-  next.features.ratio = config.feature_ratio;
-  next.features.fast_threshold = config.fast_threshold;
-  next.features.min_inliers = config.min_inliers;
-  next.features.ransac_threshold_px = config.ransac_threshold_px;
-  next.features.refine = config.refine_matches;
-  next.use_direct_alignment = config.use_direct_alignment;
-  next.direct.min_correlation = config.direct_min_correlation;
-  next.leds.threshold = config.led_threshold;
-  next.filter.accel_noise = config.accel_noise;
-  next.filter.angular_accel_noise = config.angular_accel_noise;
-  next.publish_filtered_orientation = config.publish_filtered_orientation;
-  next.filtered_orientation_correlated_fraction = config.filtered_orientation_correlated_fraction;
-  const std::string invalid = mono::validateParams(next);
-  if (!invalid.empty()) {
-    NODELET_ERROR("mono_pose: reconfigure rejected: %s", invalid.c_str());
-    return;
-  }
+  dynamic_reconfigure::Config message;
+  config.__toMessage__(message);
+  mono::MonoPoseNodeSettings next = settings_;
+  docking_settings::applyReconfigure(message, next);
   try {
-    if (estimator_) estimator_->setParams(next);
-    params_ = next;
-    publish_debug_image_ = config.publish_debug_image;
+    mono::validate(next.core);
+    if (estimator_) estimator_->setParams(next.core);
+    settings_ = next;
   } catch (const std::exception& e) {
-    NODELET_ERROR("mono_pose: reconfigure rejected: %s", e.what());
+    NODELET_ERROR("mono_pose: reconfigure rejected: %s; keeping the previous values", e.what());
+    // Show the values in force, not the refused ones (the server publishes what the callback leaves).
+    dynamic_reconfigure::Config kept = docking_settings::toReconfigure(settings_);
+    config.__fromMessage__(kept);
   }
 }
 
@@ -306,9 +270,8 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
     try {
       std::lock_guard<std::mutex> lock(mutex_);
       mono::MonoPoseResult result;
-      result.solver = mono::toString(params_.solver);
-      result.status = std::string("image dropped: ") + e.what();
-      result.reject_reason = mono::RejectReason::kBadInput;
+      result.solver = settings_.core.solver;
+      refuseInput(mono::InputOutcome::kDropped, std::string("image dropped: ") + e.what(), &result);
       publishEstimate(image->header, result);
     } catch (const std::exception& again) {
       NODELET_ERROR_THROTTLE(5.0, "mono_pose: could not report the dropped image: %s", again.what());
@@ -319,71 +282,14 @@ void MonoPoseNodelet::imageCallback(const sensor_msgs::ImageConstPtr& image,
 void MonoPoseNodelet::processImage(const sensor_msgs::ImageConstPtr& image,
                                    const sensor_msgs::CameraInfoConstPtr& info) {
   std::lock_guard<std::mutex> lock(mutex_);
-  // Intrinsics of the rectified image: the projection matrix P.
-  mono::CameraIntrinsics camera;
-  camera.fx = info->P[0];
-  camera.cx = info->P[2];
-  camera.fy = info->P[5];
-  camera.cy = info->P[6];
-  camera.width = static_cast<int>(info->width);
-  camera.height = static_cast<int>(info->height);
   mono::MonoPoseResult result;
-  result.solver = mono::toString(params_.solver);
-  std::string reason;
-  if (!camera.isValid(&reason)) {
-    camera_error_ = "camera_info on " + image_topic_ + ": " + reason;
-    result.status = camera_error_;
-    result.reject_reason = mono::RejectReason::kBadInput;
-    NODELET_WARN_THROTTLE(5.0, "mono_pose: %s", camera_error_.c_str());
-    publishEstimate(image->header, result);
-    return;
-  }
-  camera_error_.clear();
-  try {
-    if (!estimator_) {
-      estimator_ = std::make_unique<mono::MonoPoseEstimator>(*model_, camera, params_);
-    } else if (camera.fx != estimator_->camera().fx || camera.fy != estimator_->camera().fy ||
-               camera.cx != estimator_->camera().cx || camera.cy != estimator_->camera().cy ||
-               camera.width != estimator_->camera().width || camera.height != estimator_->camera().height) {
-      estimator_->setCamera(camera);
-      estimator_->reset();
-    }
-  } catch (const std::exception& e) {
-    camera_error_ = e.what();
-    result.status = camera_error_;
-    result.reject_reason = mono::RejectReason::kBadInput;
-    NODELET_ERROR_THROTTLE(5.0, "mono_pose: %s", e.what());
-    publishEstimate(image->header, result);
-    return;
-  }
-
+  result.solver = settings_.core.solver;
   cv_bridge::CvImageConstPtr cv_image;
-  try {
-    const std::string& encoding = image->encoding;
-    const bool mono8 = encoding == sensor_msgs::image_encodings::MONO8;
-    cv_image = cv_bridge::toCvShare(image, mono8 ? sensor_msgs::image_encodings::MONO8
-                                                 : sensor_msgs::image_encodings::BGR8);
-  } catch (const cv_bridge::Exception& e) {
-    result.status = std::string("cannot convert the image: ") + e.what();
-    result.reject_reason = mono::RejectReason::kBadInput;
+  if (!readyFor(*info, &result) || !converted(image, &cv_image, &result)) {
     publishEstimate(image->header, result);
     return;
   }
-  // Only a hint older than this image: the disparity of this very frame races with it, and which one
-  // won would make the result depend on thread timing (a lossless replay would not repeat itself). A
-  // same-frame hint waits for the next image (live, the disparity is the slower one anyway).
-  if (disparity_hint_ && disparity_hint_->header.stamp < image->header.stamp) {
-    if (disparity_hint_->header.frame_id == image->header.frame_id) {
-      const auto& position = disparity_hint_->pose.pose.position;
-      estimator_->setPositionHint(Eigen::Vector3d(position.x, position.y, position.z),
-                                  disparity_hint_->header.stamp.toSec());
-      ++hints_used_;
-    } else {
-      NODELET_WARN_THROTTLE(10.0, "mono_pose: disparity estimate in frame '%s', image in '%s': not used as a search hint",
-                            disparity_hint_->header.frame_id.c_str(), image->header.frame_id.c_str());
-    }
-    disparity_hint_.reset();
-  }
+  applyDisparityHint(image->header);
   // Time comes from the image: live, simulated and replayed alike.
   result = estimator_->process(cv_image->image, image->header.stamp.toSec());
   ++images_;
@@ -393,18 +299,108 @@ void MonoPoseNodelet::processImage(const sensor_msgs::ImageConstPtr& image,
   last_processing_ms_ = result.processing_time_ms;
   last_inliers_ = result.feature_inliers;
   publishEstimate(image->header, result);
-
-  if (publish_debug_image_ && debug_publisher_.getNumSubscribers() > 0) {
-    const double cpu_start_ms = docking_msgs::threadCpuMs();
-    cv_bridge::CvImage debug(image->header, sensor_msgs::image_encodings::BGR8,
-                             mono::drawDebugImage(cv_image->image, result, estimator_->camera(), *model_));
-    debug_publisher_.publish(debug.toImageMsg());
-    ++debug_images_;
-    debug_image_cpu_ms_total_ += docking_msgs::threadCpuMs() - cpu_start_ms;
+  if (settings_.publish_debug_image && debug_publisher_.getNumSubscribers() > 0) {
+    publishDebugImage(image->header, cv_image->image, result);
   }
 }
 
+void MonoPoseNodelet::refuseInput(mono::InputOutcome outcome, const std::string& status, mono::MonoPoseResult* result) {
+  result->status = status;
+  result->reject_reason = mono::RejectReason::kBadInput;
+  result->stage = mono::Stage::kInput;
+  result->stage_outcome = static_cast<uint8_t>(outcome);
+}
+
+bool MonoPoseNodelet::readyFor(const sensor_msgs::CameraInfo& info, mono::MonoPoseResult* result) {
+  // Intrinsics of the rectified image: the projection matrix P.
+  mono::CameraIntrinsics camera;
+  camera.fx = info.P[0];
+  camera.cx = info.P[2];
+  camera.fy = info.P[5];
+  camera.cy = info.P[6];
+  camera.width = static_cast<int>(info.width);
+  camera.height = static_cast<int>(info.height);
+  std::string reason;
+  if (!camera.isValid(&reason)) {
+    camera_error_ = "camera_info on " + image_topic_ + ": " + reason;
+    refuseInput(mono::InputOutcome::kBadCameraInfo, camera_error_, result);
+    NODELET_WARN_THROTTLE(5.0, "mono_pose: %s", camera_error_.c_str());
+    return false;
+  }
+  camera_error_.clear();
+  try {
+    if (!estimator_) {
+      estimator_ = std::make_unique<mono::MonoPoseEstimator>(*model_, camera, settings_.core);
+    } else if (camera.fx != estimator_->camera().fx || camera.fy != estimator_->camera().fy ||
+               camera.cx != estimator_->camera().cx || camera.cy != estimator_->camera().cy ||
+               camera.width != estimator_->camera().width || camera.height != estimator_->camera().height) {
+      estimator_->setCamera(camera);
+      estimator_->reset();
+    }
+  } catch (const std::exception& e) {
+    camera_error_ = e.what();
+    refuseInput(mono::InputOutcome::kBadCameraInfo, camera_error_, result);
+    NODELET_ERROR_THROTTLE(5.0, "mono_pose: %s", e.what());
+    return false;
+  }
+  return true;
+}
+
+bool MonoPoseNodelet::converted(const sensor_msgs::ImageConstPtr& image, cv_bridge::CvImageConstPtr* cv_image,
+                                mono::MonoPoseResult* result) {
+  try {
+    const bool mono8 = image->encoding == sensor_msgs::image_encodings::MONO8;
+    *cv_image = cv_bridge::toCvShare(image, mono8 ? sensor_msgs::image_encodings::MONO8
+                                                  : sensor_msgs::image_encodings::BGR8);
+  } catch (const cv_bridge::Exception& e) {
+    refuseInput(mono::InputOutcome::kNotConvertible, std::string("cannot convert the image: ") + e.what(), result);
+    return false;
+  }
+  return true;
+}
+
+void MonoPoseNodelet::applyDisparityHint(const std_msgs::Header& image_header) {
+  // Only a hint older than this image: the disparity of this very frame races with it, and which one
+  // won would make the result depend on thread timing (a lossless replay would not repeat itself). A
+  // same-frame hint waits for the next image (live, the disparity is the slower one anyway).
+  if (!disparity_hint_ || !(disparity_hint_->header.stamp < image_header.stamp)) return;
+  if (disparity_hint_->header.frame_id == image_header.frame_id) {
+    const auto& position = disparity_hint_->pose.pose.position;
+    estimator_->setPositionHint(Eigen::Vector3d(position.x, position.y, position.z),
+                                disparity_hint_->header.stamp.toSec());
+    ++hints_used_;
+  } else {
+    NODELET_WARN_THROTTLE(10.0, "mono_pose: disparity estimate in frame '%s', image in '%s': not used as a search hint",
+                          disparity_hint_->header.frame_id.c_str(), image_header.frame_id.c_str());
+  }
+  disparity_hint_.reset();
+}
+
+void MonoPoseNodelet::publishDebugImage(const std_msgs::Header& header, const cv::Mat& image,
+                                        const mono::MonoPoseResult& result) {
+  const double cpu_start_ms = docking_msgs::threadCpuMs();
+  cv_bridge::CvImage debug(header, sensor_msgs::image_encodings::BGR8,
+                           mono::drawDebugImage(image, result, estimator_->camera(), *model_));
+  debug_publisher_.publish(debug.toImageMsg());
+  ++debug_images_;
+  debug_image_cpu_ms_total_ += docking_msgs::threadCpuMs() - cpu_start_ms;
+}
 void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono::MonoPoseResult& result) {
+  docking_msgs::TargetEstimate msg = toMessage(header, result);
+  // What the arbiter would refuse (a NaN, a non-unit quaternion) leaves here as not valid, with the code.
+  const auto problem = docking_msgs::checks::withdrawIfMalformed(&msg);
+  if (problem != docking_msgs::checks::EstimateProblem::kNone) {
+    NODELET_ERROR_THROTTLE(5.0, "mono_pose: estimate withdrawn: %s", docking_msgs::checks::estimateProblemName(problem));
+    msg.stage = static_cast<uint8_t>(mono::Stage::kSolve);  // as its reject_reason says: an implausible pose
+    msg.stage_outcome = static_cast<uint8_t>(mono::SolveOutcome::kImplausible);
+  }
+  ++decided_[{msg.stage, msg.stage_outcome}];
+  estimate_publisher_.publish(msg);
+  if (!header.stamp.isZero()) latency_.add((ros::Time::now() - header.stamp).toSec());
+}
+
+docking_msgs::TargetEstimate MonoPoseNodelet::toMessage(const std_msgs::Header& header,
+                                                        const mono::MonoPoseResult& result) const {
   docking_msgs::TargetEstimate msg;
   msg.header = header;
   msg.source = source_;
@@ -445,25 +441,11 @@ void MonoPoseNodelet::publishEstimate(const std_msgs::Header& header, const mono
   msg.processing_time_ms = result.processing_time_ms;
   msg.solver = result.solver;
   msg.status = result.status;  // a valid result's status says what part is withheld, if any
-  // The message's REJECT_* constants mirror mono::RejectReason, in the same order.
-  static_assert(docking_msgs::TargetEstimate::REJECT_APPEARANCE == static_cast<int>(mono::RejectReason::kAppearance) &&
-                    docking_msgs::TargetEstimate::REJECT_DOT_APPEARANCE ==
-                        static_cast<int>(mono::RejectReason::kDotAppearance) &&
-                    docking_msgs::TargetEstimate::REJECT_HINT_DISAGREEMENT ==
-                        static_cast<int>(mono::RejectReason::kHintDisagreement) &&
-                    docking_msgs::TargetEstimate::REJECT_POSITION_UNCERTAIN ==
-                        static_cast<int>(mono::RejectReason::kPositionUncertain),
-                "TargetEstimate REJECT_* and mono::RejectReason differ");
   msg.reject_reason = static_cast<uint8_t>(result.valid ? mono::RejectReason::kNone : result.reject_reason);
-  // What the arbiter would refuse (a NaN, a non-unit quaternion) leaves here as not valid, with the code.
-  const auto problem = docking_msgs::checks::withdrawIfMalformed(&msg);
-  if (problem != docking_msgs::checks::EstimateProblem::kNone) {
-    NODELET_ERROR_THROTTLE(5.0, "mono_pose: estimate withdrawn: %s", docking_msgs::checks::estimateProblemName(problem));
-  }
-  estimate_publisher_.publish(msg);
-  if (!header.stamp.isZero()) latency_.add((ros::Time::now() - header.stamp).toSec());
+  msg.stage = static_cast<uint8_t>(result.stage);  // the stage that decided and its code (mono/stages.h)
+  msg.stage_outcome = result.stage_outcome;
+  return msg;
 }
-
 void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!camera_error_.empty()) {
@@ -477,8 +459,8 @@ void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   } else {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "target found");
   }
-  status.add("mode", mode_name_);
-  status.add("solver", mono::toString(params_.solver));
+  status.add("mode", settings_.core.mode);
+  status.add("solver", settings_.core.solver);
   status.add("images", images_);
   status.add("found", found_);
   status.add("last status", last_status_);
@@ -489,6 +471,11 @@ void MonoPoseNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("images left out far", images_throttled_far_);
   status.add("debug images drawn", debug_images_);
   status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
+  for (const auto& [decision, count] : decided_) {
+    const auto stage = static_cast<mono::Stage>(decision.first);
+    status.add(std::string("decided at ") + mono::stageName(stage) + ": " + mono::outcomeName(stage, decision.second),
+               count);
+  }
   docking_msgs::addLatency(status, "image->estimate", latency_);
 }
 

@@ -144,46 +144,6 @@ cv::Mat faceMask(const cv::Size& source, const cv::Matx33d& warp, const cv::Size
 
 }  // namespace
 
-std::string validateConsistencyParams(const ConsistencyParams& p) {
-  if (!(p.min_inlier_spread >= 0.0 && p.min_inlier_spread < 1.0)) return "min_inlier_spread must be in [0, 1)";
-  if (!(p.min_appearance_ncc <= 1.0)) return "min_appearance_ncc must be at most 1 (negative: off)";
-  if (!(p.max_ambiguity_deg > 0.0)) return "max_ambiguity_deg must be positive";
-  if (!(p.ambiguity_chi2 >= 0.0)) return "ambiguity_chi2 must not be negative";
-  if (!(p.blur_gain >= 0.0)) return "covariance_blur_gain must not be negative";
-  if (!(p.position_floor_fraction >= 0.0)) return "position_floor_fraction must not be negative";
-  if (!(p.rotation_floor_deg >= 0.0)) return "rotation_floor_deg must not be negative";
-  if (!(p.max_rotation_sigma_deg > 0.0)) return "max_rotation_sigma_deg must be positive";
-  if (!(p.max_position_sigma_fraction >= 0.0 && p.max_position_sigma_fraction < 1.0)) {
-    return "max_position_sigma_fraction must be in [0, 1) (0: off)";
-  }
-  if (!(p.position_sigma_check_max_range_m >= 0.0)) {
-    return "position_sigma_check_max_range_m must not be negative (0: every range)";
-  }
-  if (!(p.innovation_window_frames >= 0.0)) return "innovation_window_frames must not be negative (0: off)";
-  if (!(p.max_rotation_innovation_chi2 >= 0.0)) return "max_rotation_innovation_chi2 must not be negative (0: off)";
-  if (!(p.max_hint_disagreement_fraction >= 0.0 && p.max_hint_disagreement_fraction < 1.0)) {
-    return "max_hint_disagreement_fraction must be in [0, 1) (0: off)";
-  }
-  if (!(p.hint_check_min_range_m >= 0.0)) return "hint_check_min_range_m must not be negative";
-  if (!(p.hint_disagreement_hold_s >= 0.0)) return "hint_disagreement_hold_s must not be negative (0: off)";
-  if (!(p.hint_recovery_fraction > 0.0 && p.hint_recovery_fraction <= p.max_hint_disagreement_fraction) &&
-      p.max_hint_disagreement_fraction > 0.0) {
-    return "hint_recovery_fraction must be positive and at most max_hint_disagreement_fraction";
-  }
-  if (!(p.max_dot_offset_factor > 0.0)) return "max_dot_offset_factor must be positive";
-  if (!(p.max_solver_disagreement_deg > 0.0)) return "max_solver_disagreement_deg must be positive";
-  if (!(p.max_led_area_ratio > 1.0)) return "max_led_area_ratio must exceed 1";
-  if (!(p.max_led_elongation >= 1.0)) return "max_led_elongation must be at least 1";
-  if (!(p.led_still_streak_px >= 0.0)) return "led_still_streak_px must not be negative";
-  if (!(p.face_scale_bias_px >= 0.0)) return "face_scale_bias_px must not be negative (0: off)";
-  if (!(p.smear_shape_bias_fraction >= 0.0)) return "smear_shape_bias_fraction must not be negative (0: off)";
-  if (!(p.motion_smear_exposure_s >= 0.0)) return "motion_smear_exposure_s must not be negative (0: off)";
-  if (!(p.direct_smear_shape_bias_fraction >= 0.0)) {
-    return "direct_smear_shape_bias_fraction must not be negative (0: off)";
-  }
-  return "";
-}
-
 double inlierSpread(const std::vector<cv::Point2f>& texture_points, const cv::Size& texture_size) {
   if (texture_points.size() < 3 || texture_size.area() <= 0) return 0.0;
   std::vector<cv::Point2f> hull;
@@ -263,7 +223,7 @@ Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovarian
   const double dof = std::max(1.0, 2.0 * static_cast<double>(model_points.size()) - 6.0);
   // residual_rms_px is per point (2D): N rms^2 squared residuals over 2N - 6 degrees of freedom.
   const double residual_sigma = residual_rms_px * std::sqrt(static_cast<double>(model_points.size()) / dof);
-  const double pixel_sigma = std::max(residual_sigma, min_pixel_sigma) * (1.0 + params.blur_gain * blur_sigma_px);
+  const double pixel_sigma = std::max(residual_sigma, min_pixel_sigma) * (1.0 + params.covariance_blur_gain * blur_sigma_px);
   Matrix6d covariance;
   leastSquaresPoseCovariance(camera, pose.rotation, pose.translation, model_points, pixel_sigma * pixel_sigma,
                              &covariance);

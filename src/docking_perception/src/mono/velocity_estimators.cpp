@@ -6,6 +6,14 @@
 
 namespace docking_perception {
 namespace mono {
+namespace {
+
+// The velocity a (re)started filter assumes: zero, with these sigmas (a chaser's and a tumbling target's
+// plausible rates); the next poses decide.
+constexpr double kInitialVelocitySigma = 0.5;         // m/s
+constexpr double kInitialAngularVelocitySigma = 1.0;  // rad/s
+
+}  // namespace
 
 void FrameDifferenceVelocity::reset() {
   has_previous_ = false;
@@ -55,8 +63,8 @@ void ConstantVelocityFilter::restart(double stamp_s, const PoseWithCovariance& p
   covariance_.block<3, 3>(0, 6) = pose.covariance.block<3, 3>(0, 3);
   covariance_.block<3, 3>(6, 0) = pose.covariance.block<3, 3>(3, 0);
   covariance_.block<3, 3>(6, 6) = pose.covariance.block<3, 3>(3, 3);
-  const double sv = params_.initial_velocity_sigma;
-  const double sw = params_.initial_angular_velocity_sigma;
+  const double sv = kInitialVelocitySigma;
+  const double sw = kInitialAngularVelocitySigma;
   covariance_.block<3, 3>(3, 3) = Eigen::Matrix3d::Identity() * sv * sv;
   covariance_.block<3, 3>(9, 9) = Eigen::Matrix3d::Identity() * sw * sw;
 }

@@ -15,7 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "docking_perception/target_print/target_print.h"
-#include "mono_params_yaml.h"
+#include "docking_settings/yaml_loader.h"
 
 namespace {
 
@@ -68,12 +68,8 @@ int main(int argc, char** argv) {
       model = mono::TargetModel::fromParts(model.faceWidth(), model.faceHeight(), model.markers(),
                                            model.markerRadius(), model.ledRadius(), print);
     }
-    mono::MonoPoseParams mono_params;
-    std::string error;
-    if (!compare::loadMonoParams(mono_params_path, &mono_params, &error)) {
-      std::cerr << "check_target_print: " << error << "\n";
-      return 2;
-    }
+    const mono::MonoPoseParams mono_params =
+        docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(mono_params_path).core;
     const target_print::PrintReport report =
         target_print::checkPrint(model, mono_params.features, mono_params.dots, params);
     std::cout << "check_target_print: " << (print_path.empty() ? target_path : print_path) << "\n"

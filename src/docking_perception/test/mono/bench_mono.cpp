@@ -169,28 +169,21 @@ int main(int argc, char** argv) {
   // "5 Dec 2026, sixth part"). The inner tag is drawn on the face (both approaches), as on the real one.
   const std::vector<Frame> near_contact = visibleApproach(model, camera, Approach{0.6, 0.2, 0.02, -0.01}, 3000);
 
-  // The feature settings of config/mono_pose_visible.yaml (the struct defaults are the older ones).
-  MonoPoseParams deployed;
-  deployed.features.fast_threshold = 10;
-  deployed.features.model_widths_px = {400, 280, 200, 140, 100, 80, 64};
-  deployed.features.min_inliers = 10;
-  deployed.features.max_refined_points = 220;
-  deployed.leds.threshold = 140;
-  deployed.leds.min_contrast = 40.0;
+  // The shipped visible configuration: the declared defaults (config/mono_pose_visible.yaml changes none).
+  const MonoPoseParams deployed;
   MonoPoseParams full = deployed;
   full.use_tracking_region = false;
   MonoPoseParams tracking = deployed;
   tracking.use_tracking_region = true;
   MonoPoseParams five_point = full;
-  five_point.solver = PoseSolverType::kPaperFivePoint;
+  five_point.solver = toString(PoseSolverType::kPaperFivePoint);
   MonoPoseParams ir = deployed;
-  ir.mode = MonoMode::kIr;
-  ir.solver = PoseSolverType::kPaperFivePoint;
+  ir.mode = toString(MonoMode::kIr);
+  ir.solver = toString(PoseSolverType::kPaperFivePoint);
+  ir.leds.threshold = 140;  // renderLedSpots' spots peak lower than the simulator's saturated LEDs (200 shipped)
 
   MonoPoseParams tracking_features = tracking;  // predict_face_when_tracking off: the feature search every frame
   tracking_features.predict_face_when_tracking = false;
-  MonoPoseParams tracking_two_passes = tracking;  // refine_passes: 2 (not deployed; its cost)
-  tracking_two_passes.features.refine_passes = 2;
   struct StagePlan {
     const char* name;
     const MonoPoseParams* params;
@@ -202,7 +195,6 @@ int main(int argc, char** argv) {
                                         {"mono_tracking_near", &tracking, &near_contact, true},
                                         {"mono_tracking_features", &tracking_features, &visible, true},
                                         {"mono_full_paper_5point", &five_point, &visible, false},
-                                        {"mono_tracking_2_passes", &tracking_two_passes, &visible, true},
                                         {"mono_ir", &ir, &infrared, false}};
   std::vector<StageFigures> stages;
   for (const StagePlan& plan : plans) {

@@ -9,7 +9,7 @@
 
 #include "docking_perception/mono/mono_pose_estimator.h"
 #include "docking_perception/mono/target_model.h"
-#include "mono_params_yaml.h"
+#include "docking_settings/yaml_loader.h"
 #include "mono_stress.h"
 
 namespace docking_perception {
@@ -25,12 +25,11 @@ inline const stress::StressRenderer& renderer() {
   return r;
 }
 
-// config/mono_pose_<mode>.yaml ("visible" or "ir").
+// The shipped configuration of config/mono_pose_<mode>.yaml ("visible" or "ir").
 inline mono::MonoPoseParams params(const std::string& mode) {
-  mono::MonoPoseParams p;
-  std::string error;
-  EXPECT_TRUE(compare::loadMonoParams(std::string(CONFIG_DIR) + "/mono_pose_" + mode + ".yaml", &p, &error)) << error;
-  return p;
+  return docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(std::string(CONFIG_DIR) + "/mono_pose_" + mode +
+                                                                        ".yaml")
+      .core;
 }
 
 inline stress::StressCondition condition(const std::string& name) {

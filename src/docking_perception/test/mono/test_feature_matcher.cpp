@@ -200,40 +200,6 @@ TEST(FeatureMatcher, FindsTheFaceAndRefinesToSubPixel) {
   EXPECT_FALSE(elsewhere.status.empty());
 }
 
-// A second refinement pass (re-correlating at the refined homography) must not lose points or
-// accuracy: its refined points agree with the true projections at least about as well, over several
-// views (RMS over all refined points of each view).
-TEST(FeatureMatcher, SecondRefinementPassIsAtLeastAsAccurate) {
-  const TargetModel model = synthetic::makeModel(4);
-  const CameraIntrinsics camera = synthetic::defaultCamera();
-  FeatureMatcherParams one;
-  FeatureMatcherParams two;
-  two.refine_passes = 2;
-  FeatureMatcher matcher_one(one);
-  FeatureMatcher matcher_two(two);
-  std::string reason;
-  ASSERT_TRUE(matcher_one.buildModel(model.textureGray(), &reason)) << reason;
-  ASSERT_TRUE(matcher_two.buildModel(model.textureGray(), &reason)) << reason;
-  double total_one = 0.0;
-  double total_two = 0.0;
-  for (int view = 0; view < 4; ++view) {
-    const Eigen::Matrix3d r = synthetic::facingRotation(0.25 * (view - 1.5), 0.05 * view, 0.1);
-    const Eigen::Vector3d t(0.03 - 0.02 * view, 0.01, 0.7 + 0.25 * view);
-    const cv::Mat image = synthetic::renderVisible(model, camera, r, t, 20 + view);
-    const FaceMatch a = matcher_one.match(image);
-    const FaceMatch b = matcher_two.match(image);
-    ASSERT_TRUE(a.found && a.refined) << "view " << view << ": " << a.status;
-    ASSERT_TRUE(b.found && b.refined) << "view " << view << ": " << b.status;
-    EXPECT_GE(b.inlier_texture_points.size(), static_cast<size_t>(two.min_inliers));
-    total_one += refinedPointsRmsPx(a, model, camera, r, t);
-    total_two += refinedPointsRmsPx(b, model, camera, r, t);
-  }
-  std::cout << "refined-point RMS vs truth: one pass " << total_one / 4.0 << " px, two passes " << total_two / 4.0
-            << " px\n";
-  EXPECT_LT(total_two / 4.0, 0.3);
-  EXPECT_LE(total_two, 1.1 * total_one) << "two passes " << total_two / 4.0 << " px, one pass " << total_one / 4.0 << " px";
-}
-
 // Tracking without features (issue 15): the homography of the true pose refines to the truth; one
 // predicted 6 px off (beyond the +-3 px correlation search) keeps too few points and is not found, so the
 // caller falls back to the feature search instead of trusting a wrong prediction.
@@ -305,11 +271,11 @@ struct RefinementScene {
     cv::filter2D(sharp, out, -1, linearMotionKernel(length_px, 0.0), cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
     return out;
   }
-  // The deployed blur models: round 1.5 px, and row smears of 5, 9 and 13 px.
+  // The shipped blur models (round 1.5 px, row smears of 5, 9 and 13 px) without the pass more
+  // (refine_again_move_px 0): one refinement pass, as the tests below compare.
   static FeatureMatcherParams smearParams() {
     FeatureMatcherParams params;
-    params.blurred_model_sigma_px = 1.5;
-    params.refinement_row_smears_px = {5, 9, 13};
+    params.refine_again_move_px = 0.0;
     return params;
   }
 };
@@ -409,16 +375,18 @@ TEST(FeatureMatcher, RefinesAgainWhenTheFirstPassMovedTheFace) {
   EXPECT_FALSE(steady.refined_again);
 }
 
-// Matchers with the same BRISK parameters share one BRISK object (46 MB of pattern tables each), made
-// only when a model is built with BRISK's descriptors, and two threads matching through it at once get
-// what one thread gets. The default (upright descriptors, FAST corners) makes none.
-TEST(FeatureMatcher, SharesOneBriskPerParametersAndMatchesConcurrently) {
+// Matchers share one BRISK object (46 MB of pattern tables each), made only when a model is built with
+// BRISK's descriptors, and two threads matching through it at once get what one thread gets. Upright
+// descriptors without a blurred model make none.
+TEST(FeatureMatcher, SharesOneBriskAndMatchesConcurrently) {
   const TargetModel model = synthetic::makeModel(4);
   const CameraIntrinsics camera = synthetic::defaultCamera();
   const cv::Mat image = synthetic::renderVisible(model, camera, synthetic::facingRotation(0.2, 0.1, -0.1),
                                                  Eigen::Vector3d(-0.03, 0.01, 0.9), 5);
   std::string reason;
-  FeatureMatcher upright;
+  FeatureMatcherParams upright_params;
+  upright_params.blurred_model_sigma_px = 0.0;  // no blurred model (the shipped one is described by BRISK)
+  FeatureMatcher upright(upright_params);
   ASSERT_TRUE(upright.buildModel(model.textureGray(), &reason)) << reason;
   EXPECT_EQ(upright.descriptorExtractor(), nullptr);
 
@@ -431,11 +399,6 @@ TEST(FeatureMatcher, SharesOneBriskPerParametersAndMatchesConcurrently) {
   ASSERT_TRUE(second.buildModel(model.textureGray(), &reason)) << reason;
   ASSERT_NE(first.descriptorExtractor(), nullptr);
   EXPECT_EQ(first.descriptorExtractor(), second.descriptorExtractor());
-  FeatureMatcherParams other_params = brisk_params;
-  other_params.brisk_threshold += 5;
-  FeatureMatcher other(other_params);
-  ASSERT_TRUE(other.buildModel(model.textureGray(), &reason)) << reason;
-  EXPECT_NE(other.descriptorExtractor(), first.descriptorExtractor());
 
   const FaceMatch alone = first.match(image);
   ASSERT_TRUE(alone.found) << alone.status;

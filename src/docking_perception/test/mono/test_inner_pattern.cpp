@@ -166,5 +166,5 @@ TEST(InnerPatternDetector, RejectsBadParameters) {
   EXPECT_THROW(mono::InnerPatternDetector(innerTag(), p), std::invalid_argument);
   p = mono::InnerPatternParams();
   p.min_points = 3;
-  EXPECT_FALSE(mono::validateInnerPatternParams(p).empty());
+  EXPECT_THROW(mono::InnerPatternDetector(innerTag(), p), docking_settings::ConfigError);
 }

@@ -2,10 +2,15 @@
 
 #include <Eigen/Eigenvalues>
 #include <opencv2/core.hpp>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "docking_perception/debug_caption.h"
 #include "docking_perception/mono/debug_drawing.h"
 #include "docking_perception/mono/mono_pose_estimator.h"
+#include "docking_settings/yaml_loader.h"
 #include "synthetic_scene.h"
 
 using namespace docking_perception::mono;  // NOLINT: test file
@@ -20,11 +25,23 @@ struct ViewCase {
   Eigen::Vector3d t;
 };
 
+// The shipped configuration of the mode (config/mono_pose_<mode>.yaml) with the solver under test.
 MonoPoseParams paramsFor(MonoMode mode, PoseSolverType solver) {
-  MonoPoseParams params;
-  params.mode = mode;
-  params.solver = solver;
+  MonoPoseParams params = docking_settings::shippedSettings<MonoPoseNodeSettings>(
+                              std::string(CONFIG_DIR) + "/mono_pose_" + toString(mode) + ".yaml")
+                              .core;
+  params.solver = toString(solver);
   return params;
+}
+
+// The key of the first setting validate() refuses; empty when it accepts them.
+std::string refusedKey(const MonoPoseParams& params) {
+  try {
+    validate(params);
+  } catch (const docking_settings::ConfigError& e) {
+    return e.key();
+  }
+  return "";
 }
 
 }  // namespace
@@ -131,6 +148,22 @@ TEST(MonoPoseEstimator, TrackingUsesThePredictedRegionAndGivesAVelocity) {
   ASSERT_TRUE(result.twist.valid);
   ASSERT_TRUE(result.twist_frame_difference.valid);
   EXPECT_LT((result.twist.linear - velocity).norm(), 0.05);
+
+  // The paper's velocity, kept for comparison (velocity_method frame_difference): the one published.
+  MonoPoseParams paper = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
+  paper.velocity_method = "frame_difference";
+  MonoPoseEstimator differencing(model, camera, paper);
+  for (int frame = 0; frame < 3; ++frame) {
+    const double t = frame / 30.0;
+    const Eigen::Vector3d position = Eigen::Vector3d(0.0, 0.0, 1.0) + velocity * t;
+    result = differencing.process(synthetic::renderVisible(model, camera, synthetic::facingRotation(0.2), position, 300 + frame),
+                                  10.0 + t);
+    ASSERT_TRUE(result.valid) << "frame " << frame << ": " << result.status;
+  }
+  ASSERT_TRUE(result.twist.valid) << result.velocity_status;
+  EXPECT_EQ(result.twist.linear, result.twist_frame_difference.linear);
+  EXPECT_EQ(result.twist.angular, result.twist_frame_difference.angular);
+  EXPECT_LT((result.twist.linear - velocity).norm(), 0.2);  // one difference of two poses: noisier
 }
 
 // Tracking without features (issue 15): after the first image, the face is refined where the filter
@@ -283,7 +316,7 @@ TEST(MonoPoseEstimator, APoseThatDisagreesWithAFreshPositionHintIsNotValid) {
   unchecked.setPositionHint(1.08 * t, 1.93);
   EXPECT_TRUE(unchecked.process(image, 2.0).valid);
   params.consistency.max_hint_disagreement_fraction = 1.0;
-  EXPECT_NE(validateParams(params).find("max_hint_disagreement_fraction"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "max_hint_disagreement_fraction");
 }
 
 // After a pose disagreed with a fresh hint, a pose with no fresh hint to check it is refused for
@@ -302,11 +335,15 @@ TEST(MonoPoseEstimator, ADisagreementHoldsUntilAHintAgreesOrTheHoldEnds) {
 
   MonoPoseEstimator held(model, camera, params);
   held.setPositionHint(1.08 * t, 1.93);
-  EXPECT_EQ(held.process(image, 2.0).reject_reason, RejectReason::kHintDisagreement);
+  const MonoPoseResult refused = held.process(image, 2.0);
+  EXPECT_EQ(refused.reject_reason, RejectReason::kHintDisagreement);
+  EXPECT_EQ(refused.stage, Stage::kHint);
+  EXPECT_EQ(refused.stage_outcome, static_cast<std::uint8_t>(HintOutcome::kRangeDisagrees));
   const MonoPoseResult unchecked = held.process(image, 2.5);  // the hint is 0.57 s old: not fresh
   EXPECT_FALSE(unchecked.valid);
   EXPECT_EQ(unchecked.reject_reason, RejectReason::kHintDisagreement);
   EXPECT_NE(unchecked.status.find("hint_disagreement_hold_s"), std::string::npos) << unchecked.status;
+  EXPECT_EQ(unchecked.stage_outcome, static_cast<std::uint8_t>(HintOutcome::kHeldWithoutHint));
   const MonoPoseResult after_hold = held.process(image, 3.2);  // 1.2 s after the disagreement
   EXPECT_TRUE(after_hold.valid) << after_hold.status;
 
@@ -319,6 +356,7 @@ TEST(MonoPoseEstimator, ADisagreementHoldsUntilAHintAgreesOrTheHoldEnds) {
   const MonoPoseResult near_miss = hysteresis.process(image, 2.4);
   EXPECT_FALSE(near_miss.valid);
   EXPECT_NE(near_miss.status.find("hint_recovery_fraction"), std::string::npos) << near_miss.status;
+  EXPECT_EQ(near_miss.stage_outcome, static_cast<std::uint8_t>(HintOutcome::kNotRecovered));
   hysteresis.setPositionHint(1.03 * t, 3.55);  // 1.2 s after the last refusal (2.4 s)
   EXPECT_TRUE(hysteresis.process(image, 3.6).valid);
 
@@ -336,10 +374,10 @@ TEST(MonoPoseEstimator, ADisagreementHoldsUntilAHintAgreesOrTheHoldEnds) {
   EXPECT_FALSE(unheld.process(image, 2.0).valid);
   EXPECT_TRUE(unheld.process(image, 2.5).valid);
   params.consistency.hint_disagreement_hold_s = -1.0;
-  EXPECT_NE(validateParams(params).find("hint_disagreement_hold_s"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "hint_disagreement_hold_s");
   params.consistency.hint_disagreement_hold_s = 1.0;
   params.consistency.hint_recovery_fraction = 0.05;  // looser than the first refusal's limit
-  EXPECT_NE(validateParams(params).find("hint_recovery_fraction"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "hint_recovery_fraction");
 }
 
 TEST(MonoPoseEstimator, ReportsWhyNothingWasFound) {
@@ -356,6 +394,54 @@ TEST(MonoPoseEstimator, ReportsWhyNothingWasFound) {
   result = estimator.process(cv::Mat(), 3.0);
   EXPECT_FALSE(result.valid);
   EXPECT_EQ(result.status, "empty image");
+}
+
+// The stage that decided is on every result (stages.h): the input stage for an unusable image, the find
+// stage when nothing is found, and for a valid pose the orientation stage while its orientation is withheld
+// (a first pose: confirm_new_orientation), then the last stage, passed, once the next frame confirms it.
+TEST(MonoPoseEstimator, EachResultCarriesTheStageThatDecided) {
+  const TargetModel model = synthetic::makeModel(1);
+  const CameraIntrinsics camera = synthetic::defaultCamera();
+  MonoPoseEstimator estimator(model, camera, paramsFor(MonoMode::kVisible, PoseSolverType::kPnp));
+  auto decided = [](const MonoPoseResult& r) {
+    return std::string(stageName(r.stage)) + "/" + outcomeName(r.stage, r.stage_outcome);
+  };
+  EXPECT_EQ(decided(estimator.process(cv::Mat(), 1.0)), "input/empty");
+  EXPECT_EQ(decided(estimator.process(cv::Mat(240, 320, CV_8UC1, cv::Scalar(0)), 1.1)), "input/wrong_size");
+  EXPECT_EQ(decided(estimator.process(cv::Mat(480, 640, CV_16UC1, cv::Scalar(0)), 1.2)), "input/wrong_type");
+  const MonoPoseResult blank = estimator.process(cv::Mat(480, 640, CV_8UC1, cv::Scalar(90)), 1.3);
+  EXPECT_EQ(decided(blank), "find/face_not_found");
+  EXPECT_EQ(blank.reject_reason, RejectReason::kNotFound);
+  const Eigen::Matrix3d rotation = synthetic::facingRotation(0.2);
+  const Eigen::Vector3d position(0.0, 0.0, 0.8);
+  const MonoPoseResult first = estimator.process(synthetic::renderVisible(model, camera, rotation, position, 7), 2.0);
+  ASSERT_TRUE(first.valid) << first.status;
+  EXPECT_EQ(decided(first), "orientation/unconfirmed");
+  const MonoPoseResult second =
+      estimator.process(synthetic::renderVisible(model, camera, rotation, position, 8), 2.0 + 1.0 / 30.0);
+  ASSERT_TRUE(second.valid) << second.status;
+  EXPECT_EQ(decided(second), "position/claimed");
+
+  MonoPoseEstimator ir(model, camera, paramsFor(MonoMode::kIr, PoseSolverType::kPnp));
+  EXPECT_EQ(decided(ir.process(cv::Mat(480, 640, CV_8UC1, cv::Scalar(20)), 1.0)), "find/no_led_pattern");
+}
+
+// Every stage and outcome of stages.h has its name; a code a stage does not have is "unknown".
+TEST(MonoStages, EveryOutcomeIsNamed) {
+  const std::vector<std::pair<Stage, int>> outcome_counts = {
+      {Stage::kInput, 7}, {Stage::kFind, 5},        {Stage::kSolve, 5}, {Stage::kVet, 5},      {Stage::kInnerPattern, 2},
+      {Stage::kHint, 4},  {Stage::kOrientation, 5}, {Stage::kTrack, 1}, {Stage::kPosition, 2}};
+  std::set<std::string> stage_names;
+  for (const auto& [stage, count] : outcome_counts) {
+    stage_names.insert(stageName(stage));
+    std::set<std::string> names;
+    for (int code = 0; code < count; ++code) names.insert(outcomeName(stage, static_cast<std::uint8_t>(code)));
+    EXPECT_EQ(names.size(), static_cast<size_t>(count)) << stageName(stage);
+    EXPECT_EQ(names.count("unknown"), 0u) << stageName(stage);
+    EXPECT_STREQ(outcomeName(stage, static_cast<std::uint8_t>(count)), "unknown") << stageName(stage);
+  }
+  EXPECT_EQ(stage_names.size(), outcome_counts.size());
+  EXPECT_EQ(static_cast<int>(kLastStage), static_cast<int>(outcome_counts.size()));
 }
 
 TEST(MonoPoseEstimator, IrModeFindsTheLedsInTheDark) {
@@ -475,6 +561,7 @@ TEST(MonoPoseEstimator, AnUncertainPositionIsWithheldButStillTracked) {
   const Eigen::Matrix3d rotation = synthetic::facingRotation(0.2);
   const Eigen::Vector3d position(0.02, 0.0, 1.2);
   MonoPoseParams params = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
+  params.consistency.position_sigma_check_max_range_m = 0.0;  // every range: the view is at 1.2 m, past the shipped 1 m
   MonoPoseEstimator unlimited(model, camera, params);
   const MonoPoseResult reference = unlimited.process(synthetic::renderVisible(model, camera, rotation, position, 320), 10.0);
   ASSERT_TRUE(reference.valid) << reference.status;
@@ -491,6 +578,8 @@ TEST(MonoPoseEstimator, AnUncertainPositionIsWithheldButStillTracked) {
     EXPECT_FALSE(result.valid) << "frame " << frame;
     EXPECT_FALSE(result.orientation_valid) << "frame " << frame;
     EXPECT_EQ(result.reject_reason, RejectReason::kPositionUncertain) << "frame " << frame;
+    EXPECT_EQ(result.stage, Stage::kPosition) << "frame " << frame;
+    EXPECT_EQ(result.stage_outcome, static_cast<std::uint8_t>(PositionOutcome::kUncertain)) << "frame " << frame;
     EXPECT_NE(result.status.find("max_position_sigma_fraction"), std::string::npos) << result.status;
     EXPECT_EQ(result.used_tracking_region, frame > 0) << "frame " << frame << ": still tracked";
   }
@@ -502,13 +591,13 @@ TEST(MonoPoseEstimator, AnUncertainPositionIsWithheldButStillTracked) {
 
 TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
   MonoPoseParams params;
-  params.features.ratio = 1.5;
-  EXPECT_NE(validateParams(params).find("feature_ratio"), std::string::npos);
+  params.features.feature_ratio = 1.5;
+  EXPECT_EQ(refusedKey(params), "feature_ratio");
   params = MonoPoseParams();
   params.max_range_m = 0.05;
-  EXPECT_NE(validateParams(params).find("max_range_m"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "max_range_m");
   EXPECT_THROW(MonoPoseEstimator(synthetic::makeModel(1), synthetic::defaultCamera(), params), std::invalid_argument);
-  EXPECT_TRUE(validateParams(MonoPoseParams()).empty());
+  EXPECT_EQ(refusedKey(MonoPoseParams()), "");
   MonoMode mode;
   EXPECT_TRUE(parseMonoMode("ir", &mode));
   EXPECT_EQ(mode, MonoMode::kIr);

@@ -49,6 +49,16 @@ std::vector<mono::LedBlob> ledBlobsOf(cv::Mat image) {
   return detector.detectBlobs(image);
 }
 
+// The key of the first setting its declaration refuses; empty when it allows them all.
+std::string refusedKey(const mono::ConsistencyParams& params) {
+  try {
+    docking_settings::validateSettings(params);
+  } catch (const docking_settings::ConfigError& e) {
+    return e.key();
+  }
+  return "";
+}
+
 }  // namespace
 
 // Over a busy background the old whole-frame budget (300 strongest corners) goes to the clutter; the
@@ -58,7 +68,6 @@ TEST(MonoStress, RegionHintFindsTheTargetOverClutterThatTheFullFrameMisses) {
   c.min_range_m = 1.4;
   mono::MonoPoseParams old_params = params("visible");
   old_params.use_half_resolution = false;
-  old_params.features.keypoint_grid = 0;
   const mono::MonoPoseParams new_params = params("visible");
   int full_frame_found = 0;
   int hinted_found = 0;
@@ -150,7 +159,7 @@ TEST(MonoStress, GlareOcclusionAndReflectionsAreInvalidOrHonest) {
   // Not here: IR reflections at 1.6-2 m still give an occasional confident wrong pose (README, limits).
   for (const Case& k : cases) {
     mono::MonoPoseParams p = params(k.mode);
-    p.solver = k.solver;
+    p.solver = mono::toString(k.solver);
     std::vector<stress::EstimateScore> scores;
     const stress::ConditionSummary s = stress::runCondition(renderer(), condition(k.condition), p, kFirstSeed, 12, 2, &scores);
     const std::string label = k.condition + " / " + mono::toString(k.solver);
@@ -235,6 +244,7 @@ TEST(PoseConsistency, OrientationIsWithheldAboveTheRotationSigmaLimit) {
 TEST(PoseConsistency, PositionIsWithheldAboveTheRangeFractionLimit) {
   mono::ConsistencyParams params;
   params.max_position_sigma_fraction = 0.02;
+  params.position_sigma_check_max_range_m = 0.0;  // every range (the shipped 1 m band is tested below)
   mono::PoseWithCovariance pose;
   pose.translation = Eigen::Vector3d(0.0, 0.0, 2.5);  // 2 % of the range: 50 mm
   pose.covariance = mono::Matrix6d::Identity() * 1e-6;
@@ -266,12 +276,12 @@ TEST(PoseConsistency, PositionIsWithheldAboveTheRangeFractionLimit) {
   params.position_sigma_check_max_range_m = 6.0;
   EXPECT_FALSE(mono::positionClaimed(pose, params, &note));
   params.position_sigma_check_max_range_m = -1.0;
-  EXPECT_NE(mono::validateConsistencyParams(params), "");
+  EXPECT_EQ(refusedKey(params), "position_sigma_check_max_range_m");
   params.position_sigma_check_max_range_m = 0.0;  // every range
   params.max_position_sigma_fraction = 0.0;  // off
   EXPECT_TRUE(mono::positionClaimed(pose, params, &note));
   params.max_position_sigma_fraction = -0.1;
-  EXPECT_NE(mono::validateConsistencyParams(params), "");
+  EXPECT_EQ(refusedKey(params), "max_position_sigma_fraction");
 }
 
 // Poses that scatter about the prediction by 3 times their claimed sigma get their covariance scaled by
@@ -495,10 +505,10 @@ TEST(PoseConsistency, TheSmearShapeBiasTakesTheLongerSmearAndTheDirectFraction) 
   params.direct_smear_shape_bias_fraction = 0.0;
   EXPECT_EQ(mono::smearShapeBiasPx(params, true, 0.0, 8.0), 0.0);  // off
   params.direct_smear_shape_bias_fraction = -0.1;
-  EXPECT_NE(mono::validateConsistencyParams(params).find("direct_smear_shape_bias_fraction"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "direct_smear_shape_bias_fraction");
   params.direct_smear_shape_bias_fraction = 0.08;
   params.motion_smear_exposure_s = -0.01;
-  EXPECT_NE(mono::validateConsistencyParams(params).find("motion_smear_exposure_s"), std::string::npos);
+  EXPECT_EQ(refusedKey(params), "motion_smear_exposure_s");
 }
 
 // The node's hint: the disparity detector's 3D estimate (the blob's centre, a few cm off the port),

@@ -12,7 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "docking_perception/target_print/target_print.h"
-#include "mono_params_yaml.h"
+#include "docking_settings/yaml_loader.h"
 
 namespace docking_perception {
 namespace target_print {
@@ -20,13 +20,9 @@ namespace {
 
 const std::string kConfigDir = TARGET_PRINT_CONFIG_DIR;
 
+// The shipped visible configuration.
 mono::MonoPoseParams visibleParams() {
-  mono::MonoPoseParams params;
-  std::string error;
-  if (!compare::loadMonoParams(kConfigDir + "/mono_pose_visible.yaml", &params, &error)) {
-    throw std::runtime_error(error);
-  }
-  return params;
+  return docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(kConfigDir + "/mono_pose_visible.yaml").core;
 }
 
 const mono::TargetModel& shippedModel() {

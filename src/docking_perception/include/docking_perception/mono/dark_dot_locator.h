@@ -8,15 +8,12 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "docking_perception/mono/mono_pose_settings.h"
+
 namespace docking_perception {
 namespace mono {
 
-struct DarkDotParams {
-  double search_radius_factor = 1.5;  // search disc radius / predicted dot radius (inside the white ring)
-  double min_search_radius_px = 3.0;
-  double min_contrast = 25.0;         // background - dot, 8-bit levels
-  double max_shift_factor = 1.0;      // refined centre may move at most this many dot radii
-};
+// DarkDotParams is declared in settings/mono_pose.yaml (generated header).
 
 class DarkDotLocator {
  public:

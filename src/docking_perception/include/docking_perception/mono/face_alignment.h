@@ -18,23 +18,14 @@
 #include <string>
 #include <vector>
 
+#include "docking_perception/mono/mono_pose_settings.h"
 #include "docking_perception/mono/pose_types.h"
 #include "docking_perception/mono/target_model.h"
 
 namespace docking_perception {
 namespace mono {
 
-struct DirectAlignmentParams {
-  double min_correlation = 0.8;         // final ECC correlation needed (1: perfect match up to gain/offset)
-  double working_face_width_px = 128.0; // the image is shrunk until the face is at most this wide (CPU)
-  int pyramid_levels = 3;               // ECC levels (each half the previous), coarse to fine
-  int max_iterations = 25;              // ECC iterations per level
-  int grid_columns = 8;                 // correspondences handed to PnP: a grid over the face
-  int grid_rows = 6;
-};
-
-// Empty when usable, else a message naming the parameter (config key).
-std::string validateDirectAlignmentParams(const DirectAlignmentParams& params);
+// DirectAlignmentParams (keys direct_*) is declared in settings/mono_pose.yaml (generated header).
 
 struct DirectAlignment {
   bool found = false;

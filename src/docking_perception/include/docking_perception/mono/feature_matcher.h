@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "docking_perception/mono/mono_pose_settings.h"
 #include "docking_perception/mono/upright_descriptor.h"
 
 namespace docking_perception {
@@ -32,59 +33,11 @@ namespace mono {
 // a robot's yaw or drive during the exposure).
 enum class ModelSet { kSharp, kBlurred, kRowSmeared };
 
-struct FeatureMatcherParams {
-  bool use_brisk_detector = false;  // false: FAST corners (the descriptors: upright_descriptors)
-  // true: UprightRingDescriptor for the sharp model and its searches (no orientation: the test bed's
-  // cameras do not roll; ~7 k instructions a keypoint against BRISK's ~65 k); false: OpenCV's
-  // rotation-invariant BRISK descriptors (a camera that rolls; they also use the scale that
-  // use_brisk_detector's keypoints carry, which the upright descriptor ignores). The blurred model keeps
-  // BRISK either way: with upright descriptors it found more faces under 9 px of motion blur, but some
-  // 10-35 deg off with a small covariance (stress seeds 100-139 and 400-439: 2 confident wrong in 120
-  // frames, BRISK none).
-  bool upright_descriptors = true;
-  int fast_threshold = 20;
-  int brisk_threshold = 30;         // AGAST score threshold of BRISK's detector
-  int brisk_octaves = 3;
-  int max_image_keypoints = 300;    // strongest kept before descriptors are computed (bounds the time)
-  int max_model_keypoints_per_level = 400;  // bounds the matching time (image x model descriptors)
-  std::vector<int> model_widths_px = {400, 280, 200, 140, 100, 70};  // texture widths of the model pyramid
-  double ratio = 0.8;               // Lowe's ratio test
-  double ransac_threshold_px = 3.0;
-  int min_inliers = 12;
-  double min_face_area_px = 600.0;  // the matched face outline must be at least this big
-  bool refine = true;               // sub-pixel refinement of the inliers
-  double min_correlation = 0.75;    // refined points below this correlation are dropped
-  int max_refined_points = 150;     // inliers plus model corners of the nearest level, refined by NCC
-  // Refinement passes: each later pass re-renders the texture with the homography of the previous
-  // one and correlates the points it kept again, so the parabolic peak fit works near zero offset,
-  // where it is unbiased (a first pass with offsets up to +-3 px leans toward whole pixels).
-  int refine_passes = 1;
-  // One pass more when the last one moved a corner of the face by more than this (px): its patches were
-  // drawn at a homography that far off (a tracking prediction through a turn reversal, a feature match on
-  // a blurred face), which leaves each point off in its own way. Steady tracking moves the face by less,
-  // and pays nothing. 0: never.
-  double refine_again_move_px = 0.0;
-  // Refinement with the blurred model's patches too (when there is one), keeping them when they correlate
-  // clearly better with the image: a blurred image refined against sharp patches gives biased points.
-  bool blur_matched_refinement = true;
-  // Lengths (px) of motion blur along the image rows that the refinement also tries, each as a model
-  // smeared by that much, when the blurred model already correlated better than the sharp one (a blurred
-  // image): the smear that correlates best gives the points. Robots on a floor yaw and drive, so their
-  // images smear along the rows, and a round (Gaussian) blur matched to a row smear still leaves each
-  // point off in its own way. Empty: none.
-  std::vector<int> refinement_row_smears_px;
-  // Keypoint budget spread over a keypoint_grid x keypoint_grid grid of the search region (0: the
-  // strongest max_image_keypoints of the whole region). Over a busy background the strongest corners
-  // are the background's; a grid keeps a share for every part of the image, the target's included.
-  int keypoint_grid = 0;
-  // > 0: a second model pyramid of the texture blurred by this sigma (px at each level), matched by the
-  // searches for blurred faces (defocus, motion): their corners have the blurred texture's descriptors.
-  double blurred_model_sigma_px = 0.0;
-  // > 0 (with a blurred model): a third model pyramid, the blurred one also smeared along its rows by this
-  // many px, matched by a search of its own (FaceSearch): the corners of a face smeared by motion have
-  // the smeared texture's descriptors.
-  int search_row_smear_px = 0;
-};
+// FeatureMatcherParams is declared in settings/mono_pose.yaml (generated header). upright_descriptors: the
+// UprightRingDescriptor for the sharp model and its searches (no orientation: ~7 k instructions a keypoint
+// against BRISK's ~65 k); false: OpenCV's rotation-invariant BRISK descriptors. The blurred model keeps BRISK
+// either way: with upright descriptors it found more faces under 9 px of motion blur, but some 10-35 deg off
+// with a small covariance (stress seeds 100-139 and 400-439: 2 confident wrong in 120 frames, BRISK none).
 
 struct FaceMatch {
   bool found = false;
@@ -121,10 +74,8 @@ class FeatureMatcher {
   void setParams(const FeatureMatcherParams& params);
   const FeatureMatcherParams& params() const { return params_; }
   int modelKeypointCount() const { return static_cast<int>(model_points_.size()); }
-  // The BRISK object in use: null until buildModel, then (when BRISK detects or describes:
-  // use_brisk_detector, upright_descriptors false, or a blurred model) one per (brisk_threshold,
-  // brisk_octaves) in the process, shared by every matcher with those parameters (its pattern tables
-  // take 46 MB).
+  // The BRISK object in use: null until buildModel, then (when BRISK describes: upright_descriptors false,
+  // or a blurred model) the one of the process, shared by every matcher (its pattern tables take 46 MB).
   const cv::BRISK* descriptorExtractor() const { return brisk_.get(); }
 
   // Matches in roi (empty: the whole image) of an 8-bit gray image. expected_face_width_px > 0 (from
@@ -143,7 +94,7 @@ class FeatureMatcher {
 
   // Tracking without features (issue 15): the face where a predicted homography (texture pixel -> image
   // pixel, from the tracked pose) puts it; the model corners of the level nearest its apparent size are
-  // refined by NCC as after a feature match (up to max_refined_points, refine_passes). No FAST, BRISK or
+  // refined by NCC as after a feature match (up to max_refined_points). No FAST, BRISK or
   // Hamming matching: a third of a feature search's instructions. found when the predicted outline is a
   // plausible view and at least max(min_inliers, min_kept_fraction x the points tried) survive the
   // correlation and the refinement's RANSAC; a prediction off by more than the NCC search (+-3 px) keeps
@@ -161,6 +112,32 @@ class FeatureMatcher {
     int first_row;     // this level's rows in model_descriptors_
     int row_count;
   };
+  // The rows of model_descriptors_ a search matches against.
+  struct ModelRows {
+    int first = 0;
+    int count = 0;
+  };
+  // The region to search (roi, or the whole image when empty), clipped; *problem says why none.
+  cv::Rect searchRegion(const cv::Mat& gray, const cv::Rect& roi, std::string* problem) const;
+  // Keypoints and descriptors of the region (half: at half resolution), of the kind the model set has.
+  void describeRegion(const cv::Mat& gray, const cv::Rect& roi, bool half, bool blurred_set,
+                      std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors) const;
+  // The levels of one model set, those within a factor 1.6 of the expected width when it is known (> 0)
+  // and there are any.
+  ModelRows modelRows(ModelSet set, double expected_face_width_px) const;
+  // The image keypoints whose nearest model descriptor passes the ratio test, as texture and image points
+  // (full resolution, offset by the region's corner).
+  void ratioTestMatches(const cv::Mat& descriptors, const std::vector<cv::KeyPoint>& keypoints, const ModelRows& rows,
+                        bool half, cv::Point offset, std::vector<cv::Point2f>* texture_points,
+                        std::vector<cv::Point2f>* image_points) const;
+  // The RANSAC homography and its inliers into *result; false (with the status) when none or too few.
+  bool fitHomography(const std::vector<cv::Point2f>& texture_points, const std::vector<cv::Point2f>& image_points,
+                     bool half, FaceMatch* result) const;
+  // One level of the model pyramid: the texture at `width`, blurred / smeared as its set is, its keypoints
+  // and descriptors appended to the model's.
+  void addModelLevel(const cv::Mat& texture_gray, ModelSet set, int width);
+  // The sharp levels smeared along their rows (refinement_row_smears_px; refinement only).
+  void addRowSmearedLevels();
   void detect(const cv::Mat& image, std::vector<cv::KeyPoint>* keypoints, int max_keypoints) const;
   // Descriptors of the keypoints (those too near the border for them are removed), of the kind the
   // model set (sharp or blurred_set) was described with.
@@ -191,6 +168,11 @@ class FeatureMatcher {
   RefinedPoints refineAgainstRowSmears(const cv::Mat& gray, double apparent_width,
                                        const std::vector<cv::Point2f>& candidates, const cv::Matx33d& homography,
                                        const cv::Rect& face_box, const RefinedPoints& to_beat, int* smear_px) const;
+  // The candidates refined against the sharp model, or against the blurred one (or its row smears) when
+  // those patches correlate clearly better (blur_matched_refinement); match notes which.
+  RefinedPoints refineAgainstBestModel(const cv::Mat& gray, double apparent_width,
+                                       const std::vector<cv::Point2f>& candidates, const cv::Rect& face_box,
+                                       FaceMatch* match) const;
   // Each candidate's patch, drawn from `level` with the homography, located in the image by NCC.
   RefinedPoints refineAgainst(const cv::Mat& gray, const ModelLevel& level, const std::vector<cv::Point2f>& candidates,
                               const cv::Matx33d& homography, const cv::Rect& face_box) const;

@@ -20,31 +20,7 @@
 namespace docking_perception {
 namespace mono {
 
-// Parameters (config/mono_pose_<mode>.yaml, keys inner_pattern_*; documented there and in the README).
-struct InnerPatternParams {
-  bool enabled = true;
-  // The tag is looked for when the last pose or this image's face pose is nearer than this (m), or the
-  // face was not found right after a pose nearer than it; inside it a valid tag pose is the result.
-  double use_range_m = 0.45;
-  double quad_decimate = 2.0;          // apriltag's quad_decimate (the tag is >= 50 px wide where used)
-  double max_reprojection_px = 2.0;    // RMS over the 4 corners
-  double min_pixel_sigma = 0.5;        // floor of the corner noise scaling the covariance, px
-  double min_decision_margin = 30.0;   // apriltag's decision margin below this: not trusted
-  double min_tag_edge_px = 24.0;       // a smaller tag image gives too weak a pose
-  int min_points = 10;                 // grid corners that must refine and fit
-  // Cross-check with the face's pose in the same image (both valid): positions farther apart than
-  // this (m) or orientations (rad) mean one of them is wrong: the image gives no valid pose.
-  double cross_check_position_m = 0.02;
-  double cross_check_angle_rad = 0.0873;
-  // After an image whose face was not found while the tag gave the pose (inside use_range_m: the face
-  // no longer fits the image near contact), the face is searched again only every this many images;
-  // the tag's pose stands in between. 1: every image. The face's failing search was 20-40 ms an image
-  // inside ~0.17 m, the chain's worst latency.
-  int face_retry_every = 5;
-};
-
-// Empty when usable, else a message naming the first bad parameter by its yaml key.
-std::string validateInnerPatternParams(const InnerPatternParams& params);
+// InnerPatternParams (keys inner_pattern_*) is declared in settings/mono_pose.yaml (generated header).
 
 struct InnerPatternResult {
   bool valid = false;

@@ -20,23 +20,13 @@
 #include <vector>
 
 #include "docking_perception/mono/collinear_five_point_solver.h"
+#include "docking_perception/mono/mono_pose_settings.h"
 #include "docking_perception/mono/target_model.h"
 
 namespace docking_perception {
 namespace mono {
 
-struct LedDetectorParams {
-  int threshold = 200;                // 8-bit intensity an LED pixel reaches
-  double min_area_px = 2.0;
-  double max_area_px = 1500.0;
-  double min_fill_ratio = 0.35;       // blob area / bounding box area
-  double max_aspect_ratio = 3.0;      // bounding box long side / short side
-  int max_blobs = 16;                 // the brightest-by-area blobs kept for pattern search
-  double min_contrast = 0.0;          // peak above the blob's surroundings (its box grown by 2 px); 0: off
-  double collinearity_tolerance = 0.04;  // distance of the middle blob from the line / triple length
-  double midpoint_tolerance = 0.2;       // |position along the triple - 0.5|
-  double min_arm_angle_deg = 15.0;       // the two arms must not look parallel
-};
+// LedDetectorParams, the blob and pattern settings, is declared in settings/mono_pose.yaml (generated header).
 
 struct LedBlob {
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();

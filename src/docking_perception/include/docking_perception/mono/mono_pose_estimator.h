@@ -22,10 +22,12 @@
 #include "docking_perception/mono/feature_matcher.h"
 #include "docking_perception/mono/inner_pattern_detector.h"
 #include "docking_perception/mono/led_pattern_detector.h"
+#include "docking_perception/mono/mono_pose_settings.h"
 #include "docking_perception/mono/planar_pnp_solver.h"
 #include "docking_perception/mono/pose_consistency.h"
 #include "docking_perception/mono/pose_types.h"
 #include "docking_perception/mono/reject_reason.h"
+#include "docking_perception/mono/stages.h"
 #include "docking_perception/mono/target_model.h"
 #include "docking_perception/mono/velocity_estimators.h"
 
@@ -45,57 +47,30 @@ std::string toString(MonoMode mode);
 std::string toString(PoseSolverType solver);
 std::string toString(VelocityMethod method);
 
-struct MonoPoseParams {
-  MonoMode mode = MonoMode::kVisible;
-  PoseSolverType solver = PoseSolverType::kPnp;
-  VelocityMethod velocity = VelocityMethod::kFilter;
-  // The published orientation is the velocity filter's posterior at the image's stamp (this image's pose
-  // fused with the ones before it) once the filter has fused at least two poses since its last restart and
-  // accepted this one; otherwise the image's own. Single images under blur scatter by degrees about the
-  // truth, frame to frame; their fused orientation does not. The position stays the image's own: a turning
-  // camera moves the target on a curve in its frame, which a constant-velocity filter follows with a lag.
-  bool publish_filtered_orientation = true;
-  // The fraction of an image's orientation error (1-sigma) that persists over images, which no filtering
-  // averages out: the published rotation covariance is the filter's plus this squared times the image's.
-  double filtered_orientation_correlated_fraction = 0.5;
-  bool use_tracking_region = true;
-  double tracking_margin_px = 40.0;    // added around the predicted face outline
-  double max_reprojection_px = 3.0;    // a pose whose RMS reprojection error is larger is rejected
-  double min_pixel_sigma = 0.3;        // floor of the pixel noise that scales the covariances
-  double min_range_m = 0.1;
-  double max_range_m = 5.0;
-  int max_pattern_candidates = 6;      // IR: candidate LED patterns tried, best first
-  bool use_half_resolution = false;    // visible: also search the half-resolution image (blur)
-  // Tracking (visible): the face refined where the pose predicted by the velocity filter puts it, without
-  // the feature search (FeatureMatcher::matchAtPrediction), when the last image claimed its orientation;
-  // the feature search runs when fewer than predicted_face_min_kept_fraction of the refined points hold,
-  // or the pose fails a check.
-  bool predict_face_when_tracking = true;
-  double predicted_face_min_kept_fraction = 0.5;
-  double region_hint_max_age_s = 0.2;  // an external region hint older than this (image time) is ignored
-  double region_hint_radius_m = 0.2;   // a position hint's search region: this radius around it (the face's
-                                       // half-diagonal is 0.19 m; tracking_margin_px covers the blob's offset)
-  // Visible: when the features find no face and a prior exists (the tracked pose, or a region/position
-  // hint), align the texture with the image directly (face_alignment.h).
-  bool use_direct_alignment = true;
-  int direct_yaw_hypotheses = 5;       // a hint gives no orientation: face yaws tried, evenly over +-max
-  double direct_max_yaw_deg = 30.0;    // the largest yaw tried from a hint (the ECC basin covers ~10 deg more)
-  DirectAlignmentParams direct;
-  FeatureMatcherParams features;
-  LedDetectorParams leds;
-  DarkDotParams dots;
-  PlanarPnpParams pnp;
-  ConstantVelocityFilterParams filter;
-  InnerPatternParams inner_pattern;    // visible mode, a target with an inner pattern (target.yaml)
-  ConsistencyParams consistency;
-};
+// MonoPoseParams, the estimator's settings (its components' nested), is declared in settings/mono_pose.yaml
+// (generated header). publish_filtered_orientation: the published orientation is the velocity filter's
+// posterior at the image's stamp once the filter has fused at least two poses since its last restart and
+// accepted this one; otherwise the image's own. Single images under blur scatter by degrees about the truth,
+// frame to frame; their fused orientation does not. The position stays the image's own: a turning camera
+// moves the target on a curve in its frame, which a constant-velocity filter follows with a lag.
+// predict_face_when_tracking (visible): the face refined where the filter's predicted pose puts it
+// (FeatureMatcher::matchAtPrediction), without the feature search, when the last image claimed its
+// orientation; the search runs when fewer than predicted_face_min_kept_fraction of the refined points hold,
+// or the pose fails a check. use_direct_alignment (visible): when the features find no face and a prior
+// exists (the tracked pose, or a region/position hint), the texture is aligned with the image directly
+// (face_alignment.h).
+
+// The settings' choices as the estimator uses them.
+MonoMode modeOf(const MonoPoseParams& params);
+PoseSolverType solverOf(const MonoPoseParams& params);
+VelocityMethod velocityOf(const MonoPoseParams& params);
 
 // MonoPoseResult::solver when the pose comes from the inner pattern.
 constexpr const char* kInnerPatternSolverName = "inner_pattern";
 
-// Empty when the parameters are usable, else a message naming the first bad parameter by its name in
-// config/mono_pose_<mode>.yaml (e.g. "feature_ratio must be in (0, 1]").
-std::string validateParams(const MonoPoseParams& params);
+// Throws docking_settings::ConfigError (a std::invalid_argument) naming the first setting its declaration
+// does not allow (its key in config/mono_pose_<mode>.yaml, e.g. "feature_ratio"), or two that contradict.
+void validate(const MonoPoseParams& params);
 
 struct MonoPoseResult {
   double stamp_s = 0.0;
@@ -104,7 +79,9 @@ struct MonoPoseResult {
   // valid result, only the position (and the velocities) may be used.
   bool orientation_valid = false;
   std::string status;                  // why not valid, or what part is withheld (for people); else empty
-  RejectReason reject_reason = RejectReason::kNone;  // the same as a code (for programs)
+  RejectReason reject_reason = RejectReason::kNone;  // the same as a coarse code (for programs)
+  Stage stage = Stage::kNone;          // the stage that decided (stages.h) ...
+  std::uint8_t stage_outcome = 0;      // ... and its outcome code there (0: passed)
   std::string solver;                  // "paper_5point" or "pnp"
   PoseWithCovariance pose;             // camera <- target: what is published (see publish_filtered_orientation)
   PoseWithCovariance measured_pose;    // this image's own pose (equal to `pose` unless orientation_filtered)
@@ -177,18 +154,63 @@ class MonoPoseEstimator {
   void setPositionHint(const Eigen::Vector3d& position_camera, double stamp_s);
 
  private:
-  bool estimateVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px, MonoPoseResult* result);
-  bool estimateIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
-  bool solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason, RejectReason* code) const;
-  bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
-  // False (with the code and reason in *result) when a fresh position hint's range and the pose's differ
-  // by more than consistency.max_hint_disagreement_fraction of the range.
-  // Without a fresh hint, a pose at least hint_check_min_range_m away is refused for
-  // hint_disagreement_hold_s after a pose that disagreed.
-  bool agreesWithPositionHint(MonoPoseResult* result);
+  // What an IR search over the LED patterns learned, for the reason when none gave a pose.
+  struct LedSearch {
+    std::string reason;
+    bool blob_rejected = false;       // a pattern's blob was merged with a reflection
+    bool candidate_unsolved = false;  // a pattern of LED-like blobs gave no plausible pose
+  };
+
+  // The stages of process() (stages.h), in order.
+  InputOutcome readImage(const cv::Mat& image, cv::Mat* gray, MonoPoseResult* result) const;
+  // Near contact (inner_pattern.face_retry_every): this image's face search is skipped.
+  FindOutcome skipFaceSearch(MonoPoseResult* result);
+  // Find, solve and vet: the face's pose (visible) or the LEDs' (IR); result->valid when it passed them.
+  StageOutcome measurePose(const cv::Mat& gray, MonoPoseResult* result);
+  // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
+  InnerPatternOutcome applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
+  // A fresh position hint's range against the pose's (consistency.max_hint_disagreement_fraction); without a
+  // fresh hint, a pose at least hint_check_min_range_m away is refused for hint_disagreement_hold_s after a
+  // pose that disagreed.
+  HintOutcome checkPositionHint(MonoPoseResult* result);
+  // The pose is valid: its covariance scaled by the innovation, and whether its orientation is claimed.
+  OrientationOutcome claimOrientation(MonoPoseResult* result);
+  // Velocities, the tracking state, and the published (filtered) orientation.
+  void trackPose(MonoPoseResult* result);
   // A tracked pose whose position sigma is above consistency.max_position_sigma_fraction of its range is
   // published not valid (kPositionUncertain), though it stays the tracked pose.
-  void withholdUncertainPosition(MonoPoseResult* result) const;
+  PositionOutcome claimPosition(MonoPoseResult* result) const;
+
+  // Visible: the face at its predicted place, else searched (features, then the direct alignment), then
+  // its pose.
+  StageOutcome measureVisible(const cv::Mat& gray, const cv::Rect& region, double face_width_px, MonoPoseResult* result);
+  // Tracking with a claimed orientation (predict_face_when_tracking): true when the face refined at its
+  // predicted place gave a pose that passed; else the result is as it was.
+  bool posedAtPredictedFace(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
+  // The face by features in the predicted region, the hint's region, the full frame, then by direct alignment.
+  StageOutcome findFace(const cv::Mat& gray, const cv::Rect& region, double face_width_px, FaceMatch* match,
+                        double* direct_sigma_px, MonoPoseResult* result);
+  void alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, FaceMatch* match, double* direct_sigma_px,
+                         MonoPoseResult* result);
+  // The pose from a face match (features or direct alignment): PnP or the 5 dots, then the checks.
+  StageOutcome poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px, MonoPoseResult* result);
+  StageOutcome pnpPoseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px,
+                                MonoPoseResult* result);
+  StageOutcome fivePointPoseFromMatch(const cv::Mat& gray, const FaceMatch& match, MonoPoseResult* result);
+  void correspondences(const FaceMatch& match, std::vector<Eigen::Vector3d>* model_points,
+                       std::vector<Eigen::Vector2d>* image_points) const;
+  // paper_5point: where the homography puts printed dot marker_index, and its apparent radius.
+  Eigen::Vector2d predictedDot(const cv::Matx33d& homography, int marker_index, double* radius_px) const;
+  // IR: the LED patterns in the region (empty: the whole image), best first, until one gives a pose.
+  StageOutcome measureIr(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
+  bool poseFromLeds(const cv::Mat& gray, const cv::Rect& roi, LedSearch* search, MonoPoseResult* result) const;
+  SolveOutcome solveFivePoint(const MarkerPixels& pixels, MonoPoseResult* result, std::string* reason) const;
+  bool checkPose(const PoseWithCovariance& pose, std::string* reason) const;
+  HintOutcome hintOutcome(MonoPoseResult* result);
+  OrientationOutcome orientationOutcome(MonoPoseResult* result) const;
+  // The inner tag's pose (with the covariance model of every PnP pose) where the tracked pose puts it, then
+  // in the whole image; not valid when not found.
+  InnerPatternResult findInnerTag(const cv::Mat& gray, double* ambiguity_deg, MonoPoseResult* result) const;
   // An external hint is set and at most region_hint_max_age_s from this image's stamp.
   bool hintFresh(double stamp_s) const;
   // The region where the target should appear (empty: search the whole image) and, in visible mode,
@@ -209,35 +231,30 @@ class MonoPoseEstimator {
   // published one (publish_filtered_orientation); measured_pose keeps the image's own.
   void publishFilteredOrientation(bool fused, MonoPoseResult* result) const;
   void scaleByInnovation(MonoPoseResult* result);
-  bool claimOrientation(MonoPoseResult& result) const;
   bool directSearchDue();
   void noteDirectSearch(bool from_hint, bool found);
-  // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
   // After an image whose face was not found while the inner pattern gave the pose: skip the face's search
   // for the next inner_pattern.face_retry_every - 1 images; any invalid image ends the skipping.
   void updateFaceRetry(bool face_skipped, const MonoPoseResult& result);
-  void applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
   cv::Rect predictedInnerPatternRegion(double stamp_s) const;
   // The smear the face's image motion since the last pose gives over motion_smear_exposure_s (px; 0 without
   // a pose at most kMotionSmearMaxGapS before).
   double motionSmearPx(const Eigen::Vector3d& translation, double stamp_s) const;
-  // The consistency checks and honest covariance of a visible pose (pose_consistency.h); false with the
+  // The consistency checks and honest covariance of a visible pose (pose_consistency.h); refused with the
   // reason in result when the pose cannot be trusted.
   // pixel_sigma_px: the noise of the pose points (the PnP residual for features, the fit's own for the
   // direct alignment).
-  bool vetVisiblePose(const cv::Mat& gray, const FaceMatch& match, const std::vector<Eigen::Vector3d>& model_points,
-                      const PlanarPnpSolution* pnp, double pixel_sigma_px, MonoPoseResult* result) const;
-  // The pose from a face match (features or direct alignment): PnP or the 5 dots, then the checks.
-  bool poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px, MonoPoseResult* result);
+  StageOutcome vetVisiblePose(const cv::Mat& gray, const FaceMatch& match, const std::vector<Eigen::Vector3d>& model_points,
+                              const PlanarPnpSolution* pnp, double pixel_sigma_px, MonoPoseResult* result) const;
   // The direct alignment from the tracked pose or the hint; found == false when no prior or no match.
   DirectAlignment alignDirect(const cv::Mat& gray, bool tracking_prior, bool hint_fresh, double stamp_s) const;
   // A hint's position: the position hint's, or one from the region hint's box.
   Eigen::Vector3d hintPosition() const;
   // paper_5point: the located dots against the homography, and the 5-point pose against the inlier PnP.
-  bool vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
-                        const std::vector<Eigen::Vector3d>& model_points, const std::vector<Eigen::Vector2d>& image_points,
-                        MonoPoseResult* result) const;
+  StageOutcome vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,
+                                const std::vector<Eigen::Vector3d>& model_points,
+                                const std::vector<Eigen::Vector2d>& image_points, MonoPoseResult* result) const;
   // IR: the pose of an identified pattern after its 5-point solve (trial->pose): the blur from the LEDs'
   // streaks, then (pnp) the PnP pose with its covariance and IPPE's undecided alternative. False with the
   // reason when PnP fails or its pose is implausible.
@@ -249,6 +266,10 @@ class MonoPoseEstimator {
   TargetModel model_;
   CameraIntrinsics camera_;
   MonoPoseParams params_;
+  // params_'s choices, parsed.
+  MonoMode mode_ = MonoMode::kVisible;
+  PoseSolverType solver_ = PoseSolverType::kPnp;
+  VelocityMethod velocity_ = VelocityMethod::kFilter;
   FeatureMatcher matcher_;
   LedPatternDetector led_detector_;
   DarkDotLocator dot_locator_;

@@ -9,19 +9,14 @@
 #include <string>
 #include <vector>
 
+#include "docking_perception/mono/mono_pose_settings.h"
 #include "docking_perception/mono/pose_types.h"
 
 namespace docking_perception {
 namespace mono {
 
-struct PlanarPnpParams {
-  // The two IPPE solutions are "close" (ambiguous) when the larger reprojection error is below
-  // ambiguity_ratio times the smaller, or both are below ambiguity_floor_px.
-  double ambiguity_ratio = 1.5;
-  double ambiguity_floor_px = 0.5;
-  // Lower bound of the pixel noise used to scale the covariance (a perfect fit must not claim zero).
-  double min_pixel_sigma = 0.2;
-};
+// PlanarPnpParams (when IPPE's two poses count as close) is declared in settings/mono_pose.yaml (generated
+// header).
 
 struct PlanarPnpSolution {
   PoseWithCovariance pose;
@@ -36,9 +31,16 @@ struct PlanarPnpSolution {
 
 class PlanarPnpSolver {
  public:
-  explicit PlanarPnpSolver(const PlanarPnpParams& params = PlanarPnpParams()) : params_(params) {}
-  void setParams(const PlanarPnpParams& params) { params_ = params; }
+  // min_pixel_sigma_px: the lower bound of the pixel noise that scales the covariance (a perfect fit must
+  // not claim zero): the caller's (mono_pose's min_pixel_sigma, the inner pattern's own).
+  explicit PlanarPnpSolver(const PlanarPnpParams& params = PlanarPnpParams(), double min_pixel_sigma_px = 0.2)
+      : params_(params), min_pixel_sigma_px_(min_pixel_sigma_px) {}
+  void setParams(const PlanarPnpParams& params, double min_pixel_sigma_px) {
+    params_ = params;
+    min_pixel_sigma_px_ = min_pixel_sigma_px;
+  }
   const PlanarPnpParams& params() const { return params_; }
+  double minPixelSigma() const { return min_pixel_sigma_px_; }
 
   // model_points: coplanar points in frame `target`; image_points: their pixels. At least 4.
   // previous_rotation: the last trusted orientation (camera <- target), or nullptr.
@@ -47,7 +49,12 @@ class PlanarPnpSolver {
              PlanarPnpSolution* solution, std::string* reason) const;
 
  private:
+  // The chosen pose refined by Levenberg-Marquardt, its RMS and its Gauss-Newton covariance.
+  void refineWithCovariance(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& model_points,
+                            const std::vector<Eigen::Vector2d>& image_points, PlanarPnpSolution* solution) const;
+
   PlanarPnpParams params_;
+  double min_pixel_sigma_px_;
 };
 
 }  // namespace mono

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "docking_perception/mono/mono_pose_settings.h"
 #include "docking_perception/mono/planar_pnp_solver.h"
 #include "docking_perception/mono/pose_types.h"
 #include "docking_perception/mono/reject_reason.h"
@@ -33,98 +34,8 @@
 namespace docking_perception {
 namespace mono {
 
-struct ConsistencyParams {
-  double min_inlier_spread = 0.2;        // hull of the pose points / face area
-  double min_appearance_ncc = 0.45;      // median cell NCC of the model at the estimated pose; < 0: off
-  double max_ambiguity_deg = 8.0;        // undecided IPPE: beyond this angle the orientation is withheld
-  double ambiguity_chi2 = 16.0;          // IPPE undecided when the other solution's extra chi^2 is below this
-  double blur_gain = 0.5;                // pixel sigma multiplier per px of estimated blur sigma
-  double position_floor_fraction = 0.002;  // floor sigma of each position axis / range
-  double rotation_floor_deg = 0.3;       // floor sigma of each rotation axis
-  double max_dot_offset_factor = 0.6;    // paper_5point: located dot vs homography prediction, in dot radii
-  double max_solver_disagreement_deg = 5.0;  // paper_5point vs homography-inlier PnP orientation
-  double max_led_area_ratio = 2.5;       // IR: a pattern blob larger than this times the median of the five
-  double max_led_elongation = 1.8;       // IR: ratio of a blob's principal axes (second moments)
-  // IR: the streak sigma (LedBlob::streak_sigma_px) a still LED spot shows from the pixel grid and a
-  // turned face's ellipse (0.4-0.77 px in the still eval scenes); the median streak of the five blobs
-  // beyond it, in quadrature, is the motion blur that scales the covariance (blur_gain).
-  double led_still_streak_px = 0.8;
-  // Visible: a bias in the face's apparent size that all its points share (blur, the print's edges, a
-  // lens's residual distortion) moves the pose along the line of sight, and no residual shows it. The
-  // range sigma is at least this / sqrt(face area in px) x range, along the line of sight: at 4 m (a face
-  // ~37 px across) the pose came out 1.7 % too far for seconds against a 0.6 % range sigma
-  // (eval_real_clutter_far_4m). 0 turns it off.
-  double face_scale_bias_px = 0.3;
-  // Visible: a face refined against a row smear of L px (FaceMatch::refined_with_row_smear_px) may carry a
-  // bias of this x L px in its shape (one edge's length against the opposite one's) that all its points
-  // share: a tilt that no residual shows, and the tilt of a small face changes its shape little (at 2 m a
-  // degree about x is ~0.17 px of keystone). Each tilt axis's sigma is at least that bias over the
-  // keystone a radian about it makes (addFaceShapeBias). 0 turns it off.
-  double smear_shape_bias_fraction = 0.0;
-  // Visible: the smear L above is at least the face's image speed since the last pose times this
-  // exposure, whichever model refined its points (the longest exposure expected: the frame period at
-  // most). 0 turns it off.
-  double motion_smear_exposure_s = 0.0;
-  // Visible: smear_shape_bias_fraction for a pose from the direct (ECC) alignment, which aligns the sharp
-  // texture with the smeared face (the feature refinement models the smear): at 2.4 m under an 8 px row
-  // smear its orientations were 5-8 deg off about x against 1.9 deg sigmas (tune_real_motion9px_2p4m).
-  double direct_smear_shape_bias_fraction = 0.0;
-  // An orientation whose largest rotation sigma is above this is not claimed (the position still is):
-  // 3.3 deg puts 3 sigma at 10 deg, the error that makes an estimate wrong. Five LEDs under motion blur
-  // gave 10-28 deg errors with honest sigmas of 4-7 deg (eval_real_motion9px_1m); those are withheld.
-  double max_rotation_sigma_deg = 3.3;
-  // A pose whose largest position sigma is above this fraction of its range is not valid
-  // (kPositionUncertain): 3 sigma would pass the 5 % of range that makes a position wrong, so the pose
-  // claims nothing a planner can use. The estimator still tracks it (its filter, its search region): the
-  // covariance is honest, only the claim is withheld. The case: an IR pose at 2.8 m, 6.6 % too far, valid
-  // with a sigma of 4.6 % of range (campaign seed 10502). 0 turns the check off. Off for IR: far IR
-  // poses are honest but wide (range sigma 2-7 %, errors under 2 %), and at 0.0167 two dark runs of nine
-  // never started (docs/PERFORMANCE.md, 6 Dec 2026). The visible pose uses 0.05 nearer than 1 m (below).
-  double max_position_sigma_fraction = 0.0;
-  // The limit above holds only for poses nearer than this (0: at every range). Near the target nothing else
-  // checks a position (the stereo check starts at hint_check_min_range_m) and the planner docks on it; far
-  // out the range sigma is wide but honest (IPPE's undecided other pose) and the stereo check guards it.
-  double position_sigma_check_max_range_m = 0.0;
-  // Frames over which the scatter of the poses about the velocity filter's prediction is averaged to
-  // scale the covariance (InnovationCovarianceScale); 0 turns the scaling off.
-  double innovation_window_frames = 10.0;
-  // A single frame whose orientation jumps from the filter's prediction by more than this normalized
-  // chi^2 (3 dof, both covariances; 16.27 = 99.9 %) has its orientation withheld: a one-frame outlier
-  // moves a running mean too little to cover it. 0 turns the check off.
-  double max_rotation_innovation_chi2 = 16.27;
-  // An orientation with nothing to be compared with (the first pose after acquisition, or after a gap
-  // longer than filter.max_gap_s) is not claimed: the next frame, checked against it, is. The case: the
-  // first pose after glare (campaign seed 7899, 0.94 m) was 26.7 deg off, claimed with a 0.9 deg sigma.
-  // Off by default until measured like for like: a withheld orientation also leaves the next frame's
-  // IPPE branch undecided (previousRotation); the campaign with it on had three inner-pattern poses 5 %
-  // off in the dark, but those seeds run again gave one such pose with it off and none with it on
-  // (docs/PERFORMANCE.md, 4 Dec 2026 sixth part).
-  bool confirm_new_orientation = false;
-  // A pose whose range differs by more than this fraction from a fresh position hint's (the disparity
-  // detector's estimate of the same target in the same camera, at most region_hint_max_age_s old) is not
-  // valid (kHintDisagreement). Ranges, not positions: a turning chaser moves a stale hint's bearing.
-  // Stereo measures a far target's range directly, the pose from the face's apparent size, and a small
-  // face (far, turned) aligned 5-6 % off in scale without a residual to show it (seed 7699 at
-  // 2.7-3.8 m). 0 turns the check off.
-  double max_hint_disagreement_fraction = 0.04;
-  // ... only for a hint at least this far: the disparity detector's range (2-6 m). Nearer, the pose from
-  // a large face is the better measure; on campaign seeds 7700-7749 the check refused 144 poses within
-  // 3 % of the truth at 0.8-1.6 m, against the stereo estimate (all its refusals of poses 3-5 % or more
-  // off were at 2.2-3.8 m).
-  double hint_check_min_range_m = 2.0;
-  // After a pose disagreed with a hint, poses at least hint_check_min_range_m away that have no fresh hint
-  // to be checked against stay not valid (kHintDisagreement) for this long: the face's scale bias lasts
-  // seconds, and a frame whose disparity estimate came late slipped through (campaign seed 10506: at
-  // 3.36 m, 6.2 % too far between poses 6-7 % off that the check refused). 0: only fresh hints count.
-  double hint_disagreement_hold_s = 1.0;
-  // ... and within that hold a pose must come this close to a fresh hint (fraction of its range) to be
-  // valid again: one frame whose bias fell just under max_hint_disagreement_fraction against a stereo
-  // estimate itself 2 % off was published 6-7 % off the truth (seeds 10506, 10526, with the hold on).
-  double hint_recovery_fraction = 0.02;
-};
-
-// Empty when usable, else a message naming the parameter (config key).
-std::string validateConsistencyParams(const ConsistencyParams& params);
+// ConsistencyParams, the checks' and the covariance model's settings, is declared in settings/mono_pose.yaml
+// (generated header).
 
 // Area of the convex hull of texture points / texture area (0 for fewer than 3 points).
 double inlierSpread(const std::vector<cv::Point2f>& texture_points, const cv::Size& texture_size);

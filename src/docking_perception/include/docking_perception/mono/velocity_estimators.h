@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <string>
 
+#include "docking_perception/mono/mono_pose_settings.h"
 #include "docking_perception/mono/pose_types.h"
 
 namespace docking_perception {
@@ -40,18 +41,9 @@ class FrameDifferenceVelocity {
   TwistWithCovariance twist_;
 };
 
-struct ConstantVelocityFilterParams {
-  // Spectral densities of the white acceleration driving the model. Smaller: smoother velocity, slower
-  // response. The window is ~ (sigma_pose^2 dt / q)^(1/4): with 2 mm poses at 30 Hz and q = 1e-3 about
-  // 0.1 s, giving ~1 cm/s velocity noise.
-  double accel_noise = 1e-3;          // (m/s^2)^2 / Hz
-  double angular_accel_noise = 1e-3;  // (rad/s^2)^2 / Hz
-  double initial_velocity_sigma = 0.5;          // m/s
-  double initial_angular_velocity_sigma = 1.0;  // rad/s
-  double max_gap_s = 0.5;
-  double gate_chi2 = 22.46;           // 6 dof, 99.9 %; 0 disables the gate
-  int max_rejections = 3;
-};
+// ConstantVelocityFilterParams is declared in settings/mono_pose.yaml (generated header). The spectral
+// densities: smaller, smoother velocity and slower response; the window is ~ (sigma_pose^2 dt / q)^(1/4):
+// with 2 mm poses at 30 Hz and q = 1e-3 about 0.1 s, giving ~1 cm/s velocity noise.
 
 class ConstantVelocityFilter {
  public:
