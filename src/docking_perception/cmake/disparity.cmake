@@ -11,14 +11,18 @@ add_library(docking_perception_disparity_core
   src/disparity/tracking_window.cpp
 )
 target_include_directories(docking_perception_disparity_core SYSTEM PUBLIC ${YAML_CPP_INCLUDE_DIR})
-target_link_libraries(docking_perception_disparity_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES})
+# Its settings are declared in settings/disparity_detector.yaml and settings/far_stereo_rectify.yaml (generated
+# structs; docking_settings checks them).
+target_link_libraries(docking_perception_disparity_core ${OpenCV_LIBRARIES} ${YAML_CPP_LIBRARIES}
+  ${docking_settings_LIBRARIES})
+add_dependencies(docking_perception_disparity_core ${PROJECT_NAME}_settings_headers)
 
-# Test and benchmark support: a synthetic rectified stereo pair with known geometry, and the
-# matcher settings read from config/stereo_image_proc.yaml (the ones the launch file uses).
+# Test and benchmark support: a synthetic rectified stereo pair with known geometry, the matcher settings
+# read from config/stereo_image_proc.yaml (the ones the launch file uses), and the shipped settings.
 add_library(docking_perception_disparity_synthetic STATIC
   test/disparity/synthetic_stereo.cpp
 )
-target_link_libraries(docking_perception_disparity_synthetic ${OpenCV_LIBRARIES})
+target_link_libraries(docking_perception_disparity_synthetic docking_perception_disparity_core ${OpenCV_LIBRARIES})
 
 set(DISPARITY_CONFIG_DIR ${PROJECT_SOURCE_DIR}/../../config)
 

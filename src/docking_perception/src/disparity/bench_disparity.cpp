@@ -191,13 +191,13 @@ int main(int argc, char** argv) {
     const auto left_calibration = testing::loadCameraCalibration(config_dir + "/cameras/stereo_left.yaml");
     const auto right_calibration =
         testing::loadCameraCalibration(config_dir + "/cameras/stereo_right.yaml");
-    std::cout << "bench_disparity: config/far_stereo.yaml tracking_decimation "
-              << testing::loadTrackingDecimation(config_dir + "/far_stereo.yaml") << " (as launched)\n";
+    const auto far_stereo = testing::shippedFarStereoSettings(config_dir);
+    std::cout << "bench_disparity: config/far_stereo.yaml tracking_decimation " << far_stereo.tracking_decimation
+              << " (as launched)\n";
     auto settings = testing::loadMatcherSettings(
         config_dir + (decimation == kReducedDecimation ? "/stereo_image_proc_tracking.yaml" : "/stereo_image_proc.yaml"));
-    auto params = testing::loadDetectorParams(config_dir + "/disparity_detector.yaml");
-    params.target_shape =
-        docking_perception::disparity::loadTargetShape(config_dir + "/target.yaml");
+    auto params = testing::shippedDetectorSettings(config_dir).detector;
+    const auto target_shape = docking_perception::disparity::loadTargetShape(config_dir + "/target.yaml");
     if (decimation > 1 && decimation != kReducedDecimation) scaleMatcher(1.0 / decimation, &settings);
     params = docking_perception::disparity::detectorParamsAtDecimation(params, decimation);
     if (disparity_range_override > 0) settings.disparity_range = disparity_range_override;
@@ -236,7 +236,7 @@ int main(int argc, char** argv) {
         testing::pinholeOf(right_calibration), decimation);
     const cv::Size rectified_size = left_rectifier.outputSize();
     auto matcher = testing::createMatcher(settings);
-    const DisparityDetector detector(params);
+    const DisparityDetector detector(params, target_shape);
     // The appearance check the node runs on a found blob (face_appearance.h), part of the detection's cost.
     const auto target_model = docking_perception::mono::TargetModel::loadFromYaml(config_dir + "/target.yaml");
     const docking_perception::disparity::FaceAppearanceCheck appearance_check(
@@ -250,7 +250,7 @@ int main(int argc, char** argv) {
     cv::Rect window;  // empty: the whole image
     if (use_window) {
       window = placeWindow(left_raw, right_raw, left_rectifier, right_rectifier, *matcher, detector, geometry, settings,
-                           testing::loadTrackingWindow(config_dir + "/far_stereo.yaml"));
+                           far_stereo.window);
     }
     docking_perception::disparity::ImageWindow image_window;
     StereoGeometry window_geometry = geometry;
@@ -287,7 +287,7 @@ int main(int argc, char** argv) {
       const auto detection_start = Clock::now();
       detection = detector.detect(disparity, window_geometry, settings.min_disparity,
                                   testing::maxDisparity(settings), valid_region, {}, image_window);
-      if (params.appearance_check_enabled) {
+      if (params.appearance.check_enabled) {
         appearance = docking_perception::disparity::confirmByAppearance(appearance_check, left_rect, disparity, window_geometry,
                                                                         params.appearance, &detection);
       }

@@ -2,6 +2,8 @@
 #include "docking_perception/disparity/footprint_fit.h"
 #include "number_text.h"
 
+#include <docking_settings/setting_info.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -302,7 +304,8 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
 // above the port as below) and disparity, so that reproject() gives the port and its covariance.
 // Returns why the blob is not the mockup (empty: it fits).
 std::string portFromFootprint(const std::vector<cv::Point>& points, const std::vector<float>& disparities,
-                              const StereoGeometry& geometry, const DetectorParams& p, Detection* result) {
+                              const StereoGeometry& geometry, const DetectorParams& p, const TargetShape& shape,
+                              Detection* result) {
   std::vector<int> columns, rows;
   columns.reserve(points.size());
   rows.reserve(points.size());
@@ -312,7 +315,7 @@ std::string portFromFootprint(const std::vector<cv::Point>& points, const std::v
   }
   FootprintFitParams fit_params;
   fit_params.inlier_distance_m = p.footprint_inlier_distance_m;
-  const FootprintFit fit = fitFootprint(columnProfile(columns, disparities, geometry), p.target_shape,
+  const FootprintFit fit = fitFootprint(columnProfile(columns, disparities, geometry), shape,
                                         geometry, fit_params);
   if (!fit.valid) {
     return "footprint fit: only " + std::to_string(fit.profile_points) + " image columns with depth (need " +
@@ -433,112 +436,37 @@ TargetShape loadTargetShape(const std::string& path) {
   return shape;
 }
 
-std::vector<std::string> validateParams(const DetectorParams& p) {
-  std::vector<std::string> errors;
-  auto require = [&errors](bool ok, const std::string& field, const std::string& rule, double got) {
-    if (!ok) errors.push_back(field + " " + rule + " (got " + formatNumber(got) + ")");
-  };
-  require(p.median_kernel_px == 0 || p.median_kernel_px == 1 || p.median_kernel_px == 3 ||
-              p.median_kernel_px == 5,
-          "median_kernel_px", "must be 0, 1 (off), 3 or 5", p.median_kernel_px);
-  require(std::isfinite(p.gaussian_sigma_px) && p.gaussian_sigma_px >= 0.0 &&
-              p.gaussian_sigma_px <= 10.0,
-          "gaussian_sigma_px", "must be in [0, 10] (0: off)", p.gaussian_sigma_px);
-  require(p.closest_min_pixels >= 1, "closest_min_pixels", "must be >= 1", p.closest_min_pixels);
-  require(std::isfinite(p.target_depth_m) && p.target_depth_m >= 0.0, "target_depth_m",
-          "must be >= 0", p.target_depth_m);
-  require(std::isfinite(p.threshold_margin_px) && p.threshold_margin_px >= 0.0,
-          "threshold_margin_px", "must be >= 0", p.threshold_margin_px);
-  require(std::isfinite(p.face_percentile) && p.face_percentile >= 0.5 && p.face_percentile <= 1.0,
-          "face_percentile", "must be in [0.5, 1]", p.face_percentile);
-  require(std::isfinite(p.face_depth_band_m) && p.face_depth_band_m >= 0.0, "face_depth_band_m",
-          "must be >= 0", p.face_depth_band_m);
-  require(std::isfinite(p.face_min_band_px) && p.face_min_band_px >= 0.0, "face_min_band_px",
-          "must be >= 0", p.face_min_band_px);
-  require(p.min_blob_area_px >= 1, "min_blob_area_px", "must be >= 1", p.min_blob_area_px);
-  require(p.reduced_min_blob_area_px >= 1, "reduced_min_blob_area_px", "must be >= 1", p.reduced_min_blob_area_px);
-  require(std::isfinite(p.reduced_min_blob_thickness_px) && p.reduced_min_blob_thickness_px >= 0.0,
-          "reduced_min_blob_thickness_px", "must be >= 0", p.reduced_min_blob_thickness_px);
-  require(std::isfinite(p.min_blob_thickness_px) && p.min_blob_thickness_px >= 0.0,
-          "min_blob_thickness_px", "must be >= 0", p.min_blob_thickness_px);
-  require(std::isfinite(p.max_blob_area_fraction) && p.max_blob_area_fraction > 0.0 &&
-              p.max_blob_area_fraction <= 1.0,
-          "max_blob_area_fraction", "must be in (0, 1]", p.max_blob_area_fraction);
-  require(p.border_margin_px >= 0, "border_margin_px", "must be >= 0", p.border_margin_px);
-  require(std::isfinite(p.min_disparity_px) && p.min_disparity_px > 0.0, "min_disparity_px",
-          "must be > 0", p.min_disparity_px);
-  require(std::isfinite(p.max_disparity_px) && p.max_disparity_px > p.min_disparity_px,
-          "max_disparity_px", "must be > min_disparity_px", p.max_disparity_px);
-  require(std::isfinite(p.roi_top_fraction) && p.roi_top_fraction >= 0.0 && p.roi_top_fraction < 1.0,
-          "roi_top_fraction", "must be in [0, 1)", p.roi_top_fraction);
-  require(std::isfinite(p.roi_bottom_fraction) && p.roi_bottom_fraction > p.roi_top_fraction &&
-              p.roi_bottom_fraction <= 1.0,
-          "roi_bottom_fraction", "must be in (roi_top_fraction, 1]", p.roi_bottom_fraction);
-  require(std::isfinite(p.floor_cut_y_m) && p.floor_cut_y_m > 0.0, "floor_cut_y_m", "must be > 0",
-          p.floor_cut_y_m);
-  require(std::isfinite(p.ceiling_cut_y_m) && p.ceiling_cut_y_m >= 0.0, "ceiling_cut_y_m",
-          "must be >= 0 (0: off)", p.ceiling_cut_y_m);
-  require(std::isfinite(p.disparity_sigma_px) && p.disparity_sigma_px > 0.0, "disparity_sigma_px",
-          "must be > 0", p.disparity_sigma_px);
-  require(std::isfinite(p.centre_sigma_px) && p.centre_sigma_px > 0.0, "centre_sigma_px",
-          "must be > 0", p.centre_sigma_px);
-  require(std::isfinite(p.port_offset_sigma_m) && p.port_offset_sigma_m >= 0.0 && p.port_offset_sigma_m <= 1.0,
-          "port_offset_sigma_m", "must be in [0, 1]", p.port_offset_sigma_m);
-  require(std::isfinite(p.shape_tolerance_fraction) && p.shape_tolerance_fraction >= 0.0 &&
-              p.shape_tolerance_fraction < 1.0,
-          "shape_tolerance_fraction", "must be in [0, 1)", p.shape_tolerance_fraction);
-  require(std::isfinite(p.shape_tolerance_px) && p.shape_tolerance_px >= 0.0, "shape_tolerance_px",
-          "must be >= 0", p.shape_tolerance_px);
-  require(std::isfinite(p.degraded_min_width_fraction) && p.degraded_min_width_fraction >= 0.0 &&
-              p.degraded_min_width_fraction <= 1.0,
-          "degraded_min_width_fraction", "must be in [0, 1] (0: any width)", p.degraded_min_width_fraction);
-  require(std::isfinite(p.split_depth_step_m) && p.split_depth_step_m >= 0.0 && p.split_depth_step_m <= 2.0,
-          "split_depth_step_m", "must be in [0, 2] (0: off)", p.split_depth_step_m);
-  require(std::isfinite(p.max_centre_offset_y_m) && p.max_centre_offset_y_m >= 0.0,
-          "max_centre_offset_y_m", "must be >= 0 (0: off)", p.max_centre_offset_y_m);
-  require(std::isfinite(p.footprint_inlier_distance_m) && p.footprint_inlier_distance_m > 0.0 &&
-              p.footprint_inlier_distance_m <= 1.0,
-          "footprint_inlier_distance_m", "must be in (0, 1]", p.footprint_inlier_distance_m);
-  require(std::isfinite(p.footprint_min_inlier_fraction) && p.footprint_min_inlier_fraction >= 0.0 &&
-              p.footprint_min_inlier_fraction <= 1.0,
-          "footprint_min_inlier_fraction", "must be in [0, 1]", p.footprint_min_inlier_fraction);
-  const TargetShape& t = p.target_shape;
-  require(std::isfinite(t.face_width_m) && t.face_width_m > 0.0, "target_shape.face_width_m",
-          "must be > 0", t.face_width_m);
-  require(std::isfinite(t.face_height_m) && t.face_height_m > 0.0, "target_shape.face_height_m",
-          "must be > 0", t.face_height_m);
+namespace {
+
+// A rule between settings, or a mockup the checks cannot use: the same error as a setting out of range.
+void require(bool ok, const char* key, const std::string& rule) {
+  if (!ok) throw docking_settings::ConfigError(key, docking_settings::ConfigProblem::kInvalid, rule);
+}
+
+}  // namespace
+
+void validate(const DetectorParams& p, const TargetShape& t) {
+  docking_settings::validateSettings(p);
+  require(p.median_kernel_px != 2 && p.median_kernel_px != 4, "median_kernel_px",
+          "must be 0, 1 (off), 3 or 5 (got " + std::to_string(p.median_kernel_px) + ")");
+  require(p.max_disparity_px > p.min_disparity_px, "max_disparity_px",
+          "must be > min_disparity_px (got " + formatNumber(p.max_disparity_px) + ")");
+  require(p.roi_bottom_fraction > p.roi_top_fraction, "roi_bottom_fraction",
+          "must be > roi_top_fraction (got " + formatNumber(p.roi_bottom_fraction) + ")");
+  require(std::isfinite(t.face_width_m) && t.face_width_m > 0.0 && std::isfinite(t.face_height_m) &&
+              t.face_height_m > 0.0,
+          "target_yaml", "the mockup's face width and height must be > 0");
   require(std::isfinite(t.body_depth_m) && t.body_depth_m >= 0.0 && std::isfinite(t.panel_span_m) &&
               t.panel_span_m >= 0.0 && std::isfinite(t.panel_height_m) && t.panel_height_m >= 0.0,
-          "target_shape", "body depth and panel sizes must be >= 0", t.body_depth_m);
+          "target_yaml", "the mockup's body depth and panel sizes must be >= 0");
   require(std::isfinite(t.panel_offset_behind_face_m) && t.panel_offset_behind_face_m >= 0.0 &&
               t.panel_offset_behind_face_m <= t.body_depth_m,
-          "target_shape.panel_offset_behind_face_m", "must be in [0, body depth]",
-          t.panel_offset_behind_face_m);
-  if (errors.empty()) {
-    // A fill bound above what the mockup itself shows at some yaw would reject the real target.
-    const double mockup_fill = shapeBounds(t).min_fill;
-    require(std::isfinite(p.min_fill_fraction) && p.min_fill_fraction >= 0.0 &&
-                p.min_fill_fraction <= mockup_fill,
-            "min_fill_fraction",
-            "must be in [0, " + formatNumber(mockup_fill) + "] (the mockup's own lowest fill)",
-            p.min_fill_fraction);
-  }
-  const FaceAppearanceParams& a = p.appearance;
-  require(std::isfinite(a.min_score) && a.min_score >= -1.0 && a.min_score <= 1.0, "appearance_min_score",
-          "must be in [-1, 1]", a.min_score);
-  require(std::isfinite(a.search_radius_m) && a.search_radius_m >= 0.0 && a.search_radius_m <= 1.0,
-          "appearance_search_radius_m", "must be in [0, 1]", a.search_radius_m);
-  require(std::isfinite(a.max_working_width_px) && a.max_working_width_px >= 16.0 &&
-              a.max_working_width_px <= kMaxAppearanceWorkingWidthPx,
-          "appearance_max_working_width_px", "must be in [16, 48]", a.max_working_width_px);
-  require(a.saturated_level_dn >= 1 && a.saturated_level_dn <= 255, "appearance_saturated_level_dn",
-          "must be in [1, 255]", a.saturated_level_dn);
-  require(std::isfinite(a.max_saturated_fraction) && a.max_saturated_fraction >= 0.0 &&
-              a.max_saturated_fraction <= 1.0,
-          "appearance_max_saturated_fraction", "must be in [0, 1]", a.max_saturated_fraction);
-  require(std::isfinite(a.min_mean_dn) && a.min_mean_dn >= 0.0 && a.min_mean_dn <= 255.0, "appearance_min_mean_dn",
-          "must be in [0, 255]", a.min_mean_dn);
-  return errors;
+          "target_yaml", "the mockup's panels must lie within its body depth");
+  // A fill bound above what the mockup itself shows at some yaw would reject the real target.
+  const double mockup_fill = shapeBounds(t).min_fill;
+  require(p.min_fill_fraction <= mockup_fill, "min_fill_fraction",
+          "must be at most " + formatNumber(mockup_fill) + " (the mockup's own lowest fill; got " +
+              formatNumber(p.min_fill_fraction) + ")");
 }
 
 std::vector<std::string> validateGeometry(const StereoGeometry& g) {
@@ -574,11 +502,14 @@ const char* outcomeName(Outcome outcome) {
   return "unknown";
 }
 
-DisparityDetector::DisparityDetector(const DetectorParams& params) { setParams(params); }
+DisparityDetector::DisparityDetector(const DetectorParams& params, const TargetShape& shape) {
+  validate(params, shape);
+  params_ = params;
+  shape_ = shape;
+}
 
 void DisparityDetector::setParams(const DetectorParams& params) {
-  const auto errors = validateParams(params);
-  if (!errors.empty()) throw std::invalid_argument(joinErrors(errors));
+  validate(params, shape_);
   params_ = params;
 }
 
@@ -715,7 +646,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     return result;
   }
   cv::Mat mask(disparity.size(), CV_8UC1);
-  const ShapeBounds bounds = shapeBounds(p.target_shape);
+  const ShapeBounds bounds = shapeBounds(shape_);
   BlobCandidate chosen, fallback, first_misfit, largest_small;
   // A blob of this band failed the shape check only on a lower bound or its fill: it may be the target,
   // degraded (glare, blur, merged holes), so nothing behind it is trusted (issue 11: at 2 m under
@@ -917,7 +848,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
     result.centre_px = cv::Point2d(sum_u / face_count, sum_v / face_count);
     result.disparity_px = median(&face_disparities);
     if (p.footprint_fit_enabled) {
-      footprint_misfit = portFromFootprint(blob_points, blob_disparities, geometry, p, &result);
+      footprint_misfit = portFromFootprint(blob_points, blob_disparities, geometry, p, shape_, &result);
     }
     reproject(geometry, result.centre_px, result.disparity_px, p.centre_sigma_px,
               p.disparity_sigma_px, &result.position_m, &result.covariance_m2);

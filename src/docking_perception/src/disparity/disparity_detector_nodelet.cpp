@@ -17,6 +17,9 @@
 
 #include "docking_perception/disparity/decimating_rectifier.h"
 #include "docking_perception/mono/target_model.h"
+#include "docking_settings/param_reader.h"
+#include "docking_settings/reconfigure.h"
+#include "docking_settings/ros_loader.h"
 
 namespace docking_perception {
 namespace {
@@ -82,33 +85,25 @@ void DisparityDetectorNodelet::onInit() {
   nh_ = getNodeHandle();
   private_nh_ = getPrivateNodeHandle();
 
-  Config config;
-  if (!loadConfig(&config)) {
-    // Thrown, not ros::requestShutdown(): the nodelet loader catches it and refuses this nodelet (see
-    // mono_pose_nodelet.cpp); perception_host says so and runs without it, a `nodelet load` process
-    // exits non-zero.
-    // nodelet::Loader logs the exception's message at DEBUG only: said here first.
-    const std::string message = "disparity_detector: invalid or missing parameters in " +
-                                private_nh_.getNamespace() +
-                                " (see errors above; all keys of config/disparity_detector.yaml are required)";
-    NODELET_FATAL("%s", message.c_str());
-    throw std::runtime_error(message);
-  }
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    config_ = config;
-    detector_.setParams(toDetectorParams(config));  // validated in loadConfig
-    track_gate_.setParams(toTrackGateParams(config));
+  disparity::DisparityDetectorSettings settings;
+  try {
+    settings = loadSettings();
+  } catch (const std::exception& error) {
+    // Thrown on: the nodelet loader catches it and refuses this nodelet (see mono_pose_nodelet.cpp);
+    // perception_host says so and runs without it, a `nodelet load` process exits non-zero. The loader
+    // logs the exception's message at DEBUG only: said here first.
+    NODELET_FATAL("disparity_detector: %s", error.what());
+    throw;
   }
   {
     std::lock_guard<std::mutex> lock(pause_mutex_);
-    near_.setParams(toPauseParams(config));
+    near_.setParams(toPauseParams(settings.pause));
   }
 
-  // Live tuning: the server starts from the same parameter server values we just validated.
+  // Live tuning: the server starts from the declared defaults and the parameter server's values, the same
+  // as `settings`; its first callback applies them.
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<Config>>(reconfigure_mutex_,
                                                                               private_nh_);
-  reconfigure_server_->updateConfig(config);
   reconfigure_server_->setCallback(
       [this](Config& new_config, uint32_t level) { onReconfigure(new_config, level); });
 
@@ -157,205 +152,63 @@ void DisparityDetectorNodelet::onFusedEstimate(const docking_msgs::TargetEstimat
   updateSubscriptions();
 }
 
-bool DisparityDetectorNodelet::loadConfig(Config* config) {
-  std::vector<std::string> errors;
-  const std::string ns = private_nh_.getNamespace();
-  // Every key is required; numbers must lie in the ranges of cfg/DisparityDetector.cfg.
-  auto read = [&](const char* name, auto Config::*field) {
-    using T = std::decay_t<decltype(config->*field)>;
-    T value{};
-    if (!private_nh_.hasParam(name)) {
-      errors.push_back("missing parameter " + ns + "/" + name);
-      return;
-    }
-    if (!private_nh_.getParam(name, value)) {
-      errors.push_back("parameter " + ns + "/" + name + " has the wrong type (expected " +
-                       (std::is_same<T, bool>::value ? "true/false"
-                        : std::is_same<T, int>::value ? "an integer" : "a number") + ")");
-      return;
-    }
-    if constexpr (!std::is_same<T, bool>::value) {
-      const T min = Config::__getMin__().*field;
-      const T max = Config::__getMax__().*field;
-      if (!(value >= min && value <= max)) {
-        std::ostringstream message;
-        message << "parameter " << ns << "/" << name << " = " << value << " outside [" << min
-                << ", " << max << "]";
-        errors.push_back(message.str());
-        return;
-      }
-    }
-    config->*field = value;
-  };
-  read("median_kernel_px", &Config::median_kernel_px);
-  read("gaussian_sigma_px", &Config::gaussian_sigma_px);
-  read("closest_min_pixels", &Config::closest_min_pixels);
-  read("target_depth_m", &Config::target_depth_m);
-  read("threshold_margin_px", &Config::threshold_margin_px);
-  read("face_percentile", &Config::face_percentile);
-  read("face_depth_band_m", &Config::face_depth_band_m);
-  read("face_min_band_px", &Config::face_min_band_px);
-  read("min_blob_area_px", &Config::min_blob_area_px);
-  read("min_blob_thickness_px", &Config::min_blob_thickness_px);
-  read("reduced_min_blob_area_px", &Config::reduced_min_blob_area_px);
-  read("reduced_min_blob_thickness_px", &Config::reduced_min_blob_thickness_px);
-  read("max_blob_area_fraction", &Config::max_blob_area_fraction);
-  read("border_margin_px", &Config::border_margin_px);
-  read("min_disparity_px", &Config::min_disparity_px);
-  read("max_disparity_px", &Config::max_disparity_px);
-  read("blind_band_extra_px", &Config::blind_band_extra_px);
-  read("roi_top_fraction", &Config::roi_top_fraction);
-  read("roi_bottom_fraction", &Config::roi_bottom_fraction);
-  read("floor_cut_enabled", &Config::floor_cut_enabled);
-  read("floor_cut_y_m", &Config::floor_cut_y_m);
-  read("ceiling_cut_y_m", &Config::ceiling_cut_y_m);
-  read("disparity_sigma_px", &Config::disparity_sigma_px);
-  read("centre_sigma_px", &Config::centre_sigma_px);
-  read("port_offset_sigma_m", &Config::port_offset_sigma_m);
-  read("shape_check_enabled", &Config::shape_check_enabled);
-  read("shape_tolerance_fraction", &Config::shape_tolerance_fraction);
-  read("shape_tolerance_px", &Config::shape_tolerance_px);
-  read("min_fill_fraction", &Config::min_fill_fraction);
-  read("max_centre_offset_y_m", &Config::max_centre_offset_y_m);
-  read("stop_behind_target_sized", &Config::stop_behind_target_sized);
-  read("degraded_min_width_fraction", &Config::degraded_min_width_fraction);
-  read("split_depth_step_m", &Config::split_depth_step_m);
-  read("footprint_fit_enabled", &Config::footprint_fit_enabled);
-  read("footprint_inlier_distance_m", &Config::footprint_inlier_distance_m);
-  read("footprint_min_inlier_fraction", &Config::footprint_min_inlier_fraction);
-  read("appearance_check_enabled", &Config::appearance_check_enabled);
-  read("appearance_min_score", &Config::appearance_min_score);
-  read("appearance_search_radius_m", &Config::appearance_search_radius_m);
-  read("appearance_max_working_width_px", &Config::appearance_max_working_width_px);
-  read("appearance_saturated_level_dn", &Config::appearance_saturated_level_dn);
-  read("appearance_max_saturated_fraction", &Config::appearance_max_saturated_fraction);
-  read("appearance_min_mean_dn", &Config::appearance_min_mean_dn);
-  read("appearance_glare_keeps_blob", &Config::appearance_glare_keeps_blob);
-  read("appearance_refine_port", &Config::appearance_refine_port);
-  read("track_gate_enabled", &Config::track_gate_enabled);
-  read("track_max_speed_mps", &Config::track_max_speed_mps);
-  read("track_min_gate_m", &Config::track_min_gate_m);
-  read("track_gate_sigmas", &Config::track_gate_sigmas);
-  read("track_confirm_frames", &Config::track_confirm_frames);
-  read("track_timeout_s", &Config::track_timeout_s);
-  read("pause_inside_range_m", &Config::pause_inside_range_m);
-  read("pause_hysteresis_m", &Config::pause_hysteresis_m);
-  read("pause_max_fused_age_s", &Config::pause_max_fused_age_s);
-  read("debug_display_max_disparity_px", &Config::debug_display_max_disparity_px);
-  read("diagnostic_window_frames", &Config::diagnostic_window_frames);
-  read("min_detection_rate_ok", &Config::min_detection_rate_ok);
-  // The mockup's size for the shape check: the same target.yaml the simulator and mono_pose read.
-  std::string target_yaml;
-  if (!private_nh_.getParam("target_yaml", target_yaml) || target_yaml.empty()) {
-    errors.push_back("missing parameter " + ns + "/target_yaml (path of config/target.yaml)");
-  } else {
-    try {
-      target_shape_ = disparity::loadTargetShape(target_yaml);
-      // The face print for the appearance check: the texture mono_pose matches and the simulator prints.
-      const mono::TargetModel model = mono::TargetModel::loadFromYaml(target_yaml);
-      appearance_check_ = std::make_unique<disparity::FaceAppearanceCheck>(model.textureGray(), model.faceWidth(),
-                                                                          model.faceHeight());
-    } catch (const std::exception& error) {
-      errors.push_back(std::string("parameter ") + ns + "/target_yaml: " + error.what());
-    }
+disparity::DisparityDetectorSettings DisparityDetectorNodelet::loadSettings() {
+  disparity::DisparityDetectorSettings settings;
+  docking_settings::loadSettings(private_nh_, settings);
+  docking_settings::warnUnknownKeys(private_nh_, settings, {"target_yaml"});
+  // The mockup's size for the shape check and its face print for the appearance check: the same
+  // target.yaml the simulator and mono_pose read.
+  const auto target_yaml = docking_settings::ParamReader(private_nh_).require<std::string>("target_yaml");
+  disparity::TargetShape shape;
+  try {
+    shape = disparity::loadTargetShape(target_yaml);
+    const mono::TargetModel model = mono::TargetModel::loadFromYaml(target_yaml);
+    appearance_check_ = std::make_unique<disparity::FaceAppearanceCheck>(model.textureGray(), model.faceWidth(),
+                                                                        model.faceHeight());
+  } catch (const std::exception& error) {
+    docking_settings::ParamReader(private_nh_).invalid("target_yaml", error.what());
   }
-  if (errors.empty()) {
-    // Rules between fields (e.g. max_disparity_px > min_disparity_px), named by the core.
-    for (const auto& error : disparity::validateParams(toDetectorParams(*config))) {
-      errors.push_back("parameter " + ns + "/" + error);
-    }
-    for (const auto& error : disparity::validateTrackGateParams(toTrackGateParams(*config))) {
-      errors.push_back("parameter " + ns + "/" + error);
-    }
-  }
-  for (const auto& error : errors) NODELET_FATAL("disparity_detector: %s", error.c_str());
-  return errors.empty();
+  docking_settings::ParamReader(private_nh_).validated([&] {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    detector_ = disparity::DisparityDetector(settings.detector, shape);
+    track_gate_.setParams(settings.track);
+    settings_ = settings;
+  });
+  return settings;
 }
 
-duty::FusedRangeConditionParams DisparityDetectorNodelet::toPauseParams(const Config& c) {
+duty::FusedRangeConditionParams DisparityDetectorNodelet::toPauseParams(const disparity::PauseParams& pause) {
   duty::FusedRangeConditionParams p;
-  p.range_m = c.pause_inside_range_m;
-  p.hysteresis_m = c.pause_hysteresis_m;
-  p.max_fused_age_s = c.pause_max_fused_age_s;
-  return p;
-}
-
-disparity::TrackGateParams DisparityDetectorNodelet::toTrackGateParams(const Config& c) {
-  disparity::TrackGateParams p;
-  p.enabled = c.track_gate_enabled;
-  p.max_speed_mps = c.track_max_speed_mps;
-  p.min_gate_m = c.track_min_gate_m;
-  p.gate_sigmas = c.track_gate_sigmas;
-  p.confirm_frames = c.track_confirm_frames;
-  p.timeout_s = c.track_timeout_s;
-  return p;
-}
-
-disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Config& c) const {
-  disparity::DetectorParams p;
-  p.median_kernel_px = c.median_kernel_px;
-  p.gaussian_sigma_px = c.gaussian_sigma_px;
-  p.closest_min_pixels = c.closest_min_pixels;
-  p.target_depth_m = c.target_depth_m;
-  p.threshold_margin_px = c.threshold_margin_px;
-  p.face_percentile = c.face_percentile;
-  p.face_depth_band_m = c.face_depth_band_m;
-  p.face_min_band_px = c.face_min_band_px;
-  p.min_blob_area_px = c.min_blob_area_px;
-  p.min_blob_thickness_px = c.min_blob_thickness_px;
-  p.reduced_min_blob_area_px = c.reduced_min_blob_area_px;
-  p.reduced_min_blob_thickness_px = c.reduced_min_blob_thickness_px;
-  p.max_blob_area_fraction = c.max_blob_area_fraction;
-  p.border_margin_px = c.border_margin_px;
-  p.min_disparity_px = c.min_disparity_px;
-  p.max_disparity_px = c.max_disparity_px;
-  p.roi_top_fraction = c.roi_top_fraction;
-  p.roi_bottom_fraction = c.roi_bottom_fraction;
-  p.floor_cut_enabled = c.floor_cut_enabled;
-  p.floor_cut_y_m = c.floor_cut_y_m;
-  p.ceiling_cut_y_m = c.ceiling_cut_y_m;
-  p.disparity_sigma_px = c.disparity_sigma_px;
-  p.centre_sigma_px = c.centre_sigma_px;
-  p.port_offset_sigma_m = c.port_offset_sigma_m;
-  p.shape_check_enabled = c.shape_check_enabled;
-  p.shape_tolerance_fraction = c.shape_tolerance_fraction;
-  p.shape_tolerance_px = c.shape_tolerance_px;
-  p.min_fill_fraction = c.min_fill_fraction;
-  p.max_centre_offset_y_m = c.max_centre_offset_y_m;
-  p.stop_behind_target_sized = c.stop_behind_target_sized;
-  p.degraded_min_width_fraction = c.degraded_min_width_fraction;
-  p.split_depth_step_m = c.split_depth_step_m;
-  p.footprint_fit_enabled = c.footprint_fit_enabled;
-  p.footprint_inlier_distance_m = c.footprint_inlier_distance_m;
-  p.footprint_min_inlier_fraction = c.footprint_min_inlier_fraction;
-  p.appearance_check_enabled = c.appearance_check_enabled;
-  p.appearance.min_score = c.appearance_min_score;
-  p.appearance.search_radius_m = c.appearance_search_radius_m;
-  p.appearance.max_working_width_px = c.appearance_max_working_width_px;
-  p.appearance.saturated_level_dn = c.appearance_saturated_level_dn;
-  p.appearance.max_saturated_fraction = c.appearance_max_saturated_fraction;
-  p.appearance.min_mean_dn = c.appearance_min_mean_dn;
-  p.appearance.glare_keeps_blob = c.appearance_glare_keeps_blob;
-  p.appearance.refine_port = c.appearance_refine_port;
-  p.target_shape = target_shape_;
+  p.range_m = pause.inside_range_m;
+  p.hysteresis_m = pause.hysteresis_m;
+  p.max_fused_age_s = pause.max_fused_age_s;
   return p;
 }
 
 void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/) {
+  dynamic_reconfigure::Config message;
+  config.__toMessage__(message);
   std::lock_guard<std::mutex> lock(state_mutex_);
+  disparity::DisparityDetectorSettings settings = settings_;
+  docking_settings::applyReconfigure(message, settings);
   try {
-    detector_.setParams(toDetectorParams(config));
-    track_gate_.setParams(toTrackGateParams(config));
-    config_ = config;
-    std::lock_guard<std::mutex> pause_lock(pause_mutex_);
-    near_.setParams(toPauseParams(config));
+    docking_settings::validateSettings(settings);
+    disparity::validate(settings.detector, detector_.shape());
   } catch (const std::invalid_argument& error) {
     // Keep running with the last good values, and show them back to dynamic_reconfigure clients (dynparam get).
-    NODELET_ERROR("disparity_detector: reconfigure rejected, keeping the previous values: %s",
-                  error.what());
-    config = config_;
+    NODELET_ERROR("disparity_detector: reconfigure rejected, keeping the previous values: %s", error.what());
+    dynamic_reconfigure::Config kept = docking_settings::toReconfigure(settings_);
+    config.__fromMessage__(kept);
+    return;
   }
-  while (recent_found_.size() > static_cast<std::size_t>(config_.diagnostic_window_frames)) {
+  detector_.setParams(settings.detector);
+  track_gate_.setParams(settings.track);
+  settings_ = settings;
+  {
+    std::lock_guard<std::mutex> pause_lock(pause_mutex_);
+    near_.setParams(toPauseParams(settings.pause));
+  }
+  while (recent_found_.size() > static_cast<std::size_t>(settings_.diagnostic_window_frames)) {
     recent_found_.pop_front();
   }
 }
@@ -419,7 +272,7 @@ void DisparityDetectorNodelet::confirmAppearance(const stereo_msgs::DisparityIma
                                                  const disparity::DetectorParams& params,
                                                  const disparity::StereoGeometry& geometry,
                                                  disparity::Detection* detection) {
-  if (!params.appearance_check_enabled || !detection->found || !appearance_check_) return;
+  if (!params.appearance.check_enabled || !detection->found || !appearance_check_) return;
   sensor_msgs::ImageConstPtr left;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
@@ -512,14 +365,14 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   const cv::Mat disparity(static_cast<int>(image.height), static_cast<int>(image.width), CV_32FC1,
                           const_cast<std::uint8_t*>(image.data.data()), image.step);
 
-  Config config;
+  disparity::DisparityDetectorSettings settings;
   disparity::DisparityDetector detector;
   std::map<int, sensor_msgs::CameraInfoConstPtr> camera_infos;
   sensor_msgs::CameraInfoConstPtr window_info;
   bool windows_recently = false;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
-    config = config_;
+    settings = settings_;
     detector = detector_;
     camera_infos = camera_info_by_binning_;
     window_info = windowInfoOf(recent_window_infos_, message->header.stamp, image.width, image.height);
@@ -580,7 +433,7 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   // --- The matcher's blind left band (no match possible), and its own valid window if it set one.
   const int blind_columns =
       std::max(0, static_cast<int>(std::ceil(message->max_disparity)) +
-                      (config.blind_band_extra_px + decimation - 1) / decimation);
+                      (settings.blind_band_extra_px + decimation - 1) / decimation);
   cv::Rect valid_region(blind_columns, 0, static_cast<int>(image.width) - blind_columns,
                         static_cast<int>(image.height));
   if (message->valid_window.width > 0 && message->valid_window.height > 0) {
@@ -636,7 +489,7 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
     const double debug_start_ms = threadCpuMs();
     cv_bridge::CvImage debug(message->header, enc::BGR8,
                              disparity::renderDebugImage(disparity, detection,
-                                                         config.debug_display_max_disparity_px / decimation));
+                                                         settings.debug_display_max_disparity_px / decimation));
     debug_publisher_.publish(debug.toImageMsg());
     recordDebugImage(threadCpuMs() - debug_start_ms);
   }
@@ -675,7 +528,7 @@ void DisparityDetectorNodelet::recordOutcome(bool found, const std::string& reas
   }
   last_processing_ms_ = processing_ms;
   recent_found_.push_back(found);
-  while (recent_found_.size() > static_cast<std::size_t>(config_.diagnostic_window_frames)) {
+  while (recent_found_.size() > static_cast<std::size_t>(settings_.diagnostic_window_frames)) {
     recent_found_.pop_front();
   }
 }
@@ -727,10 +580,10 @@ void DisparityDetectorNodelet::produceDiagnostics(
     status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "bad input: " + last_input_error_);
   } else if (recent_found_.empty()) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no disparity image received yet");
-  } else if (rate < config_.min_detection_rate_ok) {
+  } else if (rate < settings_.min_detection_rate_ok) {
     std::ostringstream summary;
     summary.precision(2);
-    summary << "detection rate " << rate << " < " << config_.min_detection_rate_ok
+    summary << "detection rate " << rate << " < " << settings_.min_detection_rate_ok
             << "; last rejection: " << last_rejection_;
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, summary.str());
   } else {

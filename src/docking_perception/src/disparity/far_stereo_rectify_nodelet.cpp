@@ -20,10 +20,8 @@
 // A bad image or camera_info (wrong encoding or size, uncalibrated, binned or cropped input) drops that pair
 // with a throttled error naming the problem, counted in diagnostics (WARN while pairs are being dropped,
 // with the reason); the next pair is processed.
-// Parameters (config/far_stereo.yaml, all required): tracking_decimation (1..4), tracking_range_m (0: never
-// reduced), tracking_hysteresis_m, tracking_max_fused_age_s, window_enabled, window_half_width_m,
-// window_half_height_m, window_min_half_size_px, window_max_area_fraction, window_max_prediction_s; and
-// matcher/{min_disparity,disparity_range,correlation_window_size}.
+// Settings: declared in settings/far_stereo_rectify.yaml (config/far_stereo.yaml holds what differs from the
+// defaults); and matcher/{min_disparity,disparity_range,correlation_window_size}, the matcher's own.
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -45,6 +43,8 @@
 #include "docking_perception/duty/fused_range_condition.h"
 #include "docking_perception/disparity/decimating_rectifier.h"
 #include "docking_perception/disparity/tracking_window.h"
+#include "docking_settings/param_reader.h"
+#include "docking_settings/ros_loader.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -147,8 +147,9 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
   using Sync = message_filters::TimeSynchronizer<sensor_msgs::Image, sensor_msgs::CameraInfo, sensor_msgs::Image,
                                                  sensor_msgs::CameraInfo>;
 
+  // The declared settings with the private namespace's values (config/far_stereo.yaml), and the matcher's
+  // reach (~matcher: config/stereo_image_proc.yaml). Throws docking_settings::ConfigError naming the key.
   void readParameters();
-  void readWindowParameters(std::ostringstream* problems);
   // The window to rectify for a pair at `stamp` in `frame_id`, or none (the whole image).
   std::optional<cv::Rect> windowFor(const ros::Time& stamp, const std::string& frame_id, const Side& side) const;
   void advertise(Way* way, const char* left_image, const char* left_info, const char* right_image,
@@ -166,8 +167,7 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
 
   Way full_, tracking_;
   duty::FusedRangeConditionParams tracking_params_;
-  bool window_enabled_ = false;
-  TrackingWindowParams window_params_;
+  TrackingWindowParams window_params_;  // window_params_.enabled: windows while tracking
   MatcherReach matcher_reach_;
   ros::NodeHandle nh_;
   message_filters::Subscriber<sensor_msgs::Image> left_image_sub_, right_image_sub_;
@@ -189,54 +189,29 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
 
 void FarStereoRectifyNodelet::readParameters() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
-  int decimation = 0;
-  std::ostringstream problems;
-  if (!pnh.getParam("tracking_decimation", decimation)) problems << " ~tracking_decimation is missing;";
-  if (!pnh.getParam("tracking_range_m", tracking_params_.range_m)) problems << " ~tracking_range_m is missing;";
-  if (!pnh.getParam("tracking_hysteresis_m", tracking_params_.hysteresis_m)) {
-    problems << " ~tracking_hysteresis_m is missing;";
+  try {
+    FarStereoSettings settings;
+    docking_settings::loadSettings(pnh, settings);
+    docking_settings::warnUnknownKeys(pnh, settings, {"matcher"});
+    // What the tracking window leaves room for: the full-resolution matcher's own settings.
+    const docking_settings::ParamReader matcher(ros::NodeHandle(pnh, "matcher"));
+    matcher_reach_.min_disparity = matcher.require<int>("min_disparity");
+    matcher_reach_.disparity_range = matcher.require<int>("disparity_range");
+    matcher_reach_.correlation_window_px = matcher.require<int>("correlation_window_size");
+    const auto reach_problems = validateMatcherReach(matcher_reach_);
+    if (!reach_problems.empty()) matcher.invalid("correlation_window_size", reach_problems.front());
+    tracking_params_.range_m = settings.tracking_range_m;
+    tracking_params_.hysteresis_m = settings.tracking_hysteresis_m;
+    tracking_params_.max_fused_age_s = settings.tracking_max_fused_age_s;
+    window_params_ = settings.window;
+    full_.decimation = 1;
+    tracking_.decimation = settings.tracking_decimation;
+    tracking_condition_.setParams(tracking_params_);
+  } catch (const std::exception& error) {
+    // The nodelet loader refuses this nodelet (and logs the message at DEBUG only): said here first.
+    NODELET_FATAL("far_stereo_rectify: %s", error.what());
+    throw;
   }
-  if (!pnh.getParam("tracking_max_fused_age_s", tracking_params_.max_fused_age_s)) {
-    problems << " ~tracking_max_fused_age_s is missing;";
-  }
-  if (problems.str().empty()) {
-    if (decimation < 1 || decimation > 4) problems << " ~tracking_decimation must be 1..4 (got " << decimation << ");";
-    if (!(tracking_params_.range_m >= 0.0)) problems << " ~tracking_range_m must be >= 0;";
-    if (!(tracking_params_.hysteresis_m >= 0.0)) problems << " ~tracking_hysteresis_m must be >= 0;";
-    if (!(tracking_params_.max_fused_age_s > 0.0)) problems << " ~tracking_max_fused_age_s must be > 0;";
-  }
-  if (!problems.str().empty()) {
-    NODELET_FATAL("far_stereo_rectify: config/far_stereo.yaml:%s", problems.str().c_str());
-    throw std::runtime_error("far_stereo_rectify: invalid parameters:" + problems.str());
-  }
-  readWindowParameters(&problems);
-  if (!problems.str().empty()) {
-    NODELET_FATAL("far_stereo_rectify: config/far_stereo.yaml, config/stereo_image_proc.yaml:%s",
-                  problems.str().c_str());
-    throw std::runtime_error("far_stereo_rectify: invalid parameters:" + problems.str());
-  }
-  full_.decimation = 1;
-  tracking_.decimation = decimation;
-  tracking_condition_.setParams(tracking_params_);
-}
-
-void FarStereoRectifyNodelet::readWindowParameters(std::ostringstream* problems) {
-  ros::NodeHandle& pnh = getPrivateNodeHandle();
-  const auto need = [&](const char* name, auto* value) {
-    if (!pnh.getParam(name, *value)) *problems << " ~" << name << " is missing;";
-  };
-  need("window_enabled", &window_enabled_);
-  need("window_half_width_m", &window_params_.half_width_m);
-  need("window_half_height_m", &window_params_.half_height_m);
-  need("window_min_half_size_px", &window_params_.min_half_size_px);
-  need("window_max_area_fraction", &window_params_.max_area_fraction);
-  need("window_max_prediction_s", &window_params_.max_prediction_s);
-  need("matcher/min_disparity", &matcher_reach_.min_disparity);
-  need("matcher/disparity_range", &matcher_reach_.disparity_range);
-  need("matcher/correlation_window_size", &matcher_reach_.correlation_window_px);
-  if (!problems->str().empty()) return;
-  for (const auto& error : validateTrackingWindowParams(window_params_)) *problems << " " << error << ";";
-  for (const auto& error : validateMatcherReach(matcher_reach_)) *problems << " " << error << ";";
 }
 
 void FarStereoRectifyNodelet::advertise(Way* way, const char* left_image, const char* left_info,
@@ -258,7 +233,7 @@ void FarStereoRectifyNodelet::onInit() {
             topics::kStereoFarTrackingRightImageRect, topics::kStereoFarTrackingRightCameraInfo);
   sync_ = std::make_unique<Sync>(left_image_sub_, left_info_sub_, right_image_sub_, right_info_sub_, kSyncQueue);
   sync_->registerCallback(&FarStereoRectifyNodelet::onPair, this);
-  if ((tracking_params_.range_m > 0.0 && tracking_.decimation > 1) || window_enabled_) {
+  if ((tracking_params_.range_m > 0.0 && tracking_.decimation > 1) || window_params_.enabled) {
     fused_subscriber_ = nh_.subscribe(topics::kTargetEstimate, 1, &FarStereoRectifyNodelet::onFusedEstimate, this,
                                       ros::TransportHints().tcpNoDelay());
   }
@@ -267,7 +242,7 @@ void FarStereoRectifyNodelet::onInit() {
   diagnostics_->add("far stereo rectify", this, &FarStereoRectifyNodelet::diagnose);
   diagnostics_timer_ = nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
   NODELET_INFO("far_stereo_rectify: full resolution%s, 1/%d while the fused target is inside %.2f m; lazy",
-               window_enabled_ ? " (a window around the tracked target)" : "", tracking_.decimation,
+               window_params_.enabled ? " (a window around the tracked target)" : "", tracking_.decimation,
                tracking_params_.range_m);
 }
 
@@ -314,7 +289,7 @@ std::optional<cv::Rect> FarStereoRectifyNodelet::windowFor(const ros::Time& stam
                                                            const Side& side) const {
   // Only a fresh, valid estimate in the left camera's own frame (the arbiter's output_frame) places it;
   // anything else, and the port predicted out of view, is matched on the whole image.
-  if (!window_enabled_ || !fused_port_.usable || !side.rectifier || fused_port_.frame_id != frame_id ||
+  if (!window_params_.enabled || !fused_port_.usable || !side.rectifier || fused_port_.frame_id != frame_id ||
       ros::Time::now().toSec() - fused_port_.arrival_s > tracking_params_.max_fused_age_s) {
     return std::nullopt;
   }
@@ -432,7 +407,7 @@ void FarStereoRectifyNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapp
   status.add("pairs at full resolution", full_.pairs);
   status.add("pairs at reduced resolution", tracking_.pairs);
   status.add("pairs dropped", dropped_);
-  status.add("tracking window", window_enabled_ ? "enabled" : "disabled");
+  status.add("tracking window", window_params_.enabled ? "enabled" : "disabled");
   status.add("pairs in a tracking window", full_.windowed_pairs);
   std::ostringstream window;
   if (last_window_) {

@@ -120,7 +120,7 @@ TEST(DecimatingRectifier, RefusesWhatItCannotRectify) {
 }
 
 TEST(DetectorParamsAtDecimation, ScalesLengthsAndAreasAndTakesTheReducedBlobLimits) {
-  DetectorParams full;
+  DetectorParams full;  // the values these scalings are checked on (the shipped ones)
   full.closest_min_pixels = 150;
   full.min_blob_area_px = 400;
   full.min_blob_thickness_px = 16.0;
@@ -146,7 +146,7 @@ TEST(DetectorParamsAtDecimation, ScalesLengthsAndAreasAndTakesTheReducedBlobLimi
   EXPECT_EQ(half.border_margin_px, 1);
   EXPECT_DOUBLE_EQ(half.target_depth_m, 0.5);  // metres stay metres
   EXPECT_FALSE(half.footprint_fit_enabled);     // too coarse a depth for it (far_tracking_still_3m)
-  EXPECT_TRUE(validateParams(half).empty());
+  EXPECT_NO_THROW(validate(half, TargetShape()));
 }
 
 }  // namespace

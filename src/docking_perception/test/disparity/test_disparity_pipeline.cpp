@@ -23,7 +23,7 @@ struct PipelineResult {
   double stereo_limit_m = 0.0;  // Z^2 * 0.25 px / (f B): the yardstick
 };
 
-int trackingDecimation() { return testing::loadTrackingDecimation(kConfigDir + "/far_stereo.yaml"); }
+int trackingDecimation() { return testing::shippedFarStereoSettings(kConfigDir).tracking_decimation; }
 // The reduced pair config/stereo_image_proc_tracking.yaml is set for (far_stereo.yaml tracking_decimation 2,
 // off by default): tested whether or not it is switched on.
 constexpr int kReducedDecimation = 2;
@@ -39,15 +39,12 @@ Detection detectInScene(const testing::SyntheticScene& scene, const DetectorPara
   const cv::Mat disparity = testing::computeDisparity(*matcher, pair.left, pair.right);
   const cv::Rect valid = testing::matcherValidRegion(settings, disparity.size());
   if (geometry_used) *geometry_used = pair.geometry;
-  return DisparityDetector(detectorParamsAtDecimation(params, decimation))
+  return DisparityDetector(detectorParamsAtDecimation(params, decimation), loadTargetShape(kConfigDir + "/target.yaml"))
       .detect(disparity, pair.geometry, settings.min_disparity, testing::maxDisparity(settings), valid);
 }
 
-DetectorParams configuredParams() {
-  DetectorParams params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
-  params.target_shape = loadTargetShape(kConfigDir + "/target.yaml");
-  return params;
-}
+// The shipped configuration (declared defaults with config/disparity_detector.yaml's values).
+DetectorParams configuredParams() { return testing::shippedDetectorSettings(kConfigDir).detector; }
 
 // The yardstick: a quarter pixel of disparity at the far stage's resolution (twice the range error at
 // half resolution: the cost of tracking at an eighth of the work).
@@ -198,8 +195,7 @@ TEST(FarRangePipeline, ConfigFilesAreComplete) {
   EXPECT_LE(decimation, 4);
   EXPECT_NO_THROW(testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml"));
   EXPECT_NO_THROW(testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc_tracking.yaml"));
-  const auto params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
-  EXPECT_TRUE(validateParams(params).empty());
+  EXPECT_NO_THROW(validate(configuredParams(), loadTargetShape(kConfigDir + "/target.yaml")));
   EXPECT_THROW(testing::loadMatcherSettings(kConfigDir + "/no_such_file.yaml"), std::runtime_error);
 }
 

@@ -16,21 +16,20 @@
 #include "docking_perception/disparity/tracking_window.h"
 #include "synthetic_stereo.h"
 
+#include <docking_settings/config_error.h>
+#include <docking_settings/setting_info.h>
+
 namespace docking_perception {
 namespace disparity {
 namespace {
 
 const std::string kConfigDir = DISPARITY_CONFIG_DIR;
 
-TrackingWindowParams configuredWindow() { return testing::loadTrackingWindow(kConfigDir + "/far_stereo.yaml"); }
+TrackingWindowParams configuredWindow() { return testing::shippedFarStereoSettings(kConfigDir).window; }
 
 testing::MatcherSettings fullMatcher() { return testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml"); }
 
-DetectorParams configuredParams() {
-  DetectorParams params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
-  params.target_shape = loadTargetShape(kConfigDir + "/target.yaml");
-  return params;
-}
+DetectorParams configuredParams() { return testing::shippedDetectorSettings(kConfigDir).detector; }
 
 // The region the detector nodelet searches: the matcher's blind left band and stereo_image_proc's valid
 // window (half the correlation window off the other three sides), as the DisparityImage states it.
@@ -56,7 +55,7 @@ Detection detectOn(const testing::FarStagePair& pair, const std::optional<cv::Re
     image_window.offset = area.tl();
     image_window.full_size = pair.left.size();
   }
-  return DisparityDetector(configuredParams())
+  return DisparityDetector(configuredParams(), loadTargetShape(kConfigDir + "/target.yaml"))
       .detect(disparity, geometry, settings.min_disparity, testing::maxDisparity(settings),
               nodeletRegion(settings, disparity.size()), SearchHint(), image_window);
 }
@@ -127,19 +126,15 @@ TEST(TrackingWindow, PredictionFollowsTheVelocityForALimitedTime) {
 }
 
 TEST(TrackingWindow, InvalidSettingsAreNamed) {
-  TrackingWindowParams bad;
+  TrackingWindowParams bad = configuredWindow();
   bad.half_width_m = 0.0;
-  bad.max_area_fraction = 1.5;
-  const auto errors = validateTrackingWindowParams(bad);
-  ASSERT_EQ(errors.size(), 2u);
-  EXPECT_NE(errors[0].find("window_half_width_m"), std::string::npos);
-  EXPECT_NE(errors[1].find("window_max_area_fraction"), std::string::npos);
-  EXPECT_TRUE(validateTrackingWindowParams(configuredWindow()).empty());
-  MatcherReach reach;
-  reach.disparity_range = 90;
-  reach.correlation_window_px = 14;
-  EXPECT_EQ(validateMatcherReach(reach).size(), 2u);
-  EXPECT_TRUE(validateMatcherReach(testing::matcherReachOf(fullMatcher())).empty());
+  try {
+    docking_settings::validateSettings(bad);
+    FAIL() << "a window of no width accepted";
+  } catch (const docking_settings::ConfigError& e) {
+    EXPECT_EQ(e.key(), "half_width_m");  // the node's loader names it with its prefix, window_
+  }
+  EXPECT_NO_THROW(docking_settings::validateSettings(configuredWindow()));
 }
 
 TEST(TrackingWindow, RectifyingAWindowGivesTheWholeImagesPixels) {

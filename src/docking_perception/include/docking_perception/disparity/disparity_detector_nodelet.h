@@ -13,7 +13,8 @@
 //   perception/disparity/estimate     docking_msgs/TargetEstimate (SOURCE_DISPARITY, position only)
 //   perception/disparity/debug_image  sensor_msgs/Image bgr8 (image_transport)
 //   /diagnostics                      last rejection reason, detection rate
-// Parameters: config/disparity_detector.yaml, all required, all live through dynamic_reconfigure.
+// Settings: settings/disparity_detector.yaml declares them (defaults, ranges, meaning); config/disparity_detector.yaml
+// holds what differs from the defaults. All are live through dynamic_reconfigure. ~target_yaml: the mockup.
 #pragma once
 
 #include <deque>
@@ -51,12 +52,10 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
 
   void onInit() override;
 
-  // Reads every key of config/disparity_detector.yaml from the private namespace. Returns false and
-  // logs each missing or invalid key by name.
-  bool loadConfig(Config* config);
-  disparity::DetectorParams toDetectorParams(const Config& config) const;  // + target_shape_
-  static disparity::TrackGateParams toTrackGateParams(const Config& config);
-  static duty::FusedRangeConditionParams toPauseParams(const Config& config);
+  // The declared defaults with the private namespace's values; the mockup of ~target_yaml (its size and its
+  // face print). Throws docking_settings::ConfigError naming the key.
+  disparity::DisparityDetectorSettings loadSettings();
+  static duty::FusedRangeConditionParams toPauseParams(const disparity::PauseParams& pause);
   void onReconfigure(Config& config, uint32_t level);
 
   // Subscribes to the inputs while any output has a subscriber and the stage is not paused,
@@ -111,9 +110,8 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
 
   // State shared by the callbacks.
   std::mutex state_mutex_;
-  Config config_;
-  disparity::DisparityDetector detector_;
-  disparity::TargetShape target_shape_;   // from ~target_yaml, read once at start-up
+  disparity::DisparityDetectorSettings settings_;
+  disparity::DisparityDetector detector_;  // with the mockup of ~target_yaml, read once at start-up
   disparity::TargetTrackGate track_gate_;
   std::map<int, sensor_msgs::CameraInfoConstPtr> camera_info_by_binning_;  // the last full image of each binning
   // The far stage's tracking windows (camera_info with a region of interest): the last few, matched to a

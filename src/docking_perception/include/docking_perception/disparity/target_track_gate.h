@@ -15,25 +15,16 @@
 #include <Eigen/Core>
 
 #include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/disparity/disparity_detector_settings.h"
 
 namespace docking_perception {
 namespace disparity {
 
-struct TrackGateParams {
-  bool enabled = true;
-  double max_speed_mps = 0.5;     // fastest relative motion of target and cameras the gate allows
-  double min_gate_m = 0.3;        // gate radius never below this (face centre vs blob, yaw changes)
-  double gate_sigmas = 3.0;       // plus this many sigmas of the detection's position noise
-  int confirm_frames = 5;         // consecutive consistent frames that move the track to a jump
-  double timeout_s = 2.0;         // no confirmed detection for this long: the track is dropped
-};
-
-// Every invalid field, each message naming it; empty: usable.
-std::vector<std::string> validateTrackGateParams(const TrackGateParams& params);
+// TrackGateParams (track_* settings) are declared in settings/disparity_detector.yaml (generated header).
 
 class TargetTrackGate {
  public:
-  // Throws std::invalid_argument naming the invalid fields.
+  // Throws std::invalid_argument (docking_settings::ConfigError) naming the first setting not allowed.
   explicit TargetTrackGate(const TrackGateParams& params = TrackGateParams());
   void setParams(const TrackGateParams& params);
   const TrackGateParams& params() const { return params_; }
