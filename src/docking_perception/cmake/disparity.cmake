@@ -6,6 +6,7 @@ add_library(docking_perception_disparity_core
   src/disparity/decimating_rectifier.cpp
   src/disparity/face_appearance.cpp
   src/disparity/footprint_fit.cpp
+  src/disparity/stages.cpp
   src/disparity/disparity_detector.cpp
   src/disparity/target_track_gate.cpp
   src/disparity/tracking_window.cpp

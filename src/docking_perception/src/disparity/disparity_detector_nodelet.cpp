@@ -42,16 +42,61 @@ sensor_msgs::CameraInfoConstPtr windowInfoOf(const std::deque<sensor_msgs::Camer
   return nullptr;
 }
 
-// The message's reject code of a detector outcome: what a consumer may act on without reading the status.
-std::uint8_t rejectReasonOf(disparity::Outcome outcome) {
+// The message's reject code of the stage that decided: what a consumer may act on without reading the status.
+std::uint8_t rejectReasonOf(bool found, disparity::StageOutcome outcome) {
   using Estimate = docking_msgs::TargetEstimate;
-  switch (outcome) {
-    case disparity::Outcome::kFound: return Estimate::REJECT_NONE;
-    case disparity::Outcome::kBadInput: return Estimate::REJECT_BAD_INPUT;
-    case disparity::Outcome::kAppearanceMismatch: return Estimate::REJECT_APPEARANCE;
-    case disparity::Outcome::kAppearanceUnjudged: return Estimate::REJECT_APPEARANCE;
+  if (found) return Estimate::REJECT_NONE;
+  switch (outcome.stage) {
+    case disparity::Stage::kInput: return Estimate::REJECT_BAD_INPUT;
+    case disparity::Stage::kAppearance: return Estimate::REJECT_APPEARANCE;
     default: return Estimate::REJECT_NOT_FOUND;  // no blob, or none the mockup's size, shape or track
   }
+}
+
+// Stage 1 on the message: checked before its data is touched (a bad one is reported, never dereferenced).
+disparity::StageOutcome checkMessage(const stereo_msgs::DisparityImage& message, std::string* problem) {
+  namespace enc = sensor_msgs::image_encodings;
+  using disparity::InputOutcome;
+  const sensor_msgs::Image& image = message.image;
+  std::ostringstream why;
+  InputOutcome outcome = InputOutcome::kPassed;
+  if (image.encoding != enc::TYPE_32FC1) {
+    why << "disparity image encoding must be '" << enc::TYPE_32FC1 << "', got '" << image.encoding << "'";
+    outcome = InputOutcome::kBadEncoding;
+  } else if (image.width == 0 || image.height == 0) {
+    why << "empty disparity image (" << image.width << "x" << image.height << ")";
+    outcome = InputOutcome::kEmptyImage;
+  } else if (image.step < image.width * sizeof(float) ||
+             image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+    why << "disparity image data (" << image.data.size() << " bytes, step " << image.step << ") too short for "
+        << image.width << "x" << image.height << " floats";
+    outcome = InputOutcome::kTruncatedData;
+  } else if ((image.is_bigendian != 0) != (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__)) {
+    why << "disparity image byte order (is_bigendian " << static_cast<int>(image.is_bigendian)
+        << ") differs from this machine's";
+    outcome = InputOutcome::kWrongByteOrder;
+  } else if (!(message.f > 0.0) || !(message.T > 0.0)) {
+    why << "DisparityImage focal length f (" << message.f << ") and baseline T (" << message.T << ") must be > 0";
+    outcome = InputOutcome::kBadGeometry;
+  }
+  *problem = why.str();
+  return outcome;
+}
+
+// The region the matcher can give disparities in: right of its blind left band (its largest disparity plus
+// half its correlation window), inside its own valid window if it set one.
+cv::Rect validRegionOf(const stereo_msgs::DisparityImage& message, int blind_band_extra_px, int decimation) {
+  const int blind_columns = std::max(0, static_cast<int>(std::ceil(message.max_disparity)) +
+                                            (blind_band_extra_px + decimation - 1) / decimation);
+  cv::Rect valid_region(blind_columns, 0, static_cast<int>(message.image.width) - blind_columns,
+                        static_cast<int>(message.image.height));
+  if (message.valid_window.width > 0 && message.valid_window.height > 0) {
+    valid_region &= cv::Rect(static_cast<int>(message.valid_window.x_offset),
+                             static_cast<int>(message.valid_window.y_offset),
+                             static_cast<int>(message.valid_window.width),
+                             static_cast<int>(message.valid_window.height));
+  }
+  return valid_region;
 }
 
 // Variance of the components a disparity estimate does not measure (TargetEstimate.msg: >= 1e6).
@@ -76,6 +121,30 @@ docking_msgs::TargetEstimate blankEstimate(const std_msgs::Header& header) {
     estimate.twist.covariance[static_cast<std::size_t>(i * 6 + i)] = kUnknownVariance;
   }
   estimate.solver = "disparity";
+  return estimate;
+}
+
+// The estimate of a detection: the port's position and covariance when found, the stage that decided.
+docking_msgs::TargetEstimate toEstimate(const std_msgs::Header& header, const disparity::Detection& detection) {
+  docking_msgs::TargetEstimate estimate = blankEstimate(header);
+  estimate.valid = detection.found;
+  estimate.position_valid = detection.found;
+  estimate.status = detection.found ? std::string() : detection.reason;
+  estimate.reject_reason = rejectReasonOf(detection.found, detection.outcome);
+  estimate.stage = static_cast<std::uint8_t>(detection.outcome.stage);
+  estimate.stage_outcome = detection.outcome.code;
+  if (!detection.found) return estimate;
+  estimate.pose.pose.position.x = detection.position_m.x();
+  estimate.pose.pose.position.y = detection.position_m.y();
+  estimate.pose.pose.position.z = detection.position_m.z();
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) {
+      estimate.pose.covariance[static_cast<std::size_t>(row * 6 + col)] = detection.covariance_m2(row, col);
+    }
+  }
+  estimate.range_m = detection.range_m;
+  estimate.disparity_px = detection.disparity_px;
+  estimate.feature_inliers = static_cast<std::uint32_t>(detection.blob_pixels);
   return estimate;
 }
 
@@ -113,7 +182,11 @@ void DisparityDetectorNodelet::onInit() {
   diagnostics_timer_ = nh_.createTimer(ros::Duration(1.0),
                                        [this](const ros::TimerEvent&) { diagnostics_->update(); });
 
-  // Outputs first, with connection callbacks that (un)subscribe the inputs on demand.
+  advertise();
+}
+
+// Outputs first, with connection callbacks that (un)subscribe the inputs on demand.
+void DisparityDetectorNodelet::advertise() {
   std::lock_guard<std::mutex> lock(connection_mutex_);
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh_);
   auto connection_changed = [this](const ros::SingleSubscriberPublisher&) { updateSubscriptions(); };
@@ -304,17 +377,20 @@ void DisparityDetectorNodelet::confirmAppearance(const stereo_msgs::DisparityIma
 }
 
 void DisparityDetectorNodelet::publishInvalidInput(const stereo_msgs::DisparityImage& message,
-                                                   const std::string& status, double cpu_start_ms) {
+                                                   disparity::StageOutcome outcome, const std::string& status,
+                                                   double cpu_start_ms) {
   NODELET_ERROR_THROTTLE(5.0, "disparity_detector: %s", status.c_str());
   docking_msgs::TargetEstimate estimate = blankEstimate(message.header);
   estimate.status = status;
   estimate.reject_reason = docking_msgs::TargetEstimate::REJECT_BAD_INPUT;
+  estimate.stage = static_cast<std::uint8_t>(outcome.stage);
+  estimate.stage_outcome = outcome.code;
   estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     last_input_error_ = status;
   }
-  recordOutcome(false, status, estimate.processing_time_ms);
+  recordOutcome(outcome, false, status, estimate.processing_time_ms);
   publishEstimate(estimate);
 }
 
@@ -326,75 +402,121 @@ void DisparityDetectorNodelet::onDisparity(const stereo_msgs::DisparityImageCons
     processDisparity(message);
   } catch (const std::exception& e) {
     try {
-      publishInvalidInput(*message, std::string("disparity image dropped: ") + e.what(), cpu_start_ms);
+      publishInvalidInput(*message, disparity::InputOutcome::kDropped,
+                          std::string("disparity image dropped: ") + e.what(), cpu_start_ms);
     } catch (const std::exception& again) {
       NODELET_ERROR_THROTTLE(5.0, "disparity_detector: could not report a dropped image: %s", again.what());
     }
   }
 }
 
+// The stages (stages.h), in order: the message (1), the detector (1-5), the appearance check (6), the track
+// gate (7), the estimate's own check (8); the first that does not pass decides, and goes on the wire.
 void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImageConstPtr& message) {
   const double cpu_start_ms = threadCpuMs();
-  const sensor_msgs::Image& image = message->image;
-
-  // --- Check the message before touching its data: a bad one is reported, never dereferenced.
-  namespace enc = sensor_msgs::image_encodings;
-  std::ostringstream problem;
-  if (image.encoding != enc::TYPE_32FC1) {
-    problem << "disparity image encoding must be '" << enc::TYPE_32FC1 << "', got '"
-            << image.encoding << "'";
-  } else if (image.width == 0 || image.height == 0) {
-    problem << "empty disparity image (" << image.width << "x" << image.height << ")";
-  } else if (image.step < image.width * sizeof(float) ||
-             image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
-    problem << "disparity image data (" << image.data.size() << " bytes, step " << image.step
-            << ") too short for " << image.width << "x" << image.height << " floats";
-  } else if ((image.is_bigendian != 0) != (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__)) {
-    problem << "disparity image byte order (is_bigendian " << static_cast<int>(image.is_bigendian)
-            << ") differs from this machine's";
-  } else if (!(message->f > 0.0) || !(message->T > 0.0)) {
-    problem << "DisparityImage focal length f (" << message->f << ") and baseline T ("
-            << message->T << ") must be > 0";
+  std::string problem;
+  const disparity::StageOutcome input = checkMessage(*message, &problem);
+  if (!input.passed()) return publishInvalidInput(*message, input, problem, cpu_start_ms);
+  Frame frame;
+  if (!prepareFrame(*message, &frame, &problem)) {
+    return publishInvalidInput(*message, disparity::InputOutcome::kNoWindowCameraInfo, problem, cpu_start_ms);
   }
-  if (!problem.str().empty()) {
-    publishInvalidInput(*message, problem.str(), cpu_start_ms);
-    return;
-  }
-
   // Zero-copy view of the message data (kept alive by `message` for this callback).
+  const sensor_msgs::Image& image = message->image;
   const cv::Mat disparity(static_cast<int>(image.height), static_cast<int>(image.width), CV_32FC1,
                           const_cast<std::uint8_t*>(image.data.data()), image.step);
+  disparity::Detection detection =
+      frame.detector.detect(disparity, frame.geometry, message->min_disparity, message->max_disparity + 1.0,
+                            frame.valid_region, frame.hint, frame.window);
+  confirmAppearance(*message, disparity, frame.detector.params(), frame.geometry, &detection);
+  applyTrackGate(message->header.stamp.toSec(), &detection);
+  docking_msgs::TargetEstimate estimate = toEstimate(message->header, detection);
+  publishDebugImage(*message, disparity, detection, frame.settings.debug_display_max_disparity_px / frame.decimation);
+  checkOutput(&detection, &estimate);
+  estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
+  recordOutcome(detection.outcome, detection.found, detection.reason, estimate.processing_time_ms);
+  if (detection.found) {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    last_range_m_ = detection.range_m;
+  }
+  publishEstimate(estimate);
+}
 
-  disparity::DisparityDetectorSettings settings;
-  disparity::DisparityDetector detector;
+// Stage 7: the tracked target's gate; a detection it lets through has passed every stage so far.
+void DisparityDetectorNodelet::applyTrackGate(double stamp_s, disparity::Detection* detection) {
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    *detection = track_gate_.apply(stamp_s, *detection);
+  }
+  if (detection->found) detection->outcome = disparity::TrackOutcome::kPassed;
+}
+
+// Stage 8: what the arbiter would refuse (a NaN, a bad covariance) leaves here as not valid, with the code.
+void DisparityDetectorNodelet::checkOutput(disparity::Detection* detection, docking_msgs::TargetEstimate* estimate) {
+  const auto own_problem = docking_msgs::checks::withdrawIfMalformed(estimate);
+  if (own_problem != docking_msgs::checks::EstimateProblem::kNone) {
+    NODELET_ERROR_THROTTLE(5.0, "disparity_detector: estimate withdrawn: %s",
+                           docking_msgs::checks::estimateProblemName(own_problem));
+    detection->found = false;
+    detection->outcome = disparity::OutputOutcome::kWithdrawn;
+    detection->reason = estimate->status;
+  } else if (detection->found) {
+    detection->outcome = disparity::OutputOutcome::kPassed;
+  }
+  estimate->stage = static_cast<std::uint8_t>(detection->outcome.stage);
+  estimate->stage_outcome = detection->outcome.code;
+}
+
+bool DisparityDetectorNodelet::prepareFrame(const stereo_msgs::DisparityImage& message, Frame* frame,
+                                            std::string* problem) {
+  const sensor_msgs::Image& image = message.image;
   std::map<int, sensor_msgs::CameraInfoConstPtr> camera_infos;
   sensor_msgs::CameraInfoConstPtr window_info;
   bool windows_recently = false;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
-    settings = settings_;
-    detector = detector_;
+    frame->settings = settings_;
+    frame->detector = detector_;
     camera_infos = camera_info_by_binning_;
-    window_info = windowInfoOf(recent_window_infos_, message->header.stamp, image.width, image.height);
+    window_info = windowInfoOf(recent_window_infos_, message.header.stamp, image.width, image.height);
     if (window_info) ++window_frames_;
     // A disparity of the full image's size is not a window: it may be read without a camera_info.
     const auto& last_window = recent_window_infos_.empty() ? nullptr : recent_window_infos_.back();
-    windows_recently = last_window &&
-                       ros::Time::now().toSec() - last_window_info_arrival_s_ < kWindowInfoMemoryS &&
+    windows_recently = last_window && ros::Time::now().toSec() - last_window_info_arrival_s_ < kWindowInfoMemoryS &&
                        (image.width != last_window->width || image.height != last_window->height);
     last_input_error_.clear();
   }
-  if (window_info) camera_infos = {{1, window_info}};
+  if (window_info) {
+    camera_infos = {{1, window_info}};
+    frame->window.offset = cv::Point(static_cast<int>(window_info->roi.x_offset),
+                                     static_cast<int>(window_info->roi.y_offset));
+    frame->window.full_size = cv::Size(static_cast<int>(window_info->width), static_cast<int>(window_info->height));
+  }
+  if (!cameraModel(message, camera_infos, windows_recently, frame, problem)) return false;
+  if (frame->decimation > 1) {
+    frame->detector.setParams(disparity::detectorParamsAtDecimation(frame->detector.params(), frame->decimation));
+  }
+  frame->valid_region = validRegionOf(message, frame->settings.blind_band_extra_px, frame->decimation);
+  // The tracked target tells the search which target-shaped blob to prefer, then judges the result.
+  // The gate is the one piece of state across frames (frames arrive in order on one subscriber).
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  frame->hint = track_gate_.hint(message.header.stamp.toSec());
+  return true;
+}
 
-  // --- Rectified model: f and B from the message; the principal point and the decimation from the far
-  // stage's left camera_info (image_geometry's reduced camera: binning = decimation), else the image centre
-  // and full resolution. The detector's pixel settings are given at the calibrated resolution.
-  disparity::StereoGeometry geometry;
-  geometry.focal_px = message->f;
-  geometry.baseline_m = message->T;
+// The rectified model: f and B from the message; the principal point and the decimation from the far
+// stage's left camera_info of the disparity's size (image_geometry's reduced camera: binning = decimation),
+// else the image centre and full resolution. The detector's pixel settings are given at the calibrated
+// resolution. False (and why) for a window's disparity whose camera_info is missing.
+bool DisparityDetectorNodelet::cameraModel(const stereo_msgs::DisparityImage& message,
+                                           const std::map<int, sensor_msgs::CameraInfoConstPtr>& camera_infos,
+                                           bool windows_recently, Frame* frame, std::string* problem) {
+  const sensor_msgs::Image& image = message.image;
+  disparity::StereoGeometry& geometry = frame->geometry;
+  geometry.focal_px = message.f;
+  geometry.baseline_m = message.T;
   geometry.cx_px = (image.width - 1) / 2.0;
   geometry.cy_px = (image.height - 1) / 2.0;
-  int decimation = 1;
   image_geometry::PinholeCameraModel model;
   bool have_model = false;
   for (const auto& entry : camera_infos) {  // the camera_info whose reduced size is the disparity's
@@ -405,12 +527,10 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   if (have_model) {
     geometry.cx_px = model.cx();
     geometry.cy_px = model.cy();
-    decimation = std::max(1, static_cast<int>(model.binningX()));
-    if (std::abs(model.fx() - message->f) > 0.01 * message->f) {
-      NODELET_WARN_THROTTLE(30.0,
-                            "disparity_detector: left camera_info fx %.1f differs from the "
-                            "DisparityImage f %.1f; using f from the disparity",
-                            model.fx(), message->f);
+    frame->decimation = std::max(1, static_cast<int>(model.binningX()));
+    if (std::abs(model.fx() - message.f) > 0.01 * message.f) {
+      NODELET_WARN_THROTTLE(30.0, "disparity_detector: left camera_info fx %.1f differs from the DisparityImage f "
+                            "%.1f; using f from the disparity", model.fx(), message.f);
     }
   } else if (windows_recently) {
     // The far stage is sending windows: a disparity smaller than the image, of no known size, is one whose
@@ -418,9 +538,9 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
     // dropped instead.
     std::ostringstream missing;
     missing << "no camera_info for the " << image.width << "x" << image.height << " disparity image at "
-            << message->header.stamp << " (the far stage's tracking window's camera_info has not arrived)";
-    publishInvalidInput(*message, missing.str(), cpu_start_ms);
-    return;
+            << message.header.stamp << " (the far stage's tracking window's camera_info has not arrived)";
+    *problem = missing.str();
+    return false;
   } else if (!warned_no_camera_info_) {
     warned_no_camera_info_ = true;
     NODELET_WARN("disparity_detector: no camera_info of the disparity's size (%ux%u) on %s or %s yet; using the "
@@ -428,85 +548,17 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
                  image.width, image.height, camera_info_subscriber_.getTopic().c_str(),
                  camera_info_tracking_subscriber_.getTopic().c_str(), geometry.cx_px, geometry.cy_px);
   }
-  if (decimation > 1) detector.setParams(disparity::detectorParamsAtDecimation(detector.params(), decimation));
+  return true;
+}
 
-  // --- The matcher's blind left band (no match possible), and its own valid window if it set one.
-  const int blind_columns =
-      std::max(0, static_cast<int>(std::ceil(message->max_disparity)) +
-                      (settings.blind_band_extra_px + decimation - 1) / decimation);
-  cv::Rect valid_region(blind_columns, 0, static_cast<int>(image.width) - blind_columns,
-                        static_cast<int>(image.height));
-  if (message->valid_window.width > 0 && message->valid_window.height > 0) {
-    valid_region &= cv::Rect(static_cast<int>(message->valid_window.x_offset),
-                             static_cast<int>(message->valid_window.y_offset),
-                             static_cast<int>(message->valid_window.width),
-                             static_cast<int>(message->valid_window.height));
-  }
-
-  // The tracked target tells the search which target-shaped blob to prefer, then judges the result.
-  // The gate is the one piece of state across frames (frames arrive in order on one subscriber).
-  const double stamp_s = message->header.stamp.toSec();
-  disparity::SearchHint hint;
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    hint = track_gate_.hint(stamp_s);
-  }
-  disparity::ImageWindow window;
-  if (window_info) {
-    window.offset = cv::Point(static_cast<int>(window_info->roi.x_offset), static_cast<int>(window_info->roi.y_offset));
-    window.full_size = cv::Size(static_cast<int>(window_info->width), static_cast<int>(window_info->height));
-  }
-  disparity::Detection detection =
-      detector.detect(disparity, geometry, message->min_disparity, message->max_disparity + 1.0,
-                      valid_region, hint, window);
-  confirmAppearance(*message, disparity, detector.params(), geometry, &detection);
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    detection = track_gate_.apply(stamp_s, detection);
-  }
-
-  docking_msgs::TargetEstimate estimate = blankEstimate(message->header);
-  estimate.valid = detection.found;
-  estimate.position_valid = detection.found;
-  estimate.status = detection.found ? std::string() : detection.reason;
-  estimate.reject_reason = rejectReasonOf(detection.outcome);
-  if (detection.found) {
-    estimate.pose.pose.position.x = detection.position_m.x();
-    estimate.pose.pose.position.y = detection.position_m.y();
-    estimate.pose.pose.position.z = detection.position_m.z();
-    for (int row = 0; row < 3; ++row) {
-      for (int col = 0; col < 3; ++col) {
-        estimate.pose.covariance[static_cast<std::size_t>(row * 6 + col)] =
-            detection.covariance_m2(row, col);
-      }
-    }
-    estimate.range_m = detection.range_m;
-    estimate.disparity_px = detection.disparity_px;
-    estimate.feature_inliers = static_cast<std::uint32_t>(detection.blob_pixels);
-  }
-
-  if (debug_publisher_.getNumSubscribers() > 0) {
-    const double debug_start_ms = threadCpuMs();
-    cv_bridge::CvImage debug(message->header, enc::BGR8,
-                             disparity::renderDebugImage(disparity, detection,
-                                                         settings.debug_display_max_disparity_px / decimation));
-    debug_publisher_.publish(debug.toImageMsg());
-    recordDebugImage(threadCpuMs() - debug_start_ms);
-  }
-
-  estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
-  recordOutcome(detection.found, detection.reason, estimate.processing_time_ms);
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    if (detection.found) last_range_m_ = detection.range_m;
-  }
-  // What the arbiter would refuse (a NaN, a bad covariance) leaves here as not valid, with the code.
-  const auto own_problem = docking_msgs::checks::withdrawIfMalformed(&estimate);
-  if (own_problem != docking_msgs::checks::EstimateProblem::kNone) {
-    NODELET_ERROR_THROTTLE(5.0, "disparity_detector: estimate withdrawn: %s",
-                           docking_msgs::checks::estimateProblemName(own_problem));
-  }
-  publishEstimate(estimate);
+void DisparityDetectorNodelet::publishDebugImage(const stereo_msgs::DisparityImage& message, const cv::Mat& disparity,
+                                                 const disparity::Detection& detection, double display_max_px) {
+  if (debug_publisher_.getNumSubscribers() == 0) return;
+  const double debug_start_ms = threadCpuMs();
+  cv_bridge::CvImage debug(message.header, sensor_msgs::image_encodings::BGR8,
+                           disparity::renderDebugImage(disparity, detection, display_max_px));
+  debug_publisher_.publish(debug.toImageMsg());
+  recordDebugImage(threadCpuMs() - debug_start_ms);
 }
 
 void DisparityDetectorNodelet::publishEstimate(const docking_msgs::TargetEstimate& estimate) {
@@ -517,10 +569,11 @@ void DisparityDetectorNodelet::publishEstimate(const docking_msgs::TargetEstimat
   latency_.add(latency_s);
 }
 
-void DisparityDetectorNodelet::recordOutcome(bool found, const std::string& reason,
+void DisparityDetectorNodelet::recordOutcome(disparity::StageOutcome outcome, bool found, const std::string& reason,
                                              double processing_ms) {
   std::lock_guard<std::mutex> lock(state_mutex_);
   ++frames_;
+  ++outcome_counts_[{outcome.stage, outcome.code}];
   if (found) {
     ++detections_;
   } else {
@@ -539,39 +592,9 @@ void DisparityDetectorNodelet::recordDebugImage(double cpu_ms) {
   debug_image_cpu_ms_total_ += cpu_ms;
 }
 
-void DisparityDetectorNodelet::produceDiagnostics(
-    diagnostic_updater::DiagnosticStatusWrapper& status) {
-  std::lock_guard<std::mutex> lock(state_mutex_);
-  const double rate =
-      recent_found_.empty()
-          ? 0.0
-          : static_cast<double>(std::count(recent_found_.begin(), recent_found_.end(), true)) /
-                static_cast<double>(recent_found_.size());
-  status.add("frames", frames_);
-  status.add("frames in a tracking window", window_frames_);
-  status.add("detections", detections_);
-  status.add("detection rate (last frames)", rate);
-  status.add("window frames", recent_found_.size());
-  status.add("last rejection reason", last_rejection_.empty() ? "(none)" : last_rejection_);
-  status.add("last range m", last_range_m_);
-  status.add("appearance rejections", appearance_rejections_);
-  status.add("appearance not judged (glare, dark)", appearance_unjudged_);
-  status.add("appearance without a left image", appearance_without_image_);
-  status.add("last appearance check", last_appearance_.empty() ? "(none)" : last_appearance_);
-  status.add("last processing ms (CPU)", last_processing_ms_);
-  status.add("subscribed", static_cast<bool>(disparity_subscriber_));
-  duty::FusedRangeState near_state;
-  {
-    std::lock_guard<std::mutex> pause_lock(pause_mutex_);
-    near_state = near_state_;
-  }
-  const bool paused = near_state == duty::FusedRangeState::kHolds;
-  status.add("paused", paused);
-  status.add("target near on a monocular pose", duty::describe(near_state));
-  status.add("debug images drawn", debug_images_);
-  status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
-  docking_msgs::addLatency(status, "image->estimate", latency_);
-
+// The diagnostics' one line: idle, paused, bad input, or the detection rate against min_detection_rate_ok.
+void DisparityDetectorNodelet::summarize(diagnostic_updater::DiagnosticStatusWrapper& status, bool paused,
+                                         double rate) const {
   if (!disparity_subscriber_ && paused) {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "paused: target near, the arbiter on a monocular pose");
   } else if (!disparity_subscriber_) {
@@ -592,6 +615,48 @@ void DisparityDetectorNodelet::produceDiagnostics(
     summary << "detecting, rate " << rate;
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, summary.str());
   }
+}
+
+void DisparityDetectorNodelet::produceDiagnostics(
+    diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  const double rate =
+      recent_found_.empty()
+          ? 0.0
+          : static_cast<double>(std::count(recent_found_.begin(), recent_found_.end(), true)) /
+                static_cast<double>(recent_found_.size());
+  status.add("frames", frames_);
+  status.add("frames in a tracking window", window_frames_);
+  status.add("detections", detections_);
+  status.add("detection rate (last frames)", rate);
+  status.add("window frames", recent_found_.size());
+  status.add("last rejection reason", last_rejection_.empty() ? "(none)" : last_rejection_);
+  // Every frame's deciding stage and its outcome (stages.h), e.g. "outcome band_search/not_target_shaped".
+  for (const auto& entry : outcome_counts_) {
+    const disparity::StageOutcome outcome(entry.first.first, entry.first.second);
+    status.add(std::string("outcome ") + disparity::stageName(outcome.stage) + "/" + disparity::outcomeName(outcome),
+               entry.second);
+  }
+  status.add("last range m", last_range_m_);
+  status.add("appearance rejections", appearance_rejections_);
+  status.add("appearance not judged (glare, dark)", appearance_unjudged_);
+  status.add("appearance without a left image", appearance_without_image_);
+  status.add("last appearance check", last_appearance_.empty() ? "(none)" : last_appearance_);
+  status.add("last processing ms (CPU)", last_processing_ms_);
+  status.add("subscribed", static_cast<bool>(disparity_subscriber_));
+  duty::FusedRangeState near_state;
+  {
+    std::lock_guard<std::mutex> pause_lock(pause_mutex_);
+    near_state = near_state_;
+  }
+  const bool paused = near_state == duty::FusedRangeState::kHolds;
+  status.add("paused", paused);
+  status.add("target near on a monocular pose", duty::describe(near_state));
+  status.add("debug images drawn", debug_images_);
+  status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
+  docking_msgs::addLatency(status, "image->estimate", latency_);
+
+  summarize(status, paused, rate);
 }
 
 }  // namespace docking_perception

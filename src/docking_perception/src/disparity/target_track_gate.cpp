@@ -112,7 +112,7 @@ Detection TargetTrackGate::apply(double stamp_s, const Detection& detection) {
   }
   Detection rejected = detection;
   rejected.found = false;
-  rejected.outcome = Outcome::kOffTrack;
+  rejected.outcome = TrackOutcome::kOffTrack;
   rejected.reason = "off track: blob " + format(distance) + " m from the tracked target (gate " +
                     format(gate) + " m); " + std::to_string(pending_frames_) + " of " +
                     std::to_string(params_.confirm_frames) + " frames to confirm a new position";

@@ -38,7 +38,7 @@ TEST(DisparityDetector, PlaneAtKnownDepthIsFoundAtItsPosition) {
   const DisparityDetector detector = shippedDetector();
   const Detection result = detector.detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
-  EXPECT_EQ(result.outcome, Outcome::kFound);
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kPassed));
   EXPECT_TRUE(result.reason.empty());
   EXPECT_NEAR(result.disparity_px, disparityAt(3.0), 1e-4);
   EXPECT_NEAR(result.position_m.z(), 3.0, 1e-3);
@@ -96,7 +96,7 @@ TEST(DisparityDetector, EmptyImageIsRejectedWithReason) {
   const DisparityDetector detector = shippedDetector();
   const Detection empty = detector.detect(cv::Mat(), ourGeometry());
   EXPECT_FALSE(empty.found);
-  EXPECT_EQ(empty.outcome, Outcome::kBadInput);
+  EXPECT_EQ(empty.outcome, StageOutcome(InputOutcome::kEmptyImage));
   EXPECT_NE(empty.reason.find("empty"), std::string::npos) << empty.reason;
 }
 
@@ -106,7 +106,7 @@ TEST(DisparityDetector, AllInvalidImageIsRejectedWithReason) {
   for (const cv::Mat& image : {invalidImage(), nan_image}) {
     const Detection result = detector.detect(image, ourGeometry());
     EXPECT_FALSE(result.found);
-    EXPECT_EQ(result.outcome, Outcome::kNoValidDisparity);
+    EXPECT_EQ(result.outcome, StageOutcome(ValidDisparityOutcome::kTooFewValid));
     EXPECT_EQ(result.valid_pixels, 0);
     EXPECT_NE(result.reason.find("valid disparity"), std::string::npos) << result.reason;
   }
@@ -116,7 +116,7 @@ TEST(DisparityDetector, WrongImageTypeAndGeometryAreRejectedWithReason) {
   const DisparityDetector detector = shippedDetector();
   const Detection wrong_type = detector.detect(cv::Mat(480, 640, CV_16SC1, cv::Scalar(100)),
                                                ourGeometry());
-  EXPECT_EQ(wrong_type.outcome, Outcome::kBadInput);
+  EXPECT_EQ(wrong_type.outcome, StageOutcome(InputOutcome::kBadEncoding));
   EXPECT_NE(wrong_type.reason.find("32-bit float"), std::string::npos) << wrong_type.reason;
 
   cv::Mat disparity = invalidImage();
@@ -124,7 +124,7 @@ TEST(DisparityDetector, WrongImageTypeAndGeometryAreRejectedWithReason) {
   StereoGeometry no_baseline = ourGeometry();
   no_baseline.baseline_m = 0.0;
   const Detection bad_geometry = detector.detect(disparity, no_baseline);
-  EXPECT_EQ(bad_geometry.outcome, Outcome::kBadInput);
+  EXPECT_EQ(bad_geometry.outcome, StageOutcome(InputOutcome::kBadGeometry));
   EXPECT_NE(bad_geometry.reason.find("baseline"), std::string::npos) << bad_geometry.reason;
 }
 
@@ -134,7 +134,7 @@ TEST(DisparityDetector, BlobOnTheImageBorderIsRejected) {
   disparity(cv::Rect(600, 200, 40, 60)).setTo(cv::Scalar(disparityAt(3.0)));
   const Detection result = shippedDetector().detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kBlobTouchesBorder);
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kBlobTouchesBorder));
   EXPECT_NE(result.reason.find("right"), std::string::npos) << result.reason;
   EXPECT_FALSE(result.mask.empty()) << "a rejected blob is still returned for the debug image";
 }
@@ -149,7 +149,7 @@ TEST(DisparityDetector, BlobOnTheBlindLeftBandIsRejected) {
   EXPECT_TRUE(in_full_image.found) << in_full_image.reason;
   const Detection with_band =
       detector.detect(disparity, ourGeometry(), 0.0, 95.0, cv::Rect(109, 0, 531, 480));
-  EXPECT_EQ(with_band.outcome, Outcome::kBlobTouchesBorder);
+  EXPECT_EQ(with_band.outcome, StageOutcome(PlausibilityOutcome::kBlobTouchesBorder));
   EXPECT_NE(with_band.reason.find("left"), std::string::npos) << with_band.reason;
 }
 
@@ -161,7 +161,7 @@ TEST(DisparityDetector, TooSmallBlobIsRejected) {
   params.min_blob_area_px = 150;   // ...but too small to be the target
   const Detection result = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kBlobTooSmall);
+  EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kAllBlobsTooSmall));
   EXPECT_NE(result.reason.find("too small"), std::string::npos) << result.reason;
   EXPECT_FALSE(result.contour.empty()) << "the rejected blob is kept for the debug image";
 }
@@ -213,7 +213,7 @@ TEST(DisparityDetector, TooLargeBlobIsRejected) {
   paintRect(&disparity, 0.0, 0.0, 0.35, 0.30, 0.24);
   const Detection result = shippedDetector().detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kBlobTooLarge);
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kBlobTooLarge));
 }
 
 TEST(DisparityDetector, DisparityOutsideThePlausibleRangeIsRejected) {
@@ -221,7 +221,7 @@ TEST(DisparityDetector, DisparityOutsideThePlausibleRangeIsRejected) {
   paintRect(&disparity, 0.0, 0.0, 0.55, 0.30, 0.24);  // the face at 0.55 m: 100 px > max_disparity_px 92
   const Detection result = shippedDetector().detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kDisparityOutOfRange);
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kDisparityOutOfRange));
   EXPECT_NEAR(result.disparity_px, disparityAt(0.55), 1e-3);
 }
 

@@ -162,7 +162,7 @@ TEST(FarRangePipeline, APatchHighBehindTheTargetMergedWithABoxIsNotReported) {
     EXPECT_NEAR(d.position_m.x(), 0.0, 0.3) << d.position_m.transpose();
     EXPECT_NEAR(d.position_m.z(), 6.0, 0.3) << d.position_m.transpose();
   } else {
-    EXPECT_EQ(d.outcome, Outcome::kNotTargetShaped) << d.reason;
+    EXPECT_EQ(d.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << d.reason;
   }
 }
 

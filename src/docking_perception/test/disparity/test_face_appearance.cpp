@@ -82,7 +82,7 @@ FaceAppearanceParams shippedAppearance() { return test::shippedParams().appearan
 Detection foundAt(const Eigen::Vector3d& position_m, const Eigen::Matrix3d& covariance_m2 = Eigen::Matrix3d::Zero()) {
   Detection detection;
   detection.found = true;
-  detection.outcome = Outcome::kFound;
+  detection.outcome = PlausibilityOutcome::kPassed;
   detection.position_m = position_m;
   detection.covariance_m2 = covariance_m2;
   return detection;
@@ -211,7 +211,7 @@ TEST(FaceAppearance, AMismatchTurnsAFoundDetectionIntoARejectionWithItsScore) {
   const AppearanceResult result = confirmByAppearance(check, image, cv::Mat(), ourCamera(), shippedAppearance(), &detection);
   EXPECT_EQ(result.verdict, AppearanceVerdict::kNotTheTarget);
   EXPECT_FALSE(detection.found);
-  EXPECT_EQ(detection.outcome, Outcome::kAppearanceMismatch);
+  EXPECT_EQ(detection.outcome, StageOutcome(AppearanceOutcome::kMismatch));
   EXPECT_STREQ(outcomeName(detection.outcome), "appearance_mismatch");
   EXPECT_TRUE(detection.appearance_judged);
   EXPECT_DOUBLE_EQ(detection.appearance_score, result.score);
@@ -240,7 +240,7 @@ TEST(FaceAppearance, AFaceSaturatedByGlareOrInTheDarkIsNotJudgedAndOnlyTheDarkOn
   EXPECT_EQ(glare_result.verdict, AppearanceVerdict::kGlare) << glare_result.reason;
   EXPECT_GT(glare_result.saturated_fraction, 0.5);
   EXPECT_FALSE(detection.found);
-  EXPECT_EQ(detection.outcome, Outcome::kAppearanceUnjudged);
+  EXPECT_EQ(detection.outcome, StageOutcome(AppearanceOutcome::kGlare));
   EXPECT_NE(detection.reason.find("appearance_glare_keeps_blob"), std::string::npos) << detection.reason;
   EXPECT_FALSE(detection.appearance_judged);
   FaceAppearanceParams keeping = shippedAppearance();

@@ -202,7 +202,7 @@ TEST(FootprintFit, TheDetectorRefusesABlobOffTheOutline) {
   }
   const Detection d = DisparityDetector(params, loadTargetShape(kConfigDir + "/target.yaml")).detect(disparity, g, 0.0, 96.0);
   EXPECT_FALSE(d.found);
-  EXPECT_EQ(d.outcome, Outcome::kFootprintMisfit) << d.reason;
+  EXPECT_EQ(d.outcome, StageOutcome(PortOutcome::kFootprintMisfit)) << d.reason;
 }
 
 }  // namespace

@@ -117,7 +117,7 @@ TEST(ShapeCheck, OnlyAnotherObjectInViewIsInvalidWithTheReason) {
     paintRect(&disparity, 1.8, 0.0, 6.0, size.first, size.second);
     const Detection result = detectorWith(checkingParams()).detect(disparity, ourGeometry());
     EXPECT_FALSE(result.found) << size.first << " x " << size.second;
-    EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+    EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << result.reason;
     EXPECT_FALSE(result.reason.empty());
     EXPECT_FALSE(result.mask.empty()) << "the rejected blob is kept for the debug image";
   }
@@ -130,7 +130,7 @@ TEST(ShapeCheck, HollowObjectFailsTheFill) {
   paintRect(&disparity, -0.39, 0.0, 2.5, 0.08, 0.28);
   const Detection result = detectorWith(checkingParams()).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+  EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << result.reason;
 }
 
 TEST(ShapeCheck, NearerObjectsOfOtherSizesAreLookedBehind) {
@@ -169,7 +169,7 @@ TEST(ShapeCheck, ATargetCutByTheBorderStopsTheSearch) {
   paintMockup(&disparity, -0.85, 1.0);  // the target, all but its right panel out of view
   const Detection result = detectorWith(checkingParams()).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kBlobTouchesBorder) << result.reason;
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kBlobTouchesBorder)) << result.reason;
   EXPECT_LT(result.position_m.z(), 2.0);
 }
 
@@ -203,7 +203,7 @@ TEST(SearchHint, PrefersTheTargetShapedBlobInsideTheGate) {
 Detection foundAt(double x, double z) {
   Detection detection;
   detection.found = true;
-  detection.outcome = Outcome::kFound;
+  detection.outcome = PlausibilityOutcome::kPassed;
   detection.position_m = Eigen::Vector3d(x, 0.0, z);
   detection.covariance_m2 = Eigen::Matrix3d::Identity() * 0.05 * 0.05;
   return detection;
@@ -222,7 +222,7 @@ TEST(TargetTrackGate, AJumpOfMetresIsRejectedUntilConfirmed) {
   for (int i = 1; i < params.confirm_frames; ++i, t += dt) {
     const Detection jumped = gate.apply(t, foundAt(2.0, 6.0));
     EXPECT_FALSE(jumped.found) << i;
-    EXPECT_EQ(jumped.outcome, Outcome::kOffTrack);
+    EXPECT_EQ(jumped.outcome, StageOutcome(TrackOutcome::kOffTrack));
     EXPECT_FALSE(jumped.reason.empty());
   }
   EXPECT_TRUE(gate.apply(t, foundAt(2.0, 6.0)).found) << "seen confirm_frames times in a row";
@@ -293,7 +293,7 @@ TEST(HeightGate, APatchFarAboveTheAxisBehindAMergedBlobIsNotTheTarget) {
   params.max_centre_offset_y_m = 0.3;
   const Detection after = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(after.found) << "taken at (" << after.position_m.transpose() << ")";
-  EXPECT_EQ(after.outcome, Outcome::kNotTargetShaped) << after.reason;
+  EXPECT_EQ(after.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << after.reason;
 
   const Detection shipped = detectorWith(checkingParams()).detect(disparity, ourGeometry());
   ASSERT_TRUE(shipped.found) << shipped.reason;
@@ -315,7 +315,7 @@ TEST(HeightGate, TheTargetAtCameraHeightPassesAndTheGateIsValidated) {
   paintRect(&raised, 0.4, -0.5, 5.0, 0.30, 0.24);
   const Detection shelf = detectorWith(params).detect(raised, ourGeometry());
   EXPECT_FALSE(shelf.found);
-  EXPECT_EQ(shelf.outcome, Outcome::kNotTargetShaped) << shelf.reason;
+  EXPECT_EQ(shelf.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << shelf.reason;
   params.max_centre_offset_y_m = -0.1;
   EXPECT_FALSE(allowed(params));
 }
@@ -338,7 +338,7 @@ TEST(DegradedTarget, ABlobOfTheMockupsSizeIsNotLookedBehind) {
   params.stop_behind_target_sized = true;
   const Detection after = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(after.found) << "taken at (" << after.position_m.transpose() << ")";
-  EXPECT_EQ(after.outcome, Outcome::kNotTargetShaped) << after.reason;
+  EXPECT_EQ(after.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << after.reason;
   EXPECT_NEAR(after.shape.range_z_m, 2.0, 0.1) << "the reported blob is the degraded face";
 }
 
@@ -426,7 +426,7 @@ TEST(MergedBlob, ABumpOnABoxIsNotSplitOut) {
   params.split_depth_step_m = 0.15;
   const Detection result = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found) << "bump taken at (" << result.position_m.transpose() << ")";
-  EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+  EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << result.reason;
   EXPECT_EQ(result.merged_blobs_split, 0);
 }
 
@@ -440,7 +440,7 @@ TEST(MergedBlob, ATargetFlushWithABoxStaysInvalid) {
   params.split_depth_step_m = 0.15;
   const Detection result = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found) << "taken at (" << result.position_m.transpose() << ")";
-  EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+  EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << result.reason;
 }
 
 TEST(MergedBlob, TheSplitStepIsValidated) {

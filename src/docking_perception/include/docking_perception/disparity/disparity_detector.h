@@ -2,25 +2,23 @@
 //
 // ROS-free: plain C++17, OpenCV and Eigen. The nodelet converts messages and calls detect().
 //
-// Pipeline (see the package README, section disparity_detector):
-//  1. keep valid disparities inside the region of interest, drop floor points (optional height cut);
-//  2. median (and optionally Gaussian) filter;
-//  3. closest object: a high order statistic of the valid disparities (the value that at least
-//     `closest_min_pixels` pixels reach), so a few noisy pixels cannot win;
-//  4. threshold just below it (a depth band that holds the target's own depth), keep the largest
-//     blob (outer contour); if it is smaller than min_blob_area_px or thinner than
-//     min_blob_thickness_px (mismatches at occlusion edges, speckles), remove everything at that
-//     depth and search again behind it (at most 8 times);
-//     With the shape check on, every blob of the band (largest first) is measured: its metric
-//     width, height and fill must be those the mockup of config/target.yaml can show from some yaw
-//     (TargetShape). A band without such a blob is removed and the search looks behind it too, so a
-//     nearer wall, person or box cannot hide the target, and a box beside it cannot be taken for it;
-//     with a SearchHint (the tracked target), a target-shaped blob inside the hint's gate is preferred;
-//  5. reject implausible blobs with a reason (too small, too large, on the border, out of range,
-//     not target-shaped);
-//  6. the target's visible face: the blob's nearest depth layer; its centroid is the centre, the median
-//     of its disparities the robust disparity;
-//  7. reproject with the rectified model and propagate pixel and disparity noise to a 3x3 covariance.
+// detect() runs the detector's stages (stages.h; the package README, section disparity_detector, draws them):
+//  1. input: the image and geometry usable; the searched region: the matcher's valid window, the configured
+//     rows;
+//  2. valid disparity: the region's valid disparities above the floor cut (and below the ceiling cut), median
+//     filtered: enough of them;
+//  3. band search: the closest object (the disparity `closest_min_pixels` pixels reach, so a few noisy
+//     pixels cannot win), a threshold just below it that holds the target's own depth, and the band's blobs,
+//     largest first: too small or thin, not of the mockup's shape (TargetShape: width, height and fill it can
+//     show from some yaw), height or isolation (a part split out of a blob merged with its neighbours), or the
+//     target (with a SearchHint: inside the tracked target's gate). A band without it is removed and the
+//     search looks behind it, so a nearer wall, person or box cannot hide the target; a blob that may be the
+//     degraded target stops it;
+//  4. port: the mockup's footprint fitted to the blob's depth profile gives the port (else the centroid of
+//     the blob's nearest layer), reprojected with the rectified model, its covariance from pixel and
+//     disparity noise;
+//  5. plausibility: the blob's size, border and disparity range.
+// The node adds the appearance check (face_appearance.h) and the track gate (target_track_gate.h).
 #pragma once
 
 #include <string>
@@ -30,6 +28,7 @@
 #include <opencv2/core.hpp>
 
 #include "docking_perception/disparity/disparity_detector_settings.h"
+#include "docking_perception/disparity/stages.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -82,28 +81,6 @@ constexpr double kMaxAppearanceWorkingWidthPx = 48.0;
 void validate(const DetectorParams& params, const TargetShape& shape);
 std::vector<std::string> validateGeometry(const StereoGeometry& geometry);
 
-enum class Outcome {
-  kFound = 0,
-  kBadInput,             // empty image, wrong type, invalid geometry or parameters
-  kNoValidDisparity,     // too few valid pixels to call anything the closest object
-  kNoBlob,               // thresholding left nothing big enough to be a connected blob
-  kBlobTooSmall,
-  kBlobTooLarge,
-  kBlobTouchesBorder,
-  kDisparityOutOfRange,
-  kNotTargetShaped,      // every blob in reach has a width, height or fill the mockup cannot show
-  kOffTrack,             // target-shaped, but a jump from the tracked target not yet confirmed
-                         // (set by TargetTrackGate, never by detect())
-  kFootprintMisfit,      // the blob's depth profile does not fit the mockup's footprint
-  kAppearanceMismatch,   // target-shaped, but the face print is not where the port is
-                         // (set by confirmByAppearance, face_appearance.h, never by detect())
-  kAppearanceUnjudged,   // target-shaped, but its face too saturated to judge and glare_keeps_blob off
-                         // (set by confirmByAppearance)
-};
-
-// Short stable name of an outcome ("found", "blob_too_small", ...), for diagnostics keys and counters.
-const char* outcomeName(Outcome outcome);
-
 // The metric shape of a blob, measured at its median raw disparity.
 struct BlobShape {
   double width_m = 0.0, height_m = 0.0;  // bounding box at the blob's range
@@ -134,7 +111,9 @@ struct ImageWindow {
 
 struct Detection {
   bool found = false;
-  Outcome outcome = Outcome::kBadInput;
+  // The stage that decided (stages.h): the first that did not pass; when found, the last the core ran, passed
+  // (the node's appearance check and track gate may still refuse it).
+  StageOutcome outcome;
   std::string reason;  // empty when found; otherwise human-readable, with the numbers that decided
 
   // Search figures (filled as far as the pipeline got, also when rejected).

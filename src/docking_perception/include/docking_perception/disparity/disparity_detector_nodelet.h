@@ -22,6 +22,7 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <utility>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <docking_msgs/TargetEstimate.h>
@@ -37,6 +38,7 @@
 #include "docking_perception/DisparityDetectorConfig.h"
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/face_appearance.h"
+#include "docking_perception/disparity/stages.h"
 #include "docking_perception/duty/fused_range_condition.h"
 #include "docking_perception/disparity/target_track_gate.h"
 
@@ -51,6 +53,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   using Config = docking_perception::DisparityDetectorConfig;
 
   void onInit() override;
+  void advertise();
 
   // The declared defaults with the private namespace's values; the mockup of ~target_yaml (its size and its
   // face print). Throws docking_settings::ConfigError naming the key.
@@ -64,19 +67,40 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   void onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused);
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info);
   void onLeftImage(const sensor_msgs::ImageConstPtr& image);
-  // The appearance check on a found detection (face_appearance.h), with the left image of the disparity's
-  // stamp and size; without one the detection is kept and counted (diagnostics).
+  // What a disparity image is read with: the settings and detector in force, its camera model (a window's, or
+  // reduced by a decimation), the region the matcher searched, the tracked target's hint.
+  struct Frame {
+    disparity::DisparityDetectorSettings settings;
+    disparity::DisparityDetector detector;
+    disparity::StereoGeometry geometry;
+    int decimation = 1;
+    disparity::ImageWindow window;
+    cv::Rect valid_region;
+    disparity::SearchHint hint;
+  };
+  // The frame of `message`; false (and why) when a window's disparity has no camera_info (stage 1).
+  bool prepareFrame(const stereo_msgs::DisparityImage& message, Frame* frame, std::string* problem);
+  bool cameraModel(const stereo_msgs::DisparityImage& message,
+                   const std::map<int, sensor_msgs::CameraInfoConstPtr>& camera_infos, bool windows_recently,
+                   Frame* frame, std::string* problem);
+  // Stage 6: the appearance check on a found detection (face_appearance.h), with the left image of the
+  // disparity's stamp and size; without one the detection is kept and counted (diagnostics).
   void confirmAppearance(const stereo_msgs::DisparityImage& message, const cv::Mat& disparity,
                          const disparity::DetectorParams& params,
                          const disparity::StereoGeometry& geometry, disparity::Detection* detection);
   // Catches what processDisparity throws: the message is reported as invalid input, the node goes on.
   void onDisparity(const stereo_msgs::DisparityImageConstPtr& message);
   void processDisparity(const stereo_msgs::DisparityImageConstPtr& message);
-  // Publishes valid = false with `status` (bad input), and counts it in the diagnostics.
-  void publishInvalidInput(const stereo_msgs::DisparityImage& message, const std::string& status,
-                           double cpu_start_ms);
+  // Publishes valid = false with `status` (bad input, stage 1: `outcome`), and counts it in the diagnostics.
+  void publishInvalidInput(const stereo_msgs::DisparityImage& message, disparity::StageOutcome outcome,
+                           const std::string& status, double cpu_start_ms);
+  void publishDebugImage(const stereo_msgs::DisparityImage& message, const cv::Mat& disparity,
+                         const disparity::Detection& detection, double display_max_px);
+  void applyTrackGate(double stamp_s, disparity::Detection* detection);
+  void checkOutput(disparity::Detection* detection, docking_msgs::TargetEstimate* estimate);
   void produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
-  void recordOutcome(bool found, const std::string& reason, double processing_ms);
+  void summarize(diagnostic_updater::DiagnosticStatusWrapper& status, bool paused, double rate) const;
+  void recordOutcome(disparity::StageOutcome outcome, bool found, const std::string& reason, double processing_ms);
   // Publishes and records the image stamp -> publication latency (takes state_mutex_).
   void publishEstimate(const docking_msgs::TargetEstimate& estimate);
   void recordDebugImage(double cpu_ms);
@@ -131,6 +155,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   unsigned long window_frames_ = 0;
   bool warned_no_camera_info_ = false;
   std::deque<bool> recent_found_;  // detection outcome of the last diagnostic_window_frames frames
+  std::map<std::pair<disparity::Stage, std::uint8_t>, unsigned long> outcome_counts_;  // frames per deciding stage
   std::string last_rejection_;
   std::string last_input_error_;
   unsigned long frames_ = 0;

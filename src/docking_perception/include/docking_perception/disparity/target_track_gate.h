@@ -4,7 +4,7 @@
 // target moves slowly and continuously: once it is tracked, a detection is accepted only inside a
 // gate around the track's prediction (last confirmed position + velocity x elapsed time, widened by
 // the relative speed the target can reach and by the detection's own depth noise). A detection outside
-// the gate is reported invalid (Outcome::kOffTrack) until the same new position has been seen
+// the gate is reported invalid (TrackOutcome::kOffTrack) until the same new position has been seen
 // `confirm_frames` frames in a row: then the track moves there (the target was really moved, or the
 // first lock was wrong). Without a confirmed detection for `timeout_s` the track is dropped and the
 // next target-shaped detection starts a new one at once (the shape check alone guards acquisition).
@@ -34,7 +34,7 @@ class TargetTrackGate {
 
   // Checks a found detection at `stamp_s` (seconds, any monotonic clock: image stamps) against the
   // track and updates it. An accepted detection is returned unchanged; a rejected one has found =
-  // false, outcome kOffTrack and the reason with the distance, the gate and the confirmation count.
+  // false, outcome TrackOutcome::kOffTrack and the reason with the distance, the gate and the confirmation count.
   // Detections that are not found pass through (they only age the track). Stamps that go backwards
   // (a replayed bag restarted) reset the track.
   Detection apply(double stamp_s, const Detection& detection);
