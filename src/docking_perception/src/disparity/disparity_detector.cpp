@@ -452,8 +452,6 @@ void validate(const DetectorParams& p, const TargetShape& t) {
           "must be 0, 1 (off), 3 or 5 (got " + std::to_string(p.median_kernel_px) + ")");
   require(p.max_disparity_px > p.min_disparity_px, "max_disparity_px",
           "must be > min_disparity_px (got " + formatNumber(p.max_disparity_px) + ")");
-  require(p.roi_bottom_fraction > p.roi_top_fraction, "roi_bottom_fraction",
-          "must be > roi_top_fraction (got " + formatNumber(p.roi_bottom_fraction) + ")");
   require(std::isfinite(t.face_width_m) && t.face_width_m > 0.0 && std::isfinite(t.face_height_m) &&
               t.face_height_m > 0.0,
           "target_yaml", "the mockup's face width and height must be > 0");
@@ -546,10 +544,9 @@ struct BandSearchState {
   int largest_skipped_area = 0;
 };
 
-// Stage 1, input: the image and geometry usable, and the searched region: the matcher's valid window cut to
-// the configured rows (of the full image, when the disparity is a window of it).
+// Stage 1, input: the image and geometry usable, and the searched region: the matcher's valid window.
 StageOutcome selectRegion(const cv::Mat& disparity, const StereoGeometry& geometry, cv::Rect valid_region,
-                          const ImageWindow& window, const DetectorParams& p, cv::Rect* region, std::string* reason) {
+                          cv::Rect* region, std::string* reason) {
   if (disparity.empty()) {
     *reason = "empty disparity image";
     return InputOutcome::kEmptyImage;
@@ -566,13 +563,8 @@ StageOutcome selectRegion(const cv::Mat& disparity, const StereoGeometry& geomet
   }
   const cv::Rect image_rect(0, 0, disparity.cols, disparity.rows);
   *region = valid_region.area() > 0 ? (valid_region & image_rect) : image_rect;
-  const int full_rows = window.isWindow() ? window.full_size.height : disparity.rows;
-  const int row_offset = window.isWindow() ? window.offset.y : 0;
-  const int roi_top = static_cast<int>(std::lround(p.roi_top_fraction * full_rows)) - row_offset;
-  const int roi_bottom = static_cast<int>(std::lround(p.roi_bottom_fraction * full_rows)) - row_offset;
-  *region &= cv::Rect(0, roi_top, disparity.cols, std::max(0, roi_bottom - roi_top));
   if (region->area() <= 0) {
-    *reason = "empty region of interest (valid window and roi_top/bottom_fraction do not overlap)";
+    *reason = "empty region of interest (the matcher's valid window is outside the image)";
     return InputOutcome::kEmptyRegion;
   }
   return InputOutcome::kPassed;
@@ -615,9 +607,6 @@ int keepValidDisparities(const cv::Mat& disparity, const StereoGeometry& geometr
 int filterAndCount(const DetectorParams& p, SearchImages* images) {
   images->filtered = images->clean;
   if (p.median_kernel_px >= 3) cv::medianBlur(images->clean, images->filtered, p.median_kernel_px);
-  if (p.gaussian_sigma_px > 0.0) {
-    cv::GaussianBlur(images->filtered, images->filtered, cv::Size(0, 0), p.gaussian_sigma_px);
-  }
   const cv::Mat filtered_region = images->filtered(images->region);
   double max_value = 0.0;
   cv::minMaxLoc(filtered_region, nullptr, &max_value);
@@ -959,7 +948,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
                                     const SearchHint& hint, const ImageWindow& window) const {
   Detection result;
   SearchImages images;
-  result.outcome = selectRegion(disparity, geometry, valid_region, window, params_, &images.region, &result.reason);
+  result.outcome = selectRegion(disparity, geometry, valid_region, &images.region, &result.reason);
   if (!result.outcome.passed()) return result;
   result.outcome = validDisparity(disparity, geometry, search_min_px, search_max_px, params_, &images, &result);
   if (!result.outcome.passed()) return result;

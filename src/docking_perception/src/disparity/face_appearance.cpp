@@ -357,11 +357,11 @@ AppearanceResult confirmByAppearance(const FaceAppearanceCheck& check, const cv:
     detection->outcome = AppearanceOutcome::kMismatch;
     detection->reason = "not the target: " + result.reason;
   }
-  if (result.verdict == AppearanceVerdict::kGlare && !params.glare_keeps_blob) {
+  if (result.verdict == AppearanceVerdict::kGlare) {
     detection->found = false;
     detection->outcome = AppearanceOutcome::kGlare;
     detection->reason = "not confirmed: " + result.reason +
-                        "; glare hides part of the mockup, the port cannot be placed (appearance_glare_keeps_blob)";
+                        "; glare hides part of the mockup, the port cannot be placed";
   }
   return result;
 }

@@ -3,8 +3,7 @@
 // ROS-free: plain C++17, OpenCV and Eigen. The nodelet converts messages and calls detect().
 //
 // detect() runs the detector's stages (stages.h; the package README, section disparity_detector, draws them):
-//  1. input: the image and geometry usable; the searched region: the matcher's valid window, the configured
-//     rows;
+//  1. input: the image and geometry usable; the searched region: the matcher's valid window;
 //  2. valid disparity: the region's valid disparities above the floor cut (and below the ceiling cut), median
 //     filtered: enough of them;
 //  3. band search: the closest object (the disparity `closest_min_pixels` pixels reach, so a few noisy
@@ -76,8 +75,8 @@ constexpr double kMaxAppearanceWorkingWidthPx = 48.0;
 
 // Throws std::invalid_argument (docking_settings::ConfigError) naming the first setting its declaration does not
 // allow, or the rule between settings it breaks (median_kernel_px 0, 1, 3 or 5; max_disparity_px above
-// min_disparity_px; roi_bottom_fraction above roi_top_fraction; min_fill_fraction at most the mockup's own
-// lowest fill), or the mockup's size that is unusable.
+// min_disparity_px; min_fill_fraction at most the mockup's own lowest fill), or the mockup's size that is
+// unusable.
 void validate(const DetectorParams& params, const TargetShape& shape);
 std::vector<std::string> validateGeometry(const StereoGeometry& geometry);
 
@@ -101,8 +100,8 @@ struct SearchHint {
 // Where the disparity image lies in the camera's full image, when it is a window of it (the far stage's
 // tracking window, far_stereo_rectify: camera_info roi). Edges of the window that are not the full
 // image's are not the target's edge: a blob crossing one is a neighbour of the tracked target (or the
-// target merged with one), never reported as the target cut by the border. Rows given as fractions of
-// the image (roi_top/bottom_fraction) stay fractions of the full image. Default: not a window.
+// target merged with one), never reported as the target cut by the border; the blob-size limit stays the
+// full image's. Default: not a window.
 struct ImageWindow {
   cv::Point offset{0, 0};  // the window's top-left pixel in the full image
   cv::Size full_size;      // the full image; empty: the disparity image is the full image

@@ -88,8 +88,9 @@ class FaceAppearanceCheck {
 
 // Checks a found detection's face (port: detection->position_m) in `left_rect`: a print that does not
 // match turns it into a rejection (AppearanceOutcome::kMismatch, found = false, the reason with the score);
-// a face too dark to judge leaves it found, one too saturated (glare) too only with params.glare_keeps_blob
-// (else AppearanceOutcome::kGlare, found = false). Sets appearance_judged and appearance_score. A detection
+// a face too dark to judge leaves it found, one too saturated (glare) is refused (AppearanceOutcome::kGlare,
+// found = false: the glare that hides the print hides part of the mockup, and the blob left puts the port
+// 0.2-0.4 m off, campaign seed 10939). Sets appearance_judged and appearance_score. A detection
 // not found is left alone (and not checked). With params.refine_port, a matched print moves the port
 // to the print's centre: across the line of sight, and in depth to the median of `disparity` (CV_32F, the
 // image the detection came from; empty: depth kept) over the middle half of the matched print (when at
