@@ -15,7 +15,6 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <sensor_msgs/image_encodings.h>
 
-#include "docking_perception/disparity/decimating_rectifier.h"
 #include "docking_perception/mono/target_model.h"
 #include "docking_settings/param_reader.h"
 #include "docking_settings/reconfigure.h"
@@ -85,9 +84,8 @@ disparity::StageOutcome checkMessage(const stereo_msgs::DisparityImage& message,
 
 // The region the matcher can give disparities in: right of its blind left band (its largest disparity plus
 // half its correlation window), inside its own valid window if it set one.
-cv::Rect validRegionOf(const stereo_msgs::DisparityImage& message, int blind_band_extra_px, int decimation) {
-  const int blind_columns = std::max(0, static_cast<int>(std::ceil(message.max_disparity)) +
-                                            (blind_band_extra_px + decimation - 1) / decimation);
+cv::Rect validRegionOf(const stereo_msgs::DisparityImage& message, int blind_band_extra_px) {
+  const int blind_columns = std::max(0, static_cast<int>(std::ceil(message.max_disparity)) + blind_band_extra_px);
   cv::Rect valid_region(blind_columns, 0, static_cast<int>(message.image.width) - blind_columns,
                         static_cast<int>(message.image.height));
   if (message.valid_window.width > 0 && message.valid_window.height > 0) {
@@ -302,24 +300,16 @@ void DisparityDetectorNodelet::updateSubscriptions() {
                                           &DisparityDetectorNodelet::onDisparity, this);
     camera_info_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarFullLeftCameraInfo, 1,
                                             &DisparityDetectorNodelet::onCameraInfo, this);
-    camera_info_tracking_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarTrackingLeftCameraInfo, 1,
-                                                     &DisparityDetectorNodelet::onCameraInfo, this);
     left_image_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarFullLeftImageRect, 1,
                                            &DisparityDetectorNodelet::onLeftImage, this);
-    left_image_tracking_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarTrackingLeftImageRect, 1,
-                                                    &DisparityDetectorNodelet::onLeftImage, this);
     NODELET_DEBUG("disparity_detector: subscribed to %s", disparity_subscriber_.getTopic().c_str());
   } else if (!wanted && disparity_subscriber_) {
     disparity_subscriber_.shutdown();
     camera_info_subscriber_.shutdown();
-    camera_info_tracking_subscriber_.shutdown();
     left_image_subscriber_.shutdown();
-    left_image_tracking_subscriber_.shutdown();
     disparity_subscriber_ = ros::Subscriber();
     camera_info_subscriber_ = ros::Subscriber();
-    camera_info_tracking_subscriber_ = ros::Subscriber();
     left_image_subscriber_ = ros::Subscriber();
-    left_image_tracking_subscriber_ = ros::Subscriber();
     NODELET_DEBUG("disparity_detector: unsubscribed from the disparity (near: %s)", duty::describe(near_state));
   }
 }
@@ -332,7 +322,7 @@ void DisparityDetectorNodelet::onCameraInfo(const sensor_msgs::CameraInfoConstPt
     last_window_info_arrival_s_ = ros::Time::now().toSec();
     return;
   }
-  camera_info_by_binning_[std::max(1, static_cast<int>(info->binning_x))] = info;
+  camera_info_ = info;
 }
 
 void DisparityDetectorNodelet::onLeftImage(const sensor_msgs::ImageConstPtr& image) {
@@ -431,7 +421,7 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   confirmAppearance(*message, disparity, frame.detector.params(), frame.geometry, &detection);
   applyTrackGate(message->header.stamp.toSec(), &detection);
   docking_msgs::TargetEstimate estimate = toEstimate(message->header, detection);
-  publishDebugImage(*message, disparity, detection, frame.settings.debug_display_max_disparity_px / frame.decimation);
+  publishDebugImage(*message, disparity, detection, frame.settings.debug_display_max_disparity_px);
   checkOutput(&detection, &estimate);
   estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
   recordOutcome(detection.outcome, detection.found, detection.reason, estimate.processing_time_ms);
@@ -470,14 +460,13 @@ void DisparityDetectorNodelet::checkOutput(disparity::Detection* detection, dock
 bool DisparityDetectorNodelet::prepareFrame(const stereo_msgs::DisparityImage& message, Frame* frame,
                                             std::string* problem) {
   const sensor_msgs::Image& image = message.image;
-  std::map<int, sensor_msgs::CameraInfoConstPtr> camera_infos;
-  sensor_msgs::CameraInfoConstPtr window_info;
+  sensor_msgs::CameraInfoConstPtr camera_info, window_info;
   bool windows_recently = false;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     frame->settings = settings_;
     frame->detector = detector_;
-    camera_infos = camera_info_by_binning_;
+    camera_info = camera_info_;
     window_info = windowInfoOf(recent_window_infos_, message.header.stamp, image.width, image.height);
     if (window_info) ++window_frames_;
     // A disparity of the full image's size is not a window: it may be read without a camera_info.
@@ -487,16 +476,13 @@ bool DisparityDetectorNodelet::prepareFrame(const stereo_msgs::DisparityImage& m
     last_input_error_.clear();
   }
   if (window_info) {
-    camera_infos = {{1, window_info}};
+    camera_info = window_info;
     frame->window.offset = cv::Point(static_cast<int>(window_info->roi.x_offset),
                                      static_cast<int>(window_info->roi.y_offset));
     frame->window.full_size = cv::Size(static_cast<int>(window_info->width), static_cast<int>(window_info->height));
   }
-  if (!cameraModel(message, camera_infos, windows_recently, frame, problem)) return false;
-  if (frame->decimation > 1) {
-    frame->detector.setParams(disparity::detectorParamsAtDecimation(frame->detector.params(), frame->decimation));
-  }
-  frame->valid_region = validRegionOf(message, frame->settings.blind_band_extra_px, frame->decimation);
+  if (!cameraModel(message, camera_info, windows_recently, frame, problem)) return false;
+  frame->valid_region = validRegionOf(message, frame->settings.blind_band_extra_px);
   // The tracked target tells the search which target-shaped blob to prefer, then judges the result.
   // The gate is the one piece of state across frames (frames arrive in order on one subscriber).
   std::lock_guard<std::mutex> lock(state_mutex_);
@@ -504,13 +490,12 @@ bool DisparityDetectorNodelet::prepareFrame(const stereo_msgs::DisparityImage& m
   return true;
 }
 
-// The rectified model: f and B from the message; the principal point and the decimation from the far
-// stage's left camera_info of the disparity's size (image_geometry's reduced camera: binning = decimation),
-// else the image centre and full resolution. The detector's pixel settings are given at the calibrated
-// resolution. False (and why) for a window's disparity whose camera_info is missing.
+// The rectified model: f and B from the message; the principal point from the far stage's left camera_info
+// when it is of the disparity's size (image_geometry: a window's region of interest shifts it), else the image
+// centre. False (and why) for a window's disparity whose camera_info is missing.
 bool DisparityDetectorNodelet::cameraModel(const stereo_msgs::DisparityImage& message,
-                                           const std::map<int, sensor_msgs::CameraInfoConstPtr>& camera_infos,
-                                           bool windows_recently, Frame* frame, std::string* problem) {
+                                           const sensor_msgs::CameraInfoConstPtr& camera_info, bool windows_recently,
+                                           Frame* frame, std::string* problem) {
   const sensor_msgs::Image& image = message.image;
   disparity::StereoGeometry& geometry = frame->geometry;
   geometry.focal_px = message.f;
@@ -518,16 +503,12 @@ bool DisparityDetectorNodelet::cameraModel(const stereo_msgs::DisparityImage& me
   geometry.cx_px = (image.width - 1) / 2.0;
   geometry.cy_px = (image.height - 1) / 2.0;
   image_geometry::PinholeCameraModel model;
-  bool have_model = false;
-  for (const auto& entry : camera_infos) {  // the camera_info whose reduced size is the disparity's
-    have_model = entry.second && model.fromCameraInfo(entry.second) && model.fx() > 0.0 &&
-                 model.reducedResolution() == cv::Size(static_cast<int>(image.width), static_cast<int>(image.height));
-    if (have_model) break;
-  }
+  const bool have_model =
+      camera_info && model.fromCameraInfo(camera_info) && model.fx() > 0.0 &&
+      model.reducedResolution() == cv::Size(static_cast<int>(image.width), static_cast<int>(image.height));
   if (have_model) {
     geometry.cx_px = model.cx();
     geometry.cy_px = model.cy();
-    frame->decimation = std::max(1, static_cast<int>(model.binningX()));
     if (std::abs(model.fx() - message.f) > 0.01 * message.f) {
       NODELET_WARN_THROTTLE(30.0, "disparity_detector: left camera_info fx %.1f differs from the DisparityImage f "
                             "%.1f; using f from the disparity", model.fx(), message.f);
@@ -543,10 +524,9 @@ bool DisparityDetectorNodelet::cameraModel(const stereo_msgs::DisparityImage& me
     return false;
   } else if (!warned_no_camera_info_) {
     warned_no_camera_info_ = true;
-    NODELET_WARN("disparity_detector: no camera_info of the disparity's size (%ux%u) on %s or %s yet; using the "
-                 "image centre (%.1f, %.1f) as the principal point and the settings at full resolution",
-                 image.width, image.height, camera_info_subscriber_.getTopic().c_str(),
-                 camera_info_tracking_subscriber_.getTopic().c_str(), geometry.cx_px, geometry.cy_px);
+    NODELET_WARN("disparity_detector: no camera_info of the disparity's size (%ux%u) on %s yet; using the image "
+                 "centre (%.1f, %.1f) as the principal point", image.width, image.height,
+                 camera_info_subscriber_.getTopic().c_str(), geometry.cx_px, geometry.cy_px);
   }
   return true;
 }

@@ -323,7 +323,7 @@ MatcherReach matcherReachOf(const MatcherSettings& settings) {
   return reach;
 }
 
-FarStagePair farStagePair(const SyntheticScene& scene, int decimation) {
+FarStagePair farStagePair(const SyntheticScene& scene) {
   cv::Mat left_full, right_full;
   renderStereoPair(scene, &left_full, &right_full);
   PinholeCalibration camera;
@@ -335,12 +335,9 @@ FarStagePair farStagePair(const SyntheticScene& scene, int decimation) {
   PinholeCalibration right_camera = camera;
   right_camera.projection(0, 3) = -scene.focal_px * scene.baseline_m;
   FarStagePair pair;
-  DecimatingRectifier(camera, decimation).rectify(left_full, &pair.left);
-  DecimatingRectifier(right_camera, decimation).rectify(right_full, &pair.right);
+  WindowRectifier(camera).rectify(left_full, &pair.left);
+  WindowRectifier(right_camera).rectify(right_full, &pair.right);
   pair.geometry = geometryOf(scene);
-  pair.geometry.focal_px /= decimation;
-  pair.geometry.cx_px /= decimation;
-  pair.geometry.cy_px /= decimation;
   return pair;
 }
 

@@ -10,7 +10,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
-#include "docking_perception/disparity/decimating_rectifier.h"
+#include "docking_perception/disparity/window_rectifier.h"
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/target_track_gate.h"
 #include "docking_perception/disparity/tracking_window.h"
@@ -92,21 +92,20 @@ struct CameraCalibration {
   cv::Mat camera_matrix, distortion, rectification, projection;  // CV_64F
 };
 CameraCalibration loadCameraCalibration(const std::string& path);
-// The same camera in the core library's form (DecimatingRectifier).
+// The same camera in the core library's form (WindowRectifier).
 PinholeCalibration pinholeOf(const CameraCalibration& calibration);
 
 // What the matcher of `settings` needs around a pixel (far_stereo_rectify reads the same from
 // config/stereo_image_proc.yaml).
 MatcherReach matcherReachOf(const MatcherSettings& settings);
 
-// A rendered (rectified, full-resolution) pair as the far stage sees it at `decimation`: each image
-// through DecimatingRectifier (area-averaged; the scene's cameras have no distortion), and the
-// reduced stereo geometry (image_geometry's, binning = decimation).
+// A rendered (rectified) pair as the far stage sees it: each image through WindowRectifier (the scene's
+// cameras have no distortion), and the stereo geometry.
 struct FarStagePair {
   cv::Mat left, right;
   StereoGeometry geometry;
 };
-FarStagePair farStagePair(const SyntheticScene& scene, int decimation);
+FarStagePair farStagePair(const SyntheticScene& scene);
 
 // The target mockup of config/target.yaml seen face-on at `position_m` (the port centre, left
 // rectified optical frame), with its body and solar panels behind the face, on a floor 0.25 m below

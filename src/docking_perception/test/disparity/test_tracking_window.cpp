@@ -1,4 +1,4 @@
-// The far stage's tracking window (tracking_window.h, DecimatingRectifier::rectifyWindow, the detector's
+// The far stage's tracking window (tracking_window.h, WindowRectifier::rectifyWindow, the detector's
 // ImageWindow): its geometry; a window rectified alone is the whole image's rectification cut to it; the
 // pipeline on a window (config/far_stereo.yaml's window settings, config/stereo_image_proc.yaml's matcher)
 // finds the target where the whole image does; boxes beside it and crossing the window's edge are never
@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
 
-#include "docking_perception/disparity/decimating_rectifier.h"
+#include "docking_perception/disparity/window_rectifier.h"
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/tracking_window.h"
 #include "synthetic_stereo.h"
@@ -141,7 +141,7 @@ TEST(TrackingWindow, RectifyingAWindowGivesTheWholeImagesPixels) {
   const PinholeCalibration c = testing::distortedWebcam();
   cv::Mat raw(c.size, CV_8UC1);
   cv::randu(raw, 0, 256);
-  const DecimatingRectifier rectifier(c, 1);
+  const WindowRectifier rectifier(c);
   cv::Mat whole, window;
   rectifier.rectify(raw, &whole);
   const cv::Rect area(101, 57, 233, 141);
@@ -159,7 +159,7 @@ class WindowPipeline : public ::testing::TestWithParam<WindowCase> {};
 
 TEST_P(WindowPipeline, FindsTheTargetWhereTheWholeImageDoes) {
   const WindowCase c = GetParam();
-  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(c.x_m, 0.0, c.z_m, 12.0), 1);
+  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(c.x_m, 0.0, c.z_m, 12.0));
   const Detection whole = detectOn(pair, std::nullopt);
   ASSERT_TRUE(whole.found) << whole.reason;
   // The window placed from a prediction 0.15 m off to the side and 0.2 m off in range.
@@ -181,7 +181,7 @@ INSTANTIATE_TEST_SUITE_P(Ranges, WindowPipeline,
 // nearly constant and 0.1 m (2 deg at 3 m) is more than a fused estimate's height error.
 TEST(WindowPipeline, APredictionOffInHeightStillHoldsTheFace) {
   const double x_m = 0.2, z_m = 3.0;
-  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(x_m, 0.0, z_m, 12.0), 1);
+  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(x_m, 0.0, z_m, 12.0));
   const Detection whole = detectOn(pair, std::nullopt);
   ASSERT_TRUE(whole.found) << whole.reason;
   for (const double dy : {-0.1, 0.1}) {
@@ -199,7 +199,7 @@ TEST(WindowPipeline, APredictionOffInHeightStillHoldsTheFace) {
 TEST(WindowPipeline, ABoxCrossingTheWindowsEdgeIsLookedBehind) {
   testing::SyntheticScene scene = testing::targetScene(0.0, 0.0, 4.0, 12.0);
   scene.rects.insert(scene.rects.begin(), testing::boxOnTheFloor(0.75, 3.4, 0.5, 0.3, 53));
-  const testing::FarStagePair pair = testing::farStagePair(scene, 1);
+  const testing::FarStagePair pair = testing::farStagePair(scene);
   const cv::Rect window = windowAround(pair, Eigen::Vector3d(0.0, 0.0, 4.0));
   const Detection untold = detectOn(pair, window, /*tell_detector_it_is_a_window=*/false);
   ASSERT_FALSE(untold.found && std::abs(untold.position_m.x()) < 0.1)
@@ -214,7 +214,7 @@ TEST(WindowPipeline, ABoxCrossingTheWindowsEdgeIsLookedBehind) {
 // The window placed wrongly (the prediction 0.75 m off): the target crosses its edge and is reported not
 // found, never found at a wrong place; nothing else in the window is taken for it.
 TEST(WindowPipeline, AWindowThatCutsTheTargetReportsItNotFound) {
-  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(0.0, 0.0, 3.0, 12.0), 1);
+  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(0.0, 0.0, 3.0, 12.0));
   const cv::Rect window = windowAround(pair, Eigen::Vector3d(0.95, 0.0, 3.0));
   const Detection d = detectOn(pair, window);
   EXPECT_FALSE(d.found) << "found at " << d.position_m.transpose();

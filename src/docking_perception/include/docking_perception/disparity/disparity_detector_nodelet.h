@@ -2,17 +2,17 @@
 //
 // Subscribes (lazily, only while an output has subscribers and the stage is not paused):
 //   stereo/disparity           stereo_msgs/DisparityImage (stereo_image_proc)
-//   stereo/left/camera_info    sensor_msgs/CameraInfo: the rectified principal point
-//   stereo/far/{full,tracking}/left/image_rect  sensor_msgs/Image mono8: the left image each disparity was
-//                              computed from, matched by stamp and size, for the appearance check
-//                              (face_appearance.h)
+//   stereo/far/full/left/camera_info  sensor_msgs/CameraInfo: the rectified principal point (a tracking
+//                              window's: where the window lies)
+//   stereo/far/full/left/image_rect  sensor_msgs/Image mono8: the left image each disparity was computed
+//                              from, matched by stamp and size, for the appearance check (face_appearance.h)
 // and always
 //   target/estimate            docking_msgs/TargetEstimate, the arbiter's: near and monocular pauses the
 //                              stage (duty/fused_range_condition.h)
 // Publishes:
 //   perception/disparity/estimate     docking_msgs/TargetEstimate (SOURCE_DISPARITY, position only)
 //   perception/disparity/debug_image  sensor_msgs/Image bgr8 (image_transport)
-//   /diagnostics                      last rejection reason, detection rate
+//   /diagnostics                      detection rate, frames per deciding stage and code, last rejection
 // Settings: settings/disparity_detector.yaml declares them (defaults, ranges, meaning); config/disparity_detector.yaml
 // holds what differs from the defaults. All are live through dynamic_reconfigure. ~target_yaml: the mockup.
 #pragma once
@@ -67,22 +67,20 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   void onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused);
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info);
   void onLeftImage(const sensor_msgs::ImageConstPtr& image);
-  // What a disparity image is read with: the settings and detector in force, its camera model (a window's, or
-  // reduced by a decimation), the region the matcher searched, the tracked target's hint.
+  // What a disparity image is read with: the settings and detector in force, its camera model (a window's or
+  // the whole image's), the region the matcher searched, the tracked target's hint.
   struct Frame {
     disparity::DisparityDetectorSettings settings;
     disparity::DisparityDetector detector;
     disparity::StereoGeometry geometry;
-    int decimation = 1;
     disparity::ImageWindow window;
     cv::Rect valid_region;
     disparity::SearchHint hint;
   };
   // The frame of `message`; false (and why) when a window's disparity has no camera_info (stage 1).
   bool prepareFrame(const stereo_msgs::DisparityImage& message, Frame* frame, std::string* problem);
-  bool cameraModel(const stereo_msgs::DisparityImage& message,
-                   const std::map<int, sensor_msgs::CameraInfoConstPtr>& camera_infos, bool windows_recently,
-                   Frame* frame, std::string* problem);
+  bool cameraModel(const stereo_msgs::DisparityImage& message, const sensor_msgs::CameraInfoConstPtr& camera_info,
+                   bool windows_recently, Frame* frame, std::string* problem);
   // Stage 6: the appearance check on a found detection (face_appearance.h), with the left image of the
   // disparity's stamp and size; without one the detection is kept and counted (diagnostics).
   void confirmAppearance(const stereo_msgs::DisparityImage& message, const cv::Mat& disparity,
@@ -111,10 +109,10 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   ros::Publisher estimate_publisher_;
   image_transport::Publisher debug_publisher_;
   ros::Subscriber disparity_subscriber_;
-  // The far stage's left camera_info at full and at reduced resolution (config/far_stereo.yaml).
-  ros::Subscriber camera_info_subscriber_, camera_info_tracking_subscriber_;
+  // The far stage's left camera_info (far_stereo_rectify).
+  ros::Subscriber camera_info_subscriber_;
   // ...and its left rectified images (the appearance check).
-  ros::Subscriber left_image_subscriber_, left_image_tracking_subscriber_;
+  ros::Subscriber left_image_subscriber_;
   std::mutex connection_mutex_;
 
   // Resting near the target (issue 15): the arbiter's output, and a timer that resumes the stage when
@@ -137,7 +135,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   disparity::DisparityDetectorSettings settings_;
   disparity::DisparityDetector detector_;  // with the mockup of ~target_yaml, read once at start-up
   disparity::TargetTrackGate track_gate_;
-  std::map<int, sensor_msgs::CameraInfoConstPtr> camera_info_by_binning_;  // the last full image of each binning
+  sensor_msgs::CameraInfoConstPtr camera_info_;  // the far stage's last left camera_info of the whole image
   // The far stage's tracking windows (camera_info with a region of interest): the last few, matched to a
   // disparity image by stamp; a window disparity without its own is dropped, never read with another's.
   static constexpr std::size_t kRecentWindowInfos = 8;
