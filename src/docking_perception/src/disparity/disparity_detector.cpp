@@ -33,6 +33,16 @@ constexpr std::size_t kMaxBlobsPerBand = 6;
 constexpr int kYawSteps = 90;
 // Columns sampled across the mockup's outline for its fill.
 constexpr int kFillSamples = 200;
+// Constants of the method, not tuning (they were settings until issue 55, at these values everywhere):
+// the band's threshold stays at least this far below the closest disparity (the matcher's noise on a flat
+// face is a fraction of a pixel);
+constexpr double kThresholdMarginPx = 1.0;
+// a blob this close to the valid region's edge is cut by it (the median filter's reach and a pixel);
+constexpr int kBorderMarginPx = 2;
+// the blob's nearest (face) layer: within this depth of its reference disparity (the panels and the box's
+// sides lie 0.15 m and more behind the face), and never thinner than the matcher's sub-pixel noise.
+constexpr double kFaceDepthBandM = 0.10;
+constexpr double kFaceMinBandPx = 0.25;
 // Threshold levels tried inside a blob larger than the mockup: at least this far apart (2 histogram
 // bins), and at most this many (at 2 m the band is 6 px deep: 48 levels cost 50 ms a frame).
 constexpr double kSplitLevelStepPx = 2.0 / kHistogramBinsPerPx;
@@ -273,7 +283,7 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
       if (!shapeMismatch(outline, bounds, p, geometry.focal_px, /*cut=*/true).empty()) continue;
       BlobCandidate part = makeCandidate(contour, level_mask);
       if (part.area < p.min_blob_area_px || part.thickness_px < p.min_blob_thickness_px ||
-          touchesBorder(part.box, region, p.border_margin_px)) {
+          touchesBorder(part.box, region, kBorderMarginPx)) {
         continue;
       }
       part.shape = measureBlobShape(part, clean, geometry);
@@ -678,7 +688,7 @@ bool shapeCheck(const BandContext& c, const SearchImages& images, double thresho
                ? splitMergedBlob(*candidate, images.filtered, images.clean, g, c.bounds, p, images.region, threshold)
                : BlobCandidate();
   };
-  if (crossesWindowEdge(candidate->box, images.region, p.border_margin_px, c.window, c.image_size)) {
+  if (crossesWindowEdge(candidate->box, images.region, kBorderMarginPx, c.window, c.image_size)) {
     // The window is centred on the tracked target with room around it: what crosses its edge is a
     // neighbour, or the target merged with one (look inside it), never the target cut by the border.
     BlobCandidate part = split();
@@ -689,7 +699,7 @@ bool shapeCheck(const BandContext& c, const SearchImages& images, double thresho
     *candidate = std::move(part);
     ++result->merged_blobs_split;
   }
-  const bool cut = touchesBorder(candidate->box, images.region, p.border_margin_px);
+  const bool cut = touchesBorder(candidate->box, images.region, kBorderMarginPx);
   candidate->misfit = shapeMismatch(candidate->shape, c.bounds, p, g.focal_px, cut);
   const bool within_upper_bounds = shapeMismatch(candidate->shape, c.bounds, p, g.focal_px, /*cut=*/true).empty();
   const bool degraded = !candidate->misfit.empty() && !cut &&
@@ -806,7 +816,7 @@ StageOutcome reportBlob(const DetectorParams& p, BandSearchState* state, BlobCan
 }
 
 // Stage 3, band search: the closest object, a threshold just below it that keeps the target's own depth
-// (target_depth_m behind its nearest point, at least threshold_margin_px), and the band's blobs judged;
+// (target_depth_m behind its nearest point, at least kThresholdMarginPx), and the band's blobs judged;
 // without the target in it, the band is removed and the search looks behind it (mismatches at occlusion
 // edges, speckles, a wall, a person, furniture), at most kMaxNearObjectsSkipped times. `blob`: the blob to
 // report (invalid: none).
@@ -819,7 +829,7 @@ StageOutcome searchBands(const BandContext& c, SearchImages* images, BlobCandida
     if (closest < 0.0) break;  // only after skipping: nothing left behind
     result->closest_disparity_px = closest;
     const double threshold = std::max(
-        std::min(closest - p.threshold_margin_px, disparityBehind(c.geometry, closest, p.target_depth_m)),
+        std::min(closest - kThresholdMarginPx, disparityBehind(c.geometry, closest, p.target_depth_m)),
         1.0 / kHistogramBinsPerPx);
     result->threshold_disparity_px = threshold;
     mask.setTo(cv::Scalar(0));
@@ -864,7 +874,7 @@ void nearestLayer(const std::vector<float>& disparities, const std::vector<cv::P
   std::vector<float> sorted = disparities;
   const double reference = percentile(&sorted, p.face_percentile);
   const double band =
-      std::max(p.face_min_band_px, reference - disparityBehind(geometry, reference, p.face_depth_band_m));
+      std::max(kFaceMinBandPx, reference - disparityBehind(geometry, reference, kFaceDepthBandM));
   const float face_min = static_cast<float>(reference - band);
   std::vector<float> face_disparities;
   double sum_u = 0.0, sum_v = 0.0;
@@ -909,7 +919,7 @@ StageOutcome placePort(const cv::Mat& clean, const StereoGeometry& geometry, con
 StageOutcome checkPlausibility(const cv::Rect& region, cv::Size image_size, const ImageWindow& window,
                                const DetectorParams& p, int blob_area, const Detection& result, std::string* reason) {
   const cv::Rect& box = result.bounding_box;
-  const int margin = p.border_margin_px;
+  const int margin = kBorderMarginPx;
   const bool left = box.x <= region.x + margin, right = box.x + box.width >= region.x + region.width - margin;
   const bool top = box.y <= region.y + margin, bottom = box.y + box.height >= region.y + region.height - margin;
   const int searched = searchedArea(region, image_size, window);

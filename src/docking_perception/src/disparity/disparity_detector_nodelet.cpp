@@ -97,6 +97,9 @@ cv::Rect validRegionOf(const stereo_msgs::DisparityImage& message, int blind_ban
   return valid_region;
 }
 
+// Disparity shown white in the debug image (0.86 m for our pair; nearer is the arbiter's monocular range).
+constexpr double kDebugDisplayMaxDisparityPx = 64.0;
+
 // Variance of the components a disparity estimate does not measure (TargetEstimate.msg: >= 1e6).
 constexpr double kUnknownVariance = 1e6;
 
@@ -421,7 +424,7 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
   confirmAppearance(*message, disparity, frame.detector.params(), frame.geometry, &detection);
   applyTrackGate(message->header.stamp.toSec(), &detection);
   docking_msgs::TargetEstimate estimate = toEstimate(message->header, detection);
-  publishDebugImage(*message, disparity, detection, frame.settings.debug_display_max_disparity_px);
+  publishDebugImage(*message, disparity, detection, kDebugDisplayMaxDisparityPx);
   checkOutput(&detection, &estimate);
   estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
   recordOutcome(detection.outcome, detection.found, detection.reason, estimate.processing_time_ms);

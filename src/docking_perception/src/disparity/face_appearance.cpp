@@ -24,9 +24,14 @@ struct AppearanceSearchLayout {
 
 namespace {
 
-// The print is kept at this width (area-averaged once): validation caps max_working_width_px at
-// kMaxAppearanceWorkingWidthPx, so reducing from here stays an average.
+// Image and print are reduced so the face is at most this wide: its five rings and the port ring still
+// resolve, and the search stays cheap (a constant of the method; a setting until issue 55, 24 everywhere).
+constexpr double kWorkingWidthPx = 24.0;
+// The print is kept at this width (area-averaged once), wider than the working width, so reducing from
+// here stays an average.
 constexpr int kPrintWorkingWidthPx = static_cast<int>(kMaxAppearanceWorkingWidthPx);
+// Grey at or above this is saturated (8-bit images: the sensor's ceiling less its noise).
+constexpr int kSaturatedLevelDn = 250;
 constexpr double kVerticalSearchFraction = 0.5;  // of search_radius_m, up and down
 // The face's depth replaces the footprint fit's when they differ by more than this many of the estimate's
 // depth sigmas (the fit's port jumps ~0.1 m between yaw basins on a turned target, seed 7605 at 2.2 m).
@@ -216,7 +221,7 @@ bool judgeable(const cv::Mat& left_rect, const AppearanceSearchLayout& layout, c
     result->reason = "appearance not checked: the face is mostly outside the image";
     return false;
   }
-  result->saturated_fraction = saturatedFraction(left_rect(layout.face_rect), p.saturated_level_dn);
+  result->saturated_fraction = saturatedFraction(left_rect(layout.face_rect), kSaturatedLevelDn);
   result->mean_dn = cv::mean(left_rect(layout.region))[0];
   if (result->saturated_fraction > p.max_saturated_fraction) {
     result->verdict = AppearanceVerdict::kGlare;
@@ -251,8 +256,8 @@ AppearanceResult FaceAppearanceCheck::check(const cv::Mat& left_rect, const Ster
 
 void FaceAppearanceCheck::matchPrint(const cv::Mat& left_rect, const AppearanceSearchLayout& layout,
                                      const FaceAppearanceParams& p, AppearanceResult* result) const {
-  // Work at a scale where the face is at most max_working_width_px wide (never enlarge).
-  const double scale = std::min(1.0, p.max_working_width_px / layout.face_width_px);
+  // Work at a scale where the face is at most kWorkingWidthPx wide (never enlarge).
+  const double scale = std::min(1.0, kWorkingWidthPx / layout.face_width_px);
   cv::Mat region_f;
   if (scale < 1.0) {
     const cv::Size reduced(std::max(1, static_cast<int>(std::lround(layout.region.width * scale))),

@@ -291,11 +291,11 @@ TEST(FaceAppearance, InvalidSettingsAreNamed) {
   params.appearance.min_score = 1.5;
   EXPECT_EQ(refusedKey(params), "appearance_min_score");
   params = test::shippedParams();
-  params.appearance.max_working_width_px = 100.0;
-  EXPECT_EQ(refusedKey(params), "appearance_max_working_width_px");
+  params.appearance.search_radius_m = 2.0;
+  EXPECT_EQ(refusedKey(params), "appearance_search_radius_m");
   params = test::shippedParams();
-  params.appearance.saturated_level_dn = 0;
-  EXPECT_EQ(refusedKey(params), "appearance_saturated_level_dn");
+  params.appearance.max_saturated_fraction = 1.5;
+  EXPECT_EQ(refusedKey(params), "appearance_max_saturated_fraction");
 }
 
 }  // namespace

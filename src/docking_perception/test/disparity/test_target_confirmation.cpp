@@ -103,7 +103,7 @@ TEST_P(BoxBesideTheTarget, IsNotReportedAndTheTargetIs) {
   const Detection after = detectorWith(checkingParams()).detect(disparity, ourGeometry());
   ASSERT_TRUE(after.found) << after.reason;
   EXPECT_NEAR(after.position_m.x(), 0.0, 0.05);
-  // At 6 m the face layer's noise floor (face_min_band_px) takes the panels in: 0.15 m deep.
+  // At 6 m the face layer's noise floor (kFaceMinBandPx, 0.25 px) takes the panels in: 0.15 m deep.
   EXPECT_NEAR(after.position_m.z(), 6.0, 0.2);
   EXPECT_GE(after.not_target_shaped_skipped, 1);
 }

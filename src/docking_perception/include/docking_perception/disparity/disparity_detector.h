@@ -66,8 +66,7 @@ struct ShapeBounds {
 };
 ShapeBounds shapeBounds(const TargetShape& shape);
 
-// The face print's working width is reduced to at most this (the upper bound of
-// appearance_max_working_width_px): the print is stored reduced to it once.
+// The face print is stored reduced to this width once (face_appearance.cpp works at a narrower width).
 constexpr double kMaxAppearanceWorkingWidthPx = 48.0;
 
 // DetectorParams (the core's settings, with FaceAppearanceParams) are declared in

@@ -6,7 +6,7 @@
 // print can: at 2-6 m it is 27-80 px wide, and its five white rings and the port ring survive blur.
 //
 // Method: the left image around the detected port (the detector's position error, search_radius_m,
-// either side) and the print are both reduced so that the face is at most max_working_width_px wide;
+// either side) and the print are both reduced so that the face is at most 24 px wide;
 // the print, squeezed horizontally for each of a few yaws (the face turned up to 60 deg), is slid over
 // that region (normalised cross-correlation, so gain and exposure do not matter). The best score is
 // the match. Where the face cannot be judged (too much of it saturated by glare, too dark, outside the
