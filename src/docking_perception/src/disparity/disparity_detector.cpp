@@ -933,7 +933,7 @@ StageOutcome checkPlausibility(const cv::Rect& region, cv::Size image_size, cons
               formatNumber(p.min_blob_thickness_px);
     return PlausibilityOutcome::kBlobTooThin;
   }
-  if (left || right || top || bottom) {
+  if (p.reject_cut_blobs && (left || right || top || bottom)) {
     *reason = std::string("blob touches the border of the valid region:") + (left ? " left" : "") +
               (right ? " right" : "") + (top ? " top" : "") + (bottom ? " bottom" : "");
     return PlausibilityOutcome::kBlobTouchesBorder;

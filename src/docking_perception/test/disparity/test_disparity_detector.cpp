@@ -137,6 +137,10 @@ TEST(DisparityDetector, BlobOnTheImageBorderIsRejected) {
   EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kBlobTouchesBorder));
   EXPECT_NE(result.reason.find("right"), std::string::npos) << result.reason;
   EXPECT_FALSE(result.mask.empty()) << "a rejected blob is still returned for the debug image";
+
+  DetectorParams keep_cut = shippedParams();
+  keep_cut.reject_cut_blobs = false;  // the ablation's switch (scripts/ablate/rules): then it is reported
+  EXPECT_TRUE(detectorWith(keep_cut).detect(disparity, ourGeometry()).found);
 }
 
 TEST(DisparityDetector, BlobOnTheBlindLeftBandIsRejected) {
