@@ -229,7 +229,12 @@ void DisparityDetectorNodelet::onFusedEstimate(const docking_msgs::TargetEstimat
 disparity::DisparityDetectorSettings DisparityDetectorNodelet::loadSettings() {
   disparity::DisparityDetectorSettings settings;
   docking_settings::loadSettings(private_nh_, settings);
-  docking_settings::warnUnknownKeys(private_nh_, settings, {"target_yaml"});
+  docking_settings::warnUnknownKeys(private_nh_, settings, {"target_yaml", "matcher"});
+  // The matcher's blind left band is its largest disparity (in each DisparityImage) plus half its correlation
+  // window, rounded up: read from the matcher's own settings (config/stereo_image_proc.yaml, as ~matcher).
+  const docking_settings::ParamReader matcher(ros::NodeHandle(private_nh_, "matcher"));
+  const int correlation_window_px = matcher.requireInRange<int>("correlation_window_size", 1, 255);
+  blind_band_extra_px_ = (correlation_window_px + 1) / 2;
   // The mockup's size for the shape check and its face print for the appearance check: the same
   // target.yaml the simulator and mono_pose read.
   const auto target_yaml = docking_settings::ParamReader(private_nh_).require<std::string>("target_yaml");
@@ -485,7 +490,7 @@ bool DisparityDetectorNodelet::prepareFrame(const stereo_msgs::DisparityImage& m
     frame->window.full_size = cv::Size(static_cast<int>(window_info->width), static_cast<int>(window_info->height));
   }
   if (!cameraModel(message, camera_info, windows_recently, frame, problem)) return false;
-  frame->valid_region = validRegionOf(message, frame->settings.blind_band_extra_px);
+  frame->valid_region = validRegionOf(message, blind_band_extra_px_);
   // The tracked target tells the search which target-shaped blob to prefer, then judges the result.
   // The gate is the one piece of state across frames (frames arrive in order on one subscriber).
   std::lock_guard<std::mutex> lock(state_mutex_);

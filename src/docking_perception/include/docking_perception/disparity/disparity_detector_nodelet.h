@@ -14,7 +14,8 @@
 //   perception/disparity/debug_image  sensor_msgs/Image bgr8 (image_transport)
 //   /diagnostics                      detection rate, frames per deciding stage and code, last rejection
 // Settings: settings/disparity_detector.yaml declares them (defaults, ranges, meaning); config/disparity_detector.yaml
-// holds what differs from the defaults. All are live through dynamic_reconfigure. ~target_yaml: the mockup.
+// holds what differs from the defaults. All are live through dynamic_reconfigure. ~target_yaml: the mockup;
+// ~matcher/correlation_window_size: the block matcher's window (config/stereo_image_proc.yaml), its blind band.
 #pragma once
 
 #include <deque>
@@ -144,6 +145,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   // The far stage's last left images, matched to a disparity image by stamp and size.
   static constexpr std::size_t kRecentLeftImages = 8;
   std::deque<sensor_msgs::ImageConstPtr> recent_left_images_;
+  int blind_band_extra_px_ = 0;  // half the matcher's correlation window, rounded up (read at start-up)
   std::unique_ptr<disparity::FaceAppearanceCheck> appearance_check_;  // the print of ~target_yaml, read at start-up
   unsigned long appearance_rejections_ = 0;   // found blobs whose face did not show the print
   unsigned long appearance_unjudged_ = 0;     // ...whose face could not be judged (glare, dark, outside)
