@@ -7,7 +7,7 @@ under qemu-aarch64-static (a wrapper script) for arm64.
 
   arm64_bench_instructions.py OUT.json --bin DIR --config DIR --valgrind CMD --mono-shim SO --far-shim SO
       [--shim-env LD_PRELOAD] [--jobs 2] [--stages mono_full,mono_tracking,...]
-      [--far-left L.png --far-right R.png] [--disparity full,tracking,window] [--compare X86.json]
+      [--far-left L.png --far-right R.png] [--disparity full,window] [--compare X86.json]
 
 Why not --toggle-collect as bench_instructions.py: --toggle-collect and inclusive costs rest on callgrind's
 call-stack tracking, and under arm64 callgrind that is not reliable (bench_disparity's call graph had inclusive
@@ -19,7 +19,7 @@ bench program calls, which needs no call-stack tracking:
   with --instr-atstart=no: the 90 synthetic frames are rendered uninstrumented, ~4x faster);
 - far stage (bench_disparity, 3 frames + 3 warm-up, divided by 6 as bench_instructions.py): the shim dumps
   callgrind's counters (CALLGRIND_DUMP_STATS_AT) before and after each call of cv::cvtColor and
-  DecimatingRectifier::rectifyWindow (together: rectify), DisparityDetector::detect (detection) and
+  WindowRectifier::rectifyWindow (together: rectify), DisparityDetector::detect (detection) and
   confirmByAppearance (appearance); the dump between the last rectifyWindow and detect is disparity
   (computeDisparity, plus the loop's few clock reads). --window: runs of 3 and 6 frames differenced, as
   bench_instructions.py does, which leaves out the untimed pass that places the window.
@@ -103,9 +103,9 @@ def disparity_run(args, workdir, name, extra, frames):
 
 def count_disparity(config, args, workdir):
     stages = {}
-    if config in ("full", "tracking"):
-        prefix, decimation = ("", 1) if config == "full" else ("tracking_", bi.REDUCED_DECIMATION)
-        counts = disparity_run(args, workdir, config, ["--decimation", decimation], bi.DISPARITY_FRAMES)
+    if config == "full":
+        prefix = ""
+        counts = disparity_run(args, workdir, config, [], bi.DISPARITY_FRAMES)
         calls = bi.DISPARITY_FRAMES + bi.DISPARITY_WARMUP
         for stage, instructions in counts.items():
             stages[prefix + stage] = bi.per_frame(instructions, calls)
@@ -142,7 +142,7 @@ def main():
     parser.add_argument("--shim-env", default="LD_PRELOAD",
                         help="variable that carries the shim (the arm64 wrapper's: GUEST_LD_PRELOAD)")
     parser.add_argument("--stages", default="mono_full,mono_tracking,mono_tracking_near,mono_ir")
-    parser.add_argument("--disparity", default="full", help="far stage configurations: full,tracking,window or ''")
+    parser.add_argument("--disparity", default="full", help="far stage configurations: full,window or ''")
     parser.add_argument("--far-left")
     parser.add_argument("--far-right")
     parser.add_argument("--jobs", type=int, default=2)

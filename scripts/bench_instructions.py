@@ -10,9 +10,7 @@ function that does the stage's work (--toggle-collect); the count is divided by 
 
 Writes {"stages": {NAME: {"instructions_per_frame_M": float, "frames": int}}}. Stages:
   rectify, disparity, detection, appearance,      bench_disparity on the rendered far pair (per pair), full
-  disparity_total (the four summed)               resolution; tracking_*: the same on the reduced pair
-                                                  (far_stereo.yaml tracking_decimation 2, off by default);
-                                                  window_*: full resolution on the tracking window alone
+  disparity_total (the four summed)               image; window_*: on the tracking window alone
                                                   (far_stereo.yaml window_*, the default while tracking)
   mono_full, mono_tracking,                       bench_mono's 90-frame approach (MonoPoseEstimator::process);
   mono_tracking_features, mono_ir                 mono_tracking_features: tracking by the feature search (before);
@@ -71,22 +69,16 @@ def per_frame(instructions, frames):
     return {"instructions_per_frame_M": round(instructions / frames / 1e6, 2), "frames": frames}
 
 
-REDUCED_DECIMATION = 2  # the reduced pair of config/stereo_image_proc_tracking.yaml (far_stereo.yaml)
-
-
 def count_disparity(args, workdir):
     stages = {}
     calls = DISPARITY_FRAMES + DISPARITY_WARMUP
-    decimations = [(1, ""), (REDUCED_DECIMATION, "tracking_")]
-    for decimation, prefix in decimations:
-        command = [LIB / "bench_disparity", pathlib.Path(workdir) / "disparity.json", "--frames", DISPARITY_FRAMES,
-                   "--config-dir", ROOT / "config", "--left", args.far_left, "--right", args.far_right,
-                   "--decimation", decimation]
-        for stage, function in DISPARITY_STAGE_FUNCTIONS.items():
-            instructions, _ = collected_instructions(command, function, workdir)
-            stages[prefix + stage] = per_frame(instructions, calls)
-        total = sum(stages[prefix + s]["instructions_per_frame_M"] for s in DISPARITY_STAGE_FUNCTIONS)
-        stages[prefix + "disparity_total"] = {"instructions_per_frame_M": round(total, 2), "frames": calls}
+    command = [LIB / "bench_disparity", pathlib.Path(workdir) / "disparity.json", "--frames", DISPARITY_FRAMES,
+               "--config-dir", ROOT / "config", "--left", args.far_left, "--right", args.far_right]
+    for stage, function in DISPARITY_STAGE_FUNCTIONS.items():
+        instructions, _ = collected_instructions(command, function, workdir)
+        stages[stage] = per_frame(instructions, calls)
+    total = sum(stages[s]["instructions_per_frame_M"] for s in DISPARITY_STAGE_FUNCTIONS)
+    stages["disparity_total"] = {"instructions_per_frame_M": round(total, 2), "frames": calls}
     stages.update(count_disparity_window(args, workdir))
     return stages
 

@@ -18,9 +18,6 @@ devel/lib/docking_sim/sim_render --config config --scenario eval_far_3m_on --tim
 echo "== bench_disparity (rectify + disparity + detection on the rendered pair: full resolution, acquiring)"
 "$lib/bench_disparity" "$out/parts/disparity.json" --config-dir config \
   --left "$out/frames/far3m_stereo_left.png" --right "$out/frames/far3m_stereo_right.png" || status=1
-echo "== bench_disparity --decimation 2 (the reduced pair, config/far_stereo.yaml tracking_decimation 2: tracking_*)"
-"$lib/bench_disparity" "$out/parts/disparity_tracking.json" --config-dir config --decimation 2 \
-  --left "$out/frames/far3m_stereo_left.png" --right "$out/frames/far3m_stereo_right.png" || status=1
 echo "== bench_disparity --window (full resolution on the tracking window, config/far_stereo.yaml window_*: window_*)"
 "$lib/bench_disparity" "$out/parts/disparity_window.json" --config-dir config --window \
   --left "$out/frames/far3m_stereo_left.png" --right "$out/frames/far3m_stereo_right.png" || status=1

@@ -6,7 +6,7 @@
 #include <dlfcn.h>
 #include <valgrind/callgrind.h>
 #include <opencv2/imgproc.hpp>
-#include "docking_perception/disparity/decimating_rectifier.h"
+#include "docking_perception/disparity/window_rectifier.h"
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/face_appearance.h"
 namespace dd = docking_perception::disparity;
@@ -20,10 +20,10 @@ void shim_cvt(cv::InputArray src, cv::OutputArray dst, int code, int dcn) {
   fn(src, dst, code, dcn);
   CALLGRIND_DUMP_STATS_AT("cvtColor");
 }
-#define RW "_ZNK18docking_perception9disparity19DecimatingRectifier13rectifyWindowERKN2cv3MatERKNS2_5Rect_IiEEPS3_"
-void shim_rw(const dd::DecimatingRectifier* self, const cv::Mat& grey, const cv::Rect& window, cv::Mat* out) __asm__(RW);
-void shim_rw(const dd::DecimatingRectifier* self, const cv::Mat& grey, const cv::Rect& window, cv::Mat* out) {
-  static auto fn = real<void (*)(const dd::DecimatingRectifier*, const cv::Mat&, const cv::Rect&, cv::Mat*)>(RW);
+#define RW "_ZNK18docking_perception9disparity15WindowRectifier13rectifyWindowERKN2cv3MatERKNS2_5Rect_IiEEPS3_"
+void shim_rw(const dd::WindowRectifier* self, const cv::Mat& grey, const cv::Rect& window, cv::Mat* out) __asm__(RW);
+void shim_rw(const dd::WindowRectifier* self, const cv::Mat& grey, const cv::Rect& window, cv::Mat* out) {
+  static auto fn = real<void (*)(const dd::WindowRectifier*, const cv::Mat&, const cv::Rect&, cv::Mat*)>(RW);
   CALLGRIND_DUMP_STATS_AT("rectifyWindow_pre");
   fn(self, grey, window, out);
   CALLGRIND_DUMP_STATS_AT("rectifyWindow");

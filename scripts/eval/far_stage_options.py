@@ -6,12 +6,9 @@ CPU time, and (with --instructions) instructions per frame under callgrind.
 
 For each scene (eval_far_* and the cluttered far ones) the simulator renders one raw stereo pair and the
 truth (sim_render); bench_disparity runs the far stage on it in each configuration:
-  deployed      640x480, 96 disparities (config/stereo_image_proc.yaml: perception.launch while acquiring
-                and beyond 4 m)
+  deployed      640x480, 96 disparities (config/stereo_image_proc.yaml: perception.launch)
   full_48       640x480, 48 disparities (the far stage needs d <= 27.5 px beyond 2 m; 48 reach 1.15 m)
-  half          320x240, 48 disparities (config/stereo_image_proc_tracking.yaml: perception.launch while
-                tracking inside 4 m, config/far_stereo.yaml)
-  half_32       320x240, 32 disparities (= 64 at full: 0.86 m)
+  window        the tracking window (config/far_stereo.yaml window_*), 96 disparities
 The error is the detection's distance to the port's true position (the target origin). A program that
 prints figures; nothing here asserts.
 """
@@ -29,8 +26,7 @@ RENDER = ROOT / "devel" / "lib" / "docking_sim" / "sim_render"
 SCENES = ["eval_far_2m_on", "eval_far_2m_off", "eval_far_3m_on", "eval_far_3m_off", "eval_far_4m_on",
           "eval_far_4m_off", "eval_far_6m_on", "eval_far_6m_off", "eval_real_clutter_far_4m",
           "eval_real_clutter_far_6m"]
-CONFIGS = {"deployed": [], "full_48": ["--disparity-range", "48"], "half": ["--decimation", "2"],
-           "half_32": ["--decimation", "2", "--disparity-range", "32"]}
+CONFIGS = {"deployed": [], "full_48": ["--disparity-range", "48"], "window": ["--window"]}
 FRAMES = 10
 DETECTION = re.compile(r"detection on .*?: (found|NOT found: (?P<reason>[^,]*)).*?position \((?P<x>[-\d.e]+), "
                        r"(?P<y>[-\d.e]+), (?P<z>[-\d.e]+)\) m")

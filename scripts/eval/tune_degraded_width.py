@@ -21,11 +21,12 @@ import json
 import math
 import pathlib
 import random
-import re
 import shutil
 import subprocess
 import sys
 import tempfile
+
+import yaml
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts" / "eval"))
@@ -73,11 +74,11 @@ def config_with(fraction, folder):
     if not config.exists():
         shutil.copytree(ROOT / "config", config, ignore=shutil.ignore_patterns("scenarios", "textures"))
         (config / "textures").symlink_to(ROOT / "config" / "textures")
-        yaml = config / "disparity_detector.yaml"
-        text, n = re.subn(rf"^{KEY}: *[\d.]+", f"{KEY}: {fraction:g}", yaml.read_text(), flags=re.M)
-        if n != 1:
-            raise RuntimeError(f"{KEY} not found once in {yaml}")
-        yaml.write_text(text)
+        # The shipped file holds only overrides of the declared defaults: the value is added to them.
+        path = config / "disparity_detector.yaml"
+        overrides = yaml.safe_load(path.read_text()) or {}
+        overrides[KEY] = fraction
+        path.write_text(yaml.safe_dump(overrides))
     return config
 
 

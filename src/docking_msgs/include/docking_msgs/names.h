@@ -31,17 +31,13 @@ constexpr const char kIrCameraInfoChecked[] = "ir/camera_info_checked";
 constexpr const char kStereoLeftImageMono[] = "stereo/left/image_mono";
 constexpr const char kStereoRightImageMono[] = "stereo/right/image_mono";
 constexpr const char kStereoLeftImageRect[] = "stereo/left/image_rect";
-// The far stage's own rectified pairs (docking_perception/FarStereoRectifyNodelet, config/far_stereo.yaml),
-// grey: at full resolution while acquiring, area-averaged by the tracking decimation while tracking (its
-// camera_info with binning_x/y = decimation: image_geometry's reduced camera). One block matcher each.
+// The far stage's own rectified pair (docking_perception/FarStereoRectifyNodelet, config/far_stereo.yaml),
+// grey, at full resolution: the whole image, or a window around the tracked target (its camera_info's region
+// of interest says where). Block-matched by stereo_disparity.
 constexpr const char kStereoFarFullLeftImageRect[] = "stereo/far/full/left/image_rect";
 constexpr const char kStereoFarFullLeftCameraInfo[] = "stereo/far/full/left/camera_info";
 constexpr const char kStereoFarFullRightImageRect[] = "stereo/far/full/right/image_rect";
 constexpr const char kStereoFarFullRightCameraInfo[] = "stereo/far/full/right/camera_info";
-constexpr const char kStereoFarTrackingLeftImageRect[] = "stereo/far/tracking/left/image_rect";
-constexpr const char kStereoFarTrackingLeftCameraInfo[] = "stereo/far/tracking/left/camera_info";
-constexpr const char kStereoFarTrackingRightImageRect[] = "stereo/far/tracking/right/image_rect";
-constexpr const char kStereoFarTrackingRightCameraInfo[] = "stereo/far/tracking/right/camera_info";
 constexpr const char kStereoDisparity[] = "stereo/disparity";  // stereo_msgs/DisparityImage
 constexpr const char kIrImageRaw[] = "ir/image_raw";
 constexpr const char kIrImageRect[] = "ir/image_rect";

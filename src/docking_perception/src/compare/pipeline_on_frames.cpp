@@ -119,7 +119,8 @@ int main(int argc, char** argv) {
 
     const dt::MatcherSettings matcher_settings = dt::loadMatcherSettings(config + "/stereo_image_proc.yaml");
     cv::Ptr<cv::StereoMatcher> matcher = dt::createMatcher(matcher_settings);
-    const dp::disparity::DisparityDetector detector(dt::loadDetectorParams(config + "/disparity_detector.yaml"));
+    const dp::disparity::DisparityDetector detector(dt::shippedDetectorSettings(config).detector,
+                                                    dp::disparity::loadTargetShape(config + "/target.yaml"));
     dp::disparity::StereoGeometry geometry;
     geometry.focal_px = left_rect.intrinsics.fx;
     geometry.cx_px = left_rect.intrinsics.cx;

@@ -3,18 +3,14 @@
 //
 //   bench_disparity OUTPUT.json [--frames N] [--config-dir DIR]
 //                   [--left RAW.png --right RAW.png] [--debug-image OUT.png]
-//                   [--disparity-out OUT.tiff] [--decimation N] [--disparity-range N] [--window]
+//                   [--disparity-out OUT.tiff] [--disparity-range N] [--window]
 //
-// The far stage as perception.launch runs it (config/far_stereo.yaml): each raw frame converted to grey,
-// area-averaged by the decimation and rectified to that size (DecimatingRectifier), block matching, the
-// detector's pixel settings scaled to that size. --decimation 1 (default): full resolution (the stage as
-// launched by default), matcher config/stereo_image_proc.yaml; --decimation 2: the reduced pair that
-// far_stereo.yaml's tracking_decimation 2 switches on while tracking, matcher
-// config/stereo_image_proc_tracking.yaml (stages named tracking_*); another decimation: the full matcher's
-// window, range and speckle size scaled. --disparity-range overrides the matcher's range (a
-// multiple of 16). --window: the full-resolution stage on the tracking window alone (config/far_stereo.yaml
-// window_*, the default while the target is tracked; stages named window_*), placed around the port that
-// an untimed pass over the whole image finds, as far_stereo_rectify places it around the fused estimate.
+// The far stage as perception.launch runs it (config/far_stereo.yaml): each raw frame converted to grey and
+// rectified (WindowRectifier), block matching with the matcher of config/stereo_image_proc.yaml, the
+// detector. --disparity-range overrides the matcher's range (a multiple of 16). --window: the stage on the
+// tracking window alone (config/far_stereo.yaml window_*, the default while the target is tracked; stages
+// named window_*), placed around the port that an untimed pass over the whole image finds, as
+// far_stereo_rectify places it around the fused estimate.
 //
 // Without --left/--right the pair is rendered here (test/disparity/synthetic_stereo.h: the target
 // face-on at 3 m, its panels, a floor and a wall) and distorted with the calibration, so the
@@ -57,12 +53,9 @@ using docking_perception::disparity::Detection;
 using docking_perception::disparity::StereoGeometry;
 namespace testing = docking_perception::disparity::testing;
 
-// The decimation config/stereo_image_proc_tracking.yaml's matcher is set for (the reduced pair).
-constexpr int kReducedDecimation = 2;
-
 const char* const kUsage =
     "usage: bench_disparity OUTPUT.json [--frames N] [--config-dir DIR] [--left RAW.png --right "
-    "RAW.png] [--debug-image OUT.png] [--disparity-out OUT.tiff] [--decimation N] [--disparity-range N] "
+    "RAW.png] [--debug-image OUT.png] [--disparity-out OUT.tiff] [--disparity-range N] "
     "[--window]\n";
 
 double medianOf(std::vector<double> values) {
@@ -95,12 +88,12 @@ cv::Mat distort(const cv::Mat& rectified, const testing::CameraCalibration& cali
 }
 
 // What perception.launch does to each camera of the pair: bgr8 to grey (debayer's image_mono), then the far
-// stage's rectification (far_stereo_rectify: area-averaged by the decimation, rectified to that size).
+// stage's rectification (far_stereo_rectify).
 // Not inlined: scripts/bench_instructions.py counts this step's instructions by its name under callgrind.
 // `window`: only that part of the rectified images (the tracking window); empty: all of them.
 __attribute__((noinline)) void rectifyPair(const cv::Mat& left_raw, const cv::Mat& right_raw,
-                                           const docking_perception::disparity::DecimatingRectifier& left,
-                                           const docking_perception::disparity::DecimatingRectifier& right,
+                                           const docking_perception::disparity::WindowRectifier& left,
+                                           const docking_perception::disparity::WindowRectifier& right,
                                            const cv::Rect& window, cv::Mat* left_rect, cv::Mat* right_rect) {
   cv::Mat left_mono = left_raw, right_mono = right_raw;
   if (left_raw.channels() == 3) {
@@ -115,8 +108,8 @@ __attribute__((noinline)) void rectifyPair(const cv::Mat& left_raw, const cv::Ma
 // The tracking window as far_stereo_rectify places it: around the port an (untimed) pass over the whole
 // image finds, standing in for the fused estimate. Throws when the target is not found or no window fits.
 cv::Rect placeWindow(const cv::Mat& left_raw, const cv::Mat& right_raw,
-                     const docking_perception::disparity::DecimatingRectifier& left,
-                     const docking_perception::disparity::DecimatingRectifier& right, cv::StereoMatcher& matcher,
+                     const docking_perception::disparity::WindowRectifier& left,
+                     const docking_perception::disparity::WindowRectifier& right, cv::StereoMatcher& matcher,
                      const DisparityDetector& detector, const StereoGeometry& geometry,
                      const testing::MatcherSettings& settings,
                      const docking_perception::disparity::TrackingWindowParams& params) {
@@ -133,24 +126,12 @@ cv::Rect placeWindow(const cv::Mat& left_raw, const cv::Mat& right_raw,
   return *window;
 }
 
-// The full-resolution matcher at another decimation: lengths scaled by the ratio, the window kept odd and
-// >= 5, the range a multiple of 16.
-void scaleMatcher(double ratio, testing::MatcherSettings* settings) {
-  settings->correlation_window_size =
-      std::max(5, static_cast<int>(std::lround(settings->correlation_window_size * ratio)) | 1);
-  settings->min_disparity = static_cast<int>(std::lround(settings->min_disparity * ratio));
-  settings->disparity_range =
-      std::max(16, static_cast<int>(std::lround(settings->disparity_range * ratio / 16.0)) * 16);
-  settings->speckle_size = static_cast<int>(std::lround(settings->speckle_size * ratio * ratio));
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string output_path, left_path, right_path, debug_path, disparity_path;
   std::string config_dir = DISPARITY_CONFIG_DIR;
   int frames = 100;
-  int decimation = 1;
   int disparity_range_override = 0;  // 0: the configured (scaled) range
   bool use_window = false;
   for (int i = 1; i < argc; ++i) {
@@ -165,8 +146,6 @@ int main(int argc, char** argv) {
       right_path = argv[++i];
     } else if (arg == "--debug-image" && i + 1 < argc) {
       debug_path = argv[++i];
-    } else if (arg == "--decimation" && i + 1 < argc) {
-      decimation = std::atoi(argv[++i]);
     } else if (arg == "--disparity-range" && i + 1 < argc) {
       disparity_range_override = std::atoi(argv[++i]);
     } else if (arg == "--window") {
@@ -180,8 +159,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (output_path.empty() || left_path.empty() != right_path.empty() || decimation < 1 ||
-      disparity_range_override % 16 != 0 || disparity_range_override < 0 || (use_window && decimation != 1)) {
+  if (output_path.empty() || left_path.empty() != right_path.empty() || disparity_range_override % 16 != 0 ||
+      disparity_range_override < 0) {
     std::cerr << kUsage;
     return 2;
   }
@@ -191,15 +170,10 @@ int main(int argc, char** argv) {
     const auto left_calibration = testing::loadCameraCalibration(config_dir + "/cameras/stereo_left.yaml");
     const auto right_calibration =
         testing::loadCameraCalibration(config_dir + "/cameras/stereo_right.yaml");
-    std::cout << "bench_disparity: config/far_stereo.yaml tracking_decimation "
-              << testing::loadTrackingDecimation(config_dir + "/far_stereo.yaml") << " (as launched)\n";
-    auto settings = testing::loadMatcherSettings(
-        config_dir + (decimation == kReducedDecimation ? "/stereo_image_proc_tracking.yaml" : "/stereo_image_proc.yaml"));
-    auto params = testing::loadDetectorParams(config_dir + "/disparity_detector.yaml");
-    params.target_shape =
-        docking_perception::disparity::loadTargetShape(config_dir + "/target.yaml");
-    if (decimation > 1 && decimation != kReducedDecimation) scaleMatcher(1.0 / decimation, &settings);
-    params = docking_perception::disparity::detectorParamsAtDecimation(params, decimation);
+    const auto far_stereo = testing::shippedFarStereoSettings(config_dir);
+    auto settings = testing::loadMatcherSettings(config_dir + "/stereo_image_proc.yaml");
+    auto params = testing::shippedDetectorSettings(config_dir).detector;
+    const auto target_shape = docking_perception::disparity::loadTargetShape(config_dir + "/target.yaml");
     if (disparity_range_override > 0) settings.disparity_range = disparity_range_override;
 
     // The fixed scene: the target face-on at 3 m, slightly off-axis, floor and a wall at 8 m.
@@ -230,27 +204,22 @@ int main(int argc, char** argv) {
       }
     }
 
-    const docking_perception::disparity::DecimatingRectifier left_rectifier(testing::pinholeOf(left_calibration),
-                                                                           decimation);
-    const docking_perception::disparity::DecimatingRectifier right_rectifier(
-        testing::pinholeOf(right_calibration), decimation);
+    const docking_perception::disparity::WindowRectifier left_rectifier(testing::pinholeOf(left_calibration));
+    const docking_perception::disparity::WindowRectifier right_rectifier(testing::pinholeOf(right_calibration));
     const cv::Size rectified_size = left_rectifier.outputSize();
     auto matcher = testing::createMatcher(settings);
-    const DisparityDetector detector(params);
+    const DisparityDetector detector(params, target_shape);
     // The appearance check the node runs on a found blob (face_appearance.h), part of the detection's cost.
     const auto target_model = docking_perception::mono::TargetModel::loadFromYaml(config_dir + "/target.yaml");
     const docking_perception::disparity::FaceAppearanceCheck appearance_check(
         target_model.textureGray(), target_model.faceWidth(), target_model.faceHeight());
     docking_perception::disparity::AppearanceResult appearance;
     StereoGeometry geometry = testing::geometryOf(scene);
-    geometry.focal_px /= decimation;  // image_geometry's reduced camera for binning = decimation
-    geometry.cx_px /= decimation;
-    geometry.cy_px /= decimation;
     const int range = (settings.disparity_range / 16) * 16;
     cv::Rect window;  // empty: the whole image
     if (use_window) {
       window = placeWindow(left_raw, right_raw, left_rectifier, right_rectifier, *matcher, detector, geometry, settings,
-                           testing::loadTrackingWindow(config_dir + "/far_stereo.yaml"));
+                           far_stereo.window);
     }
     docking_perception::disparity::ImageWindow image_window;
     StereoGeometry window_geometry = geometry;
@@ -287,7 +256,7 @@ int main(int argc, char** argv) {
       const auto detection_start = Clock::now();
       detection = detector.detect(disparity, window_geometry, settings.min_disparity,
                                   testing::maxDisparity(settings), valid_region, {}, image_window);
-      if (params.appearance_check_enabled) {
+      if (params.appearance.check_enabled) {
         appearance = docking_perception::disparity::confirmByAppearance(appearance_check, left_rect, disparity, window_geometry,
                                                                         params.appearance, &detection);
       }
@@ -306,12 +275,12 @@ int main(int argc, char** argv) {
     double cpu_total_ms = 0.0;
     for (double ms : samples["disparity_total"]) cpu_total_ms += ms;
     std::cout << "bench_disparity: " << (left_path.empty() ? "synthetic grey pair" : left_path)
- << ", " << rectified_size.width << "x" << rectified_size.height << " (decimation " << decimation
-              << (use_window ? "; tracking window " + std::to_string(window.width) + "x" +
+ << ", " << rectified_size.width << "x" << rectified_size.height
+              << (use_window ? " (tracking window " + std::to_string(window.width) + "x" +
                                    std::to_string(window.height) + " at (" + std::to_string(window.x) + ", " +
-                                   std::to_string(window.y) + ")"
+                                   std::to_string(window.y) + "))"
                              : std::string())
-              << "), 1 thread, " << frames << " frames, matcher "
+              << ", 1 thread, " << frames << " frames, matcher "
               << (settings.stereo_algorithm == 0 ? "StereoBM" : "StereoSGBM") << " range " << range
               << " window " << (settings.correlation_window_size | 1) << "\n";
     std::ofstream json(output_path);
@@ -323,11 +292,8 @@ int main(int argc, char** argv) {
     json << "{\"image\": \"" << rectified_size.width << "x" << rectified_size.height
          << "\", \"threads\": 1, \"stages\": {";
     bool first = true;
-    // The stage while tracking (the reduced pair) is named apart: make bench runs both.
-    const std::string prefix = use_window ? "window_"
-                               : decimation == 1 ? ""
-                               : decimation == kReducedDecimation ? "tracking_"
-                                                                  : "decimation" + std::to_string(decimation) + "_";
+    // The stage on the tracking window is named apart: make bench runs both.
+    const std::string prefix = use_window ? "window_" : "";
     for (const char* stage : {"rectify", "disparity", "detection", "disparity_total"}) {
       const double ms = medianOf(samples[stage]);
       const double hz = ms > 0.0 ? 1000.0 / ms : 0.0;

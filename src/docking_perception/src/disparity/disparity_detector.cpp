@@ -3,6 +3,8 @@
 #include "docking_perception/disparity/footprint_fit.h"
 #include "number_text.h"
 
+#include <docking_settings/setting_info.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -33,6 +35,16 @@ constexpr std::size_t kMaxBlobsPerBand = 6;
 constexpr int kYawSteps = 90;
 // Columns sampled across the mockup's outline for its fill.
 constexpr int kFillSamples = 200;
+// Constants of the method, not tuning (they were settings until issue 55, at these values everywhere):
+// the band's threshold stays at least this far below the closest disparity (the matcher's noise on a flat
+// face is a fraction of a pixel);
+constexpr double kThresholdMarginPx = 1.0;
+// a blob this close to the valid region's edge is cut by it (the median filter's reach and a pixel);
+constexpr int kBorderMarginPx = 2;
+// the blob's nearest (face) layer: within this depth of its reference disparity (the panels and the box's
+// sides lie 0.15 m and more behind the face), and never thinner than the matcher's sub-pixel noise.
+constexpr double kFaceDepthBandM = 0.10;
+constexpr double kFaceMinBandPx = 0.25;
 // Threshold levels tried inside a blob larger than the mockup: at least this far apart (2 histogram
 // bins), and at most this many (at 2 m the band is 6 px deep: 48 levels cost 50 ms a frame).
 constexpr double kSplitLevelStepPx = 2.0 / kHistogramBinsPerPx;
@@ -273,7 +285,7 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
       if (!shapeMismatch(outline, bounds, p, geometry.focal_px, /*cut=*/true).empty()) continue;
       BlobCandidate part = makeCandidate(contour, level_mask);
       if (part.area < p.min_blob_area_px || part.thickness_px < p.min_blob_thickness_px ||
-          touchesBorder(part.box, region, p.border_margin_px)) {
+          touchesBorder(part.box, region, kBorderMarginPx)) {
         continue;
       }
       part.shape = measureBlobShape(part, clean, geometry);
@@ -297,14 +309,13 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
   return best;
 }
 
-// Extent of the mockup's outline across the line of sight at `yaw` (0: face-on): the box's columns at
-// full height, the panels' at theirs. Returns width and fill (mean column height / box height).
 // The port from the mockup's footprint fitted to the blob's column profile (footprint_fit.h): sets the
 // detection's centre (the port's image point; its row the blob's median row, the mockup being as high
 // above the port as below) and disparity, so that reproject() gives the port and its covariance.
-// Returns why the blob is not the mockup (empty: it fits).
-std::string portFromFootprint(const std::vector<cv::Point>& points, const std::vector<float>& disparities,
-                              const StereoGeometry& geometry, const DetectorParams& p, Detection* result) {
+// Not passed: `reason` says why the blob is not the mockup.
+StageOutcome portFromFootprint(const std::vector<cv::Point>& points, const std::vector<float>& disparities,
+                               const StereoGeometry& geometry, const DetectorParams& p, const TargetShape& shape,
+                               Detection* result, std::string* reason) {
   std::vector<int> columns, rows;
   columns.reserve(points.size());
   rows.reserve(points.size());
@@ -314,18 +325,19 @@ std::string portFromFootprint(const std::vector<cv::Point>& points, const std::v
   }
   FootprintFitParams fit_params;
   fit_params.inlier_distance_m = p.footprint_inlier_distance_m;
-  const FootprintFit fit = fitFootprint(columnProfile(columns, disparities, geometry), p.target_shape,
-                                        geometry, fit_params);
+  const FootprintFit fit = fitFootprint(columnProfile(columns, disparities, geometry), shape, geometry, fit_params);
   if (!fit.valid) {
-    return "footprint fit: only " + std::to_string(fit.profile_points) + " image columns with depth (need " +
-           std::to_string(kMinProfilePoints) + ")";
+    *reason = "footprint fit: only " + std::to_string(fit.profile_points) + " image columns with depth (need " +
+              std::to_string(kMinProfilePoints) + ")";
+    return PortOutcome::kTooFewColumns;
   }
   result->footprint_yaw_rad = fit.yaw_rad;
   result->footprint_inlier_fraction = fit.inlier_fraction;
   if (fit.inlier_fraction < p.footprint_min_inlier_fraction) {
-    return "footprint fit: " + formatNumber(fit.inlier_fraction) +
-           " of the blob's depth profile on the mockup's outline < footprint_min_inlier_fraction " +
-           formatNumber(p.footprint_min_inlier_fraction);
+    *reason = "footprint fit: " + formatNumber(fit.inlier_fraction) +
+              " of the blob's depth profile on the mockup's outline < footprint_min_inlier_fraction " +
+              formatNumber(p.footprint_min_inlier_fraction);
+    return PortOutcome::kFootprintMisfit;
   }
   auto middle = rows.begin() + static_cast<std::ptrdiff_t>(rows.size() / 2);
   std::nth_element(rows.begin(), middle, rows.end());
@@ -333,9 +345,11 @@ std::string portFromFootprint(const std::vector<cv::Point>& points, const std::v
   result->centre_px = cv::Point2d(geometry.cx_px + geometry.focal_px * fit.port_xz.x() / z, *middle);
   result->disparity_px = geometry.focal_px * geometry.baseline_m / z;
   result->footprint_fitted = true;
-  return "";
+  return PortOutcome::kPassed;
 }
 
+// Extent of the mockup's outline across the line of sight at `yaw` (0: face-on): the box's columns at
+// full height, the panels' at theirs. Returns width and fill (mean column height / box height).
 void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill) {
   const double c = std::cos(yaw), s = std::sin(yaw);
   // Projection of a point (x forward out of the face, y to the side) on the image's horizontal.
@@ -435,112 +449,35 @@ TargetShape loadTargetShape(const std::string& path) {
   return shape;
 }
 
-std::vector<std::string> validateParams(const DetectorParams& p) {
-  std::vector<std::string> errors;
-  auto require = [&errors](bool ok, const std::string& field, const std::string& rule, double got) {
-    if (!ok) errors.push_back(field + " " + rule + " (got " + formatNumber(got) + ")");
-  };
-  require(p.median_kernel_px == 0 || p.median_kernel_px == 1 || p.median_kernel_px == 3 ||
-              p.median_kernel_px == 5,
-          "median_kernel_px", "must be 0, 1 (off), 3 or 5", p.median_kernel_px);
-  require(std::isfinite(p.gaussian_sigma_px) && p.gaussian_sigma_px >= 0.0 &&
-              p.gaussian_sigma_px <= 10.0,
-          "gaussian_sigma_px", "must be in [0, 10] (0: off)", p.gaussian_sigma_px);
-  require(p.closest_min_pixels >= 1, "closest_min_pixels", "must be >= 1", p.closest_min_pixels);
-  require(std::isfinite(p.target_depth_m) && p.target_depth_m >= 0.0, "target_depth_m",
-          "must be >= 0", p.target_depth_m);
-  require(std::isfinite(p.threshold_margin_px) && p.threshold_margin_px >= 0.0,
-          "threshold_margin_px", "must be >= 0", p.threshold_margin_px);
-  require(std::isfinite(p.face_percentile) && p.face_percentile >= 0.5 && p.face_percentile <= 1.0,
-          "face_percentile", "must be in [0.5, 1]", p.face_percentile);
-  require(std::isfinite(p.face_depth_band_m) && p.face_depth_band_m >= 0.0, "face_depth_band_m",
-          "must be >= 0", p.face_depth_band_m);
-  require(std::isfinite(p.face_min_band_px) && p.face_min_band_px >= 0.0, "face_min_band_px",
-          "must be >= 0", p.face_min_band_px);
-  require(p.min_blob_area_px >= 1, "min_blob_area_px", "must be >= 1", p.min_blob_area_px);
-  require(p.reduced_min_blob_area_px >= 1, "reduced_min_blob_area_px", "must be >= 1", p.reduced_min_blob_area_px);
-  require(std::isfinite(p.reduced_min_blob_thickness_px) && p.reduced_min_blob_thickness_px >= 0.0,
-          "reduced_min_blob_thickness_px", "must be >= 0", p.reduced_min_blob_thickness_px);
-  require(std::isfinite(p.min_blob_thickness_px) && p.min_blob_thickness_px >= 0.0,
-          "min_blob_thickness_px", "must be >= 0", p.min_blob_thickness_px);
-  require(std::isfinite(p.max_blob_area_fraction) && p.max_blob_area_fraction > 0.0 &&
-              p.max_blob_area_fraction <= 1.0,
-          "max_blob_area_fraction", "must be in (0, 1]", p.max_blob_area_fraction);
-  require(p.border_margin_px >= 0, "border_margin_px", "must be >= 0", p.border_margin_px);
-  require(std::isfinite(p.min_disparity_px) && p.min_disparity_px > 0.0, "min_disparity_px",
-          "must be > 0", p.min_disparity_px);
-  require(std::isfinite(p.max_disparity_px) && p.max_disparity_px > p.min_disparity_px,
-          "max_disparity_px", "must be > min_disparity_px", p.max_disparity_px);
-  require(std::isfinite(p.roi_top_fraction) && p.roi_top_fraction >= 0.0 && p.roi_top_fraction < 1.0,
-          "roi_top_fraction", "must be in [0, 1)", p.roi_top_fraction);
-  require(std::isfinite(p.roi_bottom_fraction) && p.roi_bottom_fraction > p.roi_top_fraction &&
-              p.roi_bottom_fraction <= 1.0,
-          "roi_bottom_fraction", "must be in (roi_top_fraction, 1]", p.roi_bottom_fraction);
-  require(std::isfinite(p.floor_cut_y_m) && p.floor_cut_y_m > 0.0, "floor_cut_y_m", "must be > 0",
-          p.floor_cut_y_m);
-  require(std::isfinite(p.ceiling_cut_y_m) && p.ceiling_cut_y_m >= 0.0, "ceiling_cut_y_m",
-          "must be >= 0 (0: off)", p.ceiling_cut_y_m);
-  require(std::isfinite(p.disparity_sigma_px) && p.disparity_sigma_px > 0.0, "disparity_sigma_px",
-          "must be > 0", p.disparity_sigma_px);
-  require(std::isfinite(p.centre_sigma_px) && p.centre_sigma_px > 0.0, "centre_sigma_px",
-          "must be > 0", p.centre_sigma_px);
-  require(std::isfinite(p.port_offset_sigma_m) && p.port_offset_sigma_m >= 0.0 && p.port_offset_sigma_m <= 1.0,
-          "port_offset_sigma_m", "must be in [0, 1]", p.port_offset_sigma_m);
-  require(std::isfinite(p.shape_tolerance_fraction) && p.shape_tolerance_fraction >= 0.0 &&
-              p.shape_tolerance_fraction < 1.0,
-          "shape_tolerance_fraction", "must be in [0, 1)", p.shape_tolerance_fraction);
-  require(std::isfinite(p.shape_tolerance_px) && p.shape_tolerance_px >= 0.0, "shape_tolerance_px",
-          "must be >= 0", p.shape_tolerance_px);
-  require(std::isfinite(p.degraded_min_width_fraction) && p.degraded_min_width_fraction >= 0.0 &&
-              p.degraded_min_width_fraction <= 1.0,
-          "degraded_min_width_fraction", "must be in [0, 1] (0: any width)", p.degraded_min_width_fraction);
-  require(std::isfinite(p.split_depth_step_m) && p.split_depth_step_m >= 0.0 && p.split_depth_step_m <= 2.0,
-          "split_depth_step_m", "must be in [0, 2] (0: off)", p.split_depth_step_m);
-  require(std::isfinite(p.max_centre_offset_y_m) && p.max_centre_offset_y_m >= 0.0,
-          "max_centre_offset_y_m", "must be >= 0 (0: off)", p.max_centre_offset_y_m);
-  require(std::isfinite(p.footprint_inlier_distance_m) && p.footprint_inlier_distance_m > 0.0 &&
-              p.footprint_inlier_distance_m <= 1.0,
-          "footprint_inlier_distance_m", "must be in (0, 1]", p.footprint_inlier_distance_m);
-  require(std::isfinite(p.footprint_min_inlier_fraction) && p.footprint_min_inlier_fraction >= 0.0 &&
-              p.footprint_min_inlier_fraction <= 1.0,
-          "footprint_min_inlier_fraction", "must be in [0, 1]", p.footprint_min_inlier_fraction);
-  const TargetShape& t = p.target_shape;
-  require(std::isfinite(t.face_width_m) && t.face_width_m > 0.0, "target_shape.face_width_m",
-          "must be > 0", t.face_width_m);
-  require(std::isfinite(t.face_height_m) && t.face_height_m > 0.0, "target_shape.face_height_m",
-          "must be > 0", t.face_height_m);
+namespace {
+
+// A rule between settings, or a mockup the checks cannot use: the same error as a setting out of range.
+void require(bool ok, const char* key, const std::string& rule) {
+  if (!ok) throw docking_settings::ConfigError(key, docking_settings::ConfigProblem::kInvalid, rule);
+}
+
+}  // namespace
+
+void validate(const DetectorParams& p, const TargetShape& t) {
+  docking_settings::validateSettings(p);
+  require(p.median_kernel_px != 2 && p.median_kernel_px != 4, "median_kernel_px",
+          "must be 0, 1 (off), 3 or 5 (got " + std::to_string(p.median_kernel_px) + ")");
+  require(p.max_disparity_px > p.min_disparity_px, "max_disparity_px",
+          "must be > min_disparity_px (got " + formatNumber(p.max_disparity_px) + ")");
+  require(std::isfinite(t.face_width_m) && t.face_width_m > 0.0 && std::isfinite(t.face_height_m) &&
+              t.face_height_m > 0.0,
+          "target_yaml", "the mockup's face width and height must be > 0");
   require(std::isfinite(t.body_depth_m) && t.body_depth_m >= 0.0 && std::isfinite(t.panel_span_m) &&
               t.panel_span_m >= 0.0 && std::isfinite(t.panel_height_m) && t.panel_height_m >= 0.0,
-          "target_shape", "body depth and panel sizes must be >= 0", t.body_depth_m);
+          "target_yaml", "the mockup's body depth and panel sizes must be >= 0");
   require(std::isfinite(t.panel_offset_behind_face_m) && t.panel_offset_behind_face_m >= 0.0 &&
               t.panel_offset_behind_face_m <= t.body_depth_m,
-          "target_shape.panel_offset_behind_face_m", "must be in [0, body depth]",
-          t.panel_offset_behind_face_m);
-  if (errors.empty()) {
-    // A fill bound above what the mockup itself shows at some yaw would reject the real target.
-    const double mockup_fill = shapeBounds(t).min_fill;
-    require(std::isfinite(p.min_fill_fraction) && p.min_fill_fraction >= 0.0 &&
-                p.min_fill_fraction <= mockup_fill,
-            "min_fill_fraction",
-            "must be in [0, " + formatNumber(mockup_fill) + "] (the mockup's own lowest fill)",
-            p.min_fill_fraction);
-  }
-  const FaceAppearanceParams& a = p.appearance;
-  require(std::isfinite(a.min_score) && a.min_score >= -1.0 && a.min_score <= 1.0, "appearance_min_score",
-          "must be in [-1, 1]", a.min_score);
-  require(std::isfinite(a.search_radius_m) && a.search_radius_m >= 0.0 && a.search_radius_m <= 1.0,
-          "appearance_search_radius_m", "must be in [0, 1]", a.search_radius_m);
-  require(std::isfinite(a.max_working_width_px) && a.max_working_width_px >= 16.0 &&
-              a.max_working_width_px <= kMaxAppearanceWorkingWidthPx,
-          "appearance_max_working_width_px", "must be in [16, 48]", a.max_working_width_px);
-  require(a.saturated_level_dn >= 1 && a.saturated_level_dn <= 255, "appearance_saturated_level_dn",
-          "must be in [1, 255]", a.saturated_level_dn);
-  require(std::isfinite(a.max_saturated_fraction) && a.max_saturated_fraction >= 0.0 &&
-              a.max_saturated_fraction <= 1.0,
-          "appearance_max_saturated_fraction", "must be in [0, 1]", a.max_saturated_fraction);
-  require(std::isfinite(a.min_mean_dn) && a.min_mean_dn >= 0.0 && a.min_mean_dn <= 255.0, "appearance_min_mean_dn",
-          "must be in [0, 255]", a.min_mean_dn);
-  return errors;
+          "target_yaml", "the mockup's panels must lie within its body depth");
+  // A fill bound above what the mockup itself shows at some yaw would reject the real target.
+  const double mockup_fill = shapeBounds(t).min_fill;
+  require(p.min_fill_fraction <= mockup_fill, "min_fill_fraction",
+          "must be at most " + formatNumber(mockup_fill) + " (the mockup's own lowest fill; got " +
+              formatNumber(p.min_fill_fraction) + ")");
 }
 
 std::vector<std::string> validateGeometry(const StereoGeometry& g) {
@@ -557,30 +494,14 @@ std::vector<std::string> validateGeometry(const StereoGeometry& g) {
   return errors;
 }
 
-const char* outcomeName(Outcome outcome) {
-  switch (outcome) {
-    case Outcome::kFound: return "found";
-    case Outcome::kBadInput: return "bad_input";
-    case Outcome::kNoValidDisparity: return "no_valid_disparity";
-    case Outcome::kNoBlob: return "no_blob";
-    case Outcome::kBlobTooSmall: return "blob_too_small";
-    case Outcome::kBlobTooLarge: return "blob_too_large";
-    case Outcome::kBlobTouchesBorder: return "blob_touches_border";
-    case Outcome::kDisparityOutOfRange: return "disparity_out_of_range";
-    case Outcome::kNotTargetShaped: return "not_target_shaped";
-    case Outcome::kOffTrack: return "off_track";
-    case Outcome::kFootprintMisfit: return "footprint_misfit";
-    case Outcome::kAppearanceMismatch: return "appearance_mismatch";
-    case Outcome::kAppearanceUnjudged: return "appearance_unjudged";
-  }
-  return "unknown";
+DisparityDetector::DisparityDetector(const DetectorParams& params, const TargetShape& shape) {
+  validate(params, shape);
+  params_ = params;
+  shape_ = shape;
 }
 
-DisparityDetector::DisparityDetector(const DetectorParams& params) { setParams(params); }
-
 void DisparityDetector::setParams(const DetectorParams& params) {
-  const auto errors = validateParams(params);
-  if (!errors.empty()) throw std::invalid_argument(joinErrors(errors));
+  validate(params, shape_);
   params_ = params;
 }
 
@@ -604,60 +525,82 @@ void reproject(const StereoGeometry& g, const cv::Point2d& centre_px, double dis
   *covariance_m2 = jacobian * input_variance.asDiagonal() * jacobian.transpose();
 }
 
-Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeometry& geometry,
-                                    double search_min_px, double search_max_px,
-                                    cv::Rect valid_region, const SearchHint& hint,
-                                    const ImageWindow& window) const {
-  Detection result;
-  const DetectorParams& p = params_;
+namespace {
 
-  // --- Input checks: every failure is a reason, never an exception.
+// The images the stages share: the valid raw disparities of the searched region (0 elsewhere), the filtered
+// ones the search thresholds (the same data when no filter runs), and the filtered values' histogram.
+struct SearchImages {
+  cv::Rect region;
+  cv::Mat clean;
+  cv::Mat filtered;
+  std::vector<int> histogram;  // 1/16 px bins of the filtered values > 0 in the region
+};
+
+// Everything a blob of a band is judged with.
+struct BandContext {
+  const DetectorParams& p;
+  const StereoGeometry& geometry;
+  const ShapeBounds& bounds;
+  const SearchHint& hint;
+  const ImageWindow& window;
+  cv::Size image_size;
+};
+
+// What the search keeps from band to band: the chosen blob and those that explain a failure.
+struct BandSearchState {
+  BlobCandidate chosen, fallback, first_misfit, largest_small;
+  // A blob of a band failed the shape check only on a lower bound or its fill: it may be the target,
+  // degraded (glare, blur, merged holes), so nothing behind it is trusted (issue 11: at 2 m under
+  // glare the face's fill fell to 0.3 and a box stack 1.4 m behind it was taken).
+  bool stop_here = false;
+  int largest_skipped_area = 0;
+};
+
+// Stage 1, input: the image and geometry usable, and the searched region: the matcher's valid window.
+StageOutcome selectRegion(const cv::Mat& disparity, const StereoGeometry& geometry, cv::Rect valid_region,
+                          cv::Rect* region, std::string* reason) {
   if (disparity.empty()) {
-    result.reason = "empty disparity image";
-    return result;
+    *reason = "empty disparity image";
+    return InputOutcome::kEmptyImage;
   }
   if (disparity.type() != CV_32FC1) {
-    result.reason = "disparity image must be 32-bit float with one channel (OpenCV type " +
-                    std::to_string(CV_32FC1) + "), got type " + std::to_string(disparity.type());
-    return result;
+    *reason = "disparity image must be 32-bit float with one channel (OpenCV type " + std::to_string(CV_32FC1) +
+              "), got type " + std::to_string(disparity.type());
+    return InputOutcome::kBadEncoding;
   }
   const auto geometry_errors = validateGeometry(geometry);
   if (!geometry_errors.empty()) {
-    result.reason = "invalid stereo geometry: " + joinErrors(geometry_errors);
-    return result;
+    *reason = "invalid stereo geometry: " + joinErrors(geometry_errors);
+    return InputOutcome::kBadGeometry;
   }
-
-  // --- Region of interest: the matcher's valid window, cut to the configured rows (of the full image).
   const cv::Rect image_rect(0, 0, disparity.cols, disparity.rows);
-  cv::Rect region = valid_region.area() > 0 ? (valid_region & image_rect) : image_rect;
-  const int full_rows = window.isWindow() ? window.full_size.height : disparity.rows;
-  const int row_offset = window.isWindow() ? window.offset.y : 0;
-  const int roi_top = static_cast<int>(std::lround(p.roi_top_fraction * full_rows)) - row_offset;
-  const int roi_bottom = static_cast<int>(std::lround(p.roi_bottom_fraction * full_rows)) - row_offset;
-  region &= cv::Rect(0, roi_top, disparity.cols, std::max(0, roi_bottom - roi_top));
-  if (region.area() <= 0) {
-    result.reason = "empty region of interest (valid window and roi_top/bottom_fraction do not overlap)";
-    return result;
+  *region = valid_region.area() > 0 ? (valid_region & image_rect) : image_rect;
+  if (region->area() <= 0) {
+    *reason = "empty region of interest (the matcher's valid window is outside the image)";
+    return InputOutcome::kEmptyRegion;
   }
+  return InputOutcome::kPassed;
+}
 
-  // --- Valid disparities of the region; everything else 0. Floor cut: a point is lower than
-  // floor_cut_y_m below the axis when (v - cy) B / d > floor_cut_y_m, i.e. d < (v - cy) B / cut;
-  // the ceiling cut is the same above the axis.
+// The region's valid disparities (finite, > 0, inside the matcher's search range and the floor and ceiling
+// cuts) in a copy, everything else 0; returns how many. Floor cut: a point is lower than floor_cut_y_m below
+// the axis when (v - cy) B / d > floor_cut_y_m, i.e. d < (v - cy) B / cut; the ceiling cut is the same above.
+int keepValidDisparities(const cv::Mat& disparity, const StereoGeometry& geometry, double search_min_px,
+                         double search_max_px, const DetectorParams& p, SearchImages* images) {
+  const cv::Rect& region = images->region;
   const float search_min = static_cast<float>(std::max(search_min_px, 0.0));
   const float search_max = static_cast<float>(search_max_px);
-  cv::Mat clean(disparity.size(), CV_32FC1, cv::Scalar(0.0f));
+  images->clean = cv::Mat(disparity.size(), CV_32FC1, cv::Scalar(0.0f));
   int valid_count = 0;
   for (int v = region.y; v < region.y + region.height; ++v) {
     float floor_min_disparity = 0.0f;  // disparities below this are floor (ceiling) points here
     if (p.floor_cut_enabled && v > geometry.cy_px) {
-      floor_min_disparity =
-          static_cast<float>((v - geometry.cy_px) * geometry.baseline_m / p.floor_cut_y_m);
+      floor_min_disparity = static_cast<float>((v - geometry.cy_px) * geometry.baseline_m / p.floor_cut_y_m);
     } else if (p.floor_cut_enabled && p.ceiling_cut_y_m > 0.0 && v < geometry.cy_px) {
-      floor_min_disparity =
-          static_cast<float>((geometry.cy_px - v) * geometry.baseline_m / p.ceiling_cut_y_m);
+      floor_min_disparity = static_cast<float>((geometry.cy_px - v) * geometry.baseline_m / p.ceiling_cut_y_m);
     }
     const float* in = disparity.ptr<float>(v);
-    float* out = clean.ptr<float>(v);
+    float* out = images->clean.ptr<float>(v);
     for (int u = region.x; u < region.x + region.width; ++u) {
       const float d = in[u];
       // NaN fails every comparison, so it is dropped here too.
@@ -667,309 +610,378 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
       }
     }
   }
-  result.valid_pixels = valid_count;
-  const int needed = p.closest_min_pixels;
-  if (valid_count < needed) {
-    result.outcome = Outcome::kNoValidDisparity;
-    result.reason = "only " + std::to_string(valid_count) +
-                    " valid disparity pixels in the region of interest (need " +
-                    std::to_string(needed) + ")";
-    return result;
-  }
+  return valid_count;
+}
 
-  // --- Filter (the paper's step 2). Invalid pixels are 0, so the median also removes isolated
-  // speckles and trims the edge "fattening" of block matching.
-  cv::Mat filtered = clean;
-  if (p.median_kernel_px >= 3) {
-    cv::medianBlur(clean, filtered, p.median_kernel_px);
-  }
-  if (p.gaussian_sigma_px > 0.0) {
-    cv::GaussianBlur(filtered, filtered, cv::Size(0, 0), p.gaussian_sigma_px);
-  }
-
-  // --- Closest object: walk a 1/16 px histogram down from the largest disparity until
-  // closest_min_pixels pixels are collected. This is a percentile defined by a pixel count, so it
-  // does not depend on how much of the scene happens to be valid.
-  cv::Mat filtered_region = filtered(region);
+// The filter (the paper's step 2) and the histogram of what it leaves; returns how many filtered pixels are
+// valid (-1: none). Invalid pixels are 0, so the median also removes isolated speckles and trims the edge
+// "fattening" of block matching.
+int filterAndCount(const DetectorParams& p, SearchImages* images) {
+  images->filtered = images->clean;
+  if (p.median_kernel_px >= 3) cv::medianBlur(images->clean, images->filtered, p.median_kernel_px);
+  const cv::Mat filtered_region = images->filtered(images->region);
   double max_value = 0.0;
   cv::minMaxLoc(filtered_region, nullptr, &max_value);
-  if (!(max_value > 0.0)) {
-    result.outcome = Outcome::kNoValidDisparity;
-    result.reason = "no valid disparity left after filtering";
-    return result;
-  }
+  if (!(max_value > 0.0)) return -1;
   const int bins = static_cast<int>(std::ceil(max_value * kHistogramBinsPerPx)) + 1;
-  std::vector<int> histogram(static_cast<std::size_t>(bins), 0);
+  images->histogram.assign(static_cast<std::size_t>(bins), 0);
   int filtered_count = 0;
   for (int v = 0; v < filtered_region.rows; ++v) {
     const float* row = filtered_region.ptr<float>(v);
     for (int u = 0; u < filtered_region.cols; ++u) {
       if (row[u] > 0.0f) {
-        ++histogram[static_cast<std::size_t>(row[u] * kHistogramBinsPerPx)];
+        ++images->histogram[static_cast<std::size_t>(row[u] * kHistogramBinsPerPx)];
         ++filtered_count;
       }
     }
   }
+  return filtered_count;
+}
+
+// Stage 2, valid disparity: enough valid disparities in the region, before and after the filter.
+StageOutcome validDisparity(const cv::Mat& disparity, const StereoGeometry& geometry, double search_min_px,
+                            double search_max_px, const DetectorParams& p, SearchImages* images, Detection* result) {
+  const int needed = p.closest_min_pixels;
+  result->valid_pixels = keepValidDisparities(disparity, geometry, search_min_px, search_max_px, p, images);
+  if (result->valid_pixels < needed) {
+    result->reason = "only " + std::to_string(result->valid_pixels) +
+                     " valid disparity pixels in the region of interest (need " + std::to_string(needed) + ")";
+    return ValidDisparityOutcome::kTooFewValid;
+  }
+  const int filtered_count = filterAndCount(p, images);
+  if (filtered_count < 0) {
+    result->reason = "no valid disparity left after filtering";
+    return ValidDisparityOutcome::kTooFewAfterFilter;
+  }
   if (filtered_count < needed) {
-    result.outcome = Outcome::kNoValidDisparity;
-    result.reason = "only " + std::to_string(filtered_count) +
-                    " valid disparity pixels after filtering (need " + std::to_string(needed) + ")";
-    return result;
+    result->reason = "only " + std::to_string(filtered_count) + " valid disparity pixels after filtering (need " +
+                     std::to_string(needed) + ")";
+    return ValidDisparityOutcome::kTooFewAfterFilter;
   }
-  cv::Mat mask(disparity.size(), CV_8UC1);
-  const ShapeBounds bounds = shapeBounds(p.target_shape);
-  BlobCandidate chosen, fallback, first_misfit, largest_small;
-  // A blob of this band failed the shape check only on a lower bound or its fill: it may be the target,
-  // degraded (glare, blur, merged holes), so nothing behind it is trusted (issue 11: at 2 m under
-  // glare the face's fill fell to 0.3 and a box stack 1.4 m behind it was taken).
-  bool stop_here = false;
-  int largest_skipped_area = 0;
+  return ValidDisparityOutcome::kPassed;
+}
+
+// The closest object: walk the histogram down from the largest disparity until closest_min_pixels pixels are
+// collected (a percentile defined by a pixel count, so it does not depend on how much of the scene happens
+// to be valid). Negative when fewer are left.
+double closestDisparity(const std::vector<int>& histogram, int min_pixels) {
+  int collected = 0;
+  int closest_bin = static_cast<int>(histogram.size()) - 1;
+  for (; closest_bin > 0; --closest_bin) {
+    collected += histogram[static_cast<std::size_t>(closest_bin)];
+    if (collected >= min_pixels) break;
+  }
+  if (collected < min_pixels) return -1.0;
+  return closest_bin / kHistogramBinsPerPx;
+}
+
+// A blob of the band whose size and thickness a target can have, judged by the shape check: its misfit (empty:
+// it may be the target), replaced by a part of it when it crosses the tracking window's edge or is larger
+// than the mockup (the split). Returns whether, failing, it may be the target degraded (glare, blur): within
+// the mockup's upper bounds and at its height, not cut by the border, and not a strip (at least
+// degraded_min_width_fraction of its edge-on width wide); then nothing behind it is trusted.
+bool shapeCheck(const BandContext& c, const SearchImages& images, double threshold, BlobCandidate* candidate,
+                Detection* result) {
+  const DetectorParams& p = c.p;
+  const StereoGeometry& g = c.geometry;
+  candidate->shape = measureBlobShape(*candidate, images.clean, g);
+  const auto split = [&]() {
+    return p.split_depth_step_m > 0.0
+               ? splitMergedBlob(*candidate, images.filtered, images.clean, g, c.bounds, p, images.region, threshold)
+               : BlobCandidate();
+  };
+  if (crossesWindowEdge(candidate->box, images.region, kBorderMarginPx, c.window, c.image_size)) {
+    // The window is centred on the tracked target with room around it: what crosses its edge is a
+    // neighbour, or the target merged with one (look inside it), never the target cut by the border.
+    BlobCandidate part = split();
+    if (!part.valid) {
+      candidate->misfit = "crosses the tracking window's edge";
+      return false;
+    }
+    *candidate = std::move(part);
+    ++result->merged_blobs_split;
+  }
+  const bool cut = touchesBorder(candidate->box, images.region, kBorderMarginPx);
+  candidate->misfit = shapeMismatch(candidate->shape, c.bounds, p, g.focal_px, cut);
+  const bool within_upper_bounds = shapeMismatch(candidate->shape, c.bounds, p, g.focal_px, /*cut=*/true).empty();
+  const bool degraded = !candidate->misfit.empty() && !cut &&
+                        candidate->shape.width_m >= p.degraded_min_width_fraction * c.bounds.min_width_m &&
+                        within_upper_bounds && heightMismatch(candidatePosition(*candidate, g), p).empty();
+  if (candidate->misfit.empty() && !cut) candidate->misfit = heightMismatch(candidatePosition(*candidate, g), p);
+  // Larger than the mockup: maybe the target merged with its neighbours; look for it inside.
+  if (p.split_depth_step_m > 0.0 && !cut && !candidate->misfit.empty() && !within_upper_bounds) {
+    BlobCandidate part = split();
+    if (part.valid) {
+      *candidate = std::move(part);
+      ++result->merged_blobs_split;
+    }
+  }
+  return degraded;
+}
+
+// One blob of a band (largest first): too small, not target-shaped, the target, or target-shaped outside the
+// hint's gate (a fallback). Returns true when it is the target (the band's search ends).
+bool judgeBlob(const BandContext& c, const SearchImages& images, double threshold, BlobCandidate candidate,
+               BandSearchState* state, Detection* result) {
+  const DetectorParams& p = c.p;
+  if (candidate.area < p.min_blob_area_px || candidate.thickness_px < p.min_blob_thickness_px) {
+    if (!state->largest_small.valid || candidate.area > state->largest_small.area) {
+      state->largest_small = std::move(candidate);
+    }
+    return false;
+  }
+  if (!p.shape_check_enabled) {
+    state->chosen = std::move(candidate);
+    return true;
+  }
+  const bool degraded = shapeCheck(c, images, threshold, &candidate, result);
+  if (!candidate.misfit.empty()) {
+    ++result->not_target_shaped_skipped;
+    if (degraded && p.stop_behind_target_sized) {
+      if (!state->stop_here) {
+        candidate.misfit += "; within the mockup's size, so not looked behind";
+        state->first_misfit = std::move(candidate);
+      }
+      state->stop_here = true;
+    } else if (!state->first_misfit.valid) {
+      state->first_misfit = std::move(candidate);
+    }
+    return false;
+  }
+  if (!c.hint.valid || (candidatePosition(candidate, c.geometry) - c.hint.position_m).norm() <= c.hint.radius_m) {
+    state->chosen = std::move(candidate);
+    return true;
+  }
+  if (!state->fallback.valid) state->fallback = std::move(candidate);
+  return false;
+}
+
+// Removes the band (every pixel above `mask`) from the filtered image and its histogram, so the search looks
+// behind it; returns how many pixels it held.
+int removeBand(const cv::Mat& mask, SearchImages* images) {
+  if (images->filtered.data == images->clean.data) {  // no filter ran: keep the raw values for the depth
+    images->filtered = images->clean.clone();
+  }
+  const cv::Rect& region = images->region;
+  int band_pixels = 0;
+  for (int v = 0; v < region.height; ++v) {
+    float* row = images->filtered.ptr<float>(region.y + v) + region.x;
+    const std::uint8_t* mask_row = mask.ptr<std::uint8_t>(region.y + v) + region.x;
+    for (int u = 0; u < region.width; ++u) {
+      if (mask_row[u] != 0) {
+        --images->histogram[static_cast<std::size_t>(row[u] * kHistogramBinsPerPx)];
+        row[u] = 0.0f;
+        ++band_pixels;
+      }
+    }
+  }
+  return band_pixels;
+}
+
+// The blobs of one band, largest first (the paper took the biggest contour), at most kMaxBlobsPerBand.
+std::vector<std::vector<cv::Point>> bandBlobs(const cv::Mat& mask) {
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+  std::vector<std::pair<double, std::size_t>> by_area;
+  for (std::size_t i = 0; i < contours.size(); ++i) {
+    by_area.emplace_back(cv::contourArea(contours[i]) + contours[i].size(), i);
+  }
+  std::sort(by_area.begin(), by_area.end(), std::greater<>());
+  if (by_area.size() > kMaxBlobsPerBand) by_area.resize(kMaxBlobsPerBand);
+  std::vector<std::vector<cv::Point>> largest;
+  for (const auto& entry : by_area) largest.push_back(std::move(contours[entry.second]));
+  return largest;
+}
+
+// The blob to report once the search ends: the target; else a target-shaped blob outside the hint (the
+// tracker decides); else the first blob that was not target-shaped, or the largest too-small one (reasons).
+StageOutcome reportBlob(const DetectorParams& p, BandSearchState* state, BlobCandidate* blob, Detection* result) {
+  if (!state->chosen.valid && state->fallback.valid) {
+    state->chosen = std::move(state->fallback);
+    result->outside_hint = true;
+  }
+  if (state->chosen.valid) {
+    *blob = std::move(state->chosen);
+    return BandSearchOutcome::kPassed;
+  }
+  if (state->first_misfit.valid) {
+    result->reason = "not the target: " + state->first_misfit.misfit;
+    *blob = std::move(state->first_misfit);
+    return BandSearchOutcome::kNotTargetShaped;
+  }
+  result->reason = "blob too small: every object in view is smaller than min_blob_area_px " +
+                   std::to_string(p.min_blob_area_px) + " or thinner than min_blob_thickness_px " +
+                   formatNumber(p.min_blob_thickness_px) + " (largest " +
+                   std::to_string(std::max(state->largest_skipped_area, state->largest_small.area)) + " px)";
+  *blob = std::move(state->largest_small);  // for the debug image, when there is one
+  return BandSearchOutcome::kAllBlobsTooSmall;
+}
+
+// Stage 3, band search: the closest object, a threshold just below it that keeps the target's own depth
+// (target_depth_m behind its nearest point, at least kThresholdMarginPx), and the band's blobs judged;
+// without the target in it, the band is removed and the search looks behind it (mismatches at occlusion
+// edges, speckles, a wall, a person, furniture), at most kMaxNearObjectsSkipped times. `blob`: the blob to
+// report (invalid: none).
+StageOutcome searchBands(const BandContext& c, SearchImages* images, BlobCandidate* blob, Detection* result) {
+  const DetectorParams& p = c.p;
+  cv::Mat mask(c.image_size, CV_8UC1);
+  BandSearchState state;
   for (;;) {
-    int collected = 0;
-    int closest_bin = bins - 1;
-    for (; closest_bin > 0; --closest_bin) {
-      collected += histogram[static_cast<std::size_t>(closest_bin)];
-      if (collected >= p.closest_min_pixels) break;
-    }
-    if (collected < p.closest_min_pixels) break;  // only after skipping: nothing left behind
-    const double closest = closest_bin / kHistogramBinsPerPx;
-    result.closest_disparity_px = closest;
-
-    // --- Threshold just below it: keep the target's own depth (target_depth_m behind the nearest
-    // point), but never closer than threshold_margin_px to the closest disparity.
-    const double threshold =
-        std::max(std::min(closest - p.threshold_margin_px,
-                          disparityBehind(geometry, closest, p.target_depth_m)),
-                 1.0 / kHistogramBinsPerPx);
-    result.threshold_disparity_px = threshold;
+    const double closest = closestDisparity(images->histogram, p.closest_min_pixels);
+    if (closest < 0.0) break;  // only after skipping: nothing left behind
+    result->closest_disparity_px = closest;
+    const double threshold = std::max(
+        std::min(closest - kThresholdMarginPx, disparityBehind(c.geometry, closest, p.target_depth_m)),
+        1.0 / kHistogramBinsPerPx);
+    result->threshold_disparity_px = threshold;
     mask.setTo(cv::Scalar(0));
-    cv::Mat mask_region = mask(region);
-    cv::compare(filtered_region, threshold, mask_region, cv::CMP_GE);  // writes into `mask`
-
-    // --- The blobs of this band, largest first (the paper took the biggest contour). Without the
-    // shape check the largest of plausible size is the target; with it, the first target-shaped one
-    // (inside the hint's gate, when there is a hint).
-    std::vector<std::vector<cv::Point>> contours;
-    cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
-    if (contours.empty() && result.near_objects_skipped == 0) {
-      result.outcome = Outcome::kNoBlob;
-      result.reason = "no blob above the threshold disparity " + formatNumber(threshold) + " px";
-      return result;
+    cv::Mat mask_region = mask(images->region);
+    cv::compare(images->filtered(images->region), threshold, mask_region, cv::CMP_GE);  // writes into `mask`
+    const auto blobs = bandBlobs(mask);
+    if (blobs.empty() && result->near_objects_skipped == 0) {
+      result->reason = "no blob above the threshold disparity " + formatNumber(threshold) + " px";
+      return BandSearchOutcome::kNoBlob;
     }
-    std::vector<std::pair<double, std::size_t>> by_area;
-    for (std::size_t i = 0; i < contours.size(); ++i) {
-      by_area.emplace_back(cv::contourArea(contours[i]) + contours[i].size(), i);
+    for (const auto& contour : blobs) {
+      if (judgeBlob(c, *images, threshold, makeCandidate(contour, mask), &state, result)) break;
     }
-    std::sort(by_area.begin(), by_area.end(), std::greater<>());
-    if (by_area.size() > kMaxBlobsPerBand) by_area.resize(kMaxBlobsPerBand);
-    for (const auto& entry : by_area) {
-      BlobCandidate candidate = makeCandidate(contours[entry.second], mask);
-      if (candidate.area < p.min_blob_area_px || candidate.thickness_px < p.min_blob_thickness_px) {
-        if (!largest_small.valid || candidate.area > largest_small.area) largest_small = candidate;
-        continue;
-      }
-      if (!p.shape_check_enabled) {
-        chosen = std::move(candidate);
-        break;
-      }
-      candidate.shape = measureBlobShape(candidate, clean, geometry);
-      if (crossesWindowEdge(candidate.box, region, p.border_margin_px, window, disparity.size())) {
-        // The window is centred on the tracked target with room around it: what crosses its edge is a
-        // neighbour, or the target merged with one (look inside it), never the target cut by the border.
-        BlobCandidate part = p.split_depth_step_m > 0.0
-                                 ? splitMergedBlob(candidate, filtered, clean, geometry, bounds, p, region,
-                                                   threshold)
-                                 : BlobCandidate();
-        if (!part.valid) {
-          candidate.misfit = "crosses the tracking window's edge";
-          ++result.not_target_shaped_skipped;
-          if (!first_misfit.valid) first_misfit = std::move(candidate);
-          continue;
-        }
-        candidate = std::move(part);
-        ++result.merged_blobs_split;
-      }
-      const bool cut = touchesBorder(candidate.box, region, p.border_margin_px);
-      candidate.misfit = shapeMismatch(candidate.shape, bounds, p, geometry.focal_px, cut);
-      const bool degraded_target_size =
-          !candidate.misfit.empty() && !cut &&
-          candidate.shape.width_m >= p.degraded_min_width_fraction * bounds.min_width_m &&
-          shapeMismatch(candidate.shape, bounds, p, geometry.focal_px, /*cut=*/true).empty() &&
-          heightMismatch(candidatePosition(candidate, geometry), p).empty();
-      if (candidate.misfit.empty() && !cut) {
-        candidate.misfit = heightMismatch(candidatePosition(candidate, geometry), p);
-      }
-      // Larger than the mockup: maybe the target merged with its neighbours; look for it inside.
-      if (p.split_depth_step_m > 0.0 && !cut && !candidate.misfit.empty() &&
-          !shapeMismatch(candidate.shape, bounds, p, geometry.focal_px, /*cut=*/true).empty()) {
-        BlobCandidate part = splitMergedBlob(candidate, filtered, clean, geometry, bounds, p,
-                                             region, threshold);
-        if (part.valid) {
-          candidate = std::move(part);
-          ++result.merged_blobs_split;
-        }
-      }
-      if (!candidate.misfit.empty()) {
-        ++result.not_target_shaped_skipped;
-        if (degraded_target_size && p.stop_behind_target_sized) {
-          if (!stop_here) {
-            candidate.misfit += "; within the mockup's size, so not looked behind";
-            first_misfit = std::move(candidate);
-          }
-          stop_here = true;
-        } else if (!first_misfit.valid) {
-          first_misfit = std::move(candidate);
-        }
-        continue;
-      }
-      if (!hint.valid || (candidatePosition(candidate, geometry) - hint.position_m).norm() <=
-                             hint.radius_m) {
-        chosen = std::move(candidate);
-        break;
-      }
-      if (!fallback.valid) fallback = std::move(candidate);
-    }
-    if (chosen.valid || stop_here || result.near_objects_skipped >= kMaxNearObjectsSkipped) break;
-
-    // --- Nothing at this depth is the target: mismatches at occlusion edges, speckles, dust, or
-    // objects of another size (a wall, a person, furniture). Remove the band and look behind it,
-    // so it cannot hide the target.
-    if (filtered.data == clean.data) {  // no filter ran: keep the raw values for the depth
-      filtered = clean.clone();
-      filtered_region = filtered(region);
-    }
-    int band_pixels = 0;
-    for (int v = 0; v < filtered_region.rows; ++v) {
-      float* row = filtered.ptr<float>(region.y + v) + region.x;
-      const std::uint8_t* mask_row = mask_region.ptr<std::uint8_t>(v);
-      for (int u = 0; u < filtered_region.cols; ++u) {
-        if (mask_row[u] != 0) {
-          --histogram[static_cast<std::size_t>(row[u] * kHistogramBinsPerPx)];
-          row[u] = 0.0f;
-          ++band_pixels;
-        }
-      }
-    }
-    ++result.near_objects_skipped;
-    largest_skipped_area = std::max(largest_skipped_area, band_pixels);
+    if (state.chosen.valid || state.stop_here || result->near_objects_skipped >= kMaxNearObjectsSkipped) break;
+    state.largest_skipped_area = std::max(state.largest_skipped_area, removeBand(mask, images));
+    ++result->near_objects_skipped;
   }
+  return reportBlob(p, &state, blob, result);
+}
 
-  // --- The blob to report: the target; else a target-shaped blob outside the hint (the tracker
-  // decides); else the first blob that was not target-shaped, or the largest too-small one (reasons).
-  if (!chosen.valid && fallback.valid) {
-    chosen = std::move(fallback);
-    result.outside_hint = true;
-  }
-  std::string misfit_reason;
-  if (!chosen.valid && first_misfit.valid) {
-    misfit_reason = first_misfit.misfit;
-    chosen = std::move(first_misfit);
-  }
-  if (!chosen.valid) {
-    result.outcome = Outcome::kBlobTooSmall;
-    result.reason = "blob too small: every object in view is smaller than min_blob_area_px " +
-                    std::to_string(p.min_blob_area_px) + " or thinner than min_blob_thickness_px " +
-                    formatNumber(p.min_blob_thickness_px) + " (largest " +
-                    std::to_string(std::max(largest_skipped_area, largest_small.area)) + " px)";
-    if (largest_small.valid) adoptBlob(largest_small, disparity.size(), &result);
-    return result;
-  }
-  adoptBlob(chosen, disparity.size(), &result);
-  const int blob_area = chosen.area;
-
-  // --- The blob's measured (unfiltered) disparities: the median filter chose the pixels, the raw
-  // values give the depth, so the filter cannot bias it.
-  std::vector<float> blob_disparities;
-  std::vector<cv::Point> blob_points;
-  blob_disparities.reserve(static_cast<std::size_t>(blob_area));
-  blob_points.reserve(static_cast<std::size_t>(blob_area));
+// The blob's measured (unfiltered) disparities and their pixels: the median filter chose the pixels, the raw
+// values give the depth, so the filter cannot bias it.
+void blobDisparities(const Detection& result, const cv::Mat& clean, std::vector<float>* disparities,
+                     std::vector<cv::Point>* points) {
   const cv::Rect& box = result.bounding_box;
   for (int v = box.y; v < box.y + box.height; ++v) {
     const std::uint8_t* blob_row = result.mask.ptr<std::uint8_t>(v);
     const float* clean_row = clean.ptr<float>(v);
     for (int u = box.x; u < box.x + box.width; ++u) {
       if (blob_row[u] != 0 && clean_row[u] > 0.0f) {
-        blob_disparities.push_back(clean_row[u]);
-        blob_points.emplace_back(u, v);
+        disparities->push_back(clean_row[u]);
+        points->emplace_back(u, v);
       }
     }
   }
-  result.blob_pixels = static_cast<int>(blob_disparities.size());
+}
 
-  // --- The visible face: the blob's nearest depth layer (the panels and body sides lie behind it);
-  // with the footprint fit, the port read off the mockup's footprint fitted to the blob instead.
-  std::string footprint_misfit;
-  if (!blob_disparities.empty()) {
-    std::vector<float> sorted = blob_disparities;
-    const double reference = percentile(&sorted, p.face_percentile);
-    const double band = std::max(p.face_min_band_px,
-                                 reference - disparityBehind(geometry, reference, p.face_depth_band_m));
-    const float face_min = static_cast<float>(reference - band);
-    std::vector<float> face_disparities;
-    double sum_u = 0.0, sum_v = 0.0;
-    for (std::size_t i = 0; i < blob_disparities.size(); ++i) {
-      if (blob_disparities[i] >= face_min) {
-        face_disparities.push_back(blob_disparities[i]);
-        sum_u += blob_points[i].x;
-        sum_v += blob_points[i].y;
-      }
+// The visible face: the blob's nearest depth layer (the panels and body sides lie behind it). Its centroid
+// and median disparity are the centre and robust disparity.
+void nearestLayer(const std::vector<float>& disparities, const std::vector<cv::Point>& points,
+                  const StereoGeometry& geometry, const DetectorParams& p, Detection* result) {
+  std::vector<float> sorted = disparities;
+  const double reference = percentile(&sorted, p.face_percentile);
+  const double band =
+      std::max(kFaceMinBandPx, reference - disparityBehind(geometry, reference, kFaceDepthBandM));
+  const float face_min = static_cast<float>(reference - band);
+  std::vector<float> face_disparities;
+  double sum_u = 0.0, sum_v = 0.0;
+  for (std::size_t i = 0; i < disparities.size(); ++i) {
+    if (disparities[i] >= face_min) {
+      face_disparities.push_back(disparities[i]);
+      sum_u += points[i].x;
+      sum_v += points[i].y;
     }
-    result.face_pixels = static_cast<int>(face_disparities.size());
-    const double face_count = static_cast<double>(face_disparities.size());
-    result.centre_px = cv::Point2d(sum_u / face_count, sum_v / face_count);
-    result.disparity_px = median(&face_disparities);
-    if (p.footprint_fit_enabled) {
-      footprint_misfit = portFromFootprint(blob_points, blob_disparities, geometry, p, &result);
-    }
-    reproject(geometry, result.centre_px, result.disparity_px, p.centre_sigma_px,
-              p.disparity_sigma_px, &result.position_m, &result.covariance_m2);
-    // The estimate stands for the port, but the blob's centre is where the visible parts of the mockup
-    // are: it moves with the target's yaw (a box side, a panel) by centimetres at any range.
-    result.covariance_m2 += Eigen::Matrix3d::Identity() * (p.port_offset_sigma_m * p.port_offset_sigma_m);
-    result.range_m = result.position_m.norm();
   }
+  result->face_pixels = static_cast<int>(face_disparities.size());
+  const double face_count = static_cast<double>(face_disparities.size());
+  result->centre_px = cv::Point2d(sum_u / face_count, sum_v / face_count);
+  result->disparity_px = median(&face_disparities);
+}
 
-  // --- Plausibility, with the numbers in the reason so a user can tune live.
-  const int margin = p.border_margin_px;
-  const bool touches_left = box.x <= region.x + margin;
-  const bool touches_right = box.x + box.width >= region.x + region.width - margin;
-  const bool touches_top = box.y <= region.y + margin;
-  const bool touches_bottom = box.y + box.height >= region.y + region.height - margin;
-  if (!misfit_reason.empty()) {
-    result.outcome = Outcome::kNotTargetShaped;
-    result.reason = "not the target: " + misfit_reason;
-  } else if (!footprint_misfit.empty()) {
-    result.outcome = Outcome::kFootprintMisfit;
-    result.reason = "not the target: " + footprint_misfit;
-  } else if (result.blob_pixels < p.min_blob_area_px) {
-    result.outcome = Outcome::kBlobTooSmall;
-    result.reason = "blob too small: " + std::to_string(result.blob_pixels) + " px < min_blob_area_px " +
-                    std::to_string(p.min_blob_area_px);
-  } else if (result.blob_thickness_px < p.min_blob_thickness_px) {
-    result.outcome = Outcome::kBlobTooSmall;
-    result.reason = "blob too thin: " + formatNumber(result.blob_thickness_px) +
-                    " px < min_blob_thickness_px " + formatNumber(p.min_blob_thickness_px);
-  } else if (touches_left || touches_right || touches_top || touches_bottom) {
-    result.outcome = Outcome::kBlobTouchesBorder;
-    std::string sides;
-    if (touches_left) sides += " left";
-    if (touches_right) sides += " right";
-    if (touches_top) sides += " top";
-    if (touches_bottom) sides += " bottom";
-    result.reason = "blob touches the border of the valid region:" + sides;
-  } else if (blob_area > p.max_blob_area_fraction * searchedArea(region, disparity.size(), window)) {
-    result.outcome = Outcome::kBlobTooLarge;
-    result.reason = "blob too large: " + std::to_string(blob_area) + " px > max_blob_area_fraction " +
-                    formatNumber(p.max_blob_area_fraction) + " of " +
-                    std::to_string(searchedArea(region, disparity.size(), window)) + " px";
-  } else if (result.disparity_px < p.min_disparity_px || result.disparity_px > p.max_disparity_px) {
-    result.outcome = Outcome::kDisparityOutOfRange;
-    result.reason = "blob disparity " + formatNumber(result.disparity_px) + " px outside [" +
-                    formatNumber(p.min_disparity_px) + ", " + formatNumber(p.max_disparity_px) + "]";
-  } else {
-    result.found = true;
-    result.outcome = Outcome::kFound;
+// Stage 4, port: the port read off the mockup's footprint fitted to the blob (footprint_fit_enabled; else the
+// nearest layer's centre), reprojected with its covariance. `reason`: why the blob is not the mockup.
+StageOutcome placePort(const cv::Mat& clean, const StereoGeometry& geometry, const DetectorParams& p,
+                       const TargetShape& shape, int blob_area, Detection* result, std::string* reason) {
+  std::vector<float> disparities;
+  std::vector<cv::Point> points;
+  disparities.reserve(static_cast<std::size_t>(blob_area));
+  points.reserve(static_cast<std::size_t>(blob_area));
+  blobDisparities(*result, clean, &disparities, &points);
+  result->blob_pixels = static_cast<int>(disparities.size());
+  if (disparities.empty()) return PortOutcome::kPassed;  // plausibility refuses the blob (no pixels)
+  nearestLayer(disparities, points, geometry, p, result);
+  StageOutcome outcome = PortOutcome::kPassed;
+  if (p.footprint_fit_enabled) outcome = portFromFootprint(points, disparities, geometry, p, shape, result, reason);
+  reproject(geometry, result->centre_px, result->disparity_px, p.centre_sigma_px, p.disparity_sigma_px,
+            &result->position_m, &result->covariance_m2);
+  // The estimate stands for the port, but the blob's centre is where the visible parts of the mockup are:
+  // it moves with the target's yaw (a box side, a panel) by centimetres at any range.
+  result->covariance_m2 += Eigen::Matrix3d::Identity() * (p.port_offset_sigma_m * p.port_offset_sigma_m);
+  result->range_m = result->position_m.norm();
+  return outcome;
+}
+
+// Stage 5, plausibility: the blob's size, border and disparity range, with the numbers in the reason so a
+// user can tune live.
+StageOutcome checkPlausibility(const cv::Rect& region, cv::Size image_size, const ImageWindow& window,
+                               const DetectorParams& p, int blob_area, const Detection& result, std::string* reason) {
+  const cv::Rect& box = result.bounding_box;
+  const int margin = kBorderMarginPx;
+  const bool left = box.x <= region.x + margin, right = box.x + box.width >= region.x + region.width - margin;
+  const bool top = box.y <= region.y + margin, bottom = box.y + box.height >= region.y + region.height - margin;
+  const int searched = searchedArea(region, image_size, window);
+  if (result.blob_pixels < p.min_blob_area_px) {
+    *reason = "blob too small: " + std::to_string(result.blob_pixels) + " px < min_blob_area_px " +
+              std::to_string(p.min_blob_area_px);
+    return PlausibilityOutcome::kBlobTooSmall;
   }
+  if (result.blob_thickness_px < p.min_blob_thickness_px) {
+    *reason = "blob too thin: " + formatNumber(result.blob_thickness_px) + " px < min_blob_thickness_px " +
+              formatNumber(p.min_blob_thickness_px);
+    return PlausibilityOutcome::kBlobTooThin;
+  }
+  if (p.reject_cut_blobs && (left || right || top || bottom)) {
+    *reason = std::string("blob touches the border of the valid region:") + (left ? " left" : "") +
+              (right ? " right" : "") + (top ? " top" : "") + (bottom ? " bottom" : "");
+    return PlausibilityOutcome::kBlobTouchesBorder;
+  }
+  if (blob_area > p.max_blob_area_fraction * searched) {
+    *reason = "blob too large: " + std::to_string(blob_area) + " px > max_blob_area_fraction " +
+              formatNumber(p.max_blob_area_fraction) + " of " + std::to_string(searched) + " px";
+    return PlausibilityOutcome::kBlobTooLarge;
+  }
+  if (result.disparity_px < p.min_disparity_px || result.disparity_px > p.max_disparity_px) {
+    *reason = "blob disparity " + formatNumber(result.disparity_px) + " px outside [" +
+              formatNumber(p.min_disparity_px) + ", " + formatNumber(p.max_disparity_px) + "]";
+    return PlausibilityOutcome::kDisparityOutOfRange;
+  }
+  return PlausibilityOutcome::kPassed;
+}
+
+}  // namespace
+
+Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeometry& geometry,
+                                    double search_min_px, double search_max_px, cv::Rect valid_region,
+                                    const SearchHint& hint, const ImageWindow& window) const {
+  Detection result;
+  SearchImages images;
+  result.outcome = selectRegion(disparity, geometry, valid_region, &images.region, &result.reason);
+  if (!result.outcome.passed()) return result;
+  result.outcome = validDisparity(disparity, geometry, search_min_px, search_max_px, params_, &images, &result);
+  if (!result.outcome.passed()) return result;
+  const ShapeBounds bounds = shapeBounds(shape_);
+  const BandContext context{params_, geometry, bounds, hint, window, disparity.size()};
+  BlobCandidate blob;
+  result.outcome = searchBands(context, &images, &blob, &result);
+  if (blob.valid) adoptBlob(blob, disparity.size(), &result);
+  if (result.outcome == StageOutcome(BandSearchOutcome::kNoBlob) ||
+      result.outcome == StageOutcome(BandSearchOutcome::kAllBlobsTooSmall)) {
+    return result;
+  }
+  // A blob not target-shaped is still placed (its centre in the debug image); the search's outcome decides.
+  std::string port_reason, plausibility_reason;
+  const StageOutcome port = placePort(images.clean, geometry, params_, shape_, blob.area, &result, &port_reason);
+  const StageOutcome plausible = checkPlausibility(images.region, disparity.size(), window, params_, blob.area,
+                                                  result, &plausibility_reason);
+  if (!result.outcome.passed()) return result;
+  result.outcome = !port.passed() ? port : plausible;
+  result.reason = !port.passed() ? "not the target: " + port_reason : plausibility_reason;
+  result.found = result.outcome.passed();
   return result;
 }
 

@@ -15,8 +15,10 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <sensor_msgs/image_encodings.h>
 
-#include "docking_perception/disparity/decimating_rectifier.h"
 #include "docking_perception/mono/target_model.h"
+#include "docking_settings/param_reader.h"
+#include "docking_settings/reconfigure.h"
+#include "docking_settings/ros_loader.h"
 
 namespace docking_perception {
 namespace {
@@ -39,17 +41,64 @@ sensor_msgs::CameraInfoConstPtr windowInfoOf(const std::deque<sensor_msgs::Camer
   return nullptr;
 }
 
-// The message's reject code of a detector outcome: what a consumer may act on without reading the status.
-std::uint8_t rejectReasonOf(disparity::Outcome outcome) {
+// The message's reject code of the stage that decided: what a consumer may act on without reading the status.
+std::uint8_t rejectReasonOf(bool found, disparity::StageOutcome outcome) {
   using Estimate = docking_msgs::TargetEstimate;
-  switch (outcome) {
-    case disparity::Outcome::kFound: return Estimate::REJECT_NONE;
-    case disparity::Outcome::kBadInput: return Estimate::REJECT_BAD_INPUT;
-    case disparity::Outcome::kAppearanceMismatch: return Estimate::REJECT_APPEARANCE;
-    case disparity::Outcome::kAppearanceUnjudged: return Estimate::REJECT_APPEARANCE;
+  if (found) return Estimate::REJECT_NONE;
+  switch (outcome.stage) {
+    case disparity::Stage::kInput: return Estimate::REJECT_BAD_INPUT;
+    case disparity::Stage::kAppearance: return Estimate::REJECT_APPEARANCE;
     default: return Estimate::REJECT_NOT_FOUND;  // no blob, or none the mockup's size, shape or track
   }
 }
+
+// Stage 1 on the message: checked before its data is touched (a bad one is reported, never dereferenced).
+disparity::StageOutcome checkMessage(const stereo_msgs::DisparityImage& message, std::string* problem) {
+  namespace enc = sensor_msgs::image_encodings;
+  using disparity::InputOutcome;
+  const sensor_msgs::Image& image = message.image;
+  std::ostringstream why;
+  InputOutcome outcome = InputOutcome::kPassed;
+  if (image.encoding != enc::TYPE_32FC1) {
+    why << "disparity image encoding must be '" << enc::TYPE_32FC1 << "', got '" << image.encoding << "'";
+    outcome = InputOutcome::kBadEncoding;
+  } else if (image.width == 0 || image.height == 0) {
+    why << "empty disparity image (" << image.width << "x" << image.height << ")";
+    outcome = InputOutcome::kEmptyImage;
+  } else if (image.step < image.width * sizeof(float) ||
+             image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+    why << "disparity image data (" << image.data.size() << " bytes, step " << image.step << ") too short for "
+        << image.width << "x" << image.height << " floats";
+    outcome = InputOutcome::kTruncatedData;
+  } else if ((image.is_bigendian != 0) != (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__)) {
+    why << "disparity image byte order (is_bigendian " << static_cast<int>(image.is_bigendian)
+        << ") differs from this machine's";
+    outcome = InputOutcome::kWrongByteOrder;
+  } else if (!(message.f > 0.0) || !(message.T > 0.0)) {
+    why << "DisparityImage focal length f (" << message.f << ") and baseline T (" << message.T << ") must be > 0";
+    outcome = InputOutcome::kBadGeometry;
+  }
+  *problem = why.str();
+  return outcome;
+}
+
+// The region the matcher can give disparities in: right of its blind left band (its largest disparity plus
+// half its correlation window), inside its own valid window if it set one.
+cv::Rect validRegionOf(const stereo_msgs::DisparityImage& message, int blind_band_extra_px) {
+  const int blind_columns = std::max(0, static_cast<int>(std::ceil(message.max_disparity)) + blind_band_extra_px);
+  cv::Rect valid_region(blind_columns, 0, static_cast<int>(message.image.width) - blind_columns,
+                        static_cast<int>(message.image.height));
+  if (message.valid_window.width > 0 && message.valid_window.height > 0) {
+    valid_region &= cv::Rect(static_cast<int>(message.valid_window.x_offset),
+                             static_cast<int>(message.valid_window.y_offset),
+                             static_cast<int>(message.valid_window.width),
+                             static_cast<int>(message.valid_window.height));
+  }
+  return valid_region;
+}
+
+// Disparity shown white in the debug image (0.86 m for our pair; nearer is the arbiter's monocular range).
+constexpr double kDebugDisplayMaxDisparityPx = 64.0;
 
 // Variance of the components a disparity estimate does not measure (TargetEstimate.msg: >= 1e6).
 constexpr double kUnknownVariance = 1e6;
@@ -76,39 +125,55 @@ docking_msgs::TargetEstimate blankEstimate(const std_msgs::Header& header) {
   return estimate;
 }
 
+// The estimate of a detection: the port's position and covariance when found, the stage that decided.
+docking_msgs::TargetEstimate toEstimate(const std_msgs::Header& header, const disparity::Detection& detection) {
+  docking_msgs::TargetEstimate estimate = blankEstimate(header);
+  estimate.valid = detection.found;
+  estimate.position_valid = detection.found;
+  estimate.status = detection.found ? std::string() : detection.reason;
+  estimate.reject_reason = rejectReasonOf(detection.found, detection.outcome);
+  estimate.stage = static_cast<std::uint8_t>(detection.outcome.stage);
+  estimate.stage_outcome = detection.outcome.code;
+  if (!detection.found) return estimate;
+  estimate.pose.pose.position.x = detection.position_m.x();
+  estimate.pose.pose.position.y = detection.position_m.y();
+  estimate.pose.pose.position.z = detection.position_m.z();
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) {
+      estimate.pose.covariance[static_cast<std::size_t>(row * 6 + col)] = detection.covariance_m2(row, col);
+    }
+  }
+  estimate.range_m = detection.range_m;
+  estimate.disparity_px = detection.disparity_px;
+  estimate.feature_inliers = static_cast<std::uint32_t>(detection.blob_pixels);
+  return estimate;
+}
+
 }  // namespace
 
 void DisparityDetectorNodelet::onInit() {
   nh_ = getNodeHandle();
   private_nh_ = getPrivateNodeHandle();
 
-  Config config;
-  if (!loadConfig(&config)) {
-    // Thrown, not ros::requestShutdown(): the nodelet loader catches it and refuses this nodelet (see
-    // mono_pose_nodelet.cpp); perception_host says so and runs without it, a `nodelet load` process
-    // exits non-zero.
-    // nodelet::Loader logs the exception's message at DEBUG only: said here first.
-    const std::string message = "disparity_detector: invalid or missing parameters in " +
-                                private_nh_.getNamespace() +
-                                " (see errors above; all keys of config/disparity_detector.yaml are required)";
-    NODELET_FATAL("%s", message.c_str());
-    throw std::runtime_error(message);
-  }
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    config_ = config;
-    detector_.setParams(toDetectorParams(config));  // validated in loadConfig
-    track_gate_.setParams(toTrackGateParams(config));
+  disparity::DisparityDetectorSettings settings;
+  try {
+    settings = loadSettings();
+  } catch (const std::exception& error) {
+    // Thrown on: the nodelet loader catches it and refuses this nodelet (see mono_pose_nodelet.cpp);
+    // perception_host says so and runs without it, a `nodelet load` process exits non-zero. The loader
+    // logs the exception's message at DEBUG only: said here first.
+    NODELET_FATAL("disparity_detector: %s", error.what());
+    throw;
   }
   {
     std::lock_guard<std::mutex> lock(pause_mutex_);
-    near_.setParams(toPauseParams(config));
+    near_.setParams(toPauseParams(settings.pause));
   }
 
-  // Live tuning: the server starts from the same parameter server values we just validated.
+  // Live tuning: the server starts from the declared defaults and the parameter server's values, the same
+  // as `settings`; its first callback applies them.
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<Config>>(reconfigure_mutex_,
                                                                               private_nh_);
-  reconfigure_server_->updateConfig(config);
   reconfigure_server_->setCallback(
       [this](Config& new_config, uint32_t level) { onReconfigure(new_config, level); });
 
@@ -118,7 +183,11 @@ void DisparityDetectorNodelet::onInit() {
   diagnostics_timer_ = nh_.createTimer(ros::Duration(1.0),
                                        [this](const ros::TimerEvent&) { diagnostics_->update(); });
 
-  // Outputs first, with connection callbacks that (un)subscribe the inputs on demand.
+  advertise();
+}
+
+// Outputs first, with connection callbacks that (un)subscribe the inputs on demand.
+void DisparityDetectorNodelet::advertise() {
   std::lock_guard<std::mutex> lock(connection_mutex_);
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh_);
   auto connection_changed = [this](const ros::SingleSubscriberPublisher&) { updateSubscriptions(); };
@@ -157,205 +226,68 @@ void DisparityDetectorNodelet::onFusedEstimate(const docking_msgs::TargetEstimat
   updateSubscriptions();
 }
 
-bool DisparityDetectorNodelet::loadConfig(Config* config) {
-  std::vector<std::string> errors;
-  const std::string ns = private_nh_.getNamespace();
-  // Every key is required; numbers must lie in the ranges of cfg/DisparityDetector.cfg.
-  auto read = [&](const char* name, auto Config::*field) {
-    using T = std::decay_t<decltype(config->*field)>;
-    T value{};
-    if (!private_nh_.hasParam(name)) {
-      errors.push_back("missing parameter " + ns + "/" + name);
-      return;
-    }
-    if (!private_nh_.getParam(name, value)) {
-      errors.push_back("parameter " + ns + "/" + name + " has the wrong type (expected " +
-                       (std::is_same<T, bool>::value ? "true/false"
-                        : std::is_same<T, int>::value ? "an integer" : "a number") + ")");
-      return;
-    }
-    if constexpr (!std::is_same<T, bool>::value) {
-      const T min = Config::__getMin__().*field;
-      const T max = Config::__getMax__().*field;
-      if (!(value >= min && value <= max)) {
-        std::ostringstream message;
-        message << "parameter " << ns << "/" << name << " = " << value << " outside [" << min
-                << ", " << max << "]";
-        errors.push_back(message.str());
-        return;
-      }
-    }
-    config->*field = value;
-  };
-  read("median_kernel_px", &Config::median_kernel_px);
-  read("gaussian_sigma_px", &Config::gaussian_sigma_px);
-  read("closest_min_pixels", &Config::closest_min_pixels);
-  read("target_depth_m", &Config::target_depth_m);
-  read("threshold_margin_px", &Config::threshold_margin_px);
-  read("face_percentile", &Config::face_percentile);
-  read("face_depth_band_m", &Config::face_depth_band_m);
-  read("face_min_band_px", &Config::face_min_band_px);
-  read("min_blob_area_px", &Config::min_blob_area_px);
-  read("min_blob_thickness_px", &Config::min_blob_thickness_px);
-  read("reduced_min_blob_area_px", &Config::reduced_min_blob_area_px);
-  read("reduced_min_blob_thickness_px", &Config::reduced_min_blob_thickness_px);
-  read("max_blob_area_fraction", &Config::max_blob_area_fraction);
-  read("border_margin_px", &Config::border_margin_px);
-  read("min_disparity_px", &Config::min_disparity_px);
-  read("max_disparity_px", &Config::max_disparity_px);
-  read("blind_band_extra_px", &Config::blind_band_extra_px);
-  read("roi_top_fraction", &Config::roi_top_fraction);
-  read("roi_bottom_fraction", &Config::roi_bottom_fraction);
-  read("floor_cut_enabled", &Config::floor_cut_enabled);
-  read("floor_cut_y_m", &Config::floor_cut_y_m);
-  read("ceiling_cut_y_m", &Config::ceiling_cut_y_m);
-  read("disparity_sigma_px", &Config::disparity_sigma_px);
-  read("centre_sigma_px", &Config::centre_sigma_px);
-  read("port_offset_sigma_m", &Config::port_offset_sigma_m);
-  read("shape_check_enabled", &Config::shape_check_enabled);
-  read("shape_tolerance_fraction", &Config::shape_tolerance_fraction);
-  read("shape_tolerance_px", &Config::shape_tolerance_px);
-  read("min_fill_fraction", &Config::min_fill_fraction);
-  read("max_centre_offset_y_m", &Config::max_centre_offset_y_m);
-  read("stop_behind_target_sized", &Config::stop_behind_target_sized);
-  read("degraded_min_width_fraction", &Config::degraded_min_width_fraction);
-  read("split_depth_step_m", &Config::split_depth_step_m);
-  read("footprint_fit_enabled", &Config::footprint_fit_enabled);
-  read("footprint_inlier_distance_m", &Config::footprint_inlier_distance_m);
-  read("footprint_min_inlier_fraction", &Config::footprint_min_inlier_fraction);
-  read("appearance_check_enabled", &Config::appearance_check_enabled);
-  read("appearance_min_score", &Config::appearance_min_score);
-  read("appearance_search_radius_m", &Config::appearance_search_radius_m);
-  read("appearance_max_working_width_px", &Config::appearance_max_working_width_px);
-  read("appearance_saturated_level_dn", &Config::appearance_saturated_level_dn);
-  read("appearance_max_saturated_fraction", &Config::appearance_max_saturated_fraction);
-  read("appearance_min_mean_dn", &Config::appearance_min_mean_dn);
-  read("appearance_glare_keeps_blob", &Config::appearance_glare_keeps_blob);
-  read("appearance_refine_port", &Config::appearance_refine_port);
-  read("track_gate_enabled", &Config::track_gate_enabled);
-  read("track_max_speed_mps", &Config::track_max_speed_mps);
-  read("track_min_gate_m", &Config::track_min_gate_m);
-  read("track_gate_sigmas", &Config::track_gate_sigmas);
-  read("track_confirm_frames", &Config::track_confirm_frames);
-  read("track_timeout_s", &Config::track_timeout_s);
-  read("pause_inside_range_m", &Config::pause_inside_range_m);
-  read("pause_hysteresis_m", &Config::pause_hysteresis_m);
-  read("pause_max_fused_age_s", &Config::pause_max_fused_age_s);
-  read("debug_display_max_disparity_px", &Config::debug_display_max_disparity_px);
-  read("diagnostic_window_frames", &Config::diagnostic_window_frames);
-  read("min_detection_rate_ok", &Config::min_detection_rate_ok);
-  // The mockup's size for the shape check: the same target.yaml the simulator and mono_pose read.
-  std::string target_yaml;
-  if (!private_nh_.getParam("target_yaml", target_yaml) || target_yaml.empty()) {
-    errors.push_back("missing parameter " + ns + "/target_yaml (path of config/target.yaml)");
-  } else {
-    try {
-      target_shape_ = disparity::loadTargetShape(target_yaml);
-      // The face print for the appearance check: the texture mono_pose matches and the simulator prints.
-      const mono::TargetModel model = mono::TargetModel::loadFromYaml(target_yaml);
-      appearance_check_ = std::make_unique<disparity::FaceAppearanceCheck>(model.textureGray(), model.faceWidth(),
-                                                                          model.faceHeight());
-    } catch (const std::exception& error) {
-      errors.push_back(std::string("parameter ") + ns + "/target_yaml: " + error.what());
-    }
+disparity::DisparityDetectorSettings DisparityDetectorNodelet::loadSettings() {
+  disparity::DisparityDetectorSettings settings;
+  docking_settings::loadSettings(private_nh_, settings);
+  docking_settings::warnUnknownKeys(private_nh_, settings, {"target_yaml", "matcher"});
+  // The matcher's blind left band is its largest disparity (in each DisparityImage) plus half its correlation
+  // window, rounded up: read from the matcher's own settings (config/stereo_image_proc.yaml, as ~matcher).
+  const docking_settings::ParamReader matcher(ros::NodeHandle(private_nh_, "matcher"));
+  const int correlation_window_px = matcher.requireInRange<int>("correlation_window_size", 1, 255);
+  blind_band_extra_px_ = (correlation_window_px + 1) / 2;
+  // The mockup's size for the shape check and its face print for the appearance check: the same
+  // target.yaml the simulator and mono_pose read.
+  const auto target_yaml = docking_settings::ParamReader(private_nh_).require<std::string>("target_yaml");
+  disparity::TargetShape shape;
+  try {
+    shape = disparity::loadTargetShape(target_yaml);
+    const mono::TargetModel model = mono::TargetModel::loadFromYaml(target_yaml);
+    appearance_check_ = std::make_unique<disparity::FaceAppearanceCheck>(model.textureGray(), model.faceWidth(),
+                                                                        model.faceHeight());
+  } catch (const std::exception& error) {
+    docking_settings::ParamReader(private_nh_).invalid("target_yaml", error.what());
   }
-  if (errors.empty()) {
-    // Rules between fields (e.g. max_disparity_px > min_disparity_px), named by the core.
-    for (const auto& error : disparity::validateParams(toDetectorParams(*config))) {
-      errors.push_back("parameter " + ns + "/" + error);
-    }
-    for (const auto& error : disparity::validateTrackGateParams(toTrackGateParams(*config))) {
-      errors.push_back("parameter " + ns + "/" + error);
-    }
-  }
-  for (const auto& error : errors) NODELET_FATAL("disparity_detector: %s", error.c_str());
-  return errors.empty();
+  docking_settings::ParamReader(private_nh_).validated([&] {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    detector_ = disparity::DisparityDetector(settings.detector, shape);
+    track_gate_.setParams(settings.track);
+    settings_ = settings;
+  });
+  return settings;
 }
 
-duty::FusedRangeConditionParams DisparityDetectorNodelet::toPauseParams(const Config& c) {
+duty::FusedRangeConditionParams DisparityDetectorNodelet::toPauseParams(const disparity::PauseParams& pause) {
   duty::FusedRangeConditionParams p;
-  p.range_m = c.pause_inside_range_m;
-  p.hysteresis_m = c.pause_hysteresis_m;
-  p.max_fused_age_s = c.pause_max_fused_age_s;
-  return p;
-}
-
-disparity::TrackGateParams DisparityDetectorNodelet::toTrackGateParams(const Config& c) {
-  disparity::TrackGateParams p;
-  p.enabled = c.track_gate_enabled;
-  p.max_speed_mps = c.track_max_speed_mps;
-  p.min_gate_m = c.track_min_gate_m;
-  p.gate_sigmas = c.track_gate_sigmas;
-  p.confirm_frames = c.track_confirm_frames;
-  p.timeout_s = c.track_timeout_s;
-  return p;
-}
-
-disparity::DetectorParams DisparityDetectorNodelet::toDetectorParams(const Config& c) const {
-  disparity::DetectorParams p;
-  p.median_kernel_px = c.median_kernel_px;
-  p.gaussian_sigma_px = c.gaussian_sigma_px;
-  p.closest_min_pixels = c.closest_min_pixels;
-  p.target_depth_m = c.target_depth_m;
-  p.threshold_margin_px = c.threshold_margin_px;
-  p.face_percentile = c.face_percentile;
-  p.face_depth_band_m = c.face_depth_band_m;
-  p.face_min_band_px = c.face_min_band_px;
-  p.min_blob_area_px = c.min_blob_area_px;
-  p.min_blob_thickness_px = c.min_blob_thickness_px;
-  p.reduced_min_blob_area_px = c.reduced_min_blob_area_px;
-  p.reduced_min_blob_thickness_px = c.reduced_min_blob_thickness_px;
-  p.max_blob_area_fraction = c.max_blob_area_fraction;
-  p.border_margin_px = c.border_margin_px;
-  p.min_disparity_px = c.min_disparity_px;
-  p.max_disparity_px = c.max_disparity_px;
-  p.roi_top_fraction = c.roi_top_fraction;
-  p.roi_bottom_fraction = c.roi_bottom_fraction;
-  p.floor_cut_enabled = c.floor_cut_enabled;
-  p.floor_cut_y_m = c.floor_cut_y_m;
-  p.ceiling_cut_y_m = c.ceiling_cut_y_m;
-  p.disparity_sigma_px = c.disparity_sigma_px;
-  p.centre_sigma_px = c.centre_sigma_px;
-  p.port_offset_sigma_m = c.port_offset_sigma_m;
-  p.shape_check_enabled = c.shape_check_enabled;
-  p.shape_tolerance_fraction = c.shape_tolerance_fraction;
-  p.shape_tolerance_px = c.shape_tolerance_px;
-  p.min_fill_fraction = c.min_fill_fraction;
-  p.max_centre_offset_y_m = c.max_centre_offset_y_m;
-  p.stop_behind_target_sized = c.stop_behind_target_sized;
-  p.degraded_min_width_fraction = c.degraded_min_width_fraction;
-  p.split_depth_step_m = c.split_depth_step_m;
-  p.footprint_fit_enabled = c.footprint_fit_enabled;
-  p.footprint_inlier_distance_m = c.footprint_inlier_distance_m;
-  p.footprint_min_inlier_fraction = c.footprint_min_inlier_fraction;
-  p.appearance_check_enabled = c.appearance_check_enabled;
-  p.appearance.min_score = c.appearance_min_score;
-  p.appearance.search_radius_m = c.appearance_search_radius_m;
-  p.appearance.max_working_width_px = c.appearance_max_working_width_px;
-  p.appearance.saturated_level_dn = c.appearance_saturated_level_dn;
-  p.appearance.max_saturated_fraction = c.appearance_max_saturated_fraction;
-  p.appearance.min_mean_dn = c.appearance_min_mean_dn;
-  p.appearance.glare_keeps_blob = c.appearance_glare_keeps_blob;
-  p.appearance.refine_port = c.appearance_refine_port;
-  p.target_shape = target_shape_;
+  p.range_m = pause.inside_range_m;
+  p.hysteresis_m = pause.hysteresis_m;
+  p.max_fused_age_s = pause.max_fused_age_s;
   return p;
 }
 
 void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/) {
+  dynamic_reconfigure::Config message;
+  config.__toMessage__(message);
   std::lock_guard<std::mutex> lock(state_mutex_);
+  disparity::DisparityDetectorSettings settings = settings_;
+  docking_settings::applyReconfigure(message, settings);
   try {
-    detector_.setParams(toDetectorParams(config));
-    track_gate_.setParams(toTrackGateParams(config));
-    config_ = config;
-    std::lock_guard<std::mutex> pause_lock(pause_mutex_);
-    near_.setParams(toPauseParams(config));
+    docking_settings::validateSettings(settings);
+    disparity::validate(settings.detector, detector_.shape());
   } catch (const std::invalid_argument& error) {
     // Keep running with the last good values, and show them back to dynamic_reconfigure clients (dynparam get).
-    NODELET_ERROR("disparity_detector: reconfigure rejected, keeping the previous values: %s",
-                  error.what());
-    config = config_;
+    NODELET_ERROR("disparity_detector: reconfigure rejected, keeping the previous values: %s", error.what());
+    dynamic_reconfigure::Config kept = docking_settings::toReconfigure(settings_);
+    config.__fromMessage__(kept);
+    return;
   }
-  while (recent_found_.size() > static_cast<std::size_t>(config_.diagnostic_window_frames)) {
+  detector_.setParams(settings.detector);
+  track_gate_.setParams(settings.track);
+  settings_ = settings;
+  {
+    std::lock_guard<std::mutex> pause_lock(pause_mutex_);
+    near_.setParams(toPauseParams(settings.pause));
+  }
+  while (recent_found_.size() > static_cast<std::size_t>(settings_.diagnostic_window_frames)) {
     recent_found_.pop_front();
   }
 }
@@ -376,24 +308,16 @@ void DisparityDetectorNodelet::updateSubscriptions() {
                                           &DisparityDetectorNodelet::onDisparity, this);
     camera_info_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarFullLeftCameraInfo, 1,
                                             &DisparityDetectorNodelet::onCameraInfo, this);
-    camera_info_tracking_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarTrackingLeftCameraInfo, 1,
-                                                     &DisparityDetectorNodelet::onCameraInfo, this);
     left_image_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarFullLeftImageRect, 1,
                                            &DisparityDetectorNodelet::onLeftImage, this);
-    left_image_tracking_subscriber_ = nh_.subscribe(docking_msgs::topics::kStereoFarTrackingLeftImageRect, 1,
-                                                    &DisparityDetectorNodelet::onLeftImage, this);
     NODELET_DEBUG("disparity_detector: subscribed to %s", disparity_subscriber_.getTopic().c_str());
   } else if (!wanted && disparity_subscriber_) {
     disparity_subscriber_.shutdown();
     camera_info_subscriber_.shutdown();
-    camera_info_tracking_subscriber_.shutdown();
     left_image_subscriber_.shutdown();
-    left_image_tracking_subscriber_.shutdown();
     disparity_subscriber_ = ros::Subscriber();
     camera_info_subscriber_ = ros::Subscriber();
-    camera_info_tracking_subscriber_ = ros::Subscriber();
     left_image_subscriber_ = ros::Subscriber();
-    left_image_tracking_subscriber_ = ros::Subscriber();
     NODELET_DEBUG("disparity_detector: unsubscribed from the disparity (near: %s)", duty::describe(near_state));
   }
 }
@@ -406,7 +330,7 @@ void DisparityDetectorNodelet::onCameraInfo(const sensor_msgs::CameraInfoConstPt
     last_window_info_arrival_s_ = ros::Time::now().toSec();
     return;
   }
-  camera_info_by_binning_[std::max(1, static_cast<int>(info->binning_x))] = info;
+  camera_info_ = info;
 }
 
 void DisparityDetectorNodelet::onLeftImage(const sensor_msgs::ImageConstPtr& image) {
@@ -419,7 +343,7 @@ void DisparityDetectorNodelet::confirmAppearance(const stereo_msgs::DisparityIma
                                                  const disparity::DetectorParams& params,
                                                  const disparity::StereoGeometry& geometry,
                                                  disparity::Detection* detection) {
-  if (!params.appearance_check_enabled || !detection->found || !appearance_check_) return;
+  if (!params.appearance.check_enabled || !detection->found || !appearance_check_) return;
   sensor_msgs::ImageConstPtr left;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
@@ -451,17 +375,20 @@ void DisparityDetectorNodelet::confirmAppearance(const stereo_msgs::DisparityIma
 }
 
 void DisparityDetectorNodelet::publishInvalidInput(const stereo_msgs::DisparityImage& message,
-                                                   const std::string& status, double cpu_start_ms) {
+                                                   disparity::StageOutcome outcome, const std::string& status,
+                                                   double cpu_start_ms) {
   NODELET_ERROR_THROTTLE(5.0, "disparity_detector: %s", status.c_str());
   docking_msgs::TargetEstimate estimate = blankEstimate(message.header);
   estimate.status = status;
   estimate.reject_reason = docking_msgs::TargetEstimate::REJECT_BAD_INPUT;
+  estimate.stage = static_cast<std::uint8_t>(outcome.stage);
+  estimate.stage_outcome = outcome.code;
   estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     last_input_error_ = status;
   }
-  recordOutcome(false, status, estimate.processing_time_ms);
+  recordOutcome(outcome, false, status, estimate.processing_time_ms);
   publishEstimate(estimate);
 }
 
@@ -473,91 +400,126 @@ void DisparityDetectorNodelet::onDisparity(const stereo_msgs::DisparityImageCons
     processDisparity(message);
   } catch (const std::exception& e) {
     try {
-      publishInvalidInput(*message, std::string("disparity image dropped: ") + e.what(), cpu_start_ms);
+      publishInvalidInput(*message, disparity::InputOutcome::kDropped,
+                          std::string("disparity image dropped: ") + e.what(), cpu_start_ms);
     } catch (const std::exception& again) {
       NODELET_ERROR_THROTTLE(5.0, "disparity_detector: could not report a dropped image: %s", again.what());
     }
   }
 }
 
+// The stages (stages.h), in order: the message (1), the detector (1-5), the appearance check (6), the track
+// gate (7), the estimate's own check (8); the first that does not pass decides, and goes on the wire.
 void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImageConstPtr& message) {
   const double cpu_start_ms = threadCpuMs();
-  const sensor_msgs::Image& image = message->image;
-
-  // --- Check the message before touching its data: a bad one is reported, never dereferenced.
-  namespace enc = sensor_msgs::image_encodings;
-  std::ostringstream problem;
-  if (image.encoding != enc::TYPE_32FC1) {
-    problem << "disparity image encoding must be '" << enc::TYPE_32FC1 << "', got '"
-            << image.encoding << "'";
-  } else if (image.width == 0 || image.height == 0) {
-    problem << "empty disparity image (" << image.width << "x" << image.height << ")";
-  } else if (image.step < image.width * sizeof(float) ||
-             image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
-    problem << "disparity image data (" << image.data.size() << " bytes, step " << image.step
-            << ") too short for " << image.width << "x" << image.height << " floats";
-  } else if ((image.is_bigendian != 0) != (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__)) {
-    problem << "disparity image byte order (is_bigendian " << static_cast<int>(image.is_bigendian)
-            << ") differs from this machine's";
-  } else if (!(message->f > 0.0) || !(message->T > 0.0)) {
-    problem << "DisparityImage focal length f (" << message->f << ") and baseline T ("
-            << message->T << ") must be > 0";
+  std::string problem;
+  const disparity::StageOutcome input = checkMessage(*message, &problem);
+  if (!input.passed()) return publishInvalidInput(*message, input, problem, cpu_start_ms);
+  Frame frame;
+  if (!prepareFrame(*message, &frame, &problem)) {
+    return publishInvalidInput(*message, disparity::InputOutcome::kNoWindowCameraInfo, problem, cpu_start_ms);
   }
-  if (!problem.str().empty()) {
-    publishInvalidInput(*message, problem.str(), cpu_start_ms);
-    return;
-  }
-
   // Zero-copy view of the message data (kept alive by `message` for this callback).
+  const sensor_msgs::Image& image = message->image;
   const cv::Mat disparity(static_cast<int>(image.height), static_cast<int>(image.width), CV_32FC1,
                           const_cast<std::uint8_t*>(image.data.data()), image.step);
+  disparity::Detection detection =
+      frame.detector.detect(disparity, frame.geometry, message->min_disparity, message->max_disparity + 1.0,
+                            frame.valid_region, frame.hint, frame.window);
+  confirmAppearance(*message, disparity, frame.detector.params(), frame.geometry, &detection);
+  applyTrackGate(message->header.stamp.toSec(), &detection);
+  docking_msgs::TargetEstimate estimate = toEstimate(message->header, detection);
+  publishDebugImage(*message, disparity, detection, kDebugDisplayMaxDisparityPx);
+  checkOutput(&detection, &estimate);
+  estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
+  recordOutcome(detection.outcome, detection.found, detection.reason, estimate.processing_time_ms);
+  if (detection.found) {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    last_range_m_ = detection.range_m;
+  }
+  publishEstimate(estimate);
+}
 
-  Config config;
-  disparity::DisparityDetector detector;
-  std::map<int, sensor_msgs::CameraInfoConstPtr> camera_infos;
-  sensor_msgs::CameraInfoConstPtr window_info;
+// Stage 7: the tracked target's gate; a detection it lets through has passed every stage so far.
+void DisparityDetectorNodelet::applyTrackGate(double stamp_s, disparity::Detection* detection) {
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    *detection = track_gate_.apply(stamp_s, *detection);
+  }
+  if (detection->found) detection->outcome = disparity::TrackOutcome::kPassed;
+}
+
+// Stage 8: what the arbiter would refuse (a NaN, a bad covariance) leaves here as not valid, with the code.
+void DisparityDetectorNodelet::checkOutput(disparity::Detection* detection, docking_msgs::TargetEstimate* estimate) {
+  const auto own_problem = docking_msgs::checks::withdrawIfMalformed(estimate);
+  if (own_problem != docking_msgs::checks::EstimateProblem::kNone) {
+    NODELET_ERROR_THROTTLE(5.0, "disparity_detector: estimate withdrawn: %s",
+                           docking_msgs::checks::estimateProblemName(own_problem));
+    detection->found = false;
+    detection->outcome = disparity::OutputOutcome::kWithdrawn;
+    detection->reason = estimate->status;
+  } else if (detection->found) {
+    detection->outcome = disparity::OutputOutcome::kPassed;
+  }
+  estimate->stage = static_cast<std::uint8_t>(detection->outcome.stage);
+  estimate->stage_outcome = detection->outcome.code;
+}
+
+bool DisparityDetectorNodelet::prepareFrame(const stereo_msgs::DisparityImage& message, Frame* frame,
+                                            std::string* problem) {
+  const sensor_msgs::Image& image = message.image;
+  sensor_msgs::CameraInfoConstPtr camera_info, window_info;
   bool windows_recently = false;
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
-    config = config_;
-    detector = detector_;
-    camera_infos = camera_info_by_binning_;
-    window_info = windowInfoOf(recent_window_infos_, message->header.stamp, image.width, image.height);
+    frame->settings = settings_;
+    frame->detector = detector_;
+    camera_info = camera_info_;
+    window_info = windowInfoOf(recent_window_infos_, message.header.stamp, image.width, image.height);
     if (window_info) ++window_frames_;
     // A disparity of the full image's size is not a window: it may be read without a camera_info.
     const auto& last_window = recent_window_infos_.empty() ? nullptr : recent_window_infos_.back();
-    windows_recently = last_window &&
-                       ros::Time::now().toSec() - last_window_info_arrival_s_ < kWindowInfoMemoryS &&
+    windows_recently = last_window && ros::Time::now().toSec() - last_window_info_arrival_s_ < kWindowInfoMemoryS &&
                        (image.width != last_window->width || image.height != last_window->height);
     last_input_error_.clear();
   }
-  if (window_info) camera_infos = {{1, window_info}};
+  if (window_info) {
+    camera_info = window_info;
+    frame->window.offset = cv::Point(static_cast<int>(window_info->roi.x_offset),
+                                     static_cast<int>(window_info->roi.y_offset));
+    frame->window.full_size = cv::Size(static_cast<int>(window_info->width), static_cast<int>(window_info->height));
+  }
+  if (!cameraModel(message, camera_info, windows_recently, frame, problem)) return false;
+  frame->valid_region = validRegionOf(message, blind_band_extra_px_);
+  // The tracked target tells the search which target-shaped blob to prefer, then judges the result.
+  // The gate is the one piece of state across frames (frames arrive in order on one subscriber).
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  frame->hint = track_gate_.hint(message.header.stamp.toSec());
+  return true;
+}
 
-  // --- Rectified model: f and B from the message; the principal point and the decimation from the far
-  // stage's left camera_info (image_geometry's reduced camera: binning = decimation), else the image centre
-  // and full resolution. The detector's pixel settings are given at the calibrated resolution.
-  disparity::StereoGeometry geometry;
-  geometry.focal_px = message->f;
-  geometry.baseline_m = message->T;
+// The rectified model: f and B from the message; the principal point from the far stage's left camera_info
+// when it is of the disparity's size (image_geometry: a window's region of interest shifts it), else the image
+// centre. False (and why) for a window's disparity whose camera_info is missing.
+bool DisparityDetectorNodelet::cameraModel(const stereo_msgs::DisparityImage& message,
+                                           const sensor_msgs::CameraInfoConstPtr& camera_info, bool windows_recently,
+                                           Frame* frame, std::string* problem) {
+  const sensor_msgs::Image& image = message.image;
+  disparity::StereoGeometry& geometry = frame->geometry;
+  geometry.focal_px = message.f;
+  geometry.baseline_m = message.T;
   geometry.cx_px = (image.width - 1) / 2.0;
   geometry.cy_px = (image.height - 1) / 2.0;
-  int decimation = 1;
   image_geometry::PinholeCameraModel model;
-  bool have_model = false;
-  for (const auto& entry : camera_infos) {  // the camera_info whose reduced size is the disparity's
-    have_model = entry.second && model.fromCameraInfo(entry.second) && model.fx() > 0.0 &&
-                 model.reducedResolution() == cv::Size(static_cast<int>(image.width), static_cast<int>(image.height));
-    if (have_model) break;
-  }
+  const bool have_model =
+      camera_info && model.fromCameraInfo(camera_info) && model.fx() > 0.0 &&
+      model.reducedResolution() == cv::Size(static_cast<int>(image.width), static_cast<int>(image.height));
   if (have_model) {
     geometry.cx_px = model.cx();
     geometry.cy_px = model.cy();
-    decimation = std::max(1, static_cast<int>(model.binningX()));
-    if (std::abs(model.fx() - message->f) > 0.01 * message->f) {
-      NODELET_WARN_THROTTLE(30.0,
-                            "disparity_detector: left camera_info fx %.1f differs from the "
-                            "DisparityImage f %.1f; using f from the disparity",
-                            model.fx(), message->f);
+    if (std::abs(model.fx() - message.f) > 0.01 * message.f) {
+      NODELET_WARN_THROTTLE(30.0, "disparity_detector: left camera_info fx %.1f differs from the DisparityImage f "
+                            "%.1f; using f from the disparity", model.fx(), message.f);
     }
   } else if (windows_recently) {
     // The far stage is sending windows: a disparity smaller than the image, of no known size, is one whose
@@ -565,95 +527,26 @@ void DisparityDetectorNodelet::processDisparity(const stereo_msgs::DisparityImag
     // dropped instead.
     std::ostringstream missing;
     missing << "no camera_info for the " << image.width << "x" << image.height << " disparity image at "
-            << message->header.stamp << " (the far stage's tracking window's camera_info has not arrived)";
-    publishInvalidInput(*message, missing.str(), cpu_start_ms);
-    return;
+            << message.header.stamp << " (the far stage's tracking window's camera_info has not arrived)";
+    *problem = missing.str();
+    return false;
   } else if (!warned_no_camera_info_) {
     warned_no_camera_info_ = true;
-    NODELET_WARN("disparity_detector: no camera_info of the disparity's size (%ux%u) on %s or %s yet; using the "
-                 "image centre (%.1f, %.1f) as the principal point and the settings at full resolution",
-                 image.width, image.height, camera_info_subscriber_.getTopic().c_str(),
-                 camera_info_tracking_subscriber_.getTopic().c_str(), geometry.cx_px, geometry.cy_px);
+    NODELET_WARN("disparity_detector: no camera_info of the disparity's size (%ux%u) on %s yet; using the image "
+                 "centre (%.1f, %.1f) as the principal point", image.width, image.height,
+                 camera_info_subscriber_.getTopic().c_str(), geometry.cx_px, geometry.cy_px);
   }
-  if (decimation > 1) detector.setParams(disparity::detectorParamsAtDecimation(detector.params(), decimation));
+  return true;
+}
 
-  // --- The matcher's blind left band (no match possible), and its own valid window if it set one.
-  const int blind_columns =
-      std::max(0, static_cast<int>(std::ceil(message->max_disparity)) +
-                      (config.blind_band_extra_px + decimation - 1) / decimation);
-  cv::Rect valid_region(blind_columns, 0, static_cast<int>(image.width) - blind_columns,
-                        static_cast<int>(image.height));
-  if (message->valid_window.width > 0 && message->valid_window.height > 0) {
-    valid_region &= cv::Rect(static_cast<int>(message->valid_window.x_offset),
-                             static_cast<int>(message->valid_window.y_offset),
-                             static_cast<int>(message->valid_window.width),
-                             static_cast<int>(message->valid_window.height));
-  }
-
-  // The tracked target tells the search which target-shaped blob to prefer, then judges the result.
-  // The gate is the one piece of state across frames (frames arrive in order on one subscriber).
-  const double stamp_s = message->header.stamp.toSec();
-  disparity::SearchHint hint;
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    hint = track_gate_.hint(stamp_s);
-  }
-  disparity::ImageWindow window;
-  if (window_info) {
-    window.offset = cv::Point(static_cast<int>(window_info->roi.x_offset), static_cast<int>(window_info->roi.y_offset));
-    window.full_size = cv::Size(static_cast<int>(window_info->width), static_cast<int>(window_info->height));
-  }
-  disparity::Detection detection =
-      detector.detect(disparity, geometry, message->min_disparity, message->max_disparity + 1.0,
-                      valid_region, hint, window);
-  confirmAppearance(*message, disparity, detector.params(), geometry, &detection);
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    detection = track_gate_.apply(stamp_s, detection);
-  }
-
-  docking_msgs::TargetEstimate estimate = blankEstimate(message->header);
-  estimate.valid = detection.found;
-  estimate.position_valid = detection.found;
-  estimate.status = detection.found ? std::string() : detection.reason;
-  estimate.reject_reason = rejectReasonOf(detection.outcome);
-  if (detection.found) {
-    estimate.pose.pose.position.x = detection.position_m.x();
-    estimate.pose.pose.position.y = detection.position_m.y();
-    estimate.pose.pose.position.z = detection.position_m.z();
-    for (int row = 0; row < 3; ++row) {
-      for (int col = 0; col < 3; ++col) {
-        estimate.pose.covariance[static_cast<std::size_t>(row * 6 + col)] =
-            detection.covariance_m2(row, col);
-      }
-    }
-    estimate.range_m = detection.range_m;
-    estimate.disparity_px = detection.disparity_px;
-    estimate.feature_inliers = static_cast<std::uint32_t>(detection.blob_pixels);
-  }
-
-  if (debug_publisher_.getNumSubscribers() > 0) {
-    const double debug_start_ms = threadCpuMs();
-    cv_bridge::CvImage debug(message->header, enc::BGR8,
-                             disparity::renderDebugImage(disparity, detection,
-                                                         config.debug_display_max_disparity_px / decimation));
-    debug_publisher_.publish(debug.toImageMsg());
-    recordDebugImage(threadCpuMs() - debug_start_ms);
-  }
-
-  estimate.processing_time_ms = threadCpuMs() - cpu_start_ms;
-  recordOutcome(detection.found, detection.reason, estimate.processing_time_ms);
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    if (detection.found) last_range_m_ = detection.range_m;
-  }
-  // What the arbiter would refuse (a NaN, a bad covariance) leaves here as not valid, with the code.
-  const auto own_problem = docking_msgs::checks::withdrawIfMalformed(&estimate);
-  if (own_problem != docking_msgs::checks::EstimateProblem::kNone) {
-    NODELET_ERROR_THROTTLE(5.0, "disparity_detector: estimate withdrawn: %s",
-                           docking_msgs::checks::estimateProblemName(own_problem));
-  }
-  publishEstimate(estimate);
+void DisparityDetectorNodelet::publishDebugImage(const stereo_msgs::DisparityImage& message, const cv::Mat& disparity,
+                                                 const disparity::Detection& detection, double display_max_px) {
+  if (debug_publisher_.getNumSubscribers() == 0) return;
+  const double debug_start_ms = threadCpuMs();
+  cv_bridge::CvImage debug(message.header, sensor_msgs::image_encodings::BGR8,
+                           disparity::renderDebugImage(disparity, detection, display_max_px));
+  debug_publisher_.publish(debug.toImageMsg());
+  recordDebugImage(threadCpuMs() - debug_start_ms);
 }
 
 void DisparityDetectorNodelet::publishEstimate(const docking_msgs::TargetEstimate& estimate) {
@@ -664,10 +557,11 @@ void DisparityDetectorNodelet::publishEstimate(const docking_msgs::TargetEstimat
   latency_.add(latency_s);
 }
 
-void DisparityDetectorNodelet::recordOutcome(bool found, const std::string& reason,
+void DisparityDetectorNodelet::recordOutcome(disparity::StageOutcome outcome, bool found, const std::string& reason,
                                              double processing_ms) {
   std::lock_guard<std::mutex> lock(state_mutex_);
   ++frames_;
+  ++outcome_counts_[{outcome.stage, outcome.code}];
   if (found) {
     ++detections_;
   } else {
@@ -675,7 +569,7 @@ void DisparityDetectorNodelet::recordOutcome(bool found, const std::string& reas
   }
   last_processing_ms_ = processing_ms;
   recent_found_.push_back(found);
-  while (recent_found_.size() > static_cast<std::size_t>(config_.diagnostic_window_frames)) {
+  while (recent_found_.size() > static_cast<std::size_t>(settings_.diagnostic_window_frames)) {
     recent_found_.pop_front();
   }
 }
@@ -684,6 +578,31 @@ void DisparityDetectorNodelet::recordDebugImage(double cpu_ms) {
   std::lock_guard<std::mutex> lock(state_mutex_);
   ++debug_images_;
   debug_image_cpu_ms_total_ += cpu_ms;
+}
+
+// The diagnostics' one line: idle, paused, bad input, or the detection rate against min_detection_rate_ok.
+void DisparityDetectorNodelet::summarize(diagnostic_updater::DiagnosticStatusWrapper& status, bool paused,
+                                         double rate) const {
+  if (!disparity_subscriber_ && paused) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "paused: target near, the arbiter on a monocular pose");
+  } else if (!disparity_subscriber_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle: no subscribers");
+  } else if (!last_input_error_.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "bad input: " + last_input_error_);
+  } else if (recent_found_.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no disparity image received yet");
+  } else if (rate < settings_.min_detection_rate_ok) {
+    std::ostringstream summary;
+    summary.precision(2);
+    summary << "detection rate " << rate << " < " << settings_.min_detection_rate_ok
+            << "; last rejection: " << last_rejection_;
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, summary.str());
+  } else {
+    std::ostringstream summary;
+    summary.precision(2);
+    summary << "detecting, rate " << rate;
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, summary.str());
+  }
 }
 
 void DisparityDetectorNodelet::produceDiagnostics(
@@ -700,6 +619,12 @@ void DisparityDetectorNodelet::produceDiagnostics(
   status.add("detection rate (last frames)", rate);
   status.add("window frames", recent_found_.size());
   status.add("last rejection reason", last_rejection_.empty() ? "(none)" : last_rejection_);
+  // Every frame's deciding stage and its outcome (stages.h), e.g. "outcome band_search/not_target_shaped".
+  for (const auto& entry : outcome_counts_) {
+    const disparity::StageOutcome outcome(entry.first.first, entry.first.second);
+    status.add(std::string("outcome ") + disparity::stageName(outcome.stage) + "/" + disparity::outcomeName(outcome),
+               entry.second);
+  }
   status.add("last range m", last_range_m_);
   status.add("appearance rejections", appearance_rejections_);
   status.add("appearance not judged (glare, dark)", appearance_unjudged_);
@@ -719,26 +644,7 @@ void DisparityDetectorNodelet::produceDiagnostics(
   status.add("debug image CPU ms (mean)", debug_images_ > 0 ? debug_image_cpu_ms_total_ / debug_images_ : 0.0);
   docking_msgs::addLatency(status, "image->estimate", latency_);
 
-  if (!disparity_subscriber_ && paused) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "paused: target near, the arbiter on a monocular pose");
-  } else if (!disparity_subscriber_) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle: no subscribers");
-  } else if (!last_input_error_.empty()) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "bad input: " + last_input_error_);
-  } else if (recent_found_.empty()) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no disparity image received yet");
-  } else if (rate < config_.min_detection_rate_ok) {
-    std::ostringstream summary;
-    summary.precision(2);
-    summary << "detection rate " << rate << " < " << config_.min_detection_rate_ok
-            << "; last rejection: " << last_rejection_;
-    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, summary.str());
-  } else {
-    std::ostringstream summary;
-    summary.precision(2);
-    summary << "detecting, rate " << rate;
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK, summary.str());
-  }
+  summarize(status, paused, rate);
 }
 
 }  // namespace docking_perception

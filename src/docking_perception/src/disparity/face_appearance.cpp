@@ -13,11 +13,25 @@
 namespace docking_perception {
 namespace disparity {
 
+// Where the face and its search margin lie in the image, at full resolution.
+struct AppearanceSearchLayout {
+  cv::Point2d centre_px;    // the detected port
+  double face_width_px = 0, face_height_px = 0;
+  double radius_px = 0;     // search margin across; half of it up and down
+  cv::Rect face_rect;       // the expected face (clipped to the image)
+  cv::Rect region;          // face + margin, clipped to the image
+};
+
 namespace {
 
-// The print is kept at this width (area-averaged once): validation caps max_working_width_px at
-// kMaxAppearanceWorkingWidthPx, so reducing from here stays an average.
+// Image and print are reduced so the face is at most this wide: its five rings and the port ring still
+// resolve, and the search stays cheap (a constant of the method; a setting until issue 55, 24 everywhere).
+constexpr double kWorkingWidthPx = 24.0;
+// The print is kept at this width (area-averaged once), wider than the working width, so reducing from
+// here stays an average.
 constexpr int kPrintWorkingWidthPx = static_cast<int>(kMaxAppearanceWorkingWidthPx);
+// Grey at or above this is saturated (8-bit images: the sensor's ceiling less its noise).
+constexpr int kSaturatedLevelDn = 250;
 constexpr double kVerticalSearchFraction = 0.5;  // of search_radius_m, up and down
 // The face's depth replaces the footprint fit's when they differ by more than this many of the estimate's
 // depth sigmas (the fit's port jumps ~0.1 m between yaw basins on a turned target, seed 7605 at 2.2 m).
@@ -33,18 +47,10 @@ double saturatedFraction(const cv::Mat& grey, int level) {
   return static_cast<double>(cv::countNonZero(saturated)) / static_cast<double>(grey.total());
 }
 
-// Where the face and its search margin lie in the image, at full resolution.
-struct SearchLayout {
-  cv::Point2d centre_px;    // the detected port
-  double face_width_px = 0, face_height_px = 0;
-  double radius_px = 0;     // search margin across; half of it up and down
-  cv::Rect face_rect;       // the expected face (clipped to the image)
-  cv::Rect region;          // face + margin, clipped to the image
-};
 
-SearchLayout layoutOf(const cv::Size& image, const StereoGeometry& g, const Eigen::Vector3d& port,
+AppearanceSearchLayout layoutOf(const cv::Size& image, const StereoGeometry& g, const Eigen::Vector3d& port,
                       double face_width_m, double face_height_m, double search_radius_m) {
-  SearchLayout layout;
+  AppearanceSearchLayout layout;
   const double z = port.z();
   layout.centre_px = {g.cx_px + g.focal_px * port.x() / z, g.cy_px + g.focal_px * port.y() / z};
   layout.face_width_px = g.focal_px * face_width_m / z;
@@ -204,6 +210,36 @@ cv::Mat FaceAppearanceCheck::printOfSize(cv::Size size) const {
   return found->second;
 }
 
+namespace {
+
+// Whether the face can be judged where `layout` puts it: mostly inside the image, not saturated by glare, not
+// too dark. Otherwise `result` says which, and why.
+bool judgeable(const cv::Mat& left_rect, const AppearanceSearchLayout& layout, const FaceAppearanceParams& p,
+               AppearanceResult* result) {
+  if (layout.face_rect.area() < 0.5 * layout.face_width_px * layout.face_height_px) {
+    result->verdict = AppearanceVerdict::kOutsideImage;
+    result->reason = "appearance not checked: the face is mostly outside the image";
+    return false;
+  }
+  result->saturated_fraction = saturatedFraction(left_rect(layout.face_rect), kSaturatedLevelDn);
+  result->mean_dn = cv::mean(left_rect(layout.region))[0];
+  if (result->saturated_fraction > p.max_saturated_fraction) {
+    result->verdict = AppearanceVerdict::kGlare;
+    result->reason = "appearance not judged: " + formatNumber(100.0 * result->saturated_fraction) +
+                     " % of the face saturated (glare)";
+    return false;
+  }
+  if (result->mean_dn < p.min_mean_dn) {
+    result->verdict = AppearanceVerdict::kTooDark;
+    result->reason = "appearance not judged: mean grey " + formatNumber(result->mean_dn) + " < " +
+                     formatNumber(p.min_mean_dn) + " (too dark)";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 AppearanceResult FaceAppearanceCheck::check(const cv::Mat& left_rect, const StereoGeometry& geometry,
                                             const Eigen::Vector3d& port_m, const FaceAppearanceParams& p) const {
   AppearanceResult result;
@@ -212,30 +248,16 @@ AppearanceResult FaceAppearanceCheck::check(const cv::Mat& left_rect, const Ster
     result.reason = "appearance not checked: no print, no grey image or no port in front of the camera";
     return result;
   }
-  const SearchLayout layout =
+  const AppearanceSearchLayout layout =
       layoutOf(left_rect.size(), geometry, port_m, face_width_m_, face_height_m_, p.search_radius_m);
-  if (layout.face_rect.area() < 0.5 * layout.face_width_px * layout.face_height_px) {
-    result.verdict = AppearanceVerdict::kOutsideImage;
-    result.reason = "appearance not checked: the face is mostly outside the image";
-    return result;
-  }
-  result.saturated_fraction = saturatedFraction(left_rect(layout.face_rect), p.saturated_level_dn);
-  result.mean_dn = cv::mean(left_rect(layout.region))[0];
-  if (result.saturated_fraction > p.max_saturated_fraction) {
-    result.verdict = AppearanceVerdict::kGlare;
-    result.reason = "appearance not judged: " + formatNumber(100.0 * result.saturated_fraction) +
-                    " % of the face saturated (glare)";
-    return result;
-  }
-  if (result.mean_dn < p.min_mean_dn) {
-    result.verdict = AppearanceVerdict::kTooDark;
-    result.reason = "appearance not judged: mean grey " + formatNumber(result.mean_dn) + " < " +
-                    formatNumber(p.min_mean_dn) + " (too dark)";
-    return result;
-  }
+  if (judgeable(left_rect, layout, p, &result)) matchPrint(left_rect, layout, p, &result);
+  return result;
+}
 
-  // Work at a scale where the face is at most max_working_width_px wide (never enlarge).
-  const double scale = std::min(1.0, p.max_working_width_px / layout.face_width_px);
+void FaceAppearanceCheck::matchPrint(const cv::Mat& left_rect, const AppearanceSearchLayout& layout,
+                                     const FaceAppearanceParams& p, AppearanceResult* result) const {
+  // Work at a scale where the face is at most kWorkingWidthPx wide (never enlarge).
+  const double scale = std::min(1.0, kWorkingWidthPx / layout.face_width_px);
   cv::Mat region_f;
   if (scale < 1.0) {
     const cv::Size reduced(std::max(1, static_cast<int>(std::lround(layout.region.width * scale))),
@@ -249,8 +271,8 @@ AppearanceResult FaceAppearanceCheck::check(const cv::Mat& left_rect, const Ster
   const double sx = static_cast<double>(region_f.cols) / layout.region.width;
   const double sy = static_cast<double>(region_f.rows) / layout.region.height;
 
-  result.verdict = AppearanceVerdict::kOutsideImage;
-  result.score = -1.0;
+  result->verdict = AppearanceVerdict::kOutsideImage;
+  result->score = -1.0;
   bool any_fit = false;
   const int template_height = static_cast<int>(std::lround(layout.face_height_px * sy));
   for (double squeeze : appearanceSqueezes()) {
@@ -260,26 +282,25 @@ AppearanceResult FaceAppearanceCheck::check(const cv::Mat& left_rect, const Ster
     const cv::Mat print = printOfSize(cv::Size(template_width, template_height));
     const Match match = bestMatch(region_f, sum, square_sum, print);
     any_fit = true;
-    if (match.score > result.score) {
-      result.score = match.score;
-      result.squeeze = squeeze;
-      result.matched_centre_px = {layout.region.x + (match.at.x + template_width / 2.0) / sx,
-                                  layout.region.y + (match.at.y + template_height / 2.0) / sy};
-      result.matched_size_px = {template_width / sx, template_height / sy};
+    if (match.score > result->score) {
+      result->score = match.score;
+      result->squeeze = squeeze;
+      result->matched_centre_px = {layout.region.x + (match.at.x + template_width / 2.0) / sx,
+                                   layout.region.y + (match.at.y + template_height / 2.0) / sy};
+      result->matched_size_px = {template_width / sx, template_height / sy};
     }
   }
   if (!any_fit) {
-    result.verdict = AppearanceVerdict::kOutsideImage;
-    result.score = 0.0;
-    result.reason = "appearance not checked: the face is too small or the image around it too narrow";
-    return result;
+    result->verdict = AppearanceVerdict::kOutsideImage;
+    result->score = 0.0;
+    result->reason = "appearance not checked: the face is too small or the image around it too narrow";
+    return;
   }
-  const bool match = result.score >= p.min_score;
-  result.verdict = match ? AppearanceVerdict::kLooksLikeTarget : AppearanceVerdict::kNotTheTarget;
-  result.reason = std::string(match ? "looks like the target's face" : "does not look like the target's face") +
-                  ": print match " + formatNumber(result.score) + (match ? " >= " : " < ") +
-                  "appearance_min_score " + formatNumber(p.min_score);
-  return result;
+  const bool match = result->score >= p.min_score;
+  result->verdict = match ? AppearanceVerdict::kLooksLikeTarget : AppearanceVerdict::kNotTheTarget;
+  result->reason = std::string(match ? "looks like the target's face" : "does not look like the target's face") +
+                   ": print match " + formatNumber(result->score) + (match ? " >= " : " < ") +
+                   "appearance_min_score " + formatNumber(p.min_score);
 }
 
 namespace {
@@ -338,14 +359,14 @@ AppearanceResult confirmByAppearance(const FaceAppearanceCheck& check, const cv:
   }
   if (result.verdict == AppearanceVerdict::kNotTheTarget) {
     detection->found = false;
-    detection->outcome = Outcome::kAppearanceMismatch;
+    detection->outcome = AppearanceOutcome::kMismatch;
     detection->reason = "not the target: " + result.reason;
   }
-  if (result.verdict == AppearanceVerdict::kGlare && !params.glare_keeps_blob) {
+  if (result.verdict == AppearanceVerdict::kGlare) {
     detection->found = false;
-    detection->outcome = Outcome::kAppearanceUnjudged;
+    detection->outcome = AppearanceOutcome::kGlare;
     detection->reason = "not confirmed: " + result.reason +
-                        "; glare hides part of the mockup, the port cannot be placed (appearance_glare_keeps_blob)";
+                        "; glare hides part of the mockup, the port cannot be placed";
   }
   return result;
 }

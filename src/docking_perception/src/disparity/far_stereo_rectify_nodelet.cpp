@@ -1,29 +1,21 @@
 // far_stereo_rectify: the far stage's own rectified pair (issue 15). Pairs the left and right grey images
-// (image_mono, with the guarded camera_info) by stamp and rectifies both (disparity/decimating_rectifier.h):
-//   - at full resolution while the target is being acquired or is beyond ~tracking_range_m, published on
-//     stereo/far/full/{left,right}/{image_rect,camera_info} for the full-resolution block matcher;
-//   - area-averaged by ~tracking_decimation and rectified straight to that size while the arbiter's fused
-//     estimate (target/estimate) is fresh, valid and inside ~tracking_range_m (duty::FusedRangeCondition,
-//     with hysteresis), published on stereo/far/tracking/... for the reduced matcher.
-//   - at full resolution but only a window around the target (disparity/tracking_window.h) while the fused
-//     estimate is fresh and valid (window_enabled; not while the reduced pair is used): published on the
-//     full-resolution topics, its camera_info saying where the window lies (image_geometry's region of
-//     interest: roi = the window, the principal point shifted by its offset), so that the matcher and the
-//     detector work on the window as on a smaller camera. The window's left side leaves room for the
-//     matcher's search range (~matcher/{min_disparity,disparity_range,correlation_window_size}, loaded
-//     from config/stereo_image_proc.yaml, the matcher's own file).
-// Each pair goes one way, so one matcher works on it. The camera_info published beside each image is the
-// rectified camera (K = P's 3x3, no distortion, R = I) at the calibrated size with binning_x = binning_y =
-// the decimation, which image_geometry (stereo_image_proc, the detector) reads as the reduced camera.
-// Only pairs are rectified: the left camera's other frames pass through the synchroniser untouched.
-// Lazy: subscribes while anything reads its output (the matchers, paused with the detector).
-// A bad image or camera_info (wrong encoding or size, uncalibrated, binned or cropped input) drops that pair
-// with a throttled error naming the problem, counted in diagnostics (WARN while pairs are being dropped,
-// with the reason); the next pair is processed.
-// Parameters (config/far_stereo.yaml, all required): tracking_decimation (1..4), tracking_range_m (0: never
-// reduced), tracking_hysteresis_m, tracking_max_fused_age_s, window_enabled, window_half_width_m,
-// window_half_height_m, window_min_half_size_px, window_max_area_fraction, window_max_prediction_s; and
-// matcher/{min_disparity,disparity_range,correlation_window_size}.
+// (image_mono, with the guarded camera_info) by stamp and rectifies both (disparity/window_rectifier.h), at
+// full resolution, published on stereo/far/full/{left,right}/{image_rect,camera_info} for the block matcher:
+//   - the whole image while the target is being acquired (no fresh, valid fused estimate);
+//   - only a window around the target (disparity/tracking_window.h) while the arbiter's fused estimate
+//     (target/estimate) is fresh and valid (window_enabled), its camera_info saying where the window lies
+//     (image_geometry's region of interest: roi = the window, the principal point shifted by its offset),
+//     so that the matcher and the detector work on the window as on a smaller camera. The window's left
+//     side leaves room for the matcher's search range (~matcher/{min_disparity,disparity_range,
+//     correlation_window_size}, loaded from config/stereo_image_proc.yaml, the matcher's own file).
+// The camera_info published beside each image is the rectified camera (K = P's 3x3, no distortion, R = I) at
+// the calibrated size. Only pairs are rectified: the left camera's other frames pass through the
+// synchroniser untouched. Lazy: subscribes while anything reads its output (the matcher, paused with the
+// detector). A bad image or camera_info (wrong encoding or size, uncalibrated, binned or cropped input) drops
+// that pair with a throttled error naming the problem, counted in diagnostics (WARN while pairs are being
+// dropped, with the reason); the next pair is processed.
+// Settings: declared in settings/far_stereo_rectify.yaml (config/far_stereo.yaml holds what differs from the
+// defaults); and matcher/{min_disparity,disparity_range,correlation_window_size}, the matcher's own.
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -42,9 +34,10 @@
 
 #include "docking_msgs/TargetEstimate.h"
 #include "docking_msgs/names.h"
-#include "docking_perception/duty/fused_range_condition.h"
-#include "docking_perception/disparity/decimating_rectifier.h"
+#include "docking_perception/disparity/window_rectifier.h"
 #include "docking_perception/disparity/tracking_window.h"
+#include "docking_settings/param_reader.h"
+#include "docking_settings/ros_loader.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -89,10 +82,9 @@ bool sameCalibration(const sensor_msgs::CameraInfo& a, const sensor_msgs::Camera
          a.roi.height == b.roi.height;
 }
 
-// The rectified, decimated camera as sensor_msgs/CameraInfo states it (see the file comment); with a
-// window (in output pixels), the window's region of interest.
-sensor_msgs::CameraInfo rectifiedInfo(const sensor_msgs::CameraInfo& raw, int decimation,
-                                      const std::optional<cv::Rect>& window = std::nullopt) {
+// The rectified camera as sensor_msgs/CameraInfo states it (see the file comment); with a window, the
+// window's region of interest.
+sensor_msgs::CameraInfo rectifiedInfo(const sensor_msgs::CameraInfo& raw, const std::optional<cv::Rect>& window) {
   sensor_msgs::CameraInfo out;
   out.header = raw.header;
   out.width = raw.width;
@@ -104,13 +96,13 @@ sensor_msgs::CameraInfo rectifiedInfo(const sensor_msgs::CameraInfo& raw, int de
   for (int row = 0; row < 3; ++row) {
     for (int col = 0; col < 3; ++col) out.K[static_cast<std::size_t>(row * 3 + col)] = raw.P[static_cast<std::size_t>(row * 4 + col)];
   }
-  out.binning_x = static_cast<std::uint32_t>(decimation);
-  out.binning_y = static_cast<std::uint32_t>(decimation);
+  out.binning_x = 1;
+  out.binning_y = 1;
   if (window) {
-    out.roi.x_offset = static_cast<std::uint32_t>(window->x * decimation);
-    out.roi.y_offset = static_cast<std::uint32_t>(window->y * decimation);
-    out.roi.width = static_cast<std::uint32_t>(window->width * decimation);
-    out.roi.height = static_cast<std::uint32_t>(window->height * decimation);
+    out.roi.x_offset = static_cast<std::uint32_t>(window->x);
+    out.roi.y_offset = static_cast<std::uint32_t>(window->y);
+    out.roi.width = static_cast<std::uint32_t>(window->width);
+    out.roi.height = static_cast<std::uint32_t>(window->height);
   }
   return out;
 }
@@ -122,18 +114,11 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
   void onInit() override;
 
  private:
-  // One camera at one resolution: its rectifier for the calibration it was built from, its outputs.
+  // One camera: its rectifier for the calibration it was built from, its outputs.
   struct Side {
-    std::unique_ptr<DecimatingRectifier> rectifier;
+    std::unique_ptr<WindowRectifier> rectifier;
     sensor_msgs::CameraInfo calibration_info;  // what `rectifier` was built from
     ros::Publisher image_publisher, info_publisher;
-  };
-  // The pair at one resolution.
-  struct Way {
-    int decimation = 1;
-    Side left, right;
-    std::uint64_t pairs = 0;
-    std::uint64_t windowed_pairs = 0;
   };
   // The arbiter's last fused estimate, for the tracking window.
   struct FusedPort {
@@ -147,27 +132,25 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
   using Sync = message_filters::TimeSynchronizer<sensor_msgs::Image, sensor_msgs::CameraInfo, sensor_msgs::Image,
                                                  sensor_msgs::CameraInfo>;
 
+  // The declared settings with the private namespace's values (config/far_stereo.yaml), and the matcher's
+  // reach (~matcher: config/stereo_image_proc.yaml). Throws docking_settings::ConfigError naming the key.
   void readParameters();
-  void readWindowParameters(std::ostringstream* problems);
   // The window to rectify for a pair at `stamp` in `frame_id`, or none (the whole image).
   std::optional<cv::Rect> windowFor(const ros::Time& stamp, const std::string& frame_id, const Side& side) const;
-  void advertise(Way* way, const char* left_image, const char* left_info, const char* right_image,
-                 const char* right_info);
-  int subscribersOf(const Way& way) const;
+  void advertise(Side* side, const char* image, const char* info);
+  int subscribers() const;
   void onConnection();
   void onFusedEstimate(const docking_msgs::TargetEstimateConstPtr& fused);
   void onPair(const sensor_msgs::ImageConstPtr& left, const sensor_msgs::CameraInfoConstPtr& left_info,
               const sensor_msgs::ImageConstPtr& right, const sensor_msgs::CameraInfoConstPtr& right_info);
   // The rectified image of one side, or nullptr and the problem that stops the pair.
   sensor_msgs::ImagePtr rectifySide(const char* name, const sensor_msgs::Image& image,
-                                    const sensor_msgs::CameraInfo& info, int decimation, Side* side,
+                                    const sensor_msgs::CameraInfo& info, Side* side,
                                     const std::optional<cv::Rect>& window, std::string* problem);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
-  Way full_, tracking_;
-  duty::FusedRangeConditionParams tracking_params_;
-  bool window_enabled_ = false;
-  TrackingWindowParams window_params_;
+  Side left_, right_;
+  TrackingWindowParams window_params_;  // window_params_.enabled: windows while tracking
   MatcherReach matcher_reach_;
   ros::NodeHandle nh_;
   message_filters::Subscriber<sensor_msgs::Image> left_image_sub_, right_image_sub_;
@@ -178,8 +161,9 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
   ros::Timer diagnostics_timer_;
 
   std::mutex mutex_;  // everything below: the pair callback, the fused estimate, diagnostics, connections
-  duty::FusedRangeCondition tracking_condition_{duty::RangeSide::kInside};
   bool subscribed_{false};
+  std::uint64_t pairs_{0};
+  std::uint64_t windowed_pairs_{0};
   std::uint64_t dropped_{0};
   std::uint64_t dropped_at_last_report_{0};  // WARN only while pairs are being dropped, OK once they pass
   std::string last_problem_;
@@ -189,76 +173,40 @@ class FarStereoRectifyNodelet : public nodelet::Nodelet {
 
 void FarStereoRectifyNodelet::readParameters() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
-  int decimation = 0;
-  std::ostringstream problems;
-  if (!pnh.getParam("tracking_decimation", decimation)) problems << " ~tracking_decimation is missing;";
-  if (!pnh.getParam("tracking_range_m", tracking_params_.range_m)) problems << " ~tracking_range_m is missing;";
-  if (!pnh.getParam("tracking_hysteresis_m", tracking_params_.hysteresis_m)) {
-    problems << " ~tracking_hysteresis_m is missing;";
+  try {
+    FarStereoSettings settings;
+    docking_settings::loadSettings(pnh, settings);
+    docking_settings::warnUnknownKeys(pnh, settings, {"matcher"});
+    // What the tracking window leaves room for: the full-resolution matcher's own settings.
+    const docking_settings::ParamReader matcher(ros::NodeHandle(pnh, "matcher"));
+    matcher_reach_.min_disparity = matcher.require<int>("min_disparity");
+    matcher_reach_.disparity_range = matcher.require<int>("disparity_range");
+    matcher_reach_.correlation_window_px = matcher.require<int>("correlation_window_size");
+    const auto reach_problems = validateMatcherReach(matcher_reach_);
+    if (!reach_problems.empty()) matcher.invalid("correlation_window_size", reach_problems.front());
+    window_params_ = settings.window;
+  } catch (const std::exception& error) {
+    // The nodelet loader refuses this nodelet (and logs the message at DEBUG only): said here first.
+    NODELET_FATAL("far_stereo_rectify: %s", error.what());
+    throw;
   }
-  if (!pnh.getParam("tracking_max_fused_age_s", tracking_params_.max_fused_age_s)) {
-    problems << " ~tracking_max_fused_age_s is missing;";
-  }
-  if (problems.str().empty()) {
-    if (decimation < 1 || decimation > 4) problems << " ~tracking_decimation must be 1..4 (got " << decimation << ");";
-    if (!(tracking_params_.range_m >= 0.0)) problems << " ~tracking_range_m must be >= 0;";
-    if (!(tracking_params_.hysteresis_m >= 0.0)) problems << " ~tracking_hysteresis_m must be >= 0;";
-    if (!(tracking_params_.max_fused_age_s > 0.0)) problems << " ~tracking_max_fused_age_s must be > 0;";
-  }
-  if (!problems.str().empty()) {
-    NODELET_FATAL("far_stereo_rectify: config/far_stereo.yaml:%s", problems.str().c_str());
-    throw std::runtime_error("far_stereo_rectify: invalid parameters:" + problems.str());
-  }
-  readWindowParameters(&problems);
-  if (!problems.str().empty()) {
-    NODELET_FATAL("far_stereo_rectify: config/far_stereo.yaml, config/stereo_image_proc.yaml:%s",
-                  problems.str().c_str());
-    throw std::runtime_error("far_stereo_rectify: invalid parameters:" + problems.str());
-  }
-  full_.decimation = 1;
-  tracking_.decimation = decimation;
-  tracking_condition_.setParams(tracking_params_);
 }
 
-void FarStereoRectifyNodelet::readWindowParameters(std::ostringstream* problems) {
-  ros::NodeHandle& pnh = getPrivateNodeHandle();
-  const auto need = [&](const char* name, auto* value) {
-    if (!pnh.getParam(name, *value)) *problems << " ~" << name << " is missing;";
-  };
-  need("window_enabled", &window_enabled_);
-  need("window_half_width_m", &window_params_.half_width_m);
-  need("window_half_height_m", &window_params_.half_height_m);
-  need("window_min_half_size_px", &window_params_.min_half_size_px);
-  need("window_max_area_fraction", &window_params_.max_area_fraction);
-  need("window_max_prediction_s", &window_params_.max_prediction_s);
-  need("matcher/min_disparity", &matcher_reach_.min_disparity);
-  need("matcher/disparity_range", &matcher_reach_.disparity_range);
-  need("matcher/correlation_window_size", &matcher_reach_.correlation_window_px);
-  if (!problems->str().empty()) return;
-  for (const auto& error : validateTrackingWindowParams(window_params_)) *problems << " " << error << ";";
-  for (const auto& error : validateMatcherReach(matcher_reach_)) *problems << " " << error << ";";
-}
-
-void FarStereoRectifyNodelet::advertise(Way* way, const char* left_image, const char* left_info,
-                                        const char* right_image, const char* right_info) {
+void FarStereoRectifyNodelet::advertise(Side* side, const char* image, const char* info) {
   const auto connection = [this](const ros::SingleSubscriberPublisher&) { onConnection(); };
-  way->left.image_publisher = nh_.advertise<sensor_msgs::Image>(left_image, 1, connection, connection);
-  way->left.info_publisher = nh_.advertise<sensor_msgs::CameraInfo>(left_info, 1, connection, connection);
-  way->right.image_publisher = nh_.advertise<sensor_msgs::Image>(right_image, 1, connection, connection);
-  way->right.info_publisher = nh_.advertise<sensor_msgs::CameraInfo>(right_info, 1, connection, connection);
+  side->image_publisher = nh_.advertise<sensor_msgs::Image>(image, 1, connection, connection);
+  side->info_publisher = nh_.advertise<sensor_msgs::CameraInfo>(info, 1, connection, connection);
 }
 
 void FarStereoRectifyNodelet::onInit() {
   nh_ = getNodeHandle();
   readParameters();
   namespace topics = docking_msgs::topics;
-  advertise(&full_, topics::kStereoFarFullLeftImageRect, topics::kStereoFarFullLeftCameraInfo,
-            topics::kStereoFarFullRightImageRect, topics::kStereoFarFullRightCameraInfo);
-  advertise(&tracking_, topics::kStereoFarTrackingLeftImageRect, topics::kStereoFarTrackingLeftCameraInfo,
-            topics::kStereoFarTrackingRightImageRect, topics::kStereoFarTrackingRightCameraInfo);
+  advertise(&left_, topics::kStereoFarFullLeftImageRect, topics::kStereoFarFullLeftCameraInfo);
+  advertise(&right_, topics::kStereoFarFullRightImageRect, topics::kStereoFarFullRightCameraInfo);
   sync_ = std::make_unique<Sync>(left_image_sub_, left_info_sub_, right_image_sub_, right_info_sub_, kSyncQueue);
   sync_->registerCallback(&FarStereoRectifyNodelet::onPair, this);
-  if ((tracking_params_.range_m > 0.0 && tracking_.decimation > 1) || window_enabled_) {
+  if (window_params_.enabled) {
     fused_subscriber_ = nh_.subscribe(topics::kTargetEstimate, 1, &FarStereoRectifyNodelet::onFusedEstimate, this,
                                       ros::TransportHints().tcpNoDelay());
   }
@@ -266,19 +214,18 @@ void FarStereoRectifyNodelet::onInit() {
   diagnostics_->setHardwareID("far_stereo_rectify");
   diagnostics_->add("far stereo rectify", this, &FarStereoRectifyNodelet::diagnose);
   diagnostics_timer_ = nh_.createTimer(ros::Duration(1.0), [this](const ros::TimerEvent&) { diagnostics_->update(); });
-  NODELET_INFO("far_stereo_rectify: full resolution%s, 1/%d while the fused target is inside %.2f m; lazy",
-               window_enabled_ ? " (a window around the tracked target)" : "", tracking_.decimation,
-               tracking_params_.range_m);
+  NODELET_INFO("far_stereo_rectify: full resolution%s; lazy",
+               window_params_.enabled ? ", a window around the tracked target" : "");
 }
 
-int FarStereoRectifyNodelet::subscribersOf(const Way& way) const {
-  return static_cast<int>(way.left.image_publisher.getNumSubscribers() + way.left.info_publisher.getNumSubscribers() +
-                          way.right.image_publisher.getNumSubscribers() + way.right.info_publisher.getNumSubscribers());
+int FarStereoRectifyNodelet::subscribers() const {
+  return static_cast<int>(left_.image_publisher.getNumSubscribers() + left_.info_publisher.getNumSubscribers() +
+                          right_.image_publisher.getNumSubscribers() + right_.info_publisher.getNumSubscribers());
 }
 
 void FarStereoRectifyNodelet::onConnection() {
   std::lock_guard<std::mutex> lock(mutex_);
-  const bool wanted = subscribersOf(full_) + subscribersOf(tracking_) > 0;
+  const bool wanted = subscribers() > 0;
   if (wanted == subscribed_) return;
   namespace topics = docking_msgs::topics;
   if (wanted) {
@@ -299,7 +246,6 @@ void FarStereoRectifyNodelet::onFusedEstimate(const docking_msgs::TargetEstimate
   std::lock_guard<std::mutex> lock(mutex_);
   // Any source: the disparity track itself or a monocular pose both say where the target is.
   const double now_s = ros::Time::now().toSec();
-  tracking_condition_.onFusedEstimate(now_s, fused->valid && fused->position_valid, true, fused->range_m);
   fused_port_.usable = fused->valid && fused->position_valid;
   fused_port_.arrival_s = now_s;
   fused_port_.stamp = fused->header.stamp;
@@ -314,8 +260,8 @@ std::optional<cv::Rect> FarStereoRectifyNodelet::windowFor(const ros::Time& stam
                                                            const Side& side) const {
   // Only a fresh, valid estimate in the left camera's own frame (the arbiter's output_frame) places it;
   // anything else, and the port predicted out of view, is matched on the whole image.
-  if (!window_enabled_ || !fused_port_.usable || !side.rectifier || fused_port_.frame_id != frame_id ||
-      ros::Time::now().toSec() - fused_port_.arrival_s > tracking_params_.max_fused_age_s) {
+  if (!window_params_.enabled || !fused_port_.usable || !side.rectifier || fused_port_.frame_id != frame_id ||
+      ros::Time::now().toSec() - fused_port_.arrival_s > window_params_.max_fused_age_s) {
     return std::nullopt;
   }
   const Eigen::Vector3d port = predictPort(fused_port_.position_m, fused_port_.velocity_mps,
@@ -325,8 +271,8 @@ std::optional<cv::Rect> FarStereoRectifyNodelet::windowFor(const ros::Time& stam
 }
 
 sensor_msgs::ImagePtr FarStereoRectifyNodelet::rectifySide(const char* name, const sensor_msgs::Image& image,
-                                                           const sensor_msgs::CameraInfo& info, int decimation,
-                                                           Side* side, const std::optional<cv::Rect>& window,
+                                                           const sensor_msgs::CameraInfo& info, Side* side,
+                                                           const std::optional<cv::Rect>& window,
                                                            std::string* problem) {
   std::ostringstream why;
   if (image.encoding != sensor_msgs::image_encodings::MONO8) {
@@ -344,13 +290,13 @@ sensor_msgs::ImagePtr FarStereoRectifyNodelet::rectifySide(const char* name, con
   if (!side->rectifier || !sameCalibration(side->calibration_info, info)) {
     std::string calibration_problem;
     const auto calibration = calibrationOf(info, &calibration_problem);
-    const auto reasons = calibration ? validateDecimation(*calibration, decimation) : std::vector<std::string>{};
+    const auto reasons = calibration ? validateCalibration(*calibration) : std::vector<std::string>{};
     if (!calibration || !reasons.empty()) {
       *problem = std::string(name) + " camera_info: " + (calibration ? reasons.front() : calibration_problem);
       side->rectifier.reset();
       return nullptr;
     }
-    side->rectifier = std::make_unique<DecimatingRectifier>(*calibration, decimation);
+    side->rectifier = std::make_unique<WindowRectifier>(*calibration);
     side->calibration_info = info;
   }
   const cv::Mat grey(static_cast<int>(image.height), static_cast<int>(image.width), CV_8UC1,
@@ -376,21 +322,14 @@ void FarStereoRectifyNodelet::onPair(const sensor_msgs::ImageConstPtr& left,
                                      const sensor_msgs::ImageConstPtr& right,
                                      const sensor_msgs::CameraInfoConstPtr& right_info) {
   std::lock_guard<std::mutex> lock(mutex_);
-  // Reduced while tracking near enough, if its matcher listens; else full resolution.
-  const bool reduced = tracking_.decimation > 1 && tracking_condition_.holds(ros::Time::now().toSec()) &&
-                       subscribersOf(tracking_) > 0;
-  Way* way = reduced ? &tracking_ : &full_;
   std::string problem;
   sensor_msgs::ImagePtr left_rect, right_rect;
-  // The window (full resolution only) from the left side's rectifier as last built: a calibration change
-  // rebuilds it below, and the window of the old one is still inside the image (same size checked there).
-  const std::optional<cv::Rect> window =
-      way == &full_ ? windowFor(left->header.stamp, left->header.frame_id, way->left) : std::nullopt;
+  // The window from the left side's rectifier as last built: a calibration change rebuilds it below, and the
+  // window of the old one is still inside the image (same size checked there).
+  const std::optional<cv::Rect> window = windowFor(left->header.stamp, left->header.frame_id, left_);
   try {
-    left_rect = rectifySide("left", *left, *left_info, way->decimation, &way->left, window, &problem);
-    if (left_rect) {
-      right_rect = rectifySide("right", *right, *right_info, way->decimation, &way->right, window, &problem);
-    }
+    left_rect = rectifySide("left", *left, *left_info, &left_, window, &problem);
+    if (left_rect) right_rect = rectifySide("right", *right, *right_info, &right_, window, &problem);
   } catch (const std::exception& e) {
     problem = std::string("rectification failed: ") + e.what();
   }
@@ -402,38 +341,30 @@ void FarStereoRectifyNodelet::onPair(const sensor_msgs::ImageConstPtr& left,
     return;
   }
   // camera_info first: the detector matches a window's disparity to its camera_info by stamp.
-  way->left.info_publisher.publish(rectifiedInfo(*left_info, way->decimation, window));
-  way->right.info_publisher.publish(rectifiedInfo(*right_info, way->decimation, window));
-  way->left.image_publisher.publish(left_rect);
-  way->right.image_publisher.publish(right_rect);
-  ++way->pairs;
+  left_.info_publisher.publish(rectifiedInfo(*left_info, window));
+  right_.info_publisher.publish(rectifiedInfo(*right_info, window));
+  left_.image_publisher.publish(left_rect);
+  right_.image_publisher.publish(right_rect);
+  ++pairs_;
   if (window) {
-    ++way->windowed_pairs;
+    ++windowed_pairs_;
     last_window_ = window;
   }
 }
 
 void FarStereoRectifyNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const duty::FusedRangeState tracking = tracking_condition_.state(ros::Time::now().toSec());
   const bool dropping = dropped_ > dropped_at_last_report_;
   dropped_at_last_report_ = dropped_;
   if (!dropping) {
-    status.summary(diagnostic_msgs::DiagnosticStatus::OK,
-                   !subscribed_ ? "idle (no subscriber)"
-                                : (tracking_.decimation > 1 && tracking == duty::FusedRangeState::kHolds
-                                       ? "reduced resolution (tracking)"
-                                       : "full resolution"));
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, !subscribed_ ? "idle (no subscriber)" : "rectifying");
   } else {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "pairs dropped: " + last_problem_);
   }
-  status.add("tracking decimation", tracking_.decimation);
-  status.add("reduced resolution", duty::describe(tracking));
-  status.add("pairs at full resolution", full_.pairs);
-  status.add("pairs at reduced resolution", tracking_.pairs);
+  status.add("pairs", pairs_);
   status.add("pairs dropped", dropped_);
-  status.add("tracking window", window_enabled_ ? "enabled" : "disabled");
-  status.add("pairs in a tracking window", full_.windowed_pairs);
+  status.add("tracking window", window_params_.enabled ? "enabled" : "disabled");
+  status.add("pairs in a tracking window", windowed_pairs_);
   std::ostringstream window;
   if (last_window_) {
     window << last_window_->width << "x" << last_window_->height << " at (" << last_window_->x << ", "

@@ -9,6 +9,8 @@
 
 #include "number_text.h"
 
+#include <docking_settings/setting_info.h>
+
 namespace docking_perception {
 namespace disparity {
 namespace {
@@ -21,33 +23,10 @@ std::string format(double value) { return disparity::formatNumber(value, 3); }
 
 }  // namespace
 
-std::vector<std::string> validateTrackGateParams(const TrackGateParams& p) {
-  std::vector<std::string> errors;
-  auto require = [&errors](bool ok, const std::string& text) {
-    if (!ok) errors.push_back(text);
-  };
-  require(std::isfinite(p.max_speed_mps) && p.max_speed_mps >= 0.0,
-          "track_max_speed_mps must be >= 0 (got " + format(p.max_speed_mps) + ")");
-  require(std::isfinite(p.min_gate_m) && p.min_gate_m > 0.0,
-          "track_min_gate_m must be > 0 (got " + format(p.min_gate_m) + ")");
-  require(std::isfinite(p.gate_sigmas) && p.gate_sigmas >= 0.0,
-          "track_gate_sigmas must be >= 0 (got " + format(p.gate_sigmas) + ")");
-  require(p.confirm_frames >= 1, "track_confirm_frames must be >= 1 (got " +
-                                     std::to_string(p.confirm_frames) + ")");
-  require(std::isfinite(p.timeout_s) && p.timeout_s > 0.0,
-          "track_timeout_s must be > 0 (got " + format(p.timeout_s) + ")");
-  return errors;
-}
-
 TargetTrackGate::TargetTrackGate(const TrackGateParams& params) { setParams(params); }
 
 void TargetTrackGate::setParams(const TrackGateParams& params) {
-  const auto errors = validateTrackGateParams(params);
-  if (!errors.empty()) {
-    std::string joined;
-    for (const auto& error : errors) joined += (joined.empty() ? "" : "; ") + error;
-    throw std::invalid_argument(joined);
-  }
+  docking_settings::validateSettings(params);
   params_ = params;
 }
 
@@ -70,7 +49,7 @@ double TargetTrackGate::gateRadius(double dt_s, const Eigen::Matrix3d& covarianc
 
 SearchHint TargetTrackGate::hint(double stamp_s) const {
   SearchHint hint;
-  if (!params_.enabled || !has_track_ || stamp_s - last_stamp_s_ > params_.timeout_s) return hint;
+  if (!params_.gate_enabled || !has_track_ || stamp_s - last_stamp_s_ > params_.timeout_s) return hint;
   hint.valid = true;
   hint.position_m = predict(stamp_s);
   // Without a detection's covariance yet: the gate of a still, noise-free detection; the detector
@@ -91,7 +70,7 @@ void TargetTrackGate::startTrack(double stamp_s, const Eigen::Vector3d& position
 Detection TargetTrackGate::apply(double stamp_s, const Detection& detection) {
   if (stamp_s < last_seen_stamp_s_) reset();
   last_seen_stamp_s_ = stamp_s;
-  if (!params_.enabled) return detection;
+  if (!params_.gate_enabled) return detection;
   if (has_track_ && stamp_s - last_stamp_s_ > params_.timeout_s) reset();
   if (!detection.found) return detection;
 
@@ -133,7 +112,7 @@ Detection TargetTrackGate::apply(double stamp_s, const Detection& detection) {
   }
   Detection rejected = detection;
   rejected.found = false;
-  rejected.outcome = Outcome::kOffTrack;
+  rejected.outcome = TrackOutcome::kOffTrack;
   rejected.reason = "off track: blob " + format(distance) + " m from the tracked target (gate " +
                     format(gate) + " m); " + std::to_string(pending_frames_) + " of " +
                     std::to_string(params_.confirm_frames) + " frames to confirm a new position";

@@ -10,18 +10,6 @@ namespace {
 constexpr double kMinDepthM = 0.1;  // a port nearer than this (or behind the camera) has no sensible window
 }  // namespace
 
-std::vector<std::string> validateTrackingWindowParams(const TrackingWindowParams& params) {
-  std::vector<std::string> errors;
-  if (!(params.half_width_m > 0.0)) errors.push_back("window_half_width_m must be > 0");
-  if (!(params.half_height_m > 0.0)) errors.push_back("window_half_height_m must be > 0");
-  if (params.min_half_size_px < 1) errors.push_back("window_min_half_size_px must be >= 1");
-  if (!(params.max_area_fraction > 0.0 && params.max_area_fraction <= 1.0)) {
-    errors.push_back("window_max_area_fraction must be in (0, 1]");
-  }
-  if (!(params.max_prediction_s >= 0.0)) errors.push_back("window_max_prediction_s must be >= 0");
-  return errors;
-}
-
 std::vector<std::string> validateMatcherReach(const MatcherReach& reach) {
   std::vector<std::string> errors;
   if (reach.disparity_range <= 0 || reach.disparity_range % 16 != 0) {

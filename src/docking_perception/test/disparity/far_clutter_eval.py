@@ -83,10 +83,10 @@ def main():
     shutil.copytree(a.config, cfg_before)
     det = os.path.join(cfg_before, "disparity_detector.yaml")
     # The detector before issue 11: no shape check, no ceiling cut (the track gate is not in
-    # bench_disparity: one frame per scene).
-    text = open(det).read().replace("shape_check_enabled: true", "shape_check_enabled: false")
-    text = re.sub(r"^ceiling_cut_y_m: [0-9.]+", "ceiling_cut_y_m: 0.0", text, flags=re.M)
-    open(det, "w").write(text)
+    # bench_disparity: one frame per scene). The file holds only overrides of the declared defaults.
+    overrides = yaml.safe_load(open(det).read()) or {}
+    overrides.update({"shape_check_enabled": False, "ceiling_cut_y_m": 0.0})
+    open(det, "w").write(yaml.safe_dump(overrides))
     sim_render = os.path.join(a.devel, "docking_sim", "sim_render")
     totals = {k: {"n": 0, "ok": 0, "false": 0, "ms": []} for k in ("before", "after")}
     print("%-22s %5s  %-34s %-34s" % ("scene", "range", "before (no shape check)", "after"))

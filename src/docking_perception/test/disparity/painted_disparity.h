@@ -1,9 +1,12 @@
 // Synthetic disparity images for the detector's gtests: our stereo pair's geometry and fronto-parallel
-// rectangles painted at a depth (shared by test_disparity_detector.cpp and test_target_confirmation.cpp).
+// rectangles painted at a depth, and the shipped configuration the tests run (shared by
+// test_disparity_detector.cpp, test_target_confirmation.cpp and test_face_appearance.cpp).
 #pragma once
 
 #include <cmath>
+#include <string>
 
+#include <docking_settings/yaml_loader.h>
 #include <opencv2/core.hpp>
 
 #include "docking_perception/disparity/disparity_detector.h"
@@ -21,6 +24,18 @@ inline StereoGeometry ourGeometry() {
   g.baseline_m = 0.10;
   return g;
 }
+
+// The detector node's settings as shipped: the declared defaults with config/disparity_detector.yaml's values
+// (DISPARITY_CONFIG_DIR: the workspace's config/). A test that changes one says which and why.
+inline DisparityDetectorSettings shippedSettings() {
+  return docking_settings::shippedSettings<DisparityDetectorSettings>(std::string(DISPARITY_CONFIG_DIR) +
+                                                                      "/disparity_detector.yaml");
+}
+inline DetectorParams shippedParams() { return shippedSettings().detector; }
+// The mockup of config/target.yaml (the node's ~target_yaml).
+inline TargetShape shippedShape() { return loadTargetShape(std::string(DISPARITY_CONFIG_DIR) + "/target.yaml"); }
+inline DisparityDetector detectorWith(const DetectorParams& params) { return DisparityDetector(params, shippedShape()); }
+inline DisparityDetector shippedDetector() { return detectorWith(shippedParams()); }
 
 inline double disparityAt(double z_m) { return ourGeometry().focal_px * ourGeometry().baseline_m / z_m; }
 

@@ -1,5 +1,7 @@
 #include "synthetic_stereo.h"
 
+#include <docking_settings/yaml_loader.h>
+
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -174,69 +176,12 @@ MatcherSettings loadMatcherSettings(const std::string& path) {
   return s;
 }
 
-DetectorParams loadDetectorParams(const std::string& path) {
-  const auto fields = readFlatYaml(path);
-  auto number = [&](const char* name) { return readNumber(fields, path, name); };
-  auto integer = [&](const char* name) { return static_cast<int>(number(name)); };
-  DetectorParams p;
-  p.median_kernel_px = integer("median_kernel_px");
-  p.gaussian_sigma_px = number("gaussian_sigma_px");
-  p.closest_min_pixels = integer("closest_min_pixels");
-  p.target_depth_m = number("target_depth_m");
-  p.threshold_margin_px = number("threshold_margin_px");
-  p.face_percentile = number("face_percentile");
-  p.face_depth_band_m = number("face_depth_band_m");
-  p.face_min_band_px = number("face_min_band_px");
-  p.min_blob_area_px = integer("min_blob_area_px");
-  p.min_blob_thickness_px = number("min_blob_thickness_px");
-  p.reduced_min_blob_area_px = integer("reduced_min_blob_area_px");
-  p.reduced_min_blob_thickness_px = number("reduced_min_blob_thickness_px");
-  p.max_blob_area_fraction = number("max_blob_area_fraction");
-  p.border_margin_px = integer("border_margin_px");
-  p.min_disparity_px = number("min_disparity_px");
-  p.max_disparity_px = number("max_disparity_px");
-  p.roi_top_fraction = number("roi_top_fraction");
-  p.roi_bottom_fraction = number("roi_bottom_fraction");
-  p.floor_cut_enabled = number("floor_cut_enabled") != 0.0;
-  p.floor_cut_y_m = number("floor_cut_y_m");
-  p.ceiling_cut_y_m = number("ceiling_cut_y_m");
-  p.disparity_sigma_px = number("disparity_sigma_px");
-  p.centre_sigma_px = number("centre_sigma_px");
-  p.port_offset_sigma_m = number("port_offset_sigma_m");
-  p.shape_check_enabled = number("shape_check_enabled") != 0.0;
-  p.shape_tolerance_fraction = number("shape_tolerance_fraction");
-  p.shape_tolerance_px = number("shape_tolerance_px");
-  p.min_fill_fraction = number("min_fill_fraction");
-  p.max_centre_offset_y_m = number("max_centre_offset_y_m");
-  p.stop_behind_target_sized = number("stop_behind_target_sized") != 0.0;
-  p.degraded_min_width_fraction = number("degraded_min_width_fraction");
-  p.split_depth_step_m = number("split_depth_step_m");
-  p.footprint_fit_enabled = number("footprint_fit_enabled") != 0.0;
-  p.footprint_inlier_distance_m = number("footprint_inlier_distance_m");
-  p.footprint_min_inlier_fraction = number("footprint_min_inlier_fraction");
-  p.appearance_check_enabled = number("appearance_check_enabled") != 0.0;
-  p.appearance.min_score = number("appearance_min_score");
-  p.appearance.search_radius_m = number("appearance_search_radius_m");
-  p.appearance.max_working_width_px = number("appearance_max_working_width_px");
-  p.appearance.saturated_level_dn = static_cast<int>(number("appearance_saturated_level_dn"));
-  p.appearance.max_saturated_fraction = number("appearance_max_saturated_fraction");
-  p.appearance.min_mean_dn = number("appearance_min_mean_dn");
-  p.appearance.glare_keeps_blob = number("appearance_glare_keeps_blob") != 0.0;
-  p.appearance.refine_port = number("appearance_refine_port") != 0.0;
-  return p;
+DisparityDetectorSettings shippedDetectorSettings(const std::string& config_dir) {
+  return docking_settings::shippedSettings<DisparityDetectorSettings>(config_dir + "/disparity_detector.yaml");
 }
 
-TrackGateParams loadTrackGateParams(const std::string& path) {
-  const auto fields = readFlatYaml(path);
-  auto number = [&](const char* name) { return readNumber(fields, path, name); };
-  TrackGateParams p;
-  p.enabled = number("track_gate_enabled") != 0.0;
-  p.max_speed_mps = number("track_max_speed_mps");
-  p.min_gate_m = number("track_min_gate_m");
-  p.gate_sigmas = number("track_gate_sigmas");
-  p.confirm_frames = static_cast<int>(number("track_confirm_frames"));
-  p.timeout_s = number("track_timeout_s");
-  return p;
+FarStereoSettings shippedFarStereoSettings(const std::string& config_dir) {
+  return docking_settings::shippedSettings<FarStereoSettings>(config_dir + "/far_stereo.yaml");
 }
 
 CameraCalibration loadCameraCalibration(const std::string& path) {
@@ -370,29 +315,6 @@ PinholeCalibration pinholeOf(const CameraCalibration& calibration) {
   return out;
 }
 
-int loadTrackingDecimation(const std::string& path) {
-  std::ifstream file(path);
-  if (!file) throw std::runtime_error("cannot read " + path);
-  std::string line;
-  while (std::getline(file, line)) {
-    const std::string key = "tracking_decimation:";
-    if (line.rfind(key, 0) == 0) return std::stoi(line.substr(key.size()));
-  }
-  throw std::runtime_error(path + ": missing field 'tracking_decimation'");
-}
-
-TrackingWindowParams loadTrackingWindow(const std::string& path) {
-  const auto fields = readFlatYaml(path);
-  auto number = [&](const char* name) { return readNumber(fields, path, name); };
-  TrackingWindowParams params;
-  params.half_width_m = number("window_half_width_m");
-  params.half_height_m = number("window_half_height_m");
-  params.min_half_size_px = static_cast<int>(number("window_min_half_size_px"));
-  params.max_area_fraction = number("window_max_area_fraction");
-  params.max_prediction_s = number("window_max_prediction_s");
-  return params;
-}
-
 MatcherReach matcherReachOf(const MatcherSettings& settings) {
   MatcherReach reach;
   reach.min_disparity = settings.min_disparity;
@@ -401,7 +323,7 @@ MatcherReach matcherReachOf(const MatcherSettings& settings) {
   return reach;
 }
 
-FarStagePair farStagePair(const SyntheticScene& scene, int decimation) {
+FarStagePair farStagePair(const SyntheticScene& scene) {
   cv::Mat left_full, right_full;
   renderStereoPair(scene, &left_full, &right_full);
   PinholeCalibration camera;
@@ -413,12 +335,9 @@ FarStagePair farStagePair(const SyntheticScene& scene, int decimation) {
   PinholeCalibration right_camera = camera;
   right_camera.projection(0, 3) = -scene.focal_px * scene.baseline_m;
   FarStagePair pair;
-  DecimatingRectifier(camera, decimation).rectify(left_full, &pair.left);
-  DecimatingRectifier(right_camera, decimation).rectify(right_full, &pair.right);
+  WindowRectifier(camera).rectify(left_full, &pair.left);
+  WindowRectifier(right_camera).rectify(right_full, &pair.right);
   pair.geometry = geometryOf(scene);
-  pair.geometry.focal_px /= decimation;
-  pair.geometry.cx_px /= decimation;
-  pair.geometry.cy_px /= decimation;
   return pair;
 }
 

@@ -10,7 +10,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
-#include "docking_perception/disparity/decimating_rectifier.h"
+#include "docking_perception/disparity/window_rectifier.h"
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/target_track_gate.h"
 #include "docking_perception/disparity/tracking_window.h"
@@ -80,13 +80,11 @@ int maxDisparity(const MatcherSettings& settings);
 // (no right-image pixels for the largest disparity plus half the correlation window).
 cv::Rect matcherValidRegion(const MatcherSettings& settings, cv::Size image_size);
 
-// The detector's parameters from config/disparity_detector.yaml (the node's own file). Throws
-// std::runtime_error naming the file and field when one is missing or not a number. The target's
-// shape is not in that file: the default (the shipped mockup) unless the caller sets it from
-// loadTargetShape(config/target.yaml).
-DetectorParams loadDetectorParams(const std::string& path);
-// The track gate's keys of the same file.
-TrackGateParams loadTrackGateParams(const std::string& path);
+// The disparity detector's and far_stereo_rectify's settings as shipped: the declared defaults with the
+// values of `config_dir`'s disparity_detector.yaml and far_stereo.yaml (what the nodes run). Throws
+// docking_settings::ConfigError naming a key the declaration does not allow.
+DisparityDetectorSettings shippedDetectorSettings(const std::string& config_dir);
+FarStereoSettings shippedFarStereoSettings(const std::string& config_dir);
 
 // A camera in ROS camera_calibration's YAML format (config/cameras/*.yaml).
 struct CameraCalibration {
@@ -94,24 +92,20 @@ struct CameraCalibration {
   cv::Mat camera_matrix, distortion, rectification, projection;  // CV_64F
 };
 CameraCalibration loadCameraCalibration(const std::string& path);
-// The same camera in the core library's form (DecimatingRectifier).
+// The same camera in the core library's form (WindowRectifier).
 PinholeCalibration pinholeOf(const CameraCalibration& calibration);
 
-// The far stage's reduced resolution while tracking (config/far_stereo.yaml's `tracking_decimation`).
-int loadTrackingDecimation(const std::string& path);
-// The tracking window's settings (config/far_stereo.yaml's `window_*`), and what the matcher of `settings`
-// needs around a pixel (far_stereo_rectify reads the same from config/stereo_image_proc.yaml).
-TrackingWindowParams loadTrackingWindow(const std::string& path);
+// What the matcher of `settings` needs around a pixel (far_stereo_rectify reads the same from
+// config/stereo_image_proc.yaml).
 MatcherReach matcherReachOf(const MatcherSettings& settings);
 
-// A rendered (rectified, full-resolution) pair as the far stage sees it at `decimation`: each image
-// through DecimatingRectifier (area-averaged; the scene's cameras have no distortion), and the
-// reduced stereo geometry (image_geometry's, binning = decimation).
+// A rendered (rectified) pair as the far stage sees it: each image through WindowRectifier (the scene's
+// cameras have no distortion), and the stereo geometry.
 struct FarStagePair {
   cv::Mat left, right;
   StereoGeometry geometry;
 };
-FarStagePair farStagePair(const SyntheticScene& scene, int decimation);
+FarStagePair farStagePair(const SyntheticScene& scene);
 
 // The target mockup of config/target.yaml seen face-on at `position_m` (the port centre, left
 // rectified optical frame), with its body and solar panels behind the face, on a floor 0.25 m below

@@ -10,6 +10,8 @@
 #include "docking_perception/disparity/disparity_detector.h"
 #include "painted_disparity.h"
 
+#include <docking_settings/config_error.h>
+
 namespace docking_perception {
 namespace disparity {
 namespace {
@@ -17,6 +19,10 @@ namespace {
 using test::disparityAt;
 using test::ourGeometry;
 using test::paintRect;
+using test::detectorWith;
+using test::shippedDetector;
+using test::shippedParams;
+using test::shippedShape;
 
 cv::Mat invalidImage() { return cv::Mat(480, 640, CV_32FC1, cv::Scalar(-1.0f)); }
 
@@ -29,10 +35,10 @@ cv::Point2d projected(double x, double y, double z) {
 TEST(DisparityDetector, PlaneAtKnownDepthIsFoundAtItsPosition) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.20, -0.05, 3.0, 0.30, 0.24);
-  const DisparityDetector detector{DetectorParams{}};
+  const DisparityDetector detector = shippedDetector();
   const Detection result = detector.detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
-  EXPECT_EQ(result.outcome, Outcome::kFound);
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kPassed));
   EXPECT_TRUE(result.reason.empty());
   EXPECT_NEAR(result.disparity_px, disparityAt(3.0), 1e-4);
   EXPECT_NEAR(result.position_m.z(), 3.0, 1e-3);
@@ -50,7 +56,7 @@ TEST(DisparityDetector, NearerOfTwoObjectsWins) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, -0.6, 0.0, 4.0, 0.6, 0.5);   // bigger, farther
   paintRect(&disparity, 0.4, -0.02, 2.5, 0.30, 0.24);  // smaller, nearer: the target
-  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  const Detection result = shippedDetector().detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_NEAR(result.position_m.z(), 2.5, 0.01);
   EXPECT_NEAR(result.position_m.x(), 0.4, 0.01);
@@ -78,7 +84,7 @@ TEST(DisparityDetector, NoisyPlaneWithSpikesIsRecovered) {
       }
     }
   }
-  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  const Detection result = shippedDetector().detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_LT(result.closest_disparity_px, 25.0) << "a spike was taken as the closest object";
   EXPECT_NEAR(result.position_m.z(), 3.0, 0.03 * 3.0);
@@ -87,30 +93,30 @@ TEST(DisparityDetector, NoisyPlaneWithSpikesIsRecovered) {
 }
 
 TEST(DisparityDetector, EmptyImageIsRejectedWithReason) {
-  const DisparityDetector detector{DetectorParams{}};
+  const DisparityDetector detector = shippedDetector();
   const Detection empty = detector.detect(cv::Mat(), ourGeometry());
   EXPECT_FALSE(empty.found);
-  EXPECT_EQ(empty.outcome, Outcome::kBadInput);
+  EXPECT_EQ(empty.outcome, StageOutcome(InputOutcome::kEmptyImage));
   EXPECT_NE(empty.reason.find("empty"), std::string::npos) << empty.reason;
 }
 
 TEST(DisparityDetector, AllInvalidImageIsRejectedWithReason) {
-  const DisparityDetector detector{DetectorParams{}};
+  const DisparityDetector detector = shippedDetector();
   cv::Mat nan_image(480, 640, CV_32FC1, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
   for (const cv::Mat& image : {invalidImage(), nan_image}) {
     const Detection result = detector.detect(image, ourGeometry());
     EXPECT_FALSE(result.found);
-    EXPECT_EQ(result.outcome, Outcome::kNoValidDisparity);
+    EXPECT_EQ(result.outcome, StageOutcome(ValidDisparityOutcome::kTooFewValid));
     EXPECT_EQ(result.valid_pixels, 0);
     EXPECT_NE(result.reason.find("valid disparity"), std::string::npos) << result.reason;
   }
 }
 
 TEST(DisparityDetector, WrongImageTypeAndGeometryAreRejectedWithReason) {
-  const DisparityDetector detector{DetectorParams{}};
+  const DisparityDetector detector = shippedDetector();
   const Detection wrong_type = detector.detect(cv::Mat(480, 640, CV_16SC1, cv::Scalar(100)),
                                                ourGeometry());
-  EXPECT_EQ(wrong_type.outcome, Outcome::kBadInput);
+  EXPECT_EQ(wrong_type.outcome, StageOutcome(InputOutcome::kBadEncoding));
   EXPECT_NE(wrong_type.reason.find("32-bit float"), std::string::npos) << wrong_type.reason;
 
   cv::Mat disparity = invalidImage();
@@ -118,7 +124,7 @@ TEST(DisparityDetector, WrongImageTypeAndGeometryAreRejectedWithReason) {
   StereoGeometry no_baseline = ourGeometry();
   no_baseline.baseline_m = 0.0;
   const Detection bad_geometry = detector.detect(disparity, no_baseline);
-  EXPECT_EQ(bad_geometry.outcome, Outcome::kBadInput);
+  EXPECT_EQ(bad_geometry.outcome, StageOutcome(InputOutcome::kBadGeometry));
   EXPECT_NE(bad_geometry.reason.find("baseline"), std::string::npos) << bad_geometry.reason;
 }
 
@@ -126,11 +132,15 @@ TEST(DisparityDetector, BlobOnTheImageBorderIsRejected) {
   cv::Mat disparity = invalidImage();
   // Cut by the right image edge: the centre of what is visible is not the target's centre.
   disparity(cv::Rect(600, 200, 40, 60)).setTo(cv::Scalar(disparityAt(3.0)));
-  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  const Detection result = shippedDetector().detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kBlobTouchesBorder);
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kBlobTouchesBorder));
   EXPECT_NE(result.reason.find("right"), std::string::npos) << result.reason;
   EXPECT_FALSE(result.mask.empty()) << "a rejected blob is still returned for the debug image";
+
+  DetectorParams keep_cut = shippedParams();
+  keep_cut.reject_cut_blobs = false;  // the ablation's switch (scripts/ablate/rules): then it is reported
+  EXPECT_TRUE(detectorWith(keep_cut).detect(disparity, ourGeometry()).found);
 }
 
 TEST(DisparityDetector, BlobOnTheBlindLeftBandIsRejected) {
@@ -138,24 +148,24 @@ TEST(DisparityDetector, BlobOnTheBlindLeftBandIsRejected) {
   // band's edge is cut by it, even though it is far from the image's own left edge.
   cv::Mat disparity = invalidImage();
   disparity(cv::Rect(110, 200, 50, 40)).setTo(cv::Scalar(disparityAt(3.0)));
-  const DisparityDetector detector{DetectorParams{}};
+  const DisparityDetector detector = shippedDetector();
   const Detection in_full_image = detector.detect(disparity, ourGeometry());
   EXPECT_TRUE(in_full_image.found) << in_full_image.reason;
   const Detection with_band =
       detector.detect(disparity, ourGeometry(), 0.0, 95.0, cv::Rect(109, 0, 531, 480));
-  EXPECT_EQ(with_band.outcome, Outcome::kBlobTouchesBorder);
+  EXPECT_EQ(with_band.outcome, StageOutcome(PlausibilityOutcome::kBlobTouchesBorder));
   EXPECT_NE(with_band.reason.find("left"), std::string::npos) << with_band.reason;
 }
 
 TEST(DisparityDetector, TooSmallBlobIsRejected) {
   cv::Mat disparity = invalidImage();
   disparity(cv::Rect(300, 200, 10, 10)).setTo(cv::Scalar(disparityAt(3.0)));
-  DetectorParams params;
+  DetectorParams params = shippedParams();
   params.closest_min_pixels = 20;  // the 100-pixel square is "the closest object"...
   params.min_blob_area_px = 150;   // ...but too small to be the target
-  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection result = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kBlobTooSmall);
+  EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kAllBlobsTooSmall));
   EXPECT_NE(result.reason.find("too small"), std::string::npos) << result.reason;
   EXPECT_FALSE(result.contour.empty()) << "the rejected blob is kept for the debug image";
 }
@@ -166,7 +176,7 @@ TEST(DisparityDetector, SmallNearObjectIsLookedBehind) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.1, 0.0, 3.0, 0.30, 0.24);
   disparity(cv::Rect(150, 120, 20, 20)).setTo(cv::Scalar(disparityAt(1.2)));
-  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  const Detection result = shippedDetector().detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_EQ(result.near_objects_skipped, 1);
   EXPECT_NEAR(result.position_m.z(), 3.0, 0.01);
@@ -179,14 +189,15 @@ TEST(DisparityDetector, ThinNearStripIsLookedBehind) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.0, 0.0, 2.0, 0.30, 0.24);
   disparity(cv::Rect(230, 200, 8, 80)).setTo(cv::Scalar(64.0));
-  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  const Detection result = shippedDetector().detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_EQ(result.near_objects_skipped, 1);
   EXPECT_NEAR(result.position_m.z(), 2.0, 0.01);
 
-  DetectorParams no_thickness_check;
+  DetectorParams no_thickness_check = shippedParams();
   no_thickness_check.min_blob_thickness_px = 0.0;
-  const Detection fooled = DisparityDetector{no_thickness_check}.detect(disparity, ourGeometry());
+  no_thickness_check.shape_check_enabled = false;  // it refuses the strip too (its width): the thickness alone
+  const Detection fooled = detectorWith(no_thickness_check).detect(disparity, ourGeometry());
   EXPECT_LT(fooled.position_m.z(), 1.0) << "without the check the strip is taken for the target";
 }
 
@@ -195,28 +206,27 @@ TEST(DisparityDetector, TinyNearSpeckDoesNotHideTheTarget) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.0, 0.0, 3.0, 0.30, 0.24);
   disparity(cv::Rect(100 + 150, 100, 8, 8)).setTo(cv::Scalar(disparityAt(1.0)));
-  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  const Detection result = shippedDetector().detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_NEAR(result.position_m.z(), 3.0, 0.01);
 }
 
 TEST(DisparityDetector, TooLargeBlobIsRejected) {
+  // The face at 0.35 m: the mockup's shape, but 471 x 377 px, more than max_blob_area_fraction of the image.
   cv::Mat disparity = invalidImage();
-  disparity(cv::Rect(20, 20, 600, 440)).setTo(cv::Scalar(disparityAt(1.5)));
-  DetectorParams params;
-  params.floor_cut_enabled = false;  // the cut would remove the wall's lower part
-  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  paintRect(&disparity, 0.0, 0.0, 0.35, 0.30, 0.24);
+  const Detection result = shippedDetector().detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kBlobTooLarge);
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kBlobTooLarge));
 }
 
 TEST(DisparityDetector, DisparityOutsideThePlausibleRangeIsRejected) {
   cv::Mat disparity = invalidImage();
-  paintRect(&disparity, 0.0, 0.0, 0.45, 0.10, 0.08);  // 122 px > max_disparity_px 100
-  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  paintRect(&disparity, 0.0, 0.0, 0.55, 0.30, 0.24);  // the face at 0.55 m: 100 px > max_disparity_px 92
+  const Detection result = shippedDetector().detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kDisparityOutOfRange);
-  EXPECT_NEAR(result.disparity_px, disparityAt(0.45), 1e-3);
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kDisparityOutOfRange));
+  EXPECT_NEAR(result.disparity_px, disparityAt(0.55), 1e-3);
 }
 
 TEST(DisparityDetector, FloorIsIgnoredByTheHeightCut) {
@@ -230,21 +240,15 @@ TEST(DisparityDetector, FloorIsIgnoredByTheHeightCut) {
   }
   paintRect(&disparity, 0.1, 0.0, 3.0, 0.30, 0.24);
 
-  DetectorParams params;
-  const Detection with_cut = DisparityDetector{params}.detect(disparity, g);
+  DetectorParams params = shippedParams();
+  const Detection with_cut = detectorWith(params).detect(disparity, g);
   ASSERT_TRUE(with_cut.found) << with_cut.reason;
   EXPECT_NEAR(with_cut.position_m.z(), 3.0, 0.01);
   EXPECT_NEAR(with_cut.position_m.x(), 0.1, 0.01);
 
   params.floor_cut_enabled = false;
-  const Detection without_cut = DisparityDetector{params}.detect(disparity, g);
+  const Detection without_cut = detectorWith(params).detect(disparity, g);
   EXPECT_FALSE(without_cut.found) << "without the cut the floor is the closest object";
-
-  // The other remedy: look only above row 269 (the floor there is 4.8 m away, behind the target).
-  params.roi_bottom_fraction = 0.56;
-  const Detection with_roi = DisparityDetector{params}.detect(disparity, g);
-  ASSERT_TRUE(with_roi.found) << with_roi.reason;
-  EXPECT_NEAR(with_roi.position_m.z(), 3.0, 0.01);
 }
 
 TEST(DisparityDetector, CeilingIsIgnoredByTheHeightCut) {
@@ -252,13 +256,13 @@ TEST(DisparityDetector, CeilingIsIgnoredByTheHeightCut) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.0, 0.0, 6.0, 0.30, 0.24);
   paintRect(&disparity, 1.0, -2.0, 4.5, 0.6, 0.5);
-  DetectorParams params;
+  DetectorParams params = shippedParams();
   params.ceiling_cut_y_m = 1.0;
-  const Detection with_cut = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection with_cut = detectorWith(params).detect(disparity, ourGeometry());
   ASSERT_TRUE(with_cut.found) << with_cut.reason;
   EXPECT_NEAR(with_cut.position_m.z(), 6.0, 0.02);
   params.ceiling_cut_y_m = 0.0;
-  const Detection without_cut = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection without_cut = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_LT(without_cut.position_m.z(), 5.0) << "without the cut the ceiling patch wins";
 }
 
@@ -268,7 +272,11 @@ TEST(DisparityDetector, CentreIsTheFaceNotTheWholeBlob) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.30, 0.0, 3.15, 0.30, 0.16);  // panel to the right of the box
   paintRect(&disparity, 0.0, 0.0, 3.0, 0.30, 0.24);    // face
-  const Detection result = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  // The nearest layer's centroid, which the shipped footprint fit replaces (test_footprint_fit.cpp); the
+  // ablation runs it when the fit is off.
+  DetectorParams nearest_layer = shippedParams();
+  nearest_layer.footprint_fit_enabled = false;
+  const Detection result = detectorWith(nearest_layer).detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_GT(result.blob_pixels, result.face_pixels) << "the panel belongs to the blob";
   const cv::Point2d face_centre = projected(0.0, 0.0, 3.0);
@@ -313,9 +321,9 @@ TEST(Reproject, DepthErrorLiesAlongTheLineOfSight) {
 
 TEST(DisparityDetector, DetectedCovarianceGrowsAsRangeSquared) {
   // The propagated stereo noise alone: the port offset term is the same at every range.
-  DetectorParams params;
+  DetectorParams params = shippedParams();
   params.port_offset_sigma_m = 0.0;
-  const DisparityDetector detector{params};
+  const DisparityDetector detector = detectorWith(params);
   cv::Mat near_image = invalidImage(), far_image = invalidImage();
   paintRect(&near_image, 0.0, 0.0, 2.0, 0.30, 0.24);
   paintRect(&far_image, 0.0, 0.0, 4.0, 0.30, 0.24);
@@ -325,25 +333,38 @@ TEST(DisparityDetector, DetectedCovarianceGrowsAsRangeSquared) {
   EXPECT_NEAR(std::sqrt(far_result.covariance_m2(2, 2) / near_result.covariance_m2(2, 2)), 4.0, 0.05);
 }
 
-TEST(DetectorParams, InvalidFieldsAreNamedAndNotApplied) {
-  DetectorParams bad;
-  bad.median_kernel_px = 4;
-  bad.max_disparity_px = 2.0;  // below min_disparity_px 4
-  const auto errors = validateParams(bad);
-  ASSERT_EQ(errors.size(), 2u);
-  EXPECT_NE(errors[0].find("median_kernel_px"), std::string::npos);
-  EXPECT_NE(errors[1].find("max_disparity_px"), std::string::npos);
+// The key named in a refused configuration (the node's loader prefixes nothing: the detector's keys are
+// top-level).
+std::string refusedKey(const DetectorParams& params) {
+  try {
+    validate(params, shippedShape());
+  } catch (const docking_settings::ConfigError& e) {
+    return e.key();
+  }
+  return "";
+}
 
-  DisparityDetector detector{DetectorParams{}};
+TEST(DetectorParams, InvalidSettingsAreNamedAndNotApplied) {
+  EXPECT_EQ(refusedKey(shippedParams()), "");
+  DetectorParams bad = shippedParams();
+  bad.median_kernel_px = 4;  // inside its range, but not a kernel OpenCV's float median has
+  EXPECT_EQ(refusedKey(bad), "median_kernel_px");
+  bad = shippedParams();
+  bad.max_disparity_px = 2.0;  // below min_disparity_px 4
+  EXPECT_EQ(refusedKey(bad), "max_disparity_px");
+  bad = shippedParams();
+  bad.min_blob_area_px = 0;  // outside its declared range
+  EXPECT_EQ(refusedKey(bad), "min_blob_area_px");
+
+  DisparityDetector detector = shippedDetector();
   EXPECT_THROW(detector.setParams(bad), std::invalid_argument);
-  EXPECT_EQ(detector.params().median_kernel_px, DetectorParams{}.median_kernel_px);
-  EXPECT_TRUE(validateParams(DetectorParams{}).empty());
+  EXPECT_EQ(detector.params().min_blob_area_px, shippedParams().min_blob_area_px);
 }
 
 TEST(DebugImage, ShowsTheBlobInTheOutcomeColour) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.0, 0.0, 3.0, 0.30, 0.24);
-  const Detection found = DisparityDetector{DetectorParams{}}.detect(disparity, ourGeometry());
+  const Detection found = shippedDetector().detect(disparity, ourGeometry());
   const cv::Mat image = renderDebugImage(disparity, found, 100.0);
   ASSERT_EQ(image.type(), CV_8UC3);
   ASSERT_EQ(image.size(), disparity.size());

@@ -14,7 +14,16 @@
 #include <sensor_msgs/image_encodings.h>
 #include <stereo_msgs/DisparityImage.h>
 
+#include "docking_perception/disparity/stages.h"
+
 namespace {
+
+namespace disparity = docking_perception::disparity;
+
+// The wire's numbers of a stage and of an outcome code (stages.h).
+std::uint8_t stage(disparity::Stage s) { return static_cast<std::uint8_t>(s); }
+template <typename Code>
+std::uint8_t code(Code c) { return static_cast<std::uint8_t>(c); }
 
 constexpr double kFocalPx = 550.0;
 constexpr double kBaselineM = 0.10;
@@ -148,6 +157,9 @@ TEST_F(DisparityDetectorNode, PublishesThePositionOfTheFaceWithItsStampAndFrame)
   EXPECT_NEAR(estimate.disparity_px, kFocalPx * kBaselineM / 3.0, 1e-3);
   EXPECT_GT(estimate.feature_inliers, 1000u);
   EXPECT_GT(estimate.processing_time_ms, 0.0);
+  // Valid: decided by the last stage, passed.
+  EXPECT_EQ(estimate.stage, stage(disparity::Stage::kOutput));
+  EXPECT_EQ(estimate.stage_outcome, docking_msgs::TargetEstimate::STAGE_PASSED);
   // Position block: sigma_Z = Z^2 * 0.25 / (f B), plus port_offset_sigma_m 0.04 m of the node's
   // config/disparity_detector.yaml on every axis; orientation unknown.
   const double sigma_z = 9.0 * 0.25 / 55.0, port_offset_sigma = 0.04;
@@ -163,6 +175,9 @@ TEST_F(DisparityDetectorNode, NothingToSeeIsPublishedAsInvalidWithTheReason) {
   EXPECT_FALSE(estimate.valid);
   EXPECT_FALSE(estimate.position_valid);
   EXPECT_NE(estimate.status.find("valid disparity"), std::string::npos) << estimate.status;
+  EXPECT_EQ(estimate.reject_reason, docking_msgs::TargetEstimate::REJECT_NOT_FOUND);
+  EXPECT_EQ(estimate.stage, stage(disparity::Stage::kValidDisparity));
+  EXPECT_EQ(estimate.stage_outcome, code(disparity::ValidDisparityOutcome::kTooFewValid));
 }
 
 TEST_F(DisparityDetectorNode, BadImagesAreReportedAndTheNodeKeepsWorking) {
@@ -172,6 +187,9 @@ TEST_F(DisparityDetectorNode, BadImagesAreReportedAndTheNodeKeepsWorking) {
   ASSERT_TRUE(exchange(wrong_encoding, &estimate));
   EXPECT_FALSE(estimate.valid);
   EXPECT_NE(estimate.status.find("encoding"), std::string::npos) << estimate.status;
+  EXPECT_EQ(estimate.reject_reason, docking_msgs::TargetEstimate::REJECT_BAD_INPUT);
+  EXPECT_EQ(estimate.stage, stage(disparity::Stage::kInput));
+  EXPECT_EQ(estimate.stage_outcome, code(disparity::InputOutcome::kBadEncoding));
 
   stereo_msgs::DisparityImage empty = makeDisparity(0.0, 0.0, 3.0, ros::Time());
   empty.image.width = 0;
@@ -180,12 +198,14 @@ TEST_F(DisparityDetectorNode, BadImagesAreReportedAndTheNodeKeepsWorking) {
   ASSERT_TRUE(exchange(empty, &estimate));
   EXPECT_FALSE(estimate.valid);
   EXPECT_NE(estimate.status.find("empty"), std::string::npos) << estimate.status;
+  EXPECT_EQ(estimate.stage_outcome, code(disparity::InputOutcome::kEmptyImage));
 
   stereo_msgs::DisparityImage truncated = makeDisparity(0.0, 0.0, 3.0, ros::Time());
   truncated.image.data.resize(100);
   ASSERT_TRUE(exchange(truncated, &estimate));
   EXPECT_FALSE(estimate.valid);
   EXPECT_NE(estimate.status.find("too short"), std::string::npos) << estimate.status;
+  EXPECT_EQ(estimate.stage_outcome, code(disparity::InputOutcome::kTruncatedData));
 
   ASSERT_TRUE(exchange(makeDisparity(-0.3, 0.0, 4.0, ros::Time()), &estimate))
       << "the node stopped answering after bad input";
@@ -221,6 +241,8 @@ TEST_F(DisparityDetectorNode, AWindowIsReadWithItsOwnCameraInfoAndDroppedWithout
   ASSERT_TRUE(exchangeAt(cut, ros::Time(5001, 0), &estimate));
   EXPECT_FALSE(estimate.valid) << "read at " << estimate.pose.pose.position.x;
   EXPECT_NE(estimate.status.find("no camera_info"), std::string::npos) << estimate.status;
+  EXPECT_EQ(estimate.stage, stage(disparity::Stage::kInput));
+  EXPECT_EQ(estimate.stage_outcome, code(disparity::InputOutcome::kNoWindowCameraInfo));
 }
 
 TEST_F(DisparityDetectorNode, DebugImageShowsTheDetection) {

@@ -1,8 +1,6 @@
-// The far-range pipeline on rendered stereo pairs as perception.launch runs it (config/far_stereo.yaml):
-// at full resolution with the matcher of config/stereo_image_proc.yaml; and the reduced pair a user can
-// switch on for tracking inside 4 m (tracking_decimation 2), area-averaged (DecimatingRectifier), with the
-// matcher of config/stereo_image_proc_tracking.yaml; then the detector with config/disparity_detector.yaml's
-// settings scaled to that resolution. Known truth: the port centre of the rendered target.
+// The far-range pipeline on rendered stereo pairs as perception.launch runs it: the far stage's rectification
+// (WindowRectifier), the matcher of config/stereo_image_proc.yaml, then the detector with the shipped
+// settings. Known truth: the port centre of the rendered target.
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -23,46 +21,35 @@ struct PipelineResult {
   double stereo_limit_m = 0.0;  // Z^2 * 0.25 px / (f B): the issue's yardstick
 };
 
-int trackingDecimation() { return testing::loadTrackingDecimation(kConfigDir + "/far_stereo.yaml"); }
-// The reduced pair config/stereo_image_proc_tracking.yaml is set for (far_stereo.yaml tracking_decimation 2,
-// off by default): tested whether or not it is switched on.
-constexpr int kReducedDecimation = 2;
-
-// The far stage at `decimation` (1: acquiring; trackingDecimation(): tracking). `params` at the calibrated
-// resolution, as config/disparity_detector.yaml gives them.
-Detection detectInScene(const testing::SyntheticScene& scene, const DetectorParams& params, int decimation = 1,
+// The far stage on the scene's pair with `params` (at the calibrated resolution).
+Detection detectInScene(const testing::SyntheticScene& scene, const DetectorParams& params,
                         StereoGeometry* geometry_used = nullptr) {
-  const auto settings = testing::loadMatcherSettings(
-      kConfigDir + (decimation > 1 ? "/stereo_image_proc_tracking.yaml" : "/stereo_image_proc.yaml"));
-  const testing::FarStagePair pair = testing::farStagePair(scene, decimation);
+  const auto settings = testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml");
+  const testing::FarStagePair pair = testing::farStagePair(scene);
   auto matcher = testing::createMatcher(settings);
   const cv::Mat disparity = testing::computeDisparity(*matcher, pair.left, pair.right);
   const cv::Rect valid = testing::matcherValidRegion(settings, disparity.size());
   if (geometry_used) *geometry_used = pair.geometry;
-  return DisparityDetector(detectorParamsAtDecimation(params, decimation))
+  return DisparityDetector(params, loadTargetShape(kConfigDir + "/target.yaml"))
       .detect(disparity, pair.geometry, settings.min_disparity, testing::maxDisparity(settings), valid);
 }
 
-DetectorParams configuredParams() {
-  DetectorParams params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
-  params.target_shape = loadTargetShape(kConfigDir + "/target.yaml");
-  return params;
-}
+// The shipped configuration (declared defaults with config/disparity_detector.yaml's values).
+DetectorParams configuredParams() { return testing::shippedDetectorSettings(kConfigDir).detector; }
 
-// The yardstick: a quarter pixel of disparity at the far stage's resolution (twice the range error at
-// half resolution: the cost of tracking at an eighth of the work).
-PipelineResult runPipeline(double x, double y, double z, int decimation) {
+// The yardstick: a quarter pixel of disparity.
+PipelineResult runPipeline(double x, double y, double z) {
   const testing::SyntheticScene scene = testing::targetScene(x, y, z, 12.0);
   PipelineResult result;
   StereoGeometry geometry;
-  result.detection = detectInScene(scene, configuredParams(), decimation, &geometry);
+  result.detection = detectInScene(scene, configuredParams(), &geometry);
   result.stereo_limit_m = z * z * 0.25 / (geometry.focal_px * geometry.baseline_m);
   return result;
 }
 
-void expectPositionWithinTwiceTheStereoLimit(double z, double x, int decimation) {
+void expectPositionWithinTwiceTheStereoLimit(double z, double x) {
   const double y = 0.0;  // the port is at camera height on the test bed
-  const PipelineResult result = runPipeline(x, y, z, decimation);
+  const PipelineResult result = runPipeline(x, y, z);
   const Detection& d = result.detection;
   ASSERT_TRUE(d.found) << "z " << z << " x " << x << ": " << d.reason;
   const double tolerance = 2.0 * result.stereo_limit_m;
@@ -77,24 +64,13 @@ void expectPositionWithinTwiceTheStereoLimit(double z, double x, int decimation)
 class FarRangePipeline : public ::testing::TestWithParam<std::tuple<double, double>> {};
 
 TEST_P(FarRangePipeline, PositionWithinTwiceTheStereoLimit) {
-  expectPositionWithinTwiceTheStereoLimit(std::get<0>(GetParam()), std::get<1>(GetParam()), 1);
+  expectPositionWithinTwiceTheStereoLimit(std::get<0>(GetParam()), std::get<1>(GetParam()));
 }
 
 INSTANTIATE_TEST_SUITE_P(OnAndOffAxis, FarRangePipeline,
                          ::testing::Values(std::make_tuple(2.0, 0.0), std::make_tuple(3.0, 0.0),
                                            std::make_tuple(3.0, 0.6), std::make_tuple(4.0, -0.5),
                                            std::make_tuple(6.0, 0.0), std::make_tuple(6.0, 1.0)));
-
-// Tracking inside 4 m (config/far_stereo.yaml tracking_range_m): the reduced pair.
-class TrackingPipeline : public ::testing::TestWithParam<std::tuple<double, double>> {};
-
-TEST_P(TrackingPipeline, PositionWithinTwiceTheStereoLimit) {
-  expectPositionWithinTwiceTheStereoLimit(std::get<0>(GetParam()), std::get<1>(GetParam()), kReducedDecimation);
-}
-
-INSTANTIATE_TEST_SUITE_P(InsideTheTrackingRange, TrackingPipeline,
-                         ::testing::Values(std::make_tuple(2.0, 0.0), std::make_tuple(3.0, 0.0),
-                                           std::make_tuple(3.0, 0.6), std::make_tuple(4.0, -0.5)));
 
 // Issue 11: a box of another size at the target's depth 1.5-2 m to the side, or nearer than the
 // target, must not be reported as the target; the target still is.
@@ -103,10 +79,10 @@ struct DistractorCase {
   double box_x, box_z, box_width, box_height;
 };
 
-void expectTheTargetNotTheBox(const DistractorCase& c, int decimation) {
+void expectTheTargetNotTheBox(const DistractorCase& c) {
   testing::SyntheticScene scene = testing::targetScene(c.target_x, 0.0, c.target_z, 12.0);
   scene.rects.push_back(testing::boxOnTheFloor(c.box_x, c.box_z, c.box_width, c.box_height, 31));
-  const Detection d = detectInScene(scene, configuredParams(), decimation);
+  const Detection d = detectInScene(scene, configuredParams());
   ASSERT_TRUE(d.found) << d.reason;
   EXPECT_NEAR(d.position_m.x(), c.target_x, 0.05 + 0.01 * c.target_z);
   EXPECT_NEAR(d.position_m.z(), c.target_z, 0.25);
@@ -114,13 +90,13 @@ void expectTheTargetNotTheBox(const DistractorCase& c, int decimation) {
   // Without the target, the box alone is never the target.
   testing::SyntheticScene box_only = scene;
   box_only.rects.erase(box_only.rects.begin(), box_only.rects.begin() + 3);  // face and panels
-  const Detection alone = detectInScene(box_only, configuredParams(), decimation);
+  const Detection alone = detectInScene(box_only, configuredParams());
   EXPECT_FALSE(alone.found) << "box at (" << alone.position_m.transpose() << ") taken for the target";
 }
 
 class DistractorPipeline : public ::testing::TestWithParam<DistractorCase> {};
 
-TEST_P(DistractorPipeline, TheTargetIsReportedNotTheBox) { expectTheTargetNotTheBox(GetParam(), 1); }
+TEST_P(DistractorPipeline, TheTargetIsReportedNotTheBox) { expectTheTargetNotTheBox(GetParam()); }
 
 INSTANTIATE_TEST_SUITE_P(
     BoxesBesideAndNearer, DistractorPipeline,
@@ -131,18 +107,6 @@ INSTANTIATE_TEST_SUITE_P(
         // Nearer than the target: a box at 4 m in front of a target at 6 m, a workbench at 2.5 m.
         DistractorCase{6.0, 0.0, 1.5, 4.0, 0.6, 0.8}, DistractorCase{4.0, 0.4, -0.9, 2.5, 0.9, 0.6},
         DistractorCase{3.0, 0.0, 0.9, 2.0, 0.5, 0.7}, DistractorCase{2.0, 0.2, -0.7, 2.0, 0.4, 0.6}));
-
-// The same boxes around a target tracked inside 4 m, on the reduced pair.
-class TrackingDistractorPipeline : public ::testing::TestWithParam<DistractorCase> {};
-
-TEST_P(TrackingDistractorPipeline, TheTargetIsReportedNotTheBox) {
-  expectTheTargetNotTheBox(GetParam(), kReducedDecimation);
-}
-
-INSTANTIATE_TEST_SUITE_P(
-    BoxesBesideAndNearer, TrackingDistractorPipeline,
-    ::testing::Values(DistractorCase{4.0, -0.4, 1.4, 4.0, 0.6, 0.9}, DistractorCase{4.0, 0.4, -0.9, 2.5, 0.9, 0.6},
-                      DistractorCase{3.0, 0.0, 0.9, 2.0, 0.5, 0.7}, DistractorCase{2.0, 0.2, -0.7, 2.0, 0.4, 0.6}));
 
 // Issue 11, eval_real_clutter_far_6m: the target merged with a box standing against its panel (one
 // blob the mockup cannot be), and a mockup-sized patch high on the far wall, 3.4 m to the side: the
@@ -165,7 +129,7 @@ TEST(FarRangePipeline, APatchHighBehindTheTargetMergedWithABoxIsNotReported) {
     EXPECT_NEAR(d.position_m.x(), 0.0, 0.3) << d.position_m.transpose();
     EXPECT_NEAR(d.position_m.z(), 6.0, 0.3) << d.position_m.transpose();
   } else {
-    EXPECT_EQ(d.outcome, Outcome::kNotTargetShaped) << d.reason;
+    EXPECT_EQ(d.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << d.reason;
   }
 }
 
@@ -193,13 +157,8 @@ TEST(FarRangePipeline, TheTargetMergedWithBoxesAroundItIsSplitOut) {
 }
 
 TEST(FarRangePipeline, ConfigFilesAreComplete) {
-  const int decimation = trackingDecimation();
-  EXPECT_GE(decimation, 1);
-  EXPECT_LE(decimation, 4);
   EXPECT_NO_THROW(testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml"));
-  EXPECT_NO_THROW(testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc_tracking.yaml"));
-  const auto params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
-  EXPECT_TRUE(validateParams(params).empty());
+  EXPECT_NO_THROW(validate(configuredParams(), loadTargetShape(kConfigDir + "/target.yaml")));
   EXPECT_THROW(testing::loadMatcherSettings(kConfigDir + "/no_such_file.yaml"), std::runtime_error);
 }
 

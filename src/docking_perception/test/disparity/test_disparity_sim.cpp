@@ -28,10 +28,9 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
   const double max_error_fraction = private_nh.param("max_position_error_fraction", 0.05);
   const double min_detection_rate = private_nh.param("min_detection_rate", 0.9);
   const double wall_timeout_s = private_nh.param("wall_timeout_s", 300.0);
-  // The far stage's reduced pair or tracking window while tracking (config/far_stereo.yaml): at least this
-  // many of the matched estimates come from a disparity image narrower than the calibrated width; 0: not
-  // checked.
-  const int min_reduced_frames = private_nh.param("min_reduced_frames", 0);
+  // The far stage's tracking window while tracking (config/far_stereo.yaml): at least this many of the matched
+  // estimates come from a disparity image narrower than the calibrated width; 0: not checked.
+  const int min_window_frames = private_nh.param("min_window_frames", 0);
   const int calibrated_width = private_nh.param("calibrated_width", 640);
 
   std::mutex mutex;
@@ -65,8 +64,8 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
     }
     return matched;
   };
-  // Matched estimates made on the reduced pair.
-  auto reduced = [&](const std::vector<Pair>& matched) {
+  // Matched estimates made on a tracking window.
+  auto windowed = [&](const std::vector<Pair>& matched) {
     std::lock_guard<std::mutex> lock(mutex);
     int count = 0;
     for (const Pair& pair : matched) {
@@ -77,7 +76,7 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
   };
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wall_timeout_s);
   while (ros::ok() && ros::WallTime::now() < deadline &&
-         (static_cast<int>(pairs().size()) < min_frames || reduced(pairs()) < min_reduced_frames)) {
+         (static_cast<int>(pairs().size()) < min_frames || windowed(pairs()) < min_window_frames)) {
     ros::spinOnce();
     ros::WallDuration(0.05).sleep();
   }
@@ -87,10 +86,10 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
       << " s wall time (" << estimates_by_stamp.size() << " estimates, " << truth_by_stamp.size()
       << " truth messages)";
 
-  const int reduced_frames = reduced(matched);
-  EXPECT_GE(reduced_frames, min_reduced_frames)
-      << "only " << reduced_frames << " of " << matched.size()
-      << " estimates came from the reduced pair or a tracking window: did far_stereo_rectify switch while "
+  const int window_frames = windowed(matched);
+  EXPECT_GE(window_frames, min_window_frames)
+      << "only " << window_frames << " of " << matched.size()
+      << " estimates came from a tracking window: did far_stereo_rectify switch while "
          "tracking?";
 
   int valid = 0;
@@ -117,7 +116,7 @@ TEST(DisparitySimulation, EstimatesAreWithinFivePercentOfTheTruth) {
   if (!range_errors.empty()) {
     std::sort(range_errors.begin(), range_errors.end());
     std::cout << "disparity vs truth: " << valid << " of " << matched.size() << " frames found ("
-              << reduced_frames << " on the reduced pair or a window), range error median " << 100.0 * range_errors[range_errors.size() / 2]
+              << window_frames << " on a window), range error median " << 100.0 * range_errors[range_errors.size() / 2]
               << " %, max " << 100.0 * range_errors.back() << " %\n";
   }
   const double rate = static_cast<double>(valid) / static_cast<double>(matched.size());

@@ -13,6 +13,8 @@
 #include "docking_perception/disparity/face_appearance.h"
 #include "painted_disparity.h"
 
+#include <docking_settings/config_error.h>
+
 namespace docking_perception {
 namespace disparity {
 namespace {
@@ -73,13 +75,14 @@ cv::Mat scene(const cv::Mat& face_picture, const Eigen::Vector3d& port, double y
   return image;
 }
 
-FaceAppearanceParams shippedParams() { return FaceAppearanceParams(); }
+// The shipped appearance settings (config/disparity_detector.yaml over the declared defaults).
+FaceAppearanceParams shippedAppearance() { return test::shippedParams().appearance; }
 
 // A detection the detector found at `position_m`, with `covariance_m2` (default: none).
 Detection foundAt(const Eigen::Vector3d& position_m, const Eigen::Matrix3d& covariance_m2 = Eigen::Matrix3d::Zero()) {
   Detection detection;
   detection.found = true;
-  detection.outcome = Outcome::kFound;
+  detection.outcome = PlausibilityOutcome::kPassed;
   detection.position_m = position_m;
   detection.covariance_m2 = covariance_m2;
   return detection;
@@ -94,11 +97,11 @@ TEST(FaceAppearance, ThePrintIsFoundFromTwoToSixMetresTurnedAndWithThePortOffByT
       const cv::Mat image = scene(print, port, yaw_deg * M_PI / 180.0, 1.0, 4.0);
       // The detector's port: up to ~0.1 m beside the truth at 6 m.
       const Eigen::Vector3d detected = port + Eigen::Vector3d(0.08, -0.03, 0.05);
-      const AppearanceResult result = check.check(image, ourCamera(), detected, shippedParams());
+      const AppearanceResult result = check.check(image, ourCamera(), detected, shippedAppearance());
       EXPECT_EQ(result.verdict, AppearanceVerdict::kLooksLikeTarget)
           << "z " << z << " yaw " << yaw_deg << ": " << result.reason;
       // Measured 0.56 (6 m, turned 50 deg) to 0.81 (2 m); boxes 0.22-0.38 (below).
-      EXPECT_GE(result.score, shippedParams().min_score + 0.05) << "z " << z << " yaw " << yaw_deg;
+      EXPECT_GE(result.score, shippedAppearance().min_score + 0.05) << "z " << z << " yaw " << yaw_deg;
       // The match is on the face, not beside it.
       const double truth_u = 319.5 + 550.0 * port.x() / z;
       EXPECT_NEAR(result.matched_centre_px.x, truth_u, 0.05 * 550.0 / z + 2.0) << "z " << z << " yaw " << yaw_deg;
@@ -115,7 +118,7 @@ TEST(FaceAppearance, AMatchedPrintMovesThePortAcrossTheLineOfSightToThePrintsCen
       const cv::Mat image = scene(print, port, yaw_deg * M_PI / 180.0, 1.0, 4.0);
       // A turned target's footprint fit: the port 0.2 m aside (campaign seed 7515: up to 0.23 m at 2.7 m).
       Detection detection = foundAt(port + Eigen::Vector3d(0.2, -0.04, 0.03));
-      confirmByAppearance(check, image, cv::Mat(), ourCamera(), shippedParams(), &detection);
+      confirmByAppearance(check, image, cv::Mat(), ourCamera(), shippedAppearance(), &detection);
       ASSERT_TRUE(detection.found) << detection.reason;
       // Within ~1 px of the working scale (the face reduced to 24 px: 1.2 cm at 2 m, 1.1 cm at 6 m).
       EXPECT_NEAR(detection.position_m.x(), port.x(), 0.025) << "z " << z << " yaw " << yaw_deg;
@@ -125,7 +128,7 @@ TEST(FaceAppearance, AMatchedPrintMovesThePortAcrossTheLineOfSightToThePrintsCen
     }
   }
   // Switched off: the check judges, the port stays.
-  FaceAppearanceParams keep = shippedParams();
+  FaceAppearanceParams keep = shippedAppearance();
   keep.refine_port = false;
   const Eigen::Vector3d port(0.2, 0.0, 3.0);
   Detection detection = foundAt(port + Eigen::Vector3d(0.1, 0.0, 0.0));
@@ -148,7 +151,7 @@ TEST(FaceAppearance, AMatchedPrintTakesThePortsDepthFromTheFacesOwnDisparity) {
       .setTo(static_cast<float>(test::disparityAt(port.z())));
   // The footprint fit's swing at 2.2 m, with the detector's depth sigma there.
   Detection detection = foundAt(port + Eigen::Vector3d(0.1, 0.0, 0.12), Eigen::Matrix3d::Identity() * 0.046 * 0.046);
-  confirmByAppearance(check, image, disparity, ourCamera(), shippedParams(), &detection);
+  confirmByAppearance(check, image, disparity, ourCamera(), shippedAppearance(), &detection);
   ASSERT_TRUE(detection.found) << detection.reason;
   EXPECT_NEAR(detection.position_m.z(), port.z(), 0.005);
   EXPECT_NEAR(detection.position_m.x(), port.x(), 0.025);
@@ -157,13 +160,13 @@ TEST(FaceAppearance, AMatchedPrintTakesThePortsDepthFromTheFacesOwnDisparity) {
   // Too few valid disparities on the face: its depth is kept.
   cv::Mat holes(image.size(), CV_32FC1, cv::Scalar(-1.0f));
   Detection kept = foundAt(port + Eigen::Vector3d(0.0, 0.0, 0.12), detection.covariance_m2);
-  confirmByAppearance(check, image, holes, ourCamera(), shippedParams(), &kept);
+  confirmByAppearance(check, image, holes, ourCamera(), shippedAppearance(), &kept);
   ASSERT_TRUE(kept.found);
   EXPECT_DOUBLE_EQ(kept.position_m.z(), port.z() + 0.12);
 
   // Agreeing within twice the depth sigma: the detection's depth stands (the steadier far away).
   Detection agreeing = foundAt(port + Eigen::Vector3d(0.0, 0.0, 0.05), detection.covariance_m2);
-  confirmByAppearance(check, image, disparity, ourCamera(), shippedParams(), &agreeing);
+  confirmByAppearance(check, image, disparity, ourCamera(), shippedAppearance(), &agreeing);
   ASSERT_TRUE(agreeing.found);
   EXPECT_DOUBLE_EQ(agreeing.position_m.z(), port.z() + 0.05);
 }
@@ -174,7 +177,7 @@ TEST(FaceAppearance, GainAndOffsetDoNotMatter) {
   const Eigen::Vector3d port(0.0, 0.0, 4.0);
   cv::Mat dim;
   scene(print, port, 0.0, 1.5, 2.0).convertTo(dim, CV_8UC1, 0.45, 20.0);
-  const AppearanceResult result = check.check(dim, ourCamera(), port, shippedParams());
+  const AppearanceResult result = check.check(dim, ourCamera(), port, shippedAppearance());
   EXPECT_EQ(result.verdict, AppearanceVerdict::kLooksLikeTarget) << result.reason;
 }
 
@@ -188,10 +191,10 @@ TEST(FaceAppearance, ABoxOfTheMockupsSizeWithAnotherTextureIsNotTheTarget) {
         const cv::Mat box_print = cellTexture(print.size(), cell_px, seed);
         const Eigen::Vector3d port(-0.2, 0.0, z);
         const cv::Mat image = scene(box_print, port, 0.2, 1.0, 4.0, seed + 10);
-        const AppearanceResult result = check.check(image, ourCamera(), port, shippedParams());
+        const AppearanceResult result = check.check(image, ourCamera(), port, shippedAppearance());
         EXPECT_EQ(result.verdict, AppearanceVerdict::kNotTheTarget)
             << "z " << z << " cells " << cell_px << " seed " << seed << ": " << result.reason;
-        EXPECT_LT(result.score, shippedParams().min_score);
+        EXPECT_LT(result.score, shippedAppearance().min_score);
         ++cases;
       }
     }
@@ -205,10 +208,10 @@ TEST(FaceAppearance, AMismatchTurnsAFoundDetectionIntoARejectionWithItsScore) {
   const Eigen::Vector3d port(0.1, 0.0, 5.0);
   const cv::Mat image = scene(cellTexture(print.size(), 25, 4), port, 0.0, 1.0, 3.0);
   Detection detection = foundAt(port);
-  const AppearanceResult result = confirmByAppearance(check, image, cv::Mat(), ourCamera(), shippedParams(), &detection);
+  const AppearanceResult result = confirmByAppearance(check, image, cv::Mat(), ourCamera(), shippedAppearance(), &detection);
   EXPECT_EQ(result.verdict, AppearanceVerdict::kNotTheTarget);
   EXPECT_FALSE(detection.found);
-  EXPECT_EQ(detection.outcome, Outcome::kAppearanceMismatch);
+  EXPECT_EQ(detection.outcome, StageOutcome(AppearanceOutcome::kMismatch));
   EXPECT_STREQ(outcomeName(detection.outcome), "appearance_mismatch");
   EXPECT_TRUE(detection.appearance_judged);
   EXPECT_DOUBLE_EQ(detection.appearance_score, result.score);
@@ -217,13 +220,13 @@ TEST(FaceAppearance, AMismatchTurnsAFoundDetectionIntoARejectionWithItsScore) {
   // The print itself there: kept, with its score.
   const cv::Mat target = scene(print, port, 0.0, 1.0, 3.0);
   Detection kept = foundAt(port);
-  confirmByAppearance(check, target, cv::Mat(), ourCamera(), shippedParams(), &kept);
+  confirmByAppearance(check, target, cv::Mat(), ourCamera(), shippedAppearance(), &kept);
   EXPECT_TRUE(kept.found) << kept.reason;
   EXPECT_GE(kept.appearance_score, 0.6);
 }
 
-// Unjudged either way; in the dark the blob stands, in glare it is invalid unless glare_keeps_blob (the blob
-// left by glare is the part of the mockup outside it: campaign seed 10939, the port 0.2-0.4 m off).
+// Unjudged either way; in the dark the blob stands, in glare it is invalid (the blob left by glare is the part
+// of the mockup outside it: campaign seed 10939, the port 0.2-0.4 m off).
 TEST(FaceAppearance, AFaceSaturatedByGlareOrInTheDarkIsNotJudgedAndOnlyTheDarkOneKept) {
   const cv::Mat print = shippedPrint();
   const FaceAppearanceCheck check(print, kFaceWidthM, kFaceHeightM);
@@ -233,27 +236,22 @@ TEST(FaceAppearance, AFaceSaturatedByGlareOrInTheDarkIsNotJudgedAndOnlyTheDarkOn
   const int face_w = static_cast<int>(550.0 * kFaceWidthM / 3.0), face_h = static_cast<int>(550.0 * kFaceHeightM / 3.0);
   glare(cv::Rect(320 - face_w / 2 - 5, 240 - face_h / 2 - 5, face_w * 6 / 10 + 5, face_h + 10)).setTo(255);
   Detection detection = foundAt(port);
-  const AppearanceResult glare_result = confirmByAppearance(check, glare, cv::Mat(), ourCamera(), shippedParams(), &detection);
+  const AppearanceResult glare_result = confirmByAppearance(check, glare, cv::Mat(), ourCamera(), shippedAppearance(), &detection);
   EXPECT_EQ(glare_result.verdict, AppearanceVerdict::kGlare) << glare_result.reason;
   EXPECT_GT(glare_result.saturated_fraction, 0.5);
   EXPECT_FALSE(detection.found);
-  EXPECT_EQ(detection.outcome, Outcome::kAppearanceUnjudged);
-  EXPECT_NE(detection.reason.find("appearance_glare_keeps_blob"), std::string::npos) << detection.reason;
+  EXPECT_EQ(detection.outcome, StageOutcome(AppearanceOutcome::kGlare));
+  EXPECT_NE(detection.reason.find("glare"), std::string::npos) << detection.reason;
   EXPECT_FALSE(detection.appearance_judged);
-  FaceAppearanceParams keeping = shippedParams();
-  keeping.glare_keeps_blob = true;
-  Detection kept = foundAt(port);
-  confirmByAppearance(check, glare, cv::Mat(), ourCamera(), keeping, &kept);
-  EXPECT_TRUE(kept.found) << kept.reason;
 
   // Dark: the room and the face at a tenth of their light.
   cv::Mat dark;
   scene(cellTexture(print.size(), 25, 5), port, 0.0, 1.0, 2.0).convertTo(dark, CV_8UC1, 0.1);
-  const AppearanceResult dark_result = check.check(dark, ourCamera(), port, shippedParams());
+  const AppearanceResult dark_result = check.check(dark, ourCamera(), port, shippedAppearance());
   EXPECT_EQ(dark_result.verdict, AppearanceVerdict::kTooDark) << dark_result.reason;
   EXPECT_TRUE(isUnjudged(dark_result.verdict));
   Detection in_the_dark = foundAt(port);
-  confirmByAppearance(check, dark, cv::Mat(), ourCamera(), shippedParams(), &in_the_dark);
+  confirmByAppearance(check, dark, cv::Mat(), ourCamera(), shippedAppearance(), &in_the_dark);
   EXPECT_TRUE(in_the_dark.found) << in_the_dark.reason;
 }
 
@@ -261,33 +259,43 @@ TEST(FaceAppearance, AFaceOutsideTheImageOrBadInputIsNotJudged) {
   const cv::Mat print = shippedPrint();
   const FaceAppearanceCheck check(print, kFaceWidthM, kFaceHeightM);
   const cv::Mat image = scene(print, Eigen::Vector3d(0.0, 0.0, 3.0), 0.0, 1.0, 2.0);
-  EXPECT_EQ(check.check(image, ourCamera(), Eigen::Vector3d(2.0, 0.0, 3.0), shippedParams()).verdict,
+  EXPECT_EQ(check.check(image, ourCamera(), Eigen::Vector3d(2.0, 0.0, 3.0), shippedAppearance()).verdict,
             AppearanceVerdict::kOutsideImage);
-  EXPECT_EQ(check.check(cv::Mat(), ourCamera(), Eigen::Vector3d(0.0, 0.0, 3.0), shippedParams()).verdict,
+  EXPECT_EQ(check.check(cv::Mat(), ourCamera(), Eigen::Vector3d(0.0, 0.0, 3.0), shippedAppearance()).verdict,
             AppearanceVerdict::kNotChecked);
   cv::Mat colour;
   cv::cvtColor(image, colour, cv::COLOR_GRAY2BGR);
-  EXPECT_EQ(check.check(colour, ourCamera(), Eigen::Vector3d(0.0, 0.0, 3.0), shippedParams()).verdict,
+  EXPECT_EQ(check.check(colour, ourCamera(), Eigen::Vector3d(0.0, 0.0, 3.0), shippedAppearance()).verdict,
             AppearanceVerdict::kNotChecked);
-  EXPECT_EQ(check.check(image, ourCamera(), Eigen::Vector3d(0.0, 0.0, -3.0), shippedParams()).verdict,
+  EXPECT_EQ(check.check(image, ourCamera(), Eigen::Vector3d(0.0, 0.0, -3.0), shippedAppearance()).verdict,
             AppearanceVerdict::kNotChecked);
-  EXPECT_EQ(FaceAppearanceCheck().check(image, ourCamera(), Eigen::Vector3d(0.0, 0.0, 3.0), shippedParams()).verdict,
+  EXPECT_EQ(FaceAppearanceCheck().check(image, ourCamera(), Eigen::Vector3d(0.0, 0.0, 3.0), shippedAppearance()).verdict,
             AppearanceVerdict::kNotChecked);
   EXPECT_THROW(FaceAppearanceCheck(cv::Mat(), kFaceWidthM, kFaceHeightM), std::invalid_argument);
   EXPECT_THROW(FaceAppearanceCheck(print, 0.0, kFaceHeightM), std::invalid_argument);
 }
 
+// The first setting of `params` the detector refuses, by its key.
+std::string refusedKey(const DetectorParams& params) {
+  try {
+    validate(params, test::shippedShape());
+  } catch (const docking_settings::ConfigError& e) {
+    return e.key();
+  }
+  return "";
+}
+
 TEST(FaceAppearance, InvalidSettingsAreNamed) {
-  DetectorParams params;
+  EXPECT_EQ(refusedKey(test::shippedParams()), "");
+  DetectorParams params = test::shippedParams();
   params.appearance.min_score = 1.5;
-  params.appearance.max_working_width_px = 100.0;
-  params.appearance.saturated_level_dn = 0;
-  const auto errors = validateParams(params);
-  ASSERT_EQ(errors.size(), 3u);
-  EXPECT_NE(errors[0].find("appearance_min_score"), std::string::npos) << errors[0];
-  EXPECT_NE(errors[1].find("appearance_max_working_width_px"), std::string::npos) << errors[1];
-  EXPECT_NE(errors[2].find("appearance_saturated_level_dn"), std::string::npos) << errors[2];
-  EXPECT_TRUE(validateParams(DetectorParams()).empty());
+  EXPECT_EQ(refusedKey(params), "appearance_min_score");
+  params = test::shippedParams();
+  params.appearance.search_radius_m = 2.0;
+  EXPECT_EQ(refusedKey(params), "appearance_search_radius_m");
+  params = test::shippedParams();
+  params.appearance.max_saturated_fraction = 1.5;
+  EXPECT_EQ(refusedKey(params), "appearance_max_saturated_fraction");
 }
 
 }  // namespace

@@ -164,31 +164,28 @@ TEST(FootprintFit, TargetShapeReadsThePanelsOffset) {
 // port here (0.1-0.4 m in rendered scenes, where more of the panel is matched); the footprint's port is
 // within 2 % of the range.
 TEST(FootprintFit, TheDetectorReportsThePortOfATurnedMockup) {
-  DetectorParams params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
-  params.target_shape = loadTargetShape(kConfigDir + "/target.yaml");
+  DetectorParams params = testing::shippedDetectorSettings(kConfigDir).detector;
+  const TargetShape shape = loadTargetShape(kConfigDir + "/target.yaml");
   const TurnedCase c{4.0, -4.0, 50.0};
   const Eigen::Vector2d port = portAt(c);
-  const cv::Mat disparity = renderMockupDisparity(params.target_shape, port, c.yaw_deg * kPi / 180.0, 0.05, 5);
+  const cv::Mat disparity = renderMockupDisparity(shape, port, c.yaw_deg * kPi / 180.0, 0.05, 5);
   const Eigen::Vector3d truth(port.x(), 0.0, port.y());
 
-  params.footprint_fit_enabled = true;
-  const Detection fitted = DisparityDetector(params).detect(disparity, geometry640(), 0.0, 96.0);
+  const Detection fitted = DisparityDetector(params, shape).detect(disparity, geometry640(), 0.0, 96.0);
   ASSERT_TRUE(fitted.found) << fitted.reason;
   EXPECT_TRUE(fitted.footprint_fitted);
   EXPECT_LT((fitted.position_m - truth).norm(), 0.02 * c.range_m) << fitted.position_m.transpose();
 
-  params.footprint_fit_enabled = false;
-  const Detection nearest = DisparityDetector(params).detect(disparity, geometry640(), 0.0, 96.0);
+  params.footprint_fit_enabled = false;  // the nearest layer's centroid instead, for comparison
+  const Detection nearest = DisparityDetector(params, shape).detect(disparity, geometry640(), 0.0, 96.0);
   ASSERT_TRUE(nearest.found) << nearest.reason;
   EXPECT_FALSE(nearest.footprint_fitted);
   EXPECT_GT((nearest.position_m - truth).norm(), 0.05) << nearest.position_m.transpose();
 }
 
 TEST(FootprintFit, TheDetectorRefusesABlobOffTheOutline) {
-  DetectorParams params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
-  params.target_shape = loadTargetShape(kConfigDir + "/target.yaml");
+  DetectorParams params = testing::shippedDetectorSettings(kConfigDir).detector;
   params.shape_check_enabled = false;  // the shape check would refuse this wall first
-  params.footprint_fit_enabled = true;
   // A wall strip 3 m wide and 0.24 m high at 4 m, turned 6 degrees (all of it inside the detector's depth
   // band): not the mockup.
   const StereoGeometry g = geometry640();
@@ -203,9 +200,9 @@ TEST(FootprintFit, TheDetectorRefusesABlobOffTheOutline) {
       disparity.at<float>(v, u) = static_cast<float>(g.focal_px * g.baseline_m / z);
     }
   }
-  const Detection d = DisparityDetector(params).detect(disparity, g, 0.0, 96.0);
+  const Detection d = DisparityDetector(params, loadTargetShape(kConfigDir + "/target.yaml")).detect(disparity, g, 0.0, 96.0);
   EXPECT_FALSE(d.found);
-  EXPECT_EQ(d.outcome, Outcome::kFootprintMisfit) << d.reason;
+  EXPECT_EQ(d.outcome, StageOutcome(PortOutcome::kFootprintMisfit)) << d.reason;
 }
 
 }  // namespace

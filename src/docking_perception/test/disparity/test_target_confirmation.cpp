@@ -20,6 +20,10 @@ const std::string kConfigDir = DISPARITY_CONFIG_DIR;
 
 using test::ourGeometry;
 using test::paintRect;
+using test::detectorWith;
+using test::shippedDetector;
+using test::shippedParams;
+using test::shippedShape;
 
 // The mockup face-on: panels 0.15 m behind the face on both sides, then the face.
 void paintMockup(cv::Mat* disparity, double x, double z) {
@@ -30,11 +34,21 @@ void paintMockup(cv::Mat* disparity, double x, double z) {
 
 cv::Mat invalidImage() { return cv::Mat(480, 640, CV_32FC1, cv::Scalar(-1.0f)); }
 
+// The shipped configuration without the floor cut: these scenes have no floor, and boxes stand anywhere.
 DetectorParams checkingParams() {
-  DetectorParams params;
-  params.shape_check_enabled = true;
-  params.floor_cut_enabled = false;  // these scenes have no floor; boxes stand anywhere
+  DetectorParams params = shippedParams();
+  params.floor_cut_enabled = false;
   return params;
+}
+
+// Whether the detector accepts `params` with `shape` (the shipped mockup by default).
+bool allowed(const DetectorParams& params, const TargetShape& shape = shippedShape()) {
+  try {
+    validate(params, shape);
+    return true;
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
 }
 
 TEST(ShapeBounds, TheShippedMockupSpansBoxEdgeOnToFaceAndPanels) {
@@ -61,14 +75,14 @@ TEST(ShapeBounds, ReadFromTheShippedTargetYaml) {
 TEST(ShapeCheck, ParametersAreValidated) {
   DetectorParams params = checkingParams();
   params.min_fill_fraction = 0.95;  // above what the mockup itself shows
-  EXPECT_FALSE(validateParams(params).empty());
+  EXPECT_FALSE(allowed(params));
   params = checkingParams();
   params.shape_tolerance_fraction = -0.1;
-  EXPECT_FALSE(validateParams(params).empty());
-  params = checkingParams();
-  params.target_shape.face_width_m = 0.0;
-  EXPECT_FALSE(validateParams(params).empty());
-  EXPECT_TRUE(validateParams(checkingParams()).empty());
+  EXPECT_FALSE(allowed(params));
+  TargetShape no_face = shippedShape();
+  no_face.face_width_m = 0.0;
+  EXPECT_FALSE(allowed(checkingParams(), no_face));
+  EXPECT_TRUE(allowed(checkingParams()));
 }
 
 // The issue's scene: the target at 6 m and a box of another size at the same depth to the side.
@@ -82,14 +96,14 @@ TEST_P(BoxBesideTheTarget, IsNotReportedAndTheTargetIs) {
   // Before: the largest blob of the band is the cabinet.
   DetectorParams old_params = checkingParams();
   old_params.shape_check_enabled = false;
-  const Detection before = DisparityDetector{old_params}.detect(disparity, ourGeometry());
+  const Detection before = detectorWith(old_params).detect(disparity, ourGeometry());
   ASSERT_TRUE(before.found);
   EXPECT_GT(std::abs(before.position_m.x()), 1.0) << "the unchecked detector took the cabinet";
 
-  const Detection after = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+  const Detection after = detectorWith(checkingParams()).detect(disparity, ourGeometry());
   ASSERT_TRUE(after.found) << after.reason;
   EXPECT_NEAR(after.position_m.x(), 0.0, 0.05);
-  // At 6 m the face layer's noise floor (face_min_band_px) takes the panels in: 0.15 m deep.
+  // At 6 m the face layer's noise floor (kFaceMinBandPx, 0.25 px) takes the panels in: 0.15 m deep.
   EXPECT_NEAR(after.position_m.z(), 6.0, 0.2);
   EXPECT_GE(after.not_target_shaped_skipped, 1);
 }
@@ -101,9 +115,9 @@ TEST(ShapeCheck, OnlyAnotherObjectInViewIsInvalidWithTheReason) {
                            std::make_pair(1.6, 0.24)}) {
     cv::Mat disparity = invalidImage();
     paintRect(&disparity, 1.8, 0.0, 6.0, size.first, size.second);
-    const Detection result = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+    const Detection result = detectorWith(checkingParams()).detect(disparity, ourGeometry());
     EXPECT_FALSE(result.found) << size.first << " x " << size.second;
-    EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+    EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << result.reason;
     EXPECT_FALSE(result.reason.empty());
     EXPECT_FALSE(result.mask.empty()) << "the rejected blob is kept for the debug image";
   }
@@ -114,9 +128,9 @@ TEST(ShapeCheck, HollowObjectFailsTheFill) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.0, -0.10, 2.5, 0.86, 0.08);
   paintRect(&disparity, -0.39, 0.0, 2.5, 0.08, 0.28);
-  const Detection result = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+  const Detection result = detectorWith(checkingParams()).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+  EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << result.reason;
 }
 
 TEST(ShapeCheck, NearerObjectsOfOtherSizesAreLookedBehind) {
@@ -126,7 +140,7 @@ TEST(ShapeCheck, NearerObjectsOfOtherSizesAreLookedBehind) {
   paintRect(&disparity, -1.5, 0.0, 4.0, 0.7, 0.6);    // box nearer than the target, to the side
   paintRect(&disparity, 1.2, -0.3, 3.0, 0.4, 0.8);    // wall segment / door frame
   paintRect(&disparity, -0.9, -0.4, 2.5, 0.45, 1.2);  // a person (cut by the image edge? no)
-  const Detection result = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+  const Detection result = detectorWith(checkingParams()).detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_NEAR(result.position_m.x(), 0.3, 0.05);
   EXPECT_NEAR(result.position_m.z(), 6.0, 0.2);
@@ -138,11 +152,11 @@ TEST(ShapeCheck, TargetAtAnyRangeAndYawSizePasses) {
   for (double z : {2.0, 3.0, 4.0, 6.0}) {
     cv::Mat face_on = invalidImage();
     paintMockup(&face_on, 0.1, z);
-    const Detection a = DisparityDetector{checkingParams()}.detect(face_on, ourGeometry());
+    const Detection a = detectorWith(checkingParams()).detect(face_on, ourGeometry());
     EXPECT_TRUE(a.found) << z << ": " << a.reason;
     cv::Mat edge_on = invalidImage();
     paintRect(&edge_on, 0.1, 0.0, z, 0.30, 0.24);
-    const Detection b = DisparityDetector{checkingParams()}.detect(edge_on, ourGeometry());
+    const Detection b = detectorWith(checkingParams()).detect(edge_on, ourGeometry());
     EXPECT_TRUE(b.found) << z << ": " << b.reason;
   }
 }
@@ -153,9 +167,9 @@ TEST(ShapeCheck, ATargetCutByTheBorderStopsTheSearch) {
   cv::Mat disparity = invalidImage();
   paintMockup(&disparity, 1.2, 5.0);    // a box of the mockup's size and shape, behind
   paintMockup(&disparity, -0.85, 1.0);  // the target, all but its right panel out of view
-  const Detection result = DisparityDetector{checkingParams()}.detect(disparity, ourGeometry());
+  const Detection result = detectorWith(checkingParams()).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, Outcome::kBlobTouchesBorder) << result.reason;
+  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kBlobTouchesBorder)) << result.reason;
   EXPECT_LT(result.position_m.z(), 2.0);
 }
 
@@ -165,7 +179,7 @@ TEST(SearchHint, PrefersTheTargetShapedBlobInsideTheGate) {
   cv::Mat disparity = invalidImage();
   paintMockup(&disparity, -1.0, 5.0);
   paintMockup(&disparity, 1.0, 5.1);
-  const DisparityDetector detector{checkingParams()};
+  const DisparityDetector detector = detectorWith(checkingParams());
   SearchHint hint;
   hint.valid = true;
   hint.position_m = Eigen::Vector3d(1.0, 0.0, 5.1);
@@ -189,7 +203,7 @@ TEST(SearchHint, PrefersTheTargetShapedBlobInsideTheGate) {
 Detection foundAt(double x, double z) {
   Detection detection;
   detection.found = true;
-  detection.outcome = Outcome::kFound;
+  detection.outcome = PlausibilityOutcome::kPassed;
   detection.position_m = Eigen::Vector3d(x, 0.0, z);
   detection.covariance_m2 = Eigen::Matrix3d::Identity() * 0.05 * 0.05;
   return detection;
@@ -208,7 +222,7 @@ TEST(TargetTrackGate, AJumpOfMetresIsRejectedUntilConfirmed) {
   for (int i = 1; i < params.confirm_frames; ++i, t += dt) {
     const Detection jumped = gate.apply(t, foundAt(2.0, 6.0));
     EXPECT_FALSE(jumped.found) << i;
-    EXPECT_EQ(jumped.outcome, Outcome::kOffTrack);
+    EXPECT_EQ(jumped.outcome, StageOutcome(TrackOutcome::kOffTrack));
     EXPECT_FALSE(jumped.reason.empty());
   }
   EXPECT_TRUE(gate.apply(t, foundAt(2.0, 6.0)).found) << "seen confirm_frames times in a row";
@@ -252,13 +266,12 @@ TEST(TargetTrackGate, TimeoutAndStampsGoingBackwardsStartANewTrack) {
 
 TEST(TargetTrackGate, DisabledPassesEverythingAndBadParamsAreNamed) {
   TrackGateParams params;
-  params.enabled = false;
+  params.gate_enabled = false;
   TargetTrackGate gate(params);
   gate.apply(0.0, foundAt(0.0, 6.0));
   EXPECT_TRUE(gate.apply(0.1, foundAt(3.0, 6.0)).found);
   params.confirm_frames = 0;
   EXPECT_THROW(gate.setParams(params), std::invalid_argument);
-  EXPECT_FALSE(validateTrackGateParams(params).empty());
 }
 
 // Issue 11, eval_real_clutter_far_{4,6}m: the target merged with a box beside it at its depth into one
@@ -271,15 +284,20 @@ TEST(HeightGate, APatchFarAboveTheAxisBehindAMergedBlobIsNotTheTarget) {
   paintRect(&disparity, 0.65, -0.38, 6.2, 0.40, 1.0);  // a box touching the mockup's panel
   paintMockup(&disparity, 0.0, 6.0);
   DetectorParams params = checkingParams();
+  params.split_depth_step_m = 0.0;  // the split (shipped) finds the target in the merged blob: the gate alone
   params.max_centre_offset_y_m = 0.0;  // before: no gate
-  const Detection before = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection before = detectorWith(params).detect(disparity, ourGeometry());
   ASSERT_TRUE(before.found) << "the scene no longer reproduces the failure: " << before.reason;
   EXPECT_GT(before.position_m.x(), 3.0);
 
   params.max_centre_offset_y_m = 0.3;
-  const Detection after = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection after = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(after.found) << "taken at (" << after.position_m.transpose() << ")";
-  EXPECT_EQ(after.outcome, Outcome::kNotTargetShaped) << after.reason;
+  EXPECT_EQ(after.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << after.reason;
+
+  const Detection shipped = detectorWith(checkingParams()).detect(disparity, ourGeometry());
+  ASSERT_TRUE(shipped.found) << shipped.reason;
+  EXPECT_NEAR(shipped.position_m.x(), 0.0, 0.05) << "with the split, the target itself";
 }
 
 TEST(HeightGate, TheTargetAtCameraHeightPassesAndTheGateIsValidated) {
@@ -287,7 +305,7 @@ TEST(HeightGate, TheTargetAtCameraHeightPassesAndTheGateIsValidated) {
   paintMockup(&disparity, 0.4, 5.0);
   DetectorParams params = checkingParams();
   params.max_centre_offset_y_m = 0.3;
-  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection result = detectorWith(params).detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_NEAR(result.position_m.x(), 0.4, 0.05);
   // The same mockup 0.5 m above the axis (a shelf): not where the port of a target on the floor is.
@@ -295,11 +313,11 @@ TEST(HeightGate, TheTargetAtCameraHeightPassesAndTheGateIsValidated) {
   paintRect(&raised, 0.1, -0.5, 5.15, 0.30, 0.16);
   paintRect(&raised, 0.7, -0.5, 5.15, 0.30, 0.16);
   paintRect(&raised, 0.4, -0.5, 5.0, 0.30, 0.24);
-  const Detection shelf = DisparityDetector{params}.detect(raised, ourGeometry());
+  const Detection shelf = detectorWith(params).detect(raised, ourGeometry());
   EXPECT_FALSE(shelf.found);
-  EXPECT_EQ(shelf.outcome, Outcome::kNotTargetShaped) << shelf.reason;
+  EXPECT_EQ(shelf.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << shelf.reason;
   params.max_centre_offset_y_m = -0.1;
-  EXPECT_FALSE(validateParams(params).empty());
+  EXPECT_FALSE(allowed(params));
 }
 
 // Issue 11, eval_real_specular_2m: glare left an L of the face at 2 m (fill below min_fill_fraction, the
@@ -313,14 +331,14 @@ TEST(DegradedTarget, ABlobOfTheMockupsSizeIsNotLookedBehind) {
   paintRect(&disparity, 0.0, 0.12 - strip_m / 2, 2.0, 0.30, strip_m);   // ...and its bottom row
   DetectorParams params = checkingParams();
   params.stop_behind_target_sized = false;  // before
-  const Detection before = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection before = detectorWith(params).detect(disparity, ourGeometry());
   ASSERT_TRUE(before.found) << "the scene no longer reproduces the failure: " << before.reason;
   EXPECT_NEAR(before.position_m.z(), 3.4, 0.2);
 
   params.stop_behind_target_sized = true;
-  const Detection after = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection after = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(after.found) << "taken at (" << after.position_m.transpose() << ")";
-  EXPECT_EQ(after.outcome, Outcome::kNotTargetShaped) << after.reason;
+  EXPECT_EQ(after.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << after.reason;
   EXPECT_NEAR(after.shape.range_z_m, 2.0, 0.1) << "the reported blob is the degraded face";
 }
 
@@ -336,19 +354,19 @@ TEST(DegradedTarget, AStripAlongAnOccludingEdgeIsLookedBehind) {
   DetectorParams params = checkingParams();
   params.stop_behind_target_sized = true;
   params.degraded_min_width_fraction = 0.0;  // before
-  const Detection before = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection before = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(before.found) << "the scene no longer reproduces the failure: found at ("
                              << before.position_m.transpose() << ")";
   EXPECT_NEAR(before.shape.range_z_m, 2.4, 0.1) << "the search stopped at the strip";
 
   params.degraded_min_width_fraction = 0.5;
-  ASSERT_TRUE(validateParams(params).empty());
-  const Detection after = DisparityDetector{params}.detect(disparity, ourGeometry());
+  ASSERT_TRUE(allowed(params));
+  const Detection after = detectorWith(params).detect(disparity, ourGeometry());
   ASSERT_TRUE(after.found) << after.reason;
   EXPECT_NEAR(after.position_m.x(), 0.2, 0.05);
   EXPECT_NEAR(after.position_m.z(), 3.0, 0.1);
   params.degraded_min_width_fraction = 1.5;
-  EXPECT_FALSE(validateParams(params).empty());
+  EXPECT_FALSE(allowed(params));
 }
 
 TEST(DegradedTarget, LargerNearerObjectsAreStillLookedBehind) {
@@ -358,7 +376,7 @@ TEST(DegradedTarget, LargerNearerObjectsAreStillLookedBehind) {
   paintRect(&disparity, -1.2, -0.2, 4.0, 0.6, 0.9);
   DetectorParams params = checkingParams();
   params.stop_behind_target_sized = true;
-  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection result = detectorWith(params).detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_NEAR(result.position_m.x(), 0.3, 0.05);
 }
@@ -378,7 +396,7 @@ TEST(MergedBlob, WithoutTheSplitTheTargetIsNotFound) {
   paintTargetAmongBoxes(&disparity);
   DetectorParams params = checkingParams();
   params.split_depth_step_m = 0.0;  // before
-  const Detection before = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection before = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(before.found) << "the scene no longer reproduces the merge: found at ("
                              << before.position_m.transpose() << ")";
   EXPECT_EQ(before.merged_blobs_split, 0);
@@ -389,7 +407,7 @@ TEST(MergedBlob, TheTargetIsSplitFromTheBoxesAroundIt) {
   paintTargetAmongBoxes(&disparity);
   DetectorParams params = checkingParams();
   params.split_depth_step_m = 0.15;
-  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection result = detectorWith(params).detect(disparity, ourGeometry());
   ASSERT_TRUE(result.found) << result.reason;
   EXPECT_EQ(result.merged_blobs_split, 1);
   EXPECT_NEAR(result.position_m.x(), 0.0, 0.03);
@@ -406,9 +424,9 @@ TEST(MergedBlob, ABumpOnABoxIsNotSplitOut) {
   paintRect(&disparity, 0.1, -0.05, 3.95, 0.35, 0.24);
   DetectorParams params = checkingParams();
   params.split_depth_step_m = 0.15;
-  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection result = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found) << "bump taken at (" << result.position_m.transpose() << ")";
-  EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+  EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << result.reason;
   EXPECT_EQ(result.merged_blobs_split, 0);
 }
 
@@ -420,17 +438,17 @@ TEST(MergedBlob, ATargetFlushWithABoxStaysInvalid) {
   paintMockup(&disparity, 0.0, 4.0);
   DetectorParams params = checkingParams();
   params.split_depth_step_m = 0.15;
-  const Detection result = DisparityDetector{params}.detect(disparity, ourGeometry());
+  const Detection result = detectorWith(params).detect(disparity, ourGeometry());
   EXPECT_FALSE(result.found) << "taken at (" << result.position_m.transpose() << ")";
-  EXPECT_EQ(result.outcome, Outcome::kNotTargetShaped) << result.reason;
+  EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << result.reason;
 }
 
 TEST(MergedBlob, TheSplitStepIsValidated) {
   DetectorParams params = checkingParams();
   params.split_depth_step_m = -0.1;
-  EXPECT_FALSE(validateParams(params).empty());
+  EXPECT_FALSE(allowed(params));
   params.split_depth_step_m = 0.15;
-  EXPECT_TRUE(validateParams(params).empty());
+  EXPECT_TRUE(allowed(params));
 }
 
 }  // namespace

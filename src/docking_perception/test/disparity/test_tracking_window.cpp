@@ -1,4 +1,4 @@
-// The far stage's tracking window (tracking_window.h, DecimatingRectifier::rectifyWindow, the detector's
+// The far stage's tracking window (tracking_window.h, WindowRectifier::rectifyWindow, the detector's
 // ImageWindow): its geometry; a window rectified alone is the whole image's rectification cut to it; the
 // pipeline on a window (config/far_stereo.yaml's window settings, config/stereo_image_proc.yaml's matcher)
 // finds the target where the whole image does; boxes beside it and crossing the window's edge are never
@@ -11,10 +11,13 @@
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
 
-#include "docking_perception/disparity/decimating_rectifier.h"
+#include "docking_perception/disparity/window_rectifier.h"
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/tracking_window.h"
 #include "synthetic_stereo.h"
+
+#include <docking_settings/config_error.h>
+#include <docking_settings/setting_info.h>
 
 namespace docking_perception {
 namespace disparity {
@@ -22,15 +25,11 @@ namespace {
 
 const std::string kConfigDir = DISPARITY_CONFIG_DIR;
 
-TrackingWindowParams configuredWindow() { return testing::loadTrackingWindow(kConfigDir + "/far_stereo.yaml"); }
+TrackingWindowParams configuredWindow() { return testing::shippedFarStereoSettings(kConfigDir).window; }
 
 testing::MatcherSettings fullMatcher() { return testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml"); }
 
-DetectorParams configuredParams() {
-  DetectorParams params = testing::loadDetectorParams(kConfigDir + "/disparity_detector.yaml");
-  params.target_shape = loadTargetShape(kConfigDir + "/target.yaml");
-  return params;
-}
+DetectorParams configuredParams() { return testing::shippedDetectorSettings(kConfigDir).detector; }
 
 // The region the detector nodelet searches: the matcher's blind left band and stereo_image_proc's valid
 // window (half the correlation window off the other three sides), as the DisparityImage states it.
@@ -56,7 +55,7 @@ Detection detectOn(const testing::FarStagePair& pair, const std::optional<cv::Re
     image_window.offset = area.tl();
     image_window.full_size = pair.left.size();
   }
-  return DisparityDetector(configuredParams())
+  return DisparityDetector(configuredParams(), loadTargetShape(kConfigDir + "/target.yaml"))
       .detect(disparity, geometry, settings.min_disparity, testing::maxDisparity(settings),
               nodeletRegion(settings, disparity.size()), SearchHint(), image_window);
 }
@@ -127,26 +126,22 @@ TEST(TrackingWindow, PredictionFollowsTheVelocityForALimitedTime) {
 }
 
 TEST(TrackingWindow, InvalidSettingsAreNamed) {
-  TrackingWindowParams bad;
+  TrackingWindowParams bad = configuredWindow();
   bad.half_width_m = 0.0;
-  bad.max_area_fraction = 1.5;
-  const auto errors = validateTrackingWindowParams(bad);
-  ASSERT_EQ(errors.size(), 2u);
-  EXPECT_NE(errors[0].find("window_half_width_m"), std::string::npos);
-  EXPECT_NE(errors[1].find("window_max_area_fraction"), std::string::npos);
-  EXPECT_TRUE(validateTrackingWindowParams(configuredWindow()).empty());
-  MatcherReach reach;
-  reach.disparity_range = 90;
-  reach.correlation_window_px = 14;
-  EXPECT_EQ(validateMatcherReach(reach).size(), 2u);
-  EXPECT_TRUE(validateMatcherReach(testing::matcherReachOf(fullMatcher())).empty());
+  try {
+    docking_settings::validateSettings(bad);
+    FAIL() << "a window of no width accepted";
+  } catch (const docking_settings::ConfigError& e) {
+    EXPECT_EQ(e.key(), "half_width_m");  // the node's loader names it with its prefix, window_
+  }
+  EXPECT_NO_THROW(docking_settings::validateSettings(configuredWindow()));
 }
 
 TEST(TrackingWindow, RectifyingAWindowGivesTheWholeImagesPixels) {
   const PinholeCalibration c = testing::distortedWebcam();
   cv::Mat raw(c.size, CV_8UC1);
   cv::randu(raw, 0, 256);
-  const DecimatingRectifier rectifier(c, 1);
+  const WindowRectifier rectifier(c);
   cv::Mat whole, window;
   rectifier.rectify(raw, &whole);
   const cv::Rect area(101, 57, 233, 141);
@@ -164,7 +159,7 @@ class WindowPipeline : public ::testing::TestWithParam<WindowCase> {};
 
 TEST_P(WindowPipeline, FindsTheTargetWhereTheWholeImageDoes) {
   const WindowCase c = GetParam();
-  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(c.x_m, 0.0, c.z_m, 12.0), 1);
+  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(c.x_m, 0.0, c.z_m, 12.0));
   const Detection whole = detectOn(pair, std::nullopt);
   ASSERT_TRUE(whole.found) << whole.reason;
   // The window placed from a prediction 0.15 m off to the side and 0.2 m off in range.
@@ -186,7 +181,7 @@ INSTANTIATE_TEST_SUITE_P(Ranges, WindowPipeline,
 // nearly constant and 0.1 m (2 deg at 3 m) is more than a fused estimate's height error.
 TEST(WindowPipeline, APredictionOffInHeightStillHoldsTheFace) {
   const double x_m = 0.2, z_m = 3.0;
-  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(x_m, 0.0, z_m, 12.0), 1);
+  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(x_m, 0.0, z_m, 12.0));
   const Detection whole = detectOn(pair, std::nullopt);
   ASSERT_TRUE(whole.found) << whole.reason;
   for (const double dy : {-0.1, 0.1}) {
@@ -204,7 +199,7 @@ TEST(WindowPipeline, APredictionOffInHeightStillHoldsTheFace) {
 TEST(WindowPipeline, ABoxCrossingTheWindowsEdgeIsLookedBehind) {
   testing::SyntheticScene scene = testing::targetScene(0.0, 0.0, 4.0, 12.0);
   scene.rects.insert(scene.rects.begin(), testing::boxOnTheFloor(0.75, 3.4, 0.5, 0.3, 53));
-  const testing::FarStagePair pair = testing::farStagePair(scene, 1);
+  const testing::FarStagePair pair = testing::farStagePair(scene);
   const cv::Rect window = windowAround(pair, Eigen::Vector3d(0.0, 0.0, 4.0));
   const Detection untold = detectOn(pair, window, /*tell_detector_it_is_a_window=*/false);
   ASSERT_FALSE(untold.found && std::abs(untold.position_m.x()) < 0.1)
@@ -219,7 +214,7 @@ TEST(WindowPipeline, ABoxCrossingTheWindowsEdgeIsLookedBehind) {
 // The window placed wrongly (the prediction 0.75 m off): the target crosses its edge and is reported not
 // found, never found at a wrong place; nothing else in the window is taken for it.
 TEST(WindowPipeline, AWindowThatCutsTheTargetReportsItNotFound) {
-  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(0.0, 0.0, 3.0, 12.0), 1);
+  const testing::FarStagePair pair = testing::farStagePair(testing::targetScene(0.0, 0.0, 3.0, 12.0));
   const cv::Rect window = windowAround(pair, Eigen::Vector3d(0.95, 0.0, 3.0));
   const Detection d = detectOn(pair, window);
   EXPECT_FALSE(d.found) << "found at " << d.position_m.transpose();

@@ -2,25 +2,22 @@
 //
 // ROS-free: plain C++17, OpenCV and Eigen. The nodelet converts messages and calls detect().
 //
-// Pipeline (see the package README, section disparity_detector):
-//  1. keep valid disparities inside the region of interest, drop floor points (optional height cut);
-//  2. median (and optionally Gaussian) filter;
-//  3. closest object: a high order statistic of the valid disparities (the value that at least
-//     `closest_min_pixels` pixels reach), so a few noisy pixels cannot win;
-//  4. threshold just below it (a depth band that holds the target's own depth), keep the largest
-//     blob (outer contour); if it is smaller than min_blob_area_px or thinner than
-//     min_blob_thickness_px (mismatches at occlusion edges, speckles), remove everything at that
-//     depth and search again behind it (at most 8 times);
-//     With the shape check on, every blob of the band (largest first) is measured: its metric
-//     width, height and fill must be those the mockup of config/target.yaml can show from some yaw
-//     (TargetShape). A band without such a blob is removed and the search looks behind it too, so a
-//     nearer wall, person or box cannot hide the target, and a box beside it cannot be taken for it;
-//     with a SearchHint (the tracked target), a target-shaped blob inside the hint's gate is preferred;
-//  5. reject implausible blobs with a reason (too small, too large, on the border, out of range,
-//     not target-shaped);
-//  6. the target's visible face: the blob's nearest depth layer; its centroid is the centre, the median
-//     of its disparities the robust disparity;
-//  7. reproject with the rectified model and propagate pixel and disparity noise to a 3x3 covariance.
+// detect() runs the detector's stages (stages.h; the package README, section disparity_detector, draws them):
+//  1. input: the image and geometry usable; the searched region: the matcher's valid window;
+//  2. valid disparity: the region's valid disparities above the floor cut (and below the ceiling cut), median
+//     filtered: enough of them;
+//  3. band search: the closest object (the disparity `closest_min_pixels` pixels reach, so a few noisy
+//     pixels cannot win), a threshold just below it that holds the target's own depth, and the band's blobs,
+//     largest first: too small or thin, not of the mockup's shape (TargetShape: width, height and fill it can
+//     show from some yaw), height or isolation (a part split out of a blob merged with its neighbours), or the
+//     target (with a SearchHint: inside the tracked target's gate). A band without it is removed and the
+//     search looks behind it, so a nearer wall, person or box cannot hide the target; a blob that may be the
+//     degraded target stops it;
+//  4. port: the mockup's footprint fitted to the blob's depth profile gives the port (else the centroid of
+//     the blob's nearest layer), reprojected with the rectified model, its covariance from pixel and
+//     disparity noise;
+//  5. plausibility: the blob's size, border and disparity range.
+// The node adds the appearance check (face_appearance.h) and the track gate (target_track_gate.h).
 #pragma once
 
 #include <string>
@@ -28,6 +25,9 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+
+#include "docking_perception/disparity/disparity_detector_settings.h"
+#include "docking_perception/disparity/stages.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -66,141 +66,18 @@ struct ShapeBounds {
 };
 ShapeBounds shapeBounds(const TargetShape& shape);
 
-// The face print looked for where a found blob puts the port (face_appearance.h).
-constexpr double kMaxAppearanceWorkingWidthPx = 48.0;  // max_working_width_px's upper bound
-struct FaceAppearanceParams {
-  double min_score = 0.45;            // best normalised correlation below this: not the target's face
-  double search_radius_m = 0.25;      // slide the print this far either side of the detected port (half
-                                      // of it up and down)
-  double max_working_width_px = 24.0; // reduce image and print so the face is at most this wide
-  int saturated_level_dn = 250;       // grey at or above this: saturated (glare)
-  double max_saturated_fraction = 0.3;  // more of the face saturated: cannot be judged (glare)
-  double min_mean_dn = 25.0;          // the face's surroundings darker on average: cannot be judged
-  // A face too saturated to judge (glare) keeps its blob as the target (true), or the blob is reported
-  // invalid (Outcome::kAppearanceUnjudged). The glare that hides the print also hides part of the
-  // mockup: the blob left is the part outside it, and the footprint fit puts the port 0.2-0.4 m off
-  // (campaign seed 10939 at 2.9-3.9 m: every such blob 8-15 % of the range off, used by the arbiter).
-  bool glare_keeps_blob = false;
-  // A matched print moves the port across the line of sight to the print's centre (same depth): the
-  // footprint fit puts a turned target's port up to ~0.2 m aside (campaign seed 7515 at 2.5-3 m).
-  bool refine_port = true;
-};
+// The face print is stored reduced to this width once (face_appearance.cpp works at a narrower width).
+constexpr double kMaxAppearanceWorkingWidthPx = 48.0;
 
+// DetectorParams (the core's settings, with FaceAppearanceParams) are declared in
+// settings/disparity_detector.yaml (generated header disparity_detector_settings.h).
 
-// Tuning of the detector. Defaults are only for tests; the node takes every value from
-// config/disparity_detector.yaml.
-struct DetectorParams {
-  // Filtering of the disparity image before the search.
-  int median_kernel_px = 3;        // 0 or 1: off; 3 or 5 (OpenCV's float median supports only these)
-  double gaussian_sigma_px = 0.0;  // 0: off (the paper's Gaussian filter; blurs edges, off by default)
-
-  // Closest object and threshold.
-  int closest_min_pixels = 150;       // closest disparity = the value that this many valid pixels reach
-  double target_depth_m = 0.5;        // depth of the target kept below the closest disparity
-  double threshold_margin_px = 1.0;   // at least this much below the closest disparity (noise)
-
-  // The visible face: the blob's nearest layer.
-  double face_percentile = 0.9;       // reference disparity of the face: this percentile of the blob
-  double face_depth_band_m = 0.10;    // face layer: within this depth of the reference
-  double face_min_band_px = 0.25;     // ...but never thinner than this (sub-pixel noise at far range)
-
-  // Plausibility of the blob.
-  int min_blob_area_px = 400;             // fewer pixels: "blob too small" (looked behind)
-  double min_blob_thickness_px = 16.0;    // thinner (largest inscribed disc): "blob too thin",
-                                          // looked behind (mismatch strips at occlusion edges)
-  // The two above on the far stage's reduced pair (decimating_rectifier.h), in full-resolution pixels:
-  // its matcher's window is larger in those pixels (9 px at half = 18), and so are its mismatch strips.
-  int reduced_min_blob_area_px = 600;
-  double reduced_min_blob_thickness_px = 20.0;
-  double max_blob_area_fraction = 0.5;    // more than this fraction of the region: "blob too large"
-  int border_margin_px = 2;               // within this of the valid region's edge: "touches border"
-  double min_disparity_px = 4.0;          // robust disparity below this: "too far"
-  double max_disparity_px = 92.0;         // above this: "too close" (0.6 m for our pair)
-
-  // Where to look. Rows outside [roi_top_fraction, roi_bottom_fraction) of the image are ignored.
-  double roi_top_fraction = 0.0;
-  double roi_bottom_fraction = 1.0;
-  // Floor removal on the test bed: points lower than `floor_cut_y_m` below the optical axis
-  // (optical y points down) are ignored. The cameras are level on the robot, so the floor sits at the
-  // camera height below the axis.
-  bool floor_cut_enabled = true;
-  double floor_cut_y_m = 0.15;
-  // With the floor cut: points higher than this above the axis (the lab's ceiling and lights) are
-  // ignored too; 0: off.
-  double ceiling_cut_y_m = 0.0;
-
-  // Noise model of the covariance.
-  double disparity_sigma_px = 0.25;  // 1-sigma error of the robust disparity
-  double centre_sigma_px = 1.0;      // 1-sigma error of the face centre in the image
-  double port_offset_sigma_m = 0.04; // 1-sigma of the blob centre's offset from the port, per axis (m)
-
-  // Shape check: is the blob the mockup? Off by default here (tests of the search paint any
-  // rectangle); config/disparity_detector.yaml turns it on. The bounds of shapeBounds(target_shape)
-  // are widened by shape_tolerance_fraction of themselves plus shape_tolerance_px at the blob's
-  // range (block matching fattens or trims a blob's edges by up to half its window).
-  bool shape_check_enabled = false;
-  double shape_tolerance_fraction = 0.25;
-  double shape_tolerance_px = 8.0;
-  double min_fill_fraction = 0.45;  // below: not a solid object (chair, table, strip of a wall)
-  // With the shape check: a blob whose centre lies farther than this above or below the optical axis
-  // is not the target (on the test bed both robots stand on the floor and the port is at camera
-  // height); 0: off (in orbit). Issue 11: with the target's band merged into a box beside it, the
-  // search looked behind and took target-sized patches 0.7-0.9 m above the axis.
-  double max_centre_offset_y_m = 0.0;
-  // With the shape check: a blob within the mockup's upper size bounds that fails only a lower bound or
-  // the fill may be the target, degraded (glare, blur); the search then stops there (reported not
-  // target-shaped) instead of looking behind it, where only other objects can be found.
-  bool stop_behind_target_sized = true;
-  // ...provided the blob is at least this fraction of the mockup's narrowest width (edge-on) wide: a
-  // thinner one is a strip of mismatched disparity along an occluding edge, not a degraded target, and
-  // the search looks behind it (issue 11, eval_far_3m_on: a 16 px strip along the target's left edge
-  // stopped the search in front of the target). 0: any width.
-  double degraded_min_width_fraction = 0.0;
-  // With the shape check: a blob larger than the mockup is searched for a nearer part that has the
-  // mockup's shape and stands at least this far in front of what surrounds it (the target merged with
-  // a box beside or behind it through block matching's smeared depth edges, issue 11); 0: off.
-  double split_depth_step_m = 0.0;
-  // The port from the mockup's footprint fitted to the blob's depth profile (footprint_fit.h) instead
-  // of the centroid of the blob's nearest layer, which a turned target moves 0.1-0.4 m aside (a panel
-  // tip or the face's near edge is nearest). A fit with fewer than footprint_min_inlier_fraction of the
-  // profile on the footprint is not the mockup (merged with something else): "footprint misfit".
-  bool footprint_fit_enabled = false;
-  double footprint_inlier_distance_m = 0.05;   // at zero range; grows with the depth noise
-  double footprint_min_inlier_fraction = 0.5;
-  // The face print of config/target.yaml looked for in the left rectified image where a found blob puts
-  // the port (face_appearance.h); a blob whose face does not match is rejected (appearance mismatch).
-  // Applied by the node after detect() (it needs the left image), off by default here.
-  bool appearance_check_enabled = false;
-  FaceAppearanceParams appearance;
-  TargetShape target_shape;         // from config/target.yaml, not from the detector's file
-};
-
-// Every invalid field, each message naming it ("median_kernel_px must be 0, 1, 3 or 5 (got 4)").
-// Empty: the parameters are usable.
-std::vector<std::string> validateParams(const DetectorParams& params);
+// Throws std::invalid_argument (docking_settings::ConfigError) naming the first setting its declaration does not
+// allow, or the rule between settings it breaks (median_kernel_px 0, 1, 3 or 5; max_disparity_px above
+// min_disparity_px; min_fill_fraction at most the mockup's own lowest fill), or the mockup's size that is
+// unusable.
+void validate(const DetectorParams& params, const TargetShape& shape);
 std::vector<std::string> validateGeometry(const StereoGeometry& geometry);
-
-enum class Outcome {
-  kFound = 0,
-  kBadInput,             // empty image, wrong type, invalid geometry or parameters
-  kNoValidDisparity,     // too few valid pixels to call anything the closest object
-  kNoBlob,               // thresholding left nothing big enough to be a connected blob
-  kBlobTooSmall,
-  kBlobTooLarge,
-  kBlobTouchesBorder,
-  kDisparityOutOfRange,
-  kNotTargetShaped,      // every blob in reach has a width, height or fill the mockup cannot show
-  kOffTrack,             // target-shaped, but a jump from the tracked target not yet confirmed
-                         // (set by TargetTrackGate, never by detect())
-  kFootprintMisfit,      // the blob's depth profile does not fit the mockup's footprint
-  kAppearanceMismatch,   // target-shaped, but the face print is not where the port is
-                         // (set by confirmByAppearance, face_appearance.h, never by detect())
-  kAppearanceUnjudged,   // target-shaped, but its face too saturated to judge and glare_keeps_blob off
-                         // (set by confirmByAppearance)
-};
-
-// Short stable name of an outcome ("found", "blob_too_small", ...), for diagnostics keys and counters.
-const char* outcomeName(Outcome outcome);
 
 // The metric shape of a blob, measured at its median raw disparity.
 struct BlobShape {
@@ -222,8 +99,8 @@ struct SearchHint {
 // Where the disparity image lies in the camera's full image, when it is a window of it (the far stage's
 // tracking window, far_stereo_rectify: camera_info roi). Edges of the window that are not the full
 // image's are not the target's edge: a blob crossing one is a neighbour of the tracked target (or the
-// target merged with one), never reported as the target cut by the border. Rows given as fractions of
-// the image (roi_top/bottom_fraction) stay fractions of the full image. Default: not a window.
+// target merged with one), never reported as the target cut by the border; the blob-size limit stays the
+// full image's. Default: not a window.
 struct ImageWindow {
   cv::Point offset{0, 0};  // the window's top-left pixel in the full image
   cv::Size full_size;      // the full image; empty: the disparity image is the full image
@@ -232,7 +109,9 @@ struct ImageWindow {
 
 struct Detection {
   bool found = false;
-  Outcome outcome = Outcome::kBadInput;
+  // The stage that decided (stages.h): the first that did not pass; when found, the last the core ran, passed
+  // (the node's appearance check and track gate may still refuse it).
+  StageOutcome outcome;
   std::string reason;  // empty when found; otherwise human-readable, with the numbers that decided
 
   // Search figures (filled as far as the pipeline got, also when rejected).
@@ -271,12 +150,13 @@ struct Detection {
 class DisparityDetector {
  public:
   DisparityDetector() = default;
-  // Throws std::invalid_argument naming the invalid fields.
-  explicit DisparityDetector(const DetectorParams& params);
+  // `shape`: the mockup of config/target.yaml (loadTargetShape). Throws std::invalid_argument (validate()).
+  DisparityDetector(const DetectorParams& params, const TargetShape& shape);
 
-  // Throws std::invalid_argument naming the invalid fields; keeps the old parameters then.
+  // Throws std::invalid_argument (validate()); keeps the old settings then.
   void setParams(const DetectorParams& params);
   const DetectorParams& params() const { return params_; }
+  const TargetShape& shape() const { return shape_; }
 
   // `disparity`: CV_32FC1, pixels; values that are not finite, <= 0 or outside
   // [search_min_px, search_max_px] (the matcher's search range) are invalid.
@@ -293,6 +173,7 @@ class DisparityDetector {
 
  private:
   DetectorParams params_;
+  TargetShape shape_;
 };
 
 // Position and its covariance from an image point and a disparity with the rectified model:

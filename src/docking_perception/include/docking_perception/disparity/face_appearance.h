@@ -6,7 +6,7 @@
 // print can: at 2-6 m it is 27-80 px wide, and its five white rings and the port ring survive blur.
 //
 // Method: the left image around the detected port (the detector's position error, search_radius_m,
-// either side) and the print are both reduced so that the face is at most max_working_width_px wide;
+// either side) and the print are both reduced so that the face is at most 24 px wide;
 // the print, squeezed horizontally for each of a few yaws (the face turned up to 60 deg), is slid over
 // that region (normalised cross-correlation, so gain and exposure do not matter). The best score is
 // the match. Where the face cannot be judged (too much of it saturated by glare, too dark, outside the
@@ -54,6 +54,8 @@ struct AppearanceResult {
   std::string reason;               // numbers that decided, for the detector's status
 };
 
+struct AppearanceSearchLayout;  // where the face and its search margin lie (face_appearance.cpp)
+
 class FaceAppearanceCheck {
  public:
   FaceAppearanceCheck() = default;
@@ -70,6 +72,10 @@ class FaceAppearanceCheck {
                          const FaceAppearanceParams& params) const;
 
  private:
+  // The best match of the print, squeezed for each of appearanceSqueezes(), in the searched region: the
+  // verdict, score and place in `result`.
+  void matchPrint(const cv::Mat& left_rect, const AppearanceSearchLayout& layout, const FaceAppearanceParams& params,
+                  AppearanceResult* result) const;
   // The print reduced to `size`, zero mean, unit norm; made once per size (a face keeps its size from frame
   // to frame, and reducing costs as much as the search).
   cv::Mat printOfSize(cv::Size size) const;
@@ -81,9 +87,10 @@ class FaceAppearanceCheck {
 };
 
 // Checks a found detection's face (port: detection->position_m) in `left_rect`: a print that does not
-// match turns it into a rejection (kAppearanceMismatch, found = false, the reason with the score); a
-// face too dark to judge leaves it found, one too saturated (glare) too only with params.glare_keeps_blob
-// (else kAppearanceUnjudged, found = false). Sets appearance_judged and appearance_score. A detection
+// match turns it into a rejection (AppearanceOutcome::kMismatch, found = false, the reason with the score);
+// a face too dark to judge leaves it found, one too saturated (glare) is refused (AppearanceOutcome::kGlare,
+// found = false: the glare that hides the print hides part of the mockup, and the blob left puts the port
+// 0.2-0.4 m off, campaign seed 10939). Sets appearance_judged and appearance_score. A detection
 // not found is left alone (and not checked). With params.refine_port, a matched print moves the port
 // to the print's centre: across the line of sight, and in depth to the median of `disparity` (CV_32F, the
 // image the detection came from; empty: depth kept) over the middle half of the matched print (when at

@@ -4,7 +4,7 @@
 // target moves slowly and continuously: once it is tracked, a detection is accepted only inside a
 // gate around the track's prediction (last confirmed position + velocity x elapsed time, widened by
 // the relative speed the target can reach and by the detection's own depth noise). A detection outside
-// the gate is reported invalid (Outcome::kOffTrack) until the same new position has been seen
+// the gate is reported invalid (TrackOutcome::kOffTrack) until the same new position has been seen
 // `confirm_frames` frames in a row: then the track moves there (the target was really moved, or the
 // first lock was wrong). Without a confirmed detection for `timeout_s` the track is dropped and the
 // next target-shaped detection starts a new one at once (the shape check alone guards acquisition).
@@ -15,25 +15,16 @@
 #include <Eigen/Core>
 
 #include "docking_perception/disparity/disparity_detector.h"
+#include "docking_perception/disparity/disparity_detector_settings.h"
 
 namespace docking_perception {
 namespace disparity {
 
-struct TrackGateParams {
-  bool enabled = true;
-  double max_speed_mps = 0.5;     // fastest relative motion of target and cameras the gate allows
-  double min_gate_m = 0.3;        // gate radius never below this (face centre vs blob, yaw changes)
-  double gate_sigmas = 3.0;       // plus this many sigmas of the detection's position noise
-  int confirm_frames = 5;         // consecutive consistent frames that move the track to a jump
-  double timeout_s = 2.0;         // no confirmed detection for this long: the track is dropped
-};
-
-// Every invalid field, each message naming it; empty: usable.
-std::vector<std::string> validateTrackGateParams(const TrackGateParams& params);
+// TrackGateParams (track_* settings) are declared in settings/disparity_detector.yaml (generated header).
 
 class TargetTrackGate {
  public:
-  // Throws std::invalid_argument naming the invalid fields.
+  // Throws std::invalid_argument (docking_settings::ConfigError) naming the first setting not allowed.
   explicit TargetTrackGate(const TrackGateParams& params = TrackGateParams());
   void setParams(const TrackGateParams& params);
   const TrackGateParams& params() const { return params_; }
@@ -43,7 +34,7 @@ class TargetTrackGate {
 
   // Checks a found detection at `stamp_s` (seconds, any monotonic clock: image stamps) against the
   // track and updates it. An accepted detection is returned unchanged; a rejected one has found =
-  // false, outcome kOffTrack and the reason with the distance, the gate and the confirmation count.
+  // false, outcome TrackOutcome::kOffTrack and the reason with the distance, the gate and the confirmation count.
   // Detections that are not found pass through (they only age the track). Stamps that go backwards
   // (a replayed bag restarted) reset the track.
   Detection apply(double stamp_s, const Detection& detection);

@@ -19,19 +19,12 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "docking_perception/disparity/far_stereo_settings.h"
+
 namespace docking_perception {
 namespace disparity {
 
-struct TrackingWindowParams {
-  double half_width_m = 0.8;        // across the line of sight, around the port (the mockup: 0.45 m)
-  double half_height_m = 0.30;      // up and down (the face: 0.12 m each way; the floor 0.25 m below the port)
-  int min_half_size_px = 48;        // never smaller (a far target: the matcher's and blob's own margins)
-  double max_area_fraction = 0.7;   // a window larger than this share of the image: the whole image
-  double max_prediction_s = 0.5;    // the estimate's velocity is extrapolated at most this far
-};
-
-// Every invalid field, each message naming it; empty: usable.
-std::vector<std::string> validateTrackingWindowParams(const TrackingWindowParams& params);
+// TrackingWindowParams (window_* settings) are declared in settings/far_stereo_rectify.yaml (generated header).
 
 // What the block matcher needs around a pixel to give it a disparity (config/stereo_image_proc.yaml).
 struct MatcherReach {
