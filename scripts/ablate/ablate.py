@@ -19,7 +19,6 @@ import argparse
 import datetime
 import json
 import pathlib
-import re
 import shutil
 import subprocess
 import sys
@@ -32,6 +31,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(ROOT / "scripts" / "tune"))
 sys.path.insert(0, str(ROOT / "src" / "docking_settings" / "src"))
 import quality  # noqa: E402
+from yaml_line_edit import set_key  # noqa: E402
 from docking_settings.declarations import find_declarations  # noqa: E402
 
 SUITES = ("replay", "stress", "campaign")
@@ -54,20 +54,6 @@ def node_files(node):
     raise SystemExit("ablate: no settings declaration for node %s" % node)
 
 
-def set_key(path, key, value):
-    """Sets one key of an overrides-only YAML: replaces its line, or adds one (dropping a `{}`)."""
-    text = path.read_text() if path.exists() else ""
-    lines = text.splitlines()
-    line = "%s: %s" % (key, json.dumps(value))
-    pattern = re.compile(r"^%s\s*:" % re.escape(key))
-    hits = [i for i, l in enumerate(lines) if pattern.match(l)]
-    if hits:
-        lines[hits[0]] = line
-    else:
-        lines = [l for l in lines if l.strip() != "{}"] + [line]
-    path.write_text("\n".join(lines) + "\n")
-
-
 def make_config(rule, folder):
     """config/ copied to `folder`, with the rule's settings switched off (no rule: the shipped one)."""
     shutil.rmtree(folder, ignore_errors=True)
@@ -82,7 +68,7 @@ def make_config(rule, folder):
         if problem:
             raise SystemExit("ablate: %s: %s: %s" % (rule["rule"], key, problem))
         for name in rule.get("files", files):
-            set_key(folder / name, key, value)
+            set_key(str(folder / name), key, json.dumps(value))
     return folder
 
 

@@ -3,16 +3,22 @@
 The files in config/ are read by people as much as by nodes: each key's comment says why it has its
 value. Loading and dumping the YAML would drop every comment, so the tool changes only the value's text
 on the key's own line (the comment after it stays, aligned where it was) and leaves every other line
-as it was. A key that is not in the file is refused, never added: a misspelt key would otherwise be a
-silent no-op (the node ignores it and the sweep measures nothing).
+as it was. A node's shipped YAML holds only the values that differ from its settings' declared defaults
+(src/docking_settings): a key that is not in the file is added when the node's declaration declares it,
+and refused otherwise: a misspelt key would otherwise be a silent no-op (the node ignores it and the
+sweep measures nothing).
 
 Keys nested in block mappings are addressed with dots (`chaser.cameras.ir.xyz_m`). Values are YAML
 text (`5`, `0.25`, `paper_5point`, `[1, 2]`); the edited file is parsed again and must give the value
 at that key, so a value that would break the file is refused too.
 """
+import pathlib
 import re
+import sys
 
 import yaml
+
+WORKSPACE = pathlib.Path(__file__).resolve().parents[2]
 
 # `  key: value  # comment` (block mapping entries only; a flow mapping `{a: 1}` is one value).
 KEY_LINE = re.compile(r"^(?P<indent>[ ]*)(?P<key>[A-Za-z0-9_\-]+)[ ]*:(?P<rest>.*)$")
@@ -89,6 +95,25 @@ def edited_line(line, new_value, dotted_key):
     return text + line[len(body):]
 
 
+def declared_keys(path):
+    """The settings the declaration claiming the config file `path` declares (empty if none claims it)."""
+    sys.path.insert(0, str(WORKSPACE / "src" / "docking_settings" / "src"))
+    from docking_settings.declarations import find_declarations
+    name = pathlib.Path(path).name
+    for declaration in find_declarations(WORKSPACE):
+        if name in {pathlib.Path(c).name for c in declaration.config}:
+            return set(declaration.settings)
+    return set()
+
+
+def added_line(lines, dotted_key, new_value):
+    """`lines` with `dotted_key: new_value` appended (an empty-mapping `{}` line dropped)."""
+    kept = [line for line in lines if line.strip() != "{}"]
+    if kept and not kept[-1].endswith("\n"):
+        kept[-1] += "\n"
+    return kept + ["%s: %s\n" % (dotted_key, new_value.strip())]
+
+
 def set_key(path, dotted_key, new_value):
     """Sets `dotted_key` to the YAML text `new_value` in the file at `path`, in place; returns the old
     value text. Raises KeyEditError, naming the file and the key, when it cannot."""
@@ -102,14 +127,18 @@ def set_key(path, dotted_key, new_value):
         index = find_key_line(lines, dotted_key)
     except KeyEditError as err:
         raise KeyEditError("%s: %s" % (path, err))
+    if index is None and dotted_key not in declared_keys(path):
+        raise KeyEditError("%s: no key %s, and no settings declaration declares it (check its spelling and "
+                           "nesting; nested keys with dots, e.g. chaser.cameras.ir.xyz_m)" % (path, dotted_key))
     if index is None:
-        raise KeyEditError("%s: no key %s (keys are not added: check its spelling and nesting; nested keys "
-                           "with dots, e.g. chaser.cameras.ir.xyz_m)" % (path, dotted_key))
-    old_value = split_value_and_comment(KEY_LINE.match(lines[index].rstrip("\n")).group("rest"))[0].strip()
-    try:
-        lines[index] = edited_line(lines[index], new_value.strip(), dotted_key)
-    except KeyEditError as err:
-        raise KeyEditError("%s: %s" % (path, err))
+        old_value = "(declared default)"
+        lines = added_line(lines, dotted_key, new_value)
+    else:
+        old_value = split_value_and_comment(KEY_LINE.match(lines[index].rstrip("\n")).group("rest"))[0].strip()
+        try:
+            lines[index] = edited_line(lines[index], new_value.strip(), dotted_key)
+        except KeyEditError as err:
+            raise KeyEditError("%s: %s" % (path, err))
     text = "".join(lines)
     try:
         written = value_at(yaml.safe_load(text), dotted_key)

@@ -32,7 +32,9 @@ class SettingsConsistency(unittest.TestCase):
         self.assertFalse(found, "\n" + "\n".join(found))
 
     def test_every_node_configuration_is_declared(self):
-        claimed = {pathlib.Path(c).name for d in find_declarations(WORKSPACE) for c in d.config}
+        declarations = find_declarations(WORKSPACE)
+        claimed = {pathlib.Path(c).name for d in declarations for c in d.config}
+        claimed |= {pathlib.Path(d.defaults_from).name for d in declarations if d.defaults_from}
         files = {p.name for p in (WORKSPACE / "config").glob("*.yaml")}
         unclaimed = sorted(files - claimed - DATA_FILES)
         self.assertFalse(unclaimed, "config files no declaration claims: %s" % unclaimed)
