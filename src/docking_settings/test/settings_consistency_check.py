@@ -17,7 +17,7 @@ from docking_settings.declarations import find_declarations  # noqa: E402
 # (docking_sim's own loader checks every key); Debian's stereo_image_proc's parameters; the image_transport
 # plugin's settings per camera topic (their meaning: src/docking_image_transport/README.md).
 DATA_FILES = {"robot.yaml", "target.yaml", "target_tagged.yaml", "target_tagged_inset.yaml", "sim.yaml",
-              "stereo_image_proc.yaml", "stereo_image_proc_tracking.yaml", "image_transport.yaml"}
+              "stereo_image_proc.yaml", "image_transport.yaml"}
 
 
 class SettingsConsistency(unittest.TestCase):
