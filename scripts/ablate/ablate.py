@@ -13,7 +13,8 @@ Rules: scripts/ablate/rules/*.yaml (each: rule, node, guards, off_by: {key: valu
   stress   the mono stress harness on its report seeds (src/docking_perception: stress_mono);
   campaign closed-loop dockings at the held-out campaign seeds (make campaign's generator).
 Writes OUT/table.json and OUT/table.md (default results/ablate/<date-time>/); --baseline reuses the
-baseline of an earlier run's folder.
+baseline of an earlier run's folder; a rule already measured in OUT (runs/<rule>/result.json) is not measured
+again, so an interrupted run resumes with the same --out.
 """
 import argparse
 import datetime
@@ -137,6 +138,10 @@ def measure(rule, suites, out):
     label = rule["rule"] if rule else "baseline"
     work = out / "runs" / label
     work.mkdir(parents=True, exist_ok=True)
+    done = json.loads((work / "result.json").read_text()) if (work / "result.json").exists() else {}
+    if all(suite in done for suite in suites):
+        print("ablate: %s: measured before in %s" % (label, work), flush=True)
+        return {suite: done[suite] for suite in suites}
     config_dir = make_config(rule, work / "config")
     results = {}
     for suite in suites:

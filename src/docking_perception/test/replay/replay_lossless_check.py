@@ -32,7 +32,7 @@ import unittest
 import rosbag
 import rospkg
 import rostest
-import yaml
+from docking_settings.declarations import effective_values
 
 PKG = "docking_perception"
 # One free_port for every script that starts a master of its own (scripts/tune/launch_runner.py).
@@ -177,8 +177,8 @@ class ReplayLossless(unittest.TestCase):
             len(first_pass), complete["pairs"]))
         # The chaser docks while the bag runs: at the second pass the target jumps back to where it was at the
         # first frame, and the detector's track gate holds that jump invalid until track_confirm_frames confirm it.
-        with open(os.path.join(self.launch_dir, "..", "config", "disparity_detector.yaml")) as stream:
-            confirm = yaml.safe_load(stream)["track_confirm_frames"]
+        confirm = effective_values(os.path.join(self.launch_dir, "..", "config", "disparity_detector.yaml"))[
+            "track_confirm_frames"]
         self.assertGreaterEqual(valid_second, valid_first - max_lost - confirm,
                                 "valid disparity estimates: first pass %d, second %d" % (valid_first, valid_second))
         fused_second = [s for s in runs["loop"].get(ESTIMATE_TOPICS[3], {}) if s in second_pass]

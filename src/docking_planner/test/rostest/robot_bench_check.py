@@ -166,7 +166,7 @@ class RobotBench(unittest.TestCase):
 
         # 5. The client dies mid-docking: the planner notices, ends the docking, the wheels stop.
         dock = WORKSPACE / "src" / "docking_planner" / "scripts" / "dock"
-        proc = subprocess.Popen([sys.executable, str(dock), "start"], stdout=subprocess.DEVNULL,
+        proc = subprocess.Popen([str(dock), "start"], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL, env=dict(os.environ))
         t_goal = time.time()
         self.wait_for("wheels turning after the command-line client's goal",

@@ -250,3 +250,19 @@ def flatten(mapping, prefix=""):
         else:
             out[prefix + key] = value
     return out
+
+
+def effective_values(config_file):
+    """What a node reads from a shipped (or copied) config file: its declaration's defaults with the file's
+    overrides on top, keyed as the loader reads them. For a script that needs one value of a node's settings
+    (e.g. a camera's rate_hz) from a configuration folder. The declaration is the one that claims a file of
+    this name; a file no declaration claims is read as it is."""
+    config_file = pathlib.Path(config_file)
+    workspace = pathlib.Path(__file__).resolve().parents[4]
+    values = {}
+    for declaration in find_declarations(workspace):
+        if config_file.name in {pathlib.Path(c).name for c in declaration.config}:
+            values = {key: setting.default for key, setting in declaration.settings.items()}
+            break
+    values.update(flatten(yaml.safe_load(config_file.read_text()) or {}))
+    return values
