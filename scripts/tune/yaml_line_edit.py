@@ -12,6 +12,7 @@ Keys nested in block mappings are addressed with dots (`chaser.cameras.ir.xyz_m`
 text (`5`, `0.25`, `paper_5point`, `[1, 2]`); the edited file is parsed again and must give the value
 at that key, so a value that would break the file is refused too.
 """
+import json
 import pathlib
 import re
 import sys
@@ -95,15 +96,16 @@ def edited_line(line, new_value, dotted_key):
     return text + line[len(body):]
 
 
-def declared_keys(path):
-    """The settings the declaration claiming the config file `path` declares (empty if none claims it)."""
+def declared_defaults(path):
+    """{key: default} of the settings the declaration claiming the config file `path` declares (empty if
+    none claims it)."""
     sys.path.insert(0, str(WORKSPACE / "src" / "docking_settings" / "src"))
     from docking_settings.declarations import find_declarations
     name = pathlib.Path(path).name
     for declaration in find_declarations(WORKSPACE):
         if name in {pathlib.Path(c).name for c in declaration.config}:
-            return set(declaration.settings)
-    return set()
+            return {key: setting.default for key, setting in declaration.settings.items()}
+    return {}
 
 
 def added_line(lines, dotted_key, new_value):
@@ -116,7 +118,7 @@ def added_line(lines, dotted_key, new_value):
 
 def set_key(path, dotted_key, new_value):
     """Sets `dotted_key` to the YAML text `new_value` in the file at `path`, in place; returns the old
-    value text. Raises KeyEditError, naming the file and the key, when it cannot."""
+    value text (a key the file did not hold: its declared default). Raises KeyEditError, naming the file and the key, when it cannot."""
     try:
         parsed_value = yaml.safe_load(new_value)
     except yaml.YAMLError as err:
@@ -127,11 +129,13 @@ def set_key(path, dotted_key, new_value):
         index = find_key_line(lines, dotted_key)
     except KeyEditError as err:
         raise KeyEditError("%s: %s" % (path, err))
-    if index is None and dotted_key not in declared_keys(path):
+    defaults = declared_defaults(path) if index is None else {}
+    if index is None and dotted_key not in defaults:
         raise KeyEditError("%s: no key %s, and no settings declaration declares it (check its spelling and "
                            "nesting; nested keys with dots, e.g. chaser.cameras.ir.xyz_m)" % (path, dotted_key))
     if index is None:
-        old_value = "(declared default)"
+        default = defaults[dotted_key]
+        old_value = default if isinstance(default, str) else json.dumps(default)  # as YAML text
         lines = added_line(lines, dotted_key, new_value)
     else:
         old_value = split_value_and_comment(KEY_LINE.match(lines[index].rstrip("\n")).group("rest"))[0].strip()
