@@ -6,10 +6,21 @@
 #include <string>
 
 #include <Eigen/Cholesky>
+#include <boost/math/distributions/chi_squared.hpp>
 
 namespace docking_perception {
 namespace arbiter {
 namespace {
+
+// Floors of the relative motion allowed between two stamps: a still estimate may be wrong about being
+// still (0.05 m/s over the 50 ms stamp tolerance: 2.5 mm; 0.05 rad/s: 0.14 deg).
+constexpr double kMinRelativeSpeedMps = 0.05;
+constexpr double kMinRelativeRateRadps = 0.05;
+
+/// The chi-square value that `probability` of honest differences with `dof` degrees of freedom stay under.
+double chiSquareGate(int dof, double probability) {
+  return boost::math::quantile(boost::math::chi_squared(dof), probability);
+}
 
 /// Rotation taking `from` to `to`, as a rotation vector in the common frame (the covariances'
 /// convention: a perturbation about the frame's axes, q_to = exp(d) q_from). Shortest way round.
@@ -28,13 +39,13 @@ std::optional<ConsistencyTest> compare(const ComparablePose& a, const Comparable
                                        const ConsistencyConfig& config) {
   ConsistencyTest test;
   test.dof = a.has_orientation && b.has_orientation ? 6 : 3;
-  test.gate = test.dof == 6 ? config.gate_chi2_pose : config.gate_chi2_position;
+  test.gate = chiSquareGate(test.dof, config.gate_probability);
   test.dt_s = std::abs(a.stamp_s - b.stamp_s);
 
   // How far the target may have moved between the two stamps: the faster of the two estimates'
   // own velocities, never less than the floors (a still estimate may be wrong about being still).
-  const double speed = std::max({a.speed_mps, b.speed_mps, config.min_speed_mps});
-  const double rate = std::max({a.rate_radps, b.rate_radps, config.min_rate_radps});
+  const double speed = std::max({a.speed_mps, b.speed_mps, kMinRelativeSpeedMps});
+  const double rate = std::max({a.rate_radps, b.rate_radps, kMinRelativeRateRadps});
   const double position_var = std::pow(speed * test.dt_s, 2) + std::pow(config.mount_sigma_m, 2);
   const double rotation_var = std::pow(rate * test.dt_s, 2) + std::pow(config.mount_sigma_rad, 2);
 

@@ -219,9 +219,9 @@ void SourceArbiter::preferClaimedOrientation(std::array<Source, kSourceCount>* p
 
 std::string SourceArbiter::poorQualityReason(const EstimateSummary& e) const {
   if (!isMono(e.source)) return {};
-  const auto min_inliers =
-      static_cast<std::uint32_t>(e.source == Source::kMonoIr ? config_.min_ir_inliers : config_.min_visible_inliers);
-  if (e.feature_inliers < min_inliers) {
+  // An IR pose is made from its five LEDs or not at all: only the visible pose's inliers are counted.
+  const auto min_inliers = static_cast<std::uint32_t>(config_.min_visible_inliers);
+  if (e.source == Source::kMonoVisible && e.feature_inliers < min_inliers) {
     return "poor (" + std::to_string(e.feature_inliers) + " inliers < " + std::to_string(min_inliers) + ")";
   }
   if (!std::isfinite(e.reprojection_error_px) ||

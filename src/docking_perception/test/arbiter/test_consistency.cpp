@@ -46,7 +46,9 @@ TEST(Consistency, PositionDifferenceIsWeighedByBothCovariancesAndTheMountSigma) 
   ASSERT_TRUE(test);
   const double variance = 2 * 0.01 * 0.01 + c.mount_sigma_m * c.mount_sigma_m;  // dt = 0: no motion term
   EXPECT_NEAR(test->chi2, 0.03 * 0.03 / variance, 1e-9);
-  EXPECT_EQ(test->agree, test->chi2 <= c.gate_chi2_pose);
+  EXPECT_EQ(test->dof, 6);
+  EXPECT_NEAR(test->gate, 22.458, 0.001);  // the 99.9 % point of chi-square, 6 dof
+  EXPECT_EQ(test->agree, test->chi2 <= test->gate);
 }
 
 TEST(Consistency, OrientationDifferenceUsesTheShortestRotationWhateverTheQuaternionSign) {
@@ -76,7 +78,7 @@ TEST(Consistency, WithoutOrientationOnlyPositionIsCompared) {
   ASSERT_TRUE(test);
   EXPECT_EQ(test->dof, 3);
   EXPECT_NEAR(test->chi2, 0.0, 1e-12);
-  EXPECT_EQ(test->gate, c.gate_chi2_position);
+  EXPECT_NEAR(test->gate, 16.266, 0.001);  // the 99.9 % point of chi-square, 3 dof
 
   disparity.pose.position.x() = 1.8;  // a background object beside the target
   test = compare(mono, disparity, c);
@@ -86,7 +88,6 @@ TEST(Consistency, WithoutOrientationOnlyPositionIsCompared) {
 
 TEST(Consistency, StampDifferenceAllowsTheEstimatedMotionOrTheFloor) {
   ConsistencyConfig c;
-  c.min_speed_mps = 0.05;
   const ComparablePose a = pose(1.00, {0.0, 0.0, 1.0}, 0.001, 0.002);
   const ComparablePose b = pose(1.04, {0.03, 0.0, 1.0}, 0.001, 0.002);  // 3 cm in 40 ms
   auto test = compare(a, b, c);
@@ -99,10 +100,6 @@ TEST(Consistency, StampDifferenceAllowsTheEstimatedMotionOrTheFloor) {
   test = compare(a, moving, c);
   ASSERT_TRUE(test);
   EXPECT_TRUE(test->agree) << test->chi2;
-
-  // A floor high enough covers it without a twist.
-  c.min_speed_mps = 0.75;
-  EXPECT_TRUE(compare(a, b, c)->agree);
 }
 
 TEST(Consistency, ZeroCovariancesStayDefinedAndNonFiniteOnesAreNotCompared) {
@@ -124,7 +121,7 @@ TEST(Consistency, ZeroCovariancesStayDefinedAndNonFiniteOnesAreNotCompared) {
 TEST(Consistency, RejectsInvalidConfiguration) {
   EXPECT_NO_THROW(validate(ConsistencyConfig{}));
   ConsistencyConfig c;
-  c.gate_chi2_pose = 0.0;
+  c.gate_probability = 1.0;  // no gate at all: refused
   EXPECT_THROW(validate(c), std::invalid_argument);
   c = ConsistencyConfig{};
   c.stamp_tolerance_s = -0.01;
@@ -133,12 +130,12 @@ TEST(Consistency, RejectsInvalidConfiguration) {
   c.mount_sigma_rad = 0.0;
   EXPECT_THROW(validate(c), std::invalid_argument);
   c = ConsistencyConfig{};
-  c.min_speed_mps = NAN;
+  c.mount_sigma_m = NAN;
   try {
     validate(c);
     FAIL() << "no exception";
   } catch (const docking_settings::ConfigError& e) {
-    EXPECT_EQ(e.key(), "min_speed_mps");  // the node's loader names it with its prefix, consistency_
+    EXPECT_EQ(e.key(), "mount_sigma_m");  // the node's loader names it with its prefix, consistency_
     EXPECT_EQ(e.problem(), docking_settings::ConfigProblem::kOutOfRange);
   }
 }

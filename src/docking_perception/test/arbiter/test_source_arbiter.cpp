@@ -296,10 +296,9 @@ TEST(SourceArbiter, DisparityIsNeverUsedInsideTheMinimumRange) {
   EXPECT_EQ(d.source, Source::kMonoIr);
 }
 
-TEST(SourceArbiter, VisibleAndIrHaveTheirOwnInlierThresholds) {
+TEST(SourceArbiter, OnlyTheVisiblePoseHasAnInlierThreshold) {
   ArbiterConfig c;
   c.min_visible_inliers = 12;
-  c.min_ir_inliers = 5;
   SourceArbiter arbiter{c};
   // Five inliers: enough for the IR pose (its five LEDs), too few for the visible one.
   EstimateSummary visible = good(Source::kMonoVisible, 1.0, 1.0);
@@ -312,14 +311,14 @@ TEST(SourceArbiter, VisibleAndIrHaveTheirOwnInlierThresholds) {
   ASSERT_TRUE(d.valid);
   EXPECT_EQ(d.source, Source::kMonoIr);
   EXPECT_NE(d.reason.find("5 inliers < 12"), std::string::npos) << d.reason;
-  // Four IR inliers: poor too; nothing usable.
+  // Twelve visible inliers: the visible pose is usable again and, nearer in the preference, chosen.
   visible.stamp_s = ir.stamp_s = 1.1;
-  ir.feature_inliers = 4;
+  visible.feature_inliers = 12;
   ASSERT_TRUE(arbiter.offer(visible).accepted);
   ASSERT_TRUE(arbiter.offer(ir).accepted);
   d = arbiter.decide(1.11);
-  EXPECT_FALSE(d.valid);
-  EXPECT_NE(d.reason.find("4 inliers < 5"), std::string::npos) << d.reason;
+  ASSERT_TRUE(d.valid);
+  EXPECT_EQ(d.source, Source::kMonoVisible) << d.reason;
 }
 
 // ---- Consistency across sources ------------------------------------------------------------------
@@ -511,11 +510,11 @@ TEST(SourceArbiterConsistency, DisabledCheckKeepsTheFormerChoice) {
 
 TEST(SourceArbiterConsistency, InvalidConsistencySettingsAreRefused) {
   ArbiterConfig c;
-  c.consistency.gate_chi2_position = -1.0;
+  c.consistency.gate_probability = -1.0;
   EXPECT_THROW(SourceArbiter{c}, std::invalid_argument);
   SourceArbiter arbiter{ArbiterConfig{}};
   EXPECT_THROW(arbiter.reconfigure(c), std::invalid_argument);
-  EXPECT_GT(arbiter.config().consistency.gate_chi2_position, 0.0);
+  EXPECT_GT(arbiter.config().consistency.gate_probability, 0.0);
 }
 
 // Issue 12 item 2: one estimate stamped 1000 s ahead must not become the latest stamp that every later

@@ -26,7 +26,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[4]  # the repository this test b
 SAVE_PARAMS = ROOT / "scripts" / "tune" / "save_params.py"
 NODE = "/arbiter"
 # A float with a comment aligned after it, and an integer: the two kinds the file holds most.
-CHANGES = {"switch_range_m": 2.75, "min_ir_inliers": 6}
+CHANGES = {"switch_range_m": 2.75, "min_visible_inliers": 12}
 
 
 def run_save_params(*args):
@@ -101,7 +101,7 @@ class SaveParams(unittest.TestCase):
         self.assertEqual(real.stdout, dry.stdout, "the diff written differs from the dry run's")
         written = yaml.safe_load(self.yaml.read_text())
         self.assertEqual(written, CHANGES, "the file holds more or less than the two tuned values")
-        self.assertEqual(type(written["min_ir_inliers"]), int, "an int written as float")
+        self.assertEqual(type(written["min_visible_inliers"]), int, "an int written as float")
         comments = [line for line in self.original.decode().splitlines() if line.startswith("#")]
         self.assertTrue(comments, "the test expects a commented file")
         for line in comments:
