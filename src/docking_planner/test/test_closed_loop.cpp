@@ -8,7 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <deque>
+#include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <random>
 #include <sstream>
@@ -16,6 +19,7 @@
 #include <vector>
 
 #include "docking_planner/docking_planner.h"
+#include "shipped_config.h"
 
 using namespace docking_planner;
 
@@ -99,10 +103,22 @@ TargetObservation observe(const World& w, double t, const Scenario& s, double co
   return o;
 }
 
+// PLANNER_TRACE=<file>: every cycle's output of every scenario appended to <file> (state, command, goal
+// distance, reason; full precision), so that a restructuring of the planner can be shown to change no
+// output (compare the files written before and after).
+void trace(const std::string& scenario, double t, const PlannerOutput& out) {
+  const char* path = std::getenv("PLANNER_TRACE");
+  if (path == nullptr || *path == '\0') return;
+  std::ofstream file(path, std::ios::app);
+  file << std::setprecision(17) << scenario << ' ' << t << ' ' << stateName(out.state) << ' ' << out.command.vx << ' '
+       << out.command.vy << ' ' << out.command.wz << ' ' << out.goal_distance_m << ' ' << out.on_odometry << ' '
+       << out.reason << '\n';
+}
+
 Result run(const Scenario& s) {
-  PlannerConfig config;  // the defaults, which config/planner.yaml repeats
+  PlannerConfig config = shippedConfig();
   config.track.model_target_drift = s.model_target_drift;
-  DockingPlanner planner{config};
+  DockingPlanner planner{config, shippedProbeX()};
   if (!planner.start(0.0, DockingLimits{}, nullptr)) return Result{};
   World w;
   w.target_rate = s.target_rate_radps;
@@ -129,6 +145,7 @@ Result run(const Scenario& s) {
     odom.pose = w.chaser;
     planner.notePerception(t, false);
     const PlannerOutput out = planner.update(t, odom);
+    trace(s.name, t, out);
     if (r.states.empty() || r.states.back() != out.state) r.states.push_back(out.state);
     r.last_reason = out.reason;
     r.used_odometry_finish = r.used_odometry_finish || out.on_odometry;
@@ -140,7 +157,7 @@ Result run(const Scenario& s) {
     }
     if (out.state == DockingPhase::kDocked) {
       const Pose2D port = w.port(t);
-      const Vec2 tip = w.chaser.position() + config.law.probe_x_m * unitAt(w.chaser.yaw);
+      const Vec2 tip = w.chaser.position() + shippedProbeX() * unitAt(w.chaser.yaw);
       r.docked = true;
       r.time_s = t;
       r.tip_error_m = (tip - port.position()).norm();

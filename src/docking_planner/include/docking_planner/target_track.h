@@ -38,45 +38,7 @@ struct TargetObservation {
   std::string status;                ///< the estimator's reason when not valid
 };
 
-struct TrackConfig {
-  double default_position_sigma_m{0.01};      ///< when the estimate gives none
-  double default_yaw_sigma_rad{0.03};         ///< when the estimate gives none
-  /// Floor of a yaw measurement's std. dev., per square metre of camera range (rad/m^2): a monocular
-  /// orientation degrades with range much faster than its reprojection covariance says (in the
-  /// simulator 0.1 deg at 0.5 m, 1.2 deg head-on at 1.4 m, 6 deg head-on at 2 m). Poses at 2-3 m,
-  /// 10-28 deg off in some campaign runs, otherwise set a turn rate the blind finish followed.
-  double yaw_sigma_per_range2{0.005};
-  double yaw_rate_sigma_radps{0.02};          ///< std. dev. of a yaw rate taken from the estimate's twist
-  /// Fuse the twist's yaw rate when valid. Off by default: the monocular twist is relative to the
-  /// camera, and adding the chaser's odometry yaw rate to it left a bias (0.06 deg/s on a still
-  /// target in the simulator) that the blind finish integrated into the docked yaw.
-  bool use_estimate_yaw_rate{false};
-  /// rad/s per sqrt(s): how fast the target's rate may change. Small, because a free target turns at
-  /// a constant rate, and because this sets how long the filter averages the rate: with 0.005 the rate
-  /// came out 0.08 deg/s (1 sigma) off after 12 s of 0.06 deg poses, 0.5 deg over a 7 s blind finish;
-  /// with 0.0003 it is 0.01 deg/s.
-  double yaw_rate_random_walk{0.0003};
-  double centre_random_walk{0.002};          ///< m per sqrt(s): the turning centre's jitter (a turning target's centre stays put; 0.01 let it absorb the port's circle)
-  /// Estimate a drift velocity u of the target (else u = 0). Off by default: over the few seconds a
-  /// near-range camera sees the port, a drift and a turn are hard to tell apart, and modelling the
-  /// drift costs a target that only turns ~1 cm of dead-reckoned accuracy (and gains the same for
-  /// a drifting one); see README.md.
-  bool model_target_drift{false};
-  double centre_velocity_random_walk{0.005};  ///< m/s per sqrt(s): how fast the target's drift may change
-  double initial_centre_speed_sigma_mps{0.05};  ///< prior on the target's drift speed
-  double offset_random_walk{0.001};           ///< m per sqrt(s): the port offset (constant in truth)
-  /// Prior on the port's offset from the turning centre, along the port axis (the test bed's target
-  /// robots turn about their centre, the port 0.15 m ahead of it), and its std. dev.
-  double initial_offset_m{0.15};
-  double initial_offset_sigma_m{0.05};
-  double initial_yaw_rate_sigma_radps{0.1};   ///< prior on the target's yaw rate
-  double max_port_yaw_rate_radps{0.3};        ///< the estimated yaw rate is clamped to this
-  double max_port_speed_mps{0.1};             ///< the predicted port speed is clamped to this
-  double outlier_gate_sigma{6.0};             ///< innovations beyond this many sigmas are rejected (0: off)
-  int outlier_reset_count{5};                 ///< this many rejections in a row: the target moved, restart
-};
-
-/// Throws std::invalid_argument naming the bad field.
+/// The settings (settings/planner.yaml, TrackConfig): throws naming the bad field.
 void validate(const TrackConfig& config);
 
 struct TrackUpdate {

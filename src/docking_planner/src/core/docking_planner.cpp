@@ -19,12 +19,6 @@ std::string fmt2(const char* format, double a, double b) {
   return buffer;
 }
 
-void requirePositive(double value, const char* name) {
-  if (!std::isfinite(value) || value <= 0.0) {
-    throw std::invalid_argument(std::string(name) + " must be a positive number");
-  }
-}
-
 bool finite(const ChaserOdometry& o) {
   return std::isfinite(o.stamp_s) && std::isfinite(o.pose.x) && std::isfinite(o.pose.y) &&
          std::isfinite(o.pose.yaw) && std::isfinite(o.twist.vx) && std::isfinite(o.twist.vy) &&
@@ -32,9 +26,6 @@ bool finite(const ChaserOdometry& o) {
 }
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-// Perception may be gone this long at most before the chaser stops (the 0.6 s stop budget
-// includes the arbiter's own silence timeout and the base's deceleration).
-constexpr double kMaxPerceptionTimeoutS = 1.0;
 // Orbit without a known port axis: the axis is placed this far ahead, so the ALIGN law moves the chaser
 // along the circle (counter-clockwise seen from above) at its speed limit.
 constexpr double kOrbitLeadRad = 0.5;
@@ -101,62 +92,29 @@ std::string checkLimits(const DockingLimits& limits) {
 }
 
 void validate(const PlannerConfig& c) {
+  docking_settings::validateSettings(c);
   validate(c.law);
-  validate(c.track);
-  docking_msgs::checks::validate(c.stamp_limits);
-  requirePositive(c.estimate_timeout_s, "estimate_timeout_s");
-  requirePositive(c.odom_timeout_s, "odom_timeout_s");
-  requirePositive(c.orientation_timeout_s, "orientation_timeout_s");
-  requirePositive(c.search_wait_s, "search_wait_s");
-  if (!std::isfinite(c.search_yaw_rate_radps) || std::abs(c.search_yaw_rate_radps) > c.law.max_yaw_rate_radps) {
-    throw std::invalid_argument("search_yaw_rate_radps must be finite and within max_yaw_rate_radps");
+  docking_msgs::checks::validate(stampLimits(c));
+  if (std::abs(c.search_yaw_rate_radps) > c.law.max_yaw_rate_radps) {
+    throw std::invalid_argument("search_yaw_rate_radps must be within max_yaw_rate_radps");
   }
-  requirePositive(c.search_timeout_s, "search_timeout_s");
-  requirePositive(c.hold_timeout_s, "hold_timeout_s");
-  requirePositive(c.perception_timeout_s, "perception_timeout_s");
-  if (c.perception_timeout_s > kMaxPerceptionTimeoutS) {
-    throw std::invalid_argument(fmt("perception_timeout_s must be <= %.1f s: longer, the chaser drives on a dead perception",
-                                    kMaxPerceptionTimeoutS));
-  }
-  requirePositive(c.abort_timeout_s, "abort_timeout_s");
-  requirePositive(c.approach_goal_tolerance_m, "approach_goal_tolerance_m");
-  requirePositive(c.circle_tolerance_m, "circle_tolerance_m");
-  requirePositive(c.align_lateral_tolerance_m, "align_lateral_tolerance_m");
-  requirePositive(c.align_yaw_tolerance_rad, "align_yaw_tolerance_rad");
-  requirePositive(c.docked_position_tolerance_m, "docked_position_tolerance_m");
-  requirePositive(c.docked_yaw_tolerance_rad, "docked_yaw_tolerance_rad");
-  requirePositive(c.final_abort_lateral_m, "final_abort_lateral_m");
-  requirePositive(c.final_abort_yaw_rad, "final_abort_yaw_rad");
   if (c.final_abort_lateral_m <= c.align_lateral_tolerance_m || c.final_abort_yaw_rad <= c.align_yaw_tolerance_rad) {
     throw std::invalid_argument(
         "final_abort_lateral_m / final_abort_yaw_rad must exceed align_lateral_tolerance_m / align_yaw_tolerance_rad");
   }
-  requirePositive(c.divergence_margin_m, "divergence_margin_m");
-  requirePositive(c.blind_final_range_m, "blind_final_range_m");
-  if (!std::isfinite(c.odometry_only_range_m) || c.odometry_only_range_m < 0.0 ||
-      c.odometry_only_range_m > c.blind_final_range_m) {
+  if (c.odometry_only_range_m > c.blind_final_range_m) {
     throw std::invalid_argument("odometry_only_range_m must be in [0, blind_final_range_m]");
   }
-  if (!std::isfinite(c.contact_estimate_gate_m) || c.contact_estimate_gate_m < 0.0) {
-    throw std::invalid_argument("contact_estimate_gate_m must be a number >= 0");
-  }
-  if (!std::isfinite(c.contact_estimate_gate_yaw_rad) || c.contact_estimate_gate_yaw_rad < 0.0) {
-    throw std::invalid_argument("contact_estimate_gate_yaw_rad must be a number >= 0");
-  }
-  requirePositive(c.max_blind_s, "max_blind_s");
-  if (!std::isfinite(c.search_orbit_radius_m) || c.search_orbit_radius_m < c.law.safe_radius_m) {
+  if (c.search_orbit_radius_m < c.law.safe_radius_m) {
     throw std::invalid_argument("search_orbit_radius_m must be a number >= safe_radius_m");
-  }
-  requirePositive(c.orbit_speed_mps, "orbit_speed_mps");
-  if (!std::isfinite(c.search_orbit_memory_s) || c.search_orbit_memory_s < 0.0) {
-    throw std::invalid_argument("search_orbit_memory_s must be a number >= 0");
-  }
-  if (!std::isfinite(c.position_only_gate_m) || c.position_only_gate_m < 0.0) {
-    throw std::invalid_argument("position_only_gate_m must be a number >= 0");
   }
   if (c.orientation_timeout_s < c.max_blind_s) {
     throw std::invalid_argument("orientation_timeout_s must be >= max_blind_s (the blind finish needs the port axis)");
   }
+}
+
+docking_msgs::checks::StampLimits stampLimits(const PlannerConfig& c) {
+  return docking_msgs::checks::StampLimits{c.max_future_stamp_s, c.max_stamp_age_s};
 }
 
 namespace {
@@ -168,8 +126,11 @@ ApproachConfig orbitLaw(const PlannerConfig& c) {
 }
 }  // namespace
 
-DockingPlanner::DockingPlanner(const PlannerConfig& config)
-    : config_((validate(config), config)), law_(config.law), orbit_law_(orbitLaw(config)), track_(config.track) {}
+DockingPlanner::DockingPlanner(const PlannerConfig& config, double probe_x_m)
+    : config_((validate(config), config)),
+      law_(config.law, probe_x_m),
+      orbit_law_(orbitLaw(config), probe_x_m),
+      track_(config.track) {}
 
 void DockingPlanner::reset(double now_s) {
   track_.reset();

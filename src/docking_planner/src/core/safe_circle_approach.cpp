@@ -6,21 +6,6 @@
 #include <string>
 
 namespace docking_planner {
-namespace {
-
-void requirePositive(double value, const char* name) {
-  if (!std::isfinite(value) || value <= 0.0) {
-    throw std::invalid_argument(std::string(name) + " must be a positive number");
-  }
-}
-
-void requireNonNegative(double value, const char* name) {
-  if (!std::isfinite(value) || value < 0.0) {
-    throw std::invalid_argument(std::string(name) + " must be a number >= 0");
-  }
-}
-
-}  // namespace
 
 const char* phaseName(Phase phase) {
   switch (phase) {
@@ -37,34 +22,19 @@ const char* phaseName(Phase phase) {
 }
 
 void validate(const ApproachConfig& c) {
-  requirePositive(c.safe_radius_m, "safe_radius_m");
-  requireNonNegative(c.probe_x_m, "probe_x_m");
-  if (c.probe_x_m >= c.safe_radius_m) {
-    throw std::invalid_argument("probe_x_m must be smaller than safe_radius_m");
-  }
-  requirePositive(c.camera_half_fov_rad, "camera_half_fov_rad");
-  requireNonNegative(c.fov_margin_rad, "fov_margin_rad");
+  docking_settings::validateSettings(c);
   if (c.fov_margin_rad >= c.camera_half_fov_rad || c.camera_half_fov_rad >= M_PI / 2) {
     throw std::invalid_argument("fov_margin_rad must be below camera_half_fov_rad, itself below pi/2");
   }
-  requireNonNegative(c.tangent_margin_rad, "tangent_margin_rad");
-  requirePositive(c.approach_gain, "approach_gain");
-  requirePositive(c.radial_gain, "radial_gain");
-  requirePositive(c.tangential_gain, "tangential_gain");
-  requirePositive(c.axial_gain, "axial_gain");
-  requirePositive(c.lateral_gain, "lateral_gain");
-  requirePositive(c.yaw_gain, "yaw_gain");
-  requirePositive(c.max_speed_mps, "max_speed_mps");
-  requirePositive(c.max_yaw_rate_radps, "max_yaw_rate_radps");
-  requirePositive(c.align_speed_mps, "align_speed_mps");
-  requirePositive(c.final_speed_mps, "final_speed_mps");
-  requirePositive(c.final_slow_speed_mps, "final_slow_speed_mps");
-  requireNonNegative(c.final_slow_distance_m, "final_slow_distance_m");
-  requirePositive(c.final_lateral_gate_m, "final_lateral_gate_m");
-  requirePositive(c.final_yaw_gate_rad, "final_yaw_gate_rad");
 }
 
-SafeCircleApproach::SafeCircleApproach(const ApproachConfig& config) : config_(config) { validate(config_); }
+SafeCircleApproach::SafeCircleApproach(const ApproachConfig& config, double probe_x_m)
+    : config_(config), probe_x_m_(probe_x_m) {
+  validate(config_);
+  if (!std::isfinite(probe_x_m_) || probe_x_m_ < 0.0 || probe_x_m_ >= config_.safe_radius_m) {
+    throw std::invalid_argument("probe_x_m must be in [0, safe_radius_m)");
+  }
+}
 
 ApproachGeometry SafeCircleApproach::measure(const Pose2D& chaser, const Pose2D& port) const {
   ApproachGeometry g;
@@ -76,7 +46,7 @@ ApproachGeometry SafeCircleApproach::measure(const Pose2D& chaser, const Pose2D&
   g.lateral_m = rel.dot(perpendicular(axis));
   g.yaw_error_rad = wrapAngle(chaser.yaw - (port.yaw + M_PI));
   g.bearing_rad = wrapAngle(std::atan2(-rel.y(), -rel.x()) - chaser.yaw);
-  g.tip_error_m = (chaser.position() + config_.probe_x_m * unitAt(chaser.yaw) - port.position()).norm();
+  g.tip_error_m = (chaser.position() + probe_x_m_ * unitAt(chaser.yaw) - port.position()).norm();
   return g;
 }
 
@@ -96,7 +66,7 @@ Vec2 SafeCircleApproach::approachGoal(const Pose2D& chaser, const Pose2D& port) 
 }
 
 Vec2 SafeCircleApproach::dockedPosition(const Pose2D& port) const {
-  return port.position() + config_.probe_x_m * unitAt(port.yaw);
+  return port.position() + probe_x_m_ * unitAt(port.yaw);
 }
 
 double SafeCircleApproach::desiredHeading(const Pose2D& chaser, const Pose2D& port, bool* fov_limited) const {
@@ -167,7 +137,7 @@ LawCommand SafeCircleApproach::command(Phase phase, const Pose2D& chaser, const 
     case Phase::kFinal: {
       const Vec2 axis = unitAt(p.yaw);
       const Vec2 left = perpendicular(axis);
-      const double axial_to_contact = rel.dot(axis) - c.probe_x_m;  // > 0: not there yet
+      const double axial_to_contact = rel.dot(axis) - probe_x_m_;  // > 0: not there yet
       const double lateral = rel.dot(left);
       const double yaw_error = wrapAngle(chaser.yaw - (p.yaw + M_PI));
       // Close the lateral and heading errors before advancing: full axial speed only when both are small.

@@ -10,14 +10,6 @@
 namespace docking_planner {
 namespace {
 
-void requirePositive(double value, const char* name) {
-  if (!std::isfinite(value) || value <= 0.0) throw std::invalid_argument(std::string(name) + " must be positive");
-}
-
-void requireNonNegative(double value, const char* name) {
-  if (!std::isfinite(value) || value < 0.0) throw std::invalid_argument(std::string(name) + " must be >= 0");
-}
-
 Eigen::Matrix2d rotation(double a) {
   Eigen::Matrix2d r;
   r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
@@ -26,24 +18,7 @@ Eigen::Matrix2d rotation(double a) {
 
 }  // namespace
 
-void validate(const TrackConfig& c) {
-  requirePositive(c.default_position_sigma_m, "default_position_sigma_m");
-  requirePositive(c.default_yaw_sigma_rad, "default_yaw_sigma_rad");
-  requireNonNegative(c.yaw_sigma_per_range2, "yaw_sigma_per_range2");
-  requirePositive(c.yaw_rate_sigma_radps, "yaw_rate_sigma_radps");
-  requireNonNegative(c.yaw_rate_random_walk, "yaw_rate_random_walk");
-  requireNonNegative(c.centre_random_walk, "centre_random_walk");
-  requireNonNegative(c.centre_velocity_random_walk, "centre_velocity_random_walk");
-  requirePositive(c.initial_centre_speed_sigma_mps, "initial_centre_speed_sigma_mps");
-  requireNonNegative(c.offset_random_walk, "offset_random_walk");
-  requirePositive(c.initial_offset_sigma_m, "initial_offset_sigma_m");
-  if (!std::isfinite(c.initial_offset_m)) throw std::invalid_argument("initial_offset_m must be a finite number");
-  requirePositive(c.initial_yaw_rate_sigma_radps, "initial_yaw_rate_sigma_radps");
-  requireNonNegative(c.max_port_yaw_rate_radps, "max_port_yaw_rate_radps");
-  requireNonNegative(c.max_port_speed_mps, "max_port_speed_mps");
-  requireNonNegative(c.outlier_gate_sigma, "outlier_gate_sigma");
-  if (c.outlier_reset_count < 1) throw std::invalid_argument("outlier_reset_count must be >= 1");
-}
+void validate(const TrackConfig& c) { docking_settings::validateSettings(c); }
 
 TargetTrack::TargetTrack(const TrackConfig& config) : config_(config) { validate(config_); }
 
