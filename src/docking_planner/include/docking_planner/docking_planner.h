@@ -158,6 +158,37 @@ class DockingPlanner {
   double probeX() const { return law_.probeX(); }
 
  private:
+  /// What one update() sees: the time, the chaser, the port predicted to now, and the output so far.
+  struct Cycle {
+    double now_s{0.0};
+    std::string odom_problem;  ///< empty: the odometry is usable
+    Pose2D chaser;
+    PortState port;
+    bool orientation_known{false};
+    PlannerOutput out;
+  };
+  // The stages of update(), in order.
+  std::string odometryProblem(double now_s, const std::optional<ChaserOdometry>& odometry) const;
+  Cycle observe(double now_s, const std::optional<ChaserOdometry>& odometry);
+  std::optional<PlannerOutput> checkInputs(Cycle& c);
+  std::optional<PlannerOutput> holdWhilePerceptionGone(Cycle& c);
+  PlannerOutput runStateMachine(Cycle& c);
+  // One state's step: its output, or nothing after a transition (the new state runs in the same cycle).
+  std::optional<PlannerOutput> stepState(Cycle& c);
+  std::optional<PlannerOutput> stepSearch(Cycle& c);
+  std::optional<PlannerOutput> stepHold(Cycle& c);
+  std::optional<PlannerOutput> stepAbort(Cycle& c);
+  std::optional<PlannerOutput> stepMoving(Cycle& c);
+  bool continueOnOdometry(const Cycle& c, std::string* reason);
+  std::optional<PlannerOutput> stepApproach(Cycle& c);
+  std::optional<PlannerOutput> stepAlign(Cycle& c);
+  std::optional<PlannerOutput> stepFinal(Cycle& c, const std::string& blind_reason);
+  // The cycle's output: state and time in it, the speed cap; ending the docking; the law's command.
+  PlannerOutput finish(const Cycle& c, PlannerOutput o) const;
+  PlannerOutput endDocking(const Cycle& c, PlannerOutput o, DockingOutcome outcome, const std::string& reason);
+  PlannerOutput drive(const Cycle& c, PlannerOutput o, Phase phase, const std::string& reason) const;
+  static bool moving(DockingPhase state);
+
   void enter(DockingPhase state, double now_s, const std::string& reason);
   PlannerOutput stop(PlannerOutput out, const std::string& reason) const;
   bool targetVisible(double now_s) const;

@@ -86,6 +86,17 @@ class SafeCircleApproach {
   std::vector<Pose2D> plannedPath(Phase phase, const Pose2D& chaser, const Pose2D& port) const;
 
  private:
+  /// One phase's steering in odom: its goal position, the proportional correction, the feed-forward.
+  struct Steering {
+    Vec2 goal{Vec2::Zero()};
+    Vec2 correction{Vec2::Zero()};
+    Vec2 feed_forward{Vec2::Zero()};
+  };
+  Steering steer(Phase phase, const Pose2D& chaser, const PortState& port) const;
+  Steering steerApproach(const Pose2D& chaser, const PortState& port) const;
+  Steering steerAlign(const Pose2D& chaser, const PortState& port) const;
+  Steering steerFinal(const Pose2D& chaser, const PortState& port) const;
+  Steering steerBackOff(const Pose2D& chaser, const PortState& port) const;
   Vec2 feedForward(const PortState& port, const Vec2& point) const;
   BodyTwist toBody(const Pose2D& chaser, const Vec2& v_odom, double yaw_rate) const;
 

@@ -69,6 +69,17 @@ class TargetTrack {
   void reset();
 
  private:
+  struct MeasurementNoise {
+    double position_var{0.0};  ///< m^2, per axis
+    double yaw_var{0.0};       ///< rad^2
+  };
+  // The stages of update(), in order.
+  TrackUpdate checkObservation(const TargetObservation& observation) const;
+  MeasurementNoise measurementNoise(const TargetObservation& observation) const;
+  void start(const TargetObservation& observation, const MeasurementNoise& noise);
+  std::string updateYaw(const TargetObservation& observation, double yaw_var);
+  void updateYawRate(const TargetObservation& observation);
+  std::string updatePosition(const Vec2& measured, double position_var);
   void propagate(double dt);
   void restartPosition(const Vec2& measured, double variance);
   Eigen::Matrix<double, 2, 6> positionJacobian() const;

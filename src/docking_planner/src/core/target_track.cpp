@@ -83,7 +83,8 @@ void TargetTrack::restartPosition(const Vec2& measured, double variance) {
   pos_cov_.topLeftCorner<2, 2>() = Eigen::Matrix2d::Identity() * variance;
 }
 
-TrackUpdate TargetTrack::update(const TargetObservation& o) {
+// Why an observation cannot be taken at all (empty reason: it can).
+TrackUpdate TargetTrack::checkObservation(const TargetObservation& o) const {
   TrackUpdate result;
   if (!o.valid) {
     result.reason = o.status.empty() ? "estimate not valid" : "estimate not valid: " + o.status;
@@ -98,15 +99,25 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
   }
   if (last_position_stamp_s_ && o.stamp_s <= *last_position_stamp_s_) {
     result.reason = "estimate out of order (stamp not after the last one used)";
-    return result;
   }
-  const double pos_var = std::pow(o.position_sigma_m > 0.0 ? o.position_sigma_m : config_.default_position_sigma_m, 2);
-  const double yaw_floor = std::isfinite(o.range_m) ? config_.yaw_sigma_per_range2 * o.range_m * o.range_m : 0.0;
-  const double yaw_var =
-      std::pow(std::max(o.yaw_sigma_rad > 0.0 ? o.yaw_sigma_rad : config_.default_yaw_sigma_rad, yaw_floor), 2);
-  const Vec2 measured = o.pose.position();
-  const double gate2 = config_.outlier_gate_sigma * config_.outlier_gate_sigma;
+  return result;
+}
 
+// The measurement's variances: its own sigmas or the defaults; the yaw's floored by range.
+TargetTrack::MeasurementNoise TargetTrack::measurementNoise(const TargetObservation& o) const {
+  MeasurementNoise noise;
+  noise.position_var =
+      std::pow(o.position_sigma_m > 0.0 ? o.position_sigma_m : config_.default_position_sigma_m, 2);
+  const double yaw_floor = std::isfinite(o.range_m) ? config_.yaw_sigma_per_range2 * o.range_m * o.range_m : 0.0;
+  noise.yaw_var =
+      std::pow(std::max(o.yaw_sigma_rad > 0.0 ? o.yaw_sigma_rad : config_.default_yaw_sigma_rad, yaw_floor), 2);
+  return noise;
+}
+
+TrackUpdate TargetTrack::update(const TargetObservation& o) {
+  TrackUpdate result = checkObservation(o);
+  if (!result.reason.empty()) return result;
+  const MeasurementNoise noise = measurementNoise(o);
   if (o.orientation_valid && !last_orientation_stamp_s_) {
     // The first orientation (the monocular pose, after position-only stereo estimates): start afresh
     // from it. The stereo positions are those of the target's blob, decimetres off the port, and
@@ -114,88 +125,106 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
     last_position_stamp_s_.reset();
   }
   if (!last_position_stamp_s_) {
-    // First estimate: the centre behind the port by the prior offset (along the port axis; with no
-    // orientation yet the placeholder yaw 0), yaw rate unknown (prior).
-    yaw_state_ = Eigen::Vector2d(o.orientation_valid ? wrapAngle(o.pose.yaw) : 0.0, 0.0);
-    yaw_cov_ = Eigen::Vector2d(o.orientation_valid ? yaw_var : M_PI * M_PI,
-                               std::pow(config_.initial_yaw_rate_sigma_radps, 2))
-                   .asDiagonal();
-    const Vec2 offset0 = rotation(yaw_state_(0)) * Vec2(config_.initial_offset_m, 0.0);
-    pos_state_ << measured.x() - offset0.x(), measured.y() - offset0.y(), config_.initial_offset_m, 0.0, 0.0, 0.0;
-    const double s0 = std::pow(config_.initial_offset_sigma_m, 2);
-    // Without the drift model, u starts at 0 with no uncertainty and no process noise: it stays 0.
-    const double su = config_.model_target_drift ? std::pow(config_.initial_centre_speed_sigma_mps, 2) : 0.0;
-    pos_cov_.setZero();
-    pos_cov_.diagonal() << pos_var + s0, pos_var + s0, s0, s0, su, su;
-    // c + R d is known to pos_var: c and d are anti-correlated (d in the target frame, hence R).
-    const Eigen::Matrix2d r = rotation(yaw_state_(0));
-    pos_cov_.block<2, 2>(0, 2) = -s0 * r;
-    pos_cov_.block<2, 2>(2, 0) = -s0 * r.transpose();
-    if (o.orientation_valid) last_orientation_stamp_s_ = o.stamp_s;
-    last_position_stamp_s_ = o.stamp_s;
-    last_source_ = o.source;
+    start(o, noise);
     result.accepted = true;
     return result;
   }
-
   propagate(o.stamp_s - *last_position_stamp_s_);
-
-  // Yaw: first orientation after position-only ones starts filter 1 afresh.
-  if (o.orientation_valid) {
-    if (!last_orientation_stamp_s_) {
-      // Until now the yaw was a placeholder: re-express the offset so the port stays where it was.
-      const double new_yaw = wrapAngle(o.pose.yaw);
-      const Eigen::Matrix2d change = rotation(new_yaw).transpose() * rotation(yaw_state_(0));
-      pos_state_.segment<2>(2) = change * pos_state_.segment<2>(2);
-      Matrix6d j = Matrix6d::Identity();
-      j.block<2, 2>(2, 2) = change;
-      pos_cov_ = j * pos_cov_ * j.transpose();
-      yaw_state_(0) = new_yaw;
-      yaw_cov_(0, 0) = yaw_var;
-      yaw_cov_(0, 1) = yaw_cov_(1, 0) = 0.0;
-    } else {
-      const double innovation = wrapAngle(o.pose.yaw - yaw_state_(0));
-      const double s = yaw_cov_(0, 0) + yaw_var;
-      if (gate2 > 0.0 && innovation * innovation / s > gate2 && ++yaw_outliers_ < config_.outlier_reset_count) {
-        result.reason = "orientation outlier (" + std::to_string(innovation) + " rad off the held one)";
-      } else {
-        if (yaw_outliers_ >= config_.outlier_reset_count) {
-          yaw_state_(0) = wrapAngle(o.pose.yaw);  // it persisted: the target did turn; keep the rate
-          yaw_cov_(0, 0) = yaw_var;
-          yaw_cov_(0, 1) = yaw_cov_(1, 0) = 0.0;
-        } else {
-          const Eigen::Vector2d k = yaw_cov_.col(0) / s;
-          yaw_state_ += k * innovation;
-          yaw_state_(0) = wrapAngle(yaw_state_(0));
-          yaw_cov_ -= k * yaw_cov_.row(0);
-        }
-        yaw_outliers_ = 0;
-      }
-    }
-    if (result.reason.empty()) last_orientation_stamp_s_ = o.stamp_s;
-  }
-  if (o.yaw_rate_valid && config_.use_estimate_yaw_rate && result.reason.empty()) {
-    const double innovation = o.yaw_rate - yaw_state_(1);
-    const double s = yaw_cov_(1, 1) + config_.yaw_rate_sigma_radps * config_.yaw_rate_sigma_radps;
-    const Eigen::Vector2d k = yaw_cov_.col(1) / s;
-    yaw_state_ += k * innovation;
-    yaw_state_(0) = wrapAngle(yaw_state_(0));
-    yaw_cov_ -= k * yaw_cov_.row(1);
-  }
+  if (o.orientation_valid) result.reason = updateYaw(o, noise.yaw_var);
+  if (o.yaw_rate_valid && config_.use_estimate_yaw_rate && result.reason.empty()) updateYawRate(o);
   yaw_state_(1) = clampAbs(yaw_state_(1), config_.max_port_yaw_rate_radps);
   if (!result.reason.empty()) return result;  // an outlier orientation: do not trust its position either
+  result.reason = updatePosition(o.pose.position(), noise.position_var);
+  if (!result.reason.empty()) return result;
+  last_position_stamp_s_ = o.stamp_s;
+  last_source_ = o.source;
+  result.accepted = true;
+  return result;
+}
 
-  // Position.
+// First estimate: the centre behind the port by the prior offset (along the port axis; with no
+// orientation yet the placeholder yaw 0), yaw rate unknown (prior).
+void TargetTrack::start(const TargetObservation& o, const MeasurementNoise& noise) {
+  const Vec2 measured = o.pose.position();
+  yaw_state_ = Eigen::Vector2d(o.orientation_valid ? wrapAngle(o.pose.yaw) : 0.0, 0.0);
+  yaw_cov_ = Eigen::Vector2d(o.orientation_valid ? noise.yaw_var : M_PI * M_PI,
+                             std::pow(config_.initial_yaw_rate_sigma_radps, 2))
+                 .asDiagonal();
+  const Vec2 offset0 = rotation(yaw_state_(0)) * Vec2(config_.initial_offset_m, 0.0);
+  pos_state_ << measured.x() - offset0.x(), measured.y() - offset0.y(), config_.initial_offset_m, 0.0, 0.0, 0.0;
+  const double s0 = std::pow(config_.initial_offset_sigma_m, 2);
+  // Without the drift model, u starts at 0 with no uncertainty and no process noise: it stays 0.
+  const double su = config_.model_target_drift ? std::pow(config_.initial_centre_speed_sigma_mps, 2) : 0.0;
+  pos_cov_.setZero();
+  pos_cov_.diagonal() << noise.position_var + s0, noise.position_var + s0, s0, s0, su, su;
+  // c + R d is known to the position variance: c and d are anti-correlated (d in the target frame, hence R).
+  const Eigen::Matrix2d r = rotation(yaw_state_(0));
+  pos_cov_.block<2, 2>(0, 2) = -s0 * r;
+  pos_cov_.block<2, 2>(2, 0) = -s0 * r.transpose();
+  if (o.orientation_valid) last_orientation_stamp_s_ = o.stamp_s;
+  last_position_stamp_s_ = o.stamp_s;
+  last_source_ = o.source;
+}
+
+// Filter 1 with a port axis; the first one after position-only estimates starts it afresh. Returns why the
+// orientation was not taken (an outlier), or empty.
+std::string TargetTrack::updateYaw(const TargetObservation& o, double yaw_var) {
+  if (!last_orientation_stamp_s_) {
+    // Until now the yaw was a placeholder: re-express the offset so the port stays where it was.
+    const double new_yaw = wrapAngle(o.pose.yaw);
+    const Eigen::Matrix2d change = rotation(new_yaw).transpose() * rotation(yaw_state_(0));
+    pos_state_.segment<2>(2) = change * pos_state_.segment<2>(2);
+    Matrix6d j = Matrix6d::Identity();
+    j.block<2, 2>(2, 2) = change;
+    pos_cov_ = j * pos_cov_ * j.transpose();
+    yaw_state_(0) = new_yaw;
+    yaw_cov_(0, 0) = yaw_var;
+    yaw_cov_(0, 1) = yaw_cov_(1, 0) = 0.0;
+    last_orientation_stamp_s_ = o.stamp_s;
+    return "";
+  }
+  const double gate2 = config_.outlier_gate_sigma * config_.outlier_gate_sigma;
+  const double innovation = wrapAngle(o.pose.yaw - yaw_state_(0));
+  const double s = yaw_cov_(0, 0) + yaw_var;
+  if (gate2 > 0.0 && innovation * innovation / s > gate2 && ++yaw_outliers_ < config_.outlier_reset_count) {
+    return "orientation outlier (" + std::to_string(innovation) + " rad off the held one)";
+  }
+  if (yaw_outliers_ >= config_.outlier_reset_count) {
+    yaw_state_(0) = wrapAngle(o.pose.yaw);  // it persisted: the target did turn; keep the rate
+    yaw_cov_(0, 0) = yaw_var;
+    yaw_cov_(0, 1) = yaw_cov_(1, 0) = 0.0;
+  } else {
+    const Eigen::Vector2d k = yaw_cov_.col(0) / s;
+    yaw_state_ += k * innovation;
+    yaw_state_(0) = wrapAngle(yaw_state_(0));
+    yaw_cov_ -= k * yaw_cov_.row(0);
+  }
+  yaw_outliers_ = 0;
+  last_orientation_stamp_s_ = o.stamp_s;
+  return "";
+}
+
+void TargetTrack::updateYawRate(const TargetObservation& o) {
+  const double innovation = o.yaw_rate - yaw_state_(1);
+  const double s = yaw_cov_(1, 1) + config_.yaw_rate_sigma_radps * config_.yaw_rate_sigma_radps;
+  const Eigen::Vector2d k = yaw_cov_.col(1) / s;
+  yaw_state_ += k * innovation;
+  yaw_state_(0) = wrapAngle(yaw_state_(0));
+  yaw_cov_ -= k * yaw_cov_.row(1);
+}
+
+// Filter 2; an outlier is refused (its reason returned) until it persists: then the centre restarts there.
+std::string TargetTrack::updatePosition(const Vec2& measured, double position_var) {
+  const double gate2 = config_.outlier_gate_sigma * config_.outlier_gate_sigma;
   const Eigen::Matrix<double, 2, 6> h = positionJacobian();
   const Vec2 innovation = measured - h * pos_state_;
-  const Eigen::Matrix2d s = h * pos_cov_ * h.transpose() + Eigen::Matrix2d::Identity() * pos_var;
+  const Eigen::Matrix2d s = h * pos_cov_ * h.transpose() + Eigen::Matrix2d::Identity() * position_var;
   const double mahalanobis2 = innovation.dot(s.ldlt().solve(innovation));
   if (gate2 > 0.0 && mahalanobis2 > gate2) {
     if (++position_outliers_ < config_.outlier_reset_count) {
-      result.reason = "position outlier (" + std::to_string(innovation.norm()) + " m off the held one)";
-      return result;
+      return "position outlier (" + std::to_string(innovation.norm()) + " m off the held one)";
     }
-    restartPosition(measured, pos_var);  // it persisted: the target did move
+    restartPosition(measured, position_var);  // it persisted: the target did move
   } else {
     const Eigen::Matrix<double, 6, 2> k = pos_cov_ * h.transpose() * s.inverse();
     pos_state_ += k * innovation;
@@ -203,10 +232,7 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
     pos_cov_ = 0.5 * (pos_cov_ + pos_cov_.transpose());
   }
   position_outliers_ = 0;
-  last_position_stamp_s_ = o.stamp_s;
-  last_source_ = o.source;
-  result.accepted = true;
-  return result;
+  return "";
 }
 
 PortState TargetTrack::predict(double now_s) const {
