@@ -82,24 +82,6 @@ TEST(TargetTrack, NoisyEstimatesAreAveragedNotDifferenced) {
   EXPECT_LT(std::abs(p.yaw_rate), 0.2 * M_PI / 180.0);
 }
 
-TEST(TargetTrack, UsesTheEstimateYawRateOnlyWhenConfiguredTo) {
-  auto run = [](bool use_twist) {
-    TrackConfig c = shippedConfig().track;
-    c.use_estimate_yaw_rate = use_twist;
-    TargetTrack track{c};
-    // Poses say the port is still; the twist says it turns at 0.1 rad/s.
-    for (int i = 0; i <= 50; ++i) {
-      TargetObservation o = observe(0.1 * i, 0.0, 0.0, 0.0);
-      o.yaw_rate_valid = true;
-      o.yaw_rate = 0.1;
-      EXPECT_TRUE(track.update(o).accepted);
-    }
-    return track.predict(5.0).yaw_rate;
-  };
-  EXPECT_GT(run(true), 0.005);
-  EXPECT_NEAR(run(false), 0.0, 1e-6);
-}
-
 TEST(TargetTrack, RejectsNanOutOfOrderAndInvalid) {
   TargetTrack track{shippedConfig().track};
   ASSERT_TRUE(track.update(observe(1.0, 1.0, 1.0, 0.0)).accepted);

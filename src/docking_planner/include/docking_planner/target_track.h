@@ -2,13 +2,13 @@
 // prediction to any later time. This is what lets the final approach finish on odometry when the
 // cameras are too close to see the target, and what the rotating target's feed-forward comes from.
 //
-// Model (the simulator's and the paper's test bed: a target robot that stands, turns in place, or
-// drifts while turning): the target is a rigid body turning at a nearly constant rate w about a point
-// c of the odom plane that moves at a nearly constant velocity u; the port sits at a fixed offset d
-// from c in the target's frame:
+// Model (the simulator's and the paper's test bed: a target robot that stands or turns in place): the
+// target is a rigid body turning at a nearly constant rate w about a point c of the odom plane that stays
+// put (a random walk); the port sits at a fixed offset d from c in the target's frame:
 //     port yaw       psi(t) = psi0 + w t              (filter 1: [psi, w], w a slow random walk)
-//     port position  p(t) = c(t) + R(psi(t)) d,  c' = u  (filter 2: [c, d, u], linear given psi)
-// so the port's velocity is u + w x R(psi) d; a still target is w = 0, u = 0. Pose noise is averaged
+//     port position  p(t) = c + R(psi(t)) d           (filter 2: [c, d], linear given psi)
+// so the port's velocity is w x R(psi) d; a still target is w = 0. A drifting target is followed through
+// the estimates, not modelled (README "The port held in odom"). Pose noise is averaged
 // over seconds instead of being differenced (differencing amplifies it by sqrt(2)/dt, paper-notes.md
 // "Velocities"), which keeps a dead-reckoned finish accurate.
 #pragma once
@@ -32,8 +32,6 @@ struct TargetObservation {
   double position_sigma_m{0.0};      ///< std. dev. of x and y; 0: use the configured default
   double yaw_sigma_rad{0.0};         ///< std. dev. of yaw; 0: use the configured default
   double range_m{0.0};               ///< camera to port (m), for the range-dependent yaw floor; 0: unknown
-  bool yaw_rate_valid{false};        ///< `yaw_rate` is meaningful
-  double yaw_rate{0.0};              ///< the port's angular velocity about odom z, rad/s
   std::uint8_t source{0};            ///< TargetEstimate.SOURCE_* of the estimate used
   std::string status;                ///< the estimator's reason when not valid
 };
@@ -78,21 +76,20 @@ class TargetTrack {
   MeasurementNoise measurementNoise(const TargetObservation& observation) const;
   void start(const TargetObservation& observation, const MeasurementNoise& noise);
   std::string updateYaw(const TargetObservation& observation, double yaw_var);
-  void updateYawRate(const TargetObservation& observation);
   std::string updatePosition(const Vec2& measured, double position_var);
   void propagate(double dt);
   void restartPosition(const Vec2& measured, double variance);
-  Eigen::Matrix<double, 2, 6> positionJacobian() const;
+  Eigen::Matrix<double, 2, 4> positionJacobian() const;
 
   TrackConfig config_;
   // Filter 1: port yaw and yaw rate.
   Eigen::Vector2d yaw_state_{Eigen::Vector2d::Zero()};
   Eigen::Matrix2d yaw_cov_{Eigen::Matrix2d::Identity()};
-  // Filter 2: turning centre c (0, 1), port offset d in the target frame (2, 3), drift u of c (4, 5).
-  using Vector6d = Eigen::Matrix<double, 6, 1>;
-  using Matrix6d = Eigen::Matrix<double, 6, 6>;
-  Vector6d pos_state_{Vector6d::Zero()};
-  Matrix6d pos_cov_{Matrix6d::Identity()};
+  // Filter 2: turning centre c (0, 1), port offset d in the target frame (2, 3).
+  using Vector4d = Eigen::Matrix<double, 4, 1>;
+  using Matrix4d = Eigen::Matrix<double, 4, 4>;
+  Vector4d pos_state_{Vector4d::Zero()};
+  Matrix4d pos_cov_{Matrix4d::Identity()};
   std::optional<double> last_position_stamp_s_;
   std::optional<double> last_orientation_stamp_s_;
   std::uint8_t last_source_{0};

@@ -38,9 +38,9 @@ double TargetTrack::lastOrientationStamp() const {
   return last_orientation_stamp_s_ ? *last_orientation_stamp_s_ : -std::numeric_limits<double>::infinity();
 }
 
-Eigen::Matrix<double, 2, 6> TargetTrack::positionJacobian() const {
-  // p = c + R(psi) d: linear in (c, d) for the current yaw estimate; u is seen through c.
-  Eigen::Matrix<double, 2, 6> h = Eigen::Matrix<double, 2, 6>::Zero();
+Eigen::Matrix<double, 2, 4> TargetTrack::positionJacobian() const {
+  // p = c + R(psi) d: linear in (c, d) for the current yaw estimate.
+  Eigen::Matrix<double, 2, 4> h = Eigen::Matrix<double, 2, 4>::Zero();
   h.leftCols<2>() = Eigen::Matrix2d::Identity();
   h.block<2, 2>(0, 2) = rotation(yaw_state_(0));
   return h;
@@ -56,30 +56,20 @@ void TargetTrack::propagate(double dt) {
   yaw_state_ = f * yaw_state_;
   yaw_state_(0) = wrapAngle(yaw_state_(0));
   yaw_cov_ = f * yaw_cov_ * f.transpose() + qm;
-  // c' = u (constant drift), u a random walk.
-  Matrix6d fp = Matrix6d::Identity();
-  fp.block<2, 2>(0, 4) = Eigen::Matrix2d::Identity() * dt;
-  pos_state_ = fp * pos_state_;
-  pos_cov_ = fp * pos_cov_ * fp.transpose();
+  // The centre and the offset stand still but for their random walks.
   const double qc = config_.centre_random_walk * config_.centre_random_walk * dt;
   const double qd = config_.offset_random_walk * config_.offset_random_walk * dt;
-  const double qu =
-      config_.model_target_drift ? config_.centre_velocity_random_walk * config_.centre_velocity_random_walk : 0.0;
-  Vector6d noise;
-  noise << (qc + qu * dt * dt * dt / 3.0), (qc + qu * dt * dt * dt / 3.0), qd, qd, (qu * dt), (qu * dt);
+  Vector4d noise;
+  noise << qc, qc, qd, qd;
   pos_cov_.diagonal() += noise;
-  pos_cov_(0, 4) += qu * dt * dt / 2.0;
-  pos_cov_(4, 0) += qu * dt * dt / 2.0;
-  pos_cov_(1, 5) += qu * dt * dt / 2.0;
-  pos_cov_(5, 1) += qu * dt * dt / 2.0;
 }
 
 void TargetTrack::restartPosition(const Vec2& measured, double variance) {
   // Keep the offset (the port is where it is on the target), move the centre under the measurement.
   const Vec2 offset = pos_state_.segment<2>(2);
   pos_state_.head<2>() = measured - rotation(yaw_state_(0)) * offset;
-  pos_cov_.block<2, 6>(0, 0).setZero();
-  pos_cov_.block<6, 2>(0, 0).setZero();
+  pos_cov_.block<2, 4>(0, 0).setZero();
+  pos_cov_.block<4, 2>(0, 0).setZero();
   pos_cov_.topLeftCorner<2, 2>() = Eigen::Matrix2d::Identity() * variance;
 }
 
@@ -91,7 +81,7 @@ TrackUpdate TargetTrack::checkObservation(const TargetObservation& o) const {
     return result;
   }
   if (!std::isfinite(o.stamp_s) || !std::isfinite(o.pose.x) || !std::isfinite(o.pose.y) ||
-      (o.orientation_valid && !std::isfinite(o.pose.yaw)) || (o.yaw_rate_valid && !std::isfinite(o.yaw_rate)) ||
+      (o.orientation_valid && !std::isfinite(o.pose.yaw)) ||
       !std::isfinite(o.position_sigma_m) || !std::isfinite(o.yaw_sigma_rad)) {
     result.reason = "estimate contains NaN or infinity";
     result.not_finite = true;
@@ -131,7 +121,6 @@ TrackUpdate TargetTrack::update(const TargetObservation& o) {
   }
   propagate(o.stamp_s - *last_position_stamp_s_);
   if (o.orientation_valid) result.reason = updateYaw(o, noise.yaw_var);
-  if (o.yaw_rate_valid && config_.use_estimate_yaw_rate && result.reason.empty()) updateYawRate(o);
   yaw_state_(1) = clampAbs(yaw_state_(1), config_.max_port_yaw_rate_radps);
   if (!result.reason.empty()) return result;  // an outlier orientation: do not trust its position either
   result.reason = updatePosition(o.pose.position(), noise.position_var);
@@ -151,12 +140,10 @@ void TargetTrack::start(const TargetObservation& o, const MeasurementNoise& nois
                              std::pow(config_.initial_yaw_rate_sigma_radps, 2))
                  .asDiagonal();
   const Vec2 offset0 = rotation(yaw_state_(0)) * Vec2(config_.initial_offset_m, 0.0);
-  pos_state_ << measured.x() - offset0.x(), measured.y() - offset0.y(), config_.initial_offset_m, 0.0, 0.0, 0.0;
+  pos_state_ << measured.x() - offset0.x(), measured.y() - offset0.y(), config_.initial_offset_m, 0.0;
   const double s0 = std::pow(config_.initial_offset_sigma_m, 2);
-  // Without the drift model, u starts at 0 with no uncertainty and no process noise: it stays 0.
-  const double su = config_.model_target_drift ? std::pow(config_.initial_centre_speed_sigma_mps, 2) : 0.0;
   pos_cov_.setZero();
-  pos_cov_.diagonal() << noise.position_var + s0, noise.position_var + s0, s0, s0, su, su;
+  pos_cov_.diagonal() << noise.position_var + s0, noise.position_var + s0, s0, s0;
   // c + R d is known to the position variance: c and d are anti-correlated (d in the target frame, hence R).
   const Eigen::Matrix2d r = rotation(yaw_state_(0));
   pos_cov_.block<2, 2>(0, 2) = -s0 * r;
@@ -174,7 +161,7 @@ std::string TargetTrack::updateYaw(const TargetObservation& o, double yaw_var) {
     const double new_yaw = wrapAngle(o.pose.yaw);
     const Eigen::Matrix2d change = rotation(new_yaw).transpose() * rotation(yaw_state_(0));
     pos_state_.segment<2>(2) = change * pos_state_.segment<2>(2);
-    Matrix6d j = Matrix6d::Identity();
+    Matrix4d j = Matrix4d::Identity();
     j.block<2, 2>(2, 2) = change;
     pos_cov_ = j * pos_cov_ * j.transpose();
     yaw_state_(0) = new_yaw;
@@ -204,19 +191,10 @@ std::string TargetTrack::updateYaw(const TargetObservation& o, double yaw_var) {
   return "";
 }
 
-void TargetTrack::updateYawRate(const TargetObservation& o) {
-  const double innovation = o.yaw_rate - yaw_state_(1);
-  const double s = yaw_cov_(1, 1) + config_.yaw_rate_sigma_radps * config_.yaw_rate_sigma_radps;
-  const Eigen::Vector2d k = yaw_cov_.col(1) / s;
-  yaw_state_ += k * innovation;
-  yaw_state_(0) = wrapAngle(yaw_state_(0));
-  yaw_cov_ -= k * yaw_cov_.row(1);
-}
-
 // Filter 2; an outlier is refused (its reason returned) until it persists: then the centre restarts there.
 std::string TargetTrack::updatePosition(const Vec2& measured, double position_var) {
   const double gate2 = config_.outlier_gate_sigma * config_.outlier_gate_sigma;
-  const Eigen::Matrix<double, 2, 6> h = positionJacobian();
+  const Eigen::Matrix<double, 2, 4> h = positionJacobian();
   const Vec2 innovation = measured - h * pos_state_;
   const Eigen::Matrix2d s = h * pos_cov_ * h.transpose() + Eigen::Matrix2d::Identity() * position_var;
   const double mahalanobis2 = innovation.dot(s.ldlt().solve(innovation));
@@ -226,9 +204,9 @@ std::string TargetTrack::updatePosition(const Vec2& measured, double position_va
     }
     restartPosition(measured, position_var);  // it persisted: the target did move
   } else {
-    const Eigen::Matrix<double, 6, 2> k = pos_cov_ * h.transpose() * s.inverse();
+    const Eigen::Matrix<double, 4, 2> k = pos_cov_ * h.transpose() * s.inverse();
     pos_state_ += k * innovation;
-    pos_cov_ = (Matrix6d::Identity() - k * h) * pos_cov_;
+    pos_cov_ = (Matrix4d::Identity() - k * h) * pos_cov_;
     pos_cov_ = 0.5 * (pos_cov_ + pos_cov_.transpose());
   }
   position_outliers_ = 0;
@@ -240,12 +218,11 @@ PortState TargetTrack::predict(double now_s) const {
   const double dt = last_position_stamp_s_ ? now_s - *last_position_stamp_s_ : 0.0;
   const double yaw_rate = yaw_state_(1);
   const double yaw = wrapAngle(yaw_state_(0) + yaw_rate * dt);
-  const Vec2 drift = pos_state_.tail<2>();
   const Vec2 offset = rotation(yaw) * pos_state_.segment<2>(2);
-  const Vec2 position = pos_state_.head<2>() + drift * dt + offset;
+  const Vec2 position = pos_state_.head<2>() + offset;
   s.pose = Pose2D{position.x(), position.y(), yaw};
   s.yaw_rate = yaw_rate;
-  s.velocity = clampNorm(drift + yaw_rate * perpendicular(offset), config_.max_port_speed_mps);
+  s.velocity = clampNorm(yaw_rate * perpendicular(offset), config_.max_port_speed_mps);
   return s;
 }
 

@@ -559,13 +559,6 @@ class PlannerNode {
       if (std::isfinite(xy_var) && xy_var > 0.0 && xy_var < 1e5) o.position_sigma_m = std::sqrt(xy_var);
       if (std::isfinite(yaw_var) && yaw_var > 0.0 && yaw_var < 1e5) o.yaw_sigma_rad = std::sqrt(yaw_var);
     }
-    if (msg.twist_valid && odometry_) {
-      // The twist is relative to the camera, which turns with base_link: add the chaser's own yaw rate.
-      const auto& w = msg.twist.twist.angular;
-      const Eigen::Vector3d relative = odom_from_camera.rotation() * Eigen::Vector3d(w.x, w.y, w.z);
-      o.yaw_rate_valid = true;
-      o.yaw_rate = relative.z() + odometry_->twist.wz;
-    }
     return o;
   }
 
