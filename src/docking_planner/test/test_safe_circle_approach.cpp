@@ -99,7 +99,7 @@ TEST(SafeCircleApproach, PortFacingAwayGoesToTheTangentPointNotThroughTheCircle)
   const Pose2D port{0.0, 0.0, M_PI - 2.0};  // chaser is 2 rad (115 deg) off the port axis
   const Vec2 goal = law.approachGoal(chaser, port);
   EXPECT_NEAR(goal.norm(), 0.6, kTol);  // on the circle
-  const double reach = std::acos(0.6 / 4.0) - law.config().tangent_margin_rad;
+  const double reach = std::acos(0.6 / 4.0) - kTangentMarginRad;
   const double goal_polar = std::atan2(goal.y(), goal.x()) - port.yaw;
   EXPECT_NEAR(goal_polar, 2.0 - reach, 1e-9);  // moved towards the axis by exactly the reach
   // The straight line to it stays outside the safe circle.

@@ -31,10 +31,10 @@ TargetObservation rotatingPort(double t, double rate) {
 
 TEST(TargetTrack, RejectsInvalidConfiguration) {
   TrackConfig c = shippedConfig().track;
-  c.default_position_sigma_m = 0.0;
+  c.initial_offset_sigma_m = 0.0;
   EXPECT_THROW(TargetTrack{c}, std::invalid_argument);
   c = shippedConfig().track;
-  c.outlier_reset_count = 0;
+  c.outlier_gate_sigma = -1.0;
   EXPECT_THROW(TargetTrack{c}, std::invalid_argument);
 }
 
@@ -110,9 +110,9 @@ TEST(TargetTrack, OutlierRejectedUntilItPersists) {
   EXPECT_FALSE(u.accepted);
   EXPECT_NE(u.reason.find("outlier"), std::string::npos);
   EXPECT_NEAR(track.predict(t).pose.x, 1.0, 1e-3);
-  // It persists: after outlier_reset_count in a row the track restarts there.
+  // It persists: after kOutlierResetCount in a row the track restarts there.
   bool accepted = false;
-  for (int i = 0; i < shippedConfig().track.outlier_reset_count && !accepted; ++i) {
+  for (int i = 0; i < kOutlierResetCount && !accepted; ++i) {
     accepted = track.update(observe(t += 0.1, 2.0, 1.0, 0.0)).accepted;
   }
   EXPECT_TRUE(accepted);

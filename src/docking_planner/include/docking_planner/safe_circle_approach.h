@@ -24,6 +24,10 @@
 
 namespace docking_planner {
 
+/// The straight approach stays this far outside the tangent to the safe circle, rad (a constant of the
+/// law: the one value ever shipped, a setting until 7 Dec 2026).
+constexpr double kTangentMarginRad = 0.05;
+
 /// The settings (settings/planner.yaml) and what one range cannot say; throws naming the bad field.
 void validate(const ApproachConfig& config);
 

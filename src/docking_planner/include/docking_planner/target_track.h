@@ -36,6 +36,17 @@ struct TargetObservation {
   std::string status;                ///< the estimator's reason when not valid
 };
 
+// Constants of the filter's method, each the one value ever shipped (settings until 7 Dec 2026).
+/// This many rejections in a row: the target did move, the filter restarts from them.
+constexpr int kOutlierResetCount = 5;
+/// Prior on the target's turn rate, rad/s (3 deg/s = 0.052).
+constexpr double kInitialYawRateSigmaRadps = 0.1;
+/// m per sqrt(s): how fast the port's offset from the turning centre may change (constant in truth).
+constexpr double kOffsetRandomWalk = 0.001;
+/// Measurement noise of an estimate that gives no position / orientation covariance.
+constexpr double kDefaultPositionSigmaM = 0.01;
+constexpr double kDefaultYawSigmaRad = 0.03;
+
 /// The settings (settings/planner.yaml, TrackConfig): throws naming the bad field.
 void validate(const TrackConfig& config);
 

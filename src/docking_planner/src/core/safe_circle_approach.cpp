@@ -59,7 +59,7 @@ Vec2 SafeCircleApproach::approachGoal(const Pose2D& chaser, const Pose2D& port) 
   if (r > r_safe) {
     // A straight segment to the circle point at polar angle g stays outside the circle while
     // |g - gamma| <= acos(R / r) (the tangent points); move the goal towards the axis by at most that.
-    const double reach = std::max(0.0, std::acos(r_safe / r) - config_.tangent_margin_rad);
+    const double reach = std::max(0.0, std::acos(r_safe / r) - kTangentMarginRad);
     goal_gamma = gamma - clampAbs(gamma, reach);
   }
   return port.position() + r_safe * unitAt(port.yaw + goal_gamma);

@@ -58,7 +58,7 @@ void TargetTrack::propagate(double dt) {
   yaw_cov_ = f * yaw_cov_ * f.transpose() + qm;
   // The centre and the offset stand still but for their random walks.
   const double qc = config_.centre_random_walk * config_.centre_random_walk * dt;
-  const double qd = config_.offset_random_walk * config_.offset_random_walk * dt;
+  const double qd = kOffsetRandomWalk * kOffsetRandomWalk * dt;
   Vector4d noise;
   noise << qc, qc, qd, qd;
   pos_cov_.diagonal() += noise;
@@ -97,10 +97,10 @@ TrackUpdate TargetTrack::checkObservation(const TargetObservation& o) const {
 TargetTrack::MeasurementNoise TargetTrack::measurementNoise(const TargetObservation& o) const {
   MeasurementNoise noise;
   noise.position_var =
-      std::pow(o.position_sigma_m > 0.0 ? o.position_sigma_m : config_.default_position_sigma_m, 2);
+      std::pow(o.position_sigma_m > 0.0 ? o.position_sigma_m : kDefaultPositionSigmaM, 2);
   const double yaw_floor = std::isfinite(o.range_m) ? config_.yaw_sigma_per_range2 * o.range_m * o.range_m : 0.0;
   noise.yaw_var =
-      std::pow(std::max(o.yaw_sigma_rad > 0.0 ? o.yaw_sigma_rad : config_.default_yaw_sigma_rad, yaw_floor), 2);
+      std::pow(std::max(o.yaw_sigma_rad > 0.0 ? o.yaw_sigma_rad : kDefaultYawSigmaRad, yaw_floor), 2);
   return noise;
 }
 
@@ -137,7 +137,7 @@ void TargetTrack::start(const TargetObservation& o, const MeasurementNoise& nois
   const Vec2 measured = o.pose.position();
   yaw_state_ = Eigen::Vector2d(o.orientation_valid ? wrapAngle(o.pose.yaw) : 0.0, 0.0);
   yaw_cov_ = Eigen::Vector2d(o.orientation_valid ? noise.yaw_var : M_PI * M_PI,
-                             std::pow(config_.initial_yaw_rate_sigma_radps, 2))
+                             std::pow(kInitialYawRateSigmaRadps, 2))
                  .asDiagonal();
   const Vec2 offset0 = rotation(yaw_state_(0)) * Vec2(config_.initial_offset_m, 0.0);
   pos_state_ << measured.x() - offset0.x(), measured.y() - offset0.y(), config_.initial_offset_m, 0.0;
@@ -173,10 +173,10 @@ std::string TargetTrack::updateYaw(const TargetObservation& o, double yaw_var) {
   const double gate2 = config_.outlier_gate_sigma * config_.outlier_gate_sigma;
   const double innovation = wrapAngle(o.pose.yaw - yaw_state_(0));
   const double s = yaw_cov_(0, 0) + yaw_var;
-  if (gate2 > 0.0 && innovation * innovation / s > gate2 && ++yaw_outliers_ < config_.outlier_reset_count) {
+  if (gate2 > 0.0 && innovation * innovation / s > gate2 && ++yaw_outliers_ < kOutlierResetCount) {
     return "orientation outlier (" + std::to_string(innovation) + " rad off the held one)";
   }
-  if (yaw_outliers_ >= config_.outlier_reset_count) {
+  if (yaw_outliers_ >= kOutlierResetCount) {
     yaw_state_(0) = wrapAngle(o.pose.yaw);  // it persisted: the target did turn; keep the rate
     yaw_cov_(0, 0) = yaw_var;
     yaw_cov_(0, 1) = yaw_cov_(1, 0) = 0.0;
@@ -199,7 +199,7 @@ std::string TargetTrack::updatePosition(const Vec2& measured, double position_va
   const Eigen::Matrix2d s = h * pos_cov_ * h.transpose() + Eigen::Matrix2d::Identity() * position_var;
   const double mahalanobis2 = innovation.dot(s.ldlt().solve(innovation));
   if (gate2 > 0.0 && mahalanobis2 > gate2) {
-    if (++position_outliers_ < config_.outlier_reset_count) {
+    if (++position_outliers_ < kOutlierResetCount) {
       return "position outlier (" + std::to_string(innovation.norm()) + " m off the held one)";
     }
     restartPosition(measured, position_var);  // it persisted: the target did move

@@ -46,6 +46,8 @@ namespace {
 
 // The probe tip is robot data: config/robot.yaml, loaded under ~robot by guidance.launch (one home).
 constexpr char kRobotNamespace[] = "robot";
+// The docking action's feedback (the current DockingState) rate, Hz.
+constexpr double kFeedbackRateHz = 5.0;
 constexpr char kProbeTipKey[] = "robot/chaser/docking_probe_x_m";
 
 /// The node's settings: the declared defaults with the parameter server's values (config/planner.yaml).
@@ -63,6 +65,26 @@ double loadProbeTip(const ros::NodeHandle& pnh, const ApproachConfig& law) {
   const double probe_x_m = reader.require<double>(kProbeTipKey);
   reader.validated([&] { SafeCircleApproach(law, probe_x_m); });
   return probe_x_m;
+}
+
+/// The estimate's covariance rotated into odom, as the track's sigmas.
+void takeMeasurementNoise(const docking_msgs::TargetEstimate& msg, const Eigen::Matrix3d& rot, TargetObservation* o) {
+  // Rotate the camera-frame covariance into odom; the planner's filter takes one sigma for x and y
+  // (the larger of the two, to stay on the safe side) and one for yaw. Variances of 1e6 and more
+  // mean "not estimated" (TargetEstimate): the track's default is used then (sigma 0).
+  Eigen::Matrix3d position_cov, rotation_cov;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      position_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>(r * 6 + c)];
+      rotation_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>((r + 3) * 6 + c + 3)];
+    }
+  }
+  const Eigen::Matrix3d position_odom = rot * position_cov * rot.transpose();
+  const Eigen::Matrix3d rotation_odom = rot * rotation_cov * rot.transpose();
+  const double xy_var = std::max(position_odom(0, 0), position_odom(1, 1));
+  const double yaw_var = rotation_odom(2, 2);
+  if (std::isfinite(xy_var) && xy_var > 0.0 && xy_var < 1e5) o->position_sigma_m = std::sqrt(xy_var);
+  if (std::isfinite(yaw_var) && yaw_var > 0.0 && yaw_var < 1e5) o->yaw_sigma_rad = std::sqrt(yaw_var);
 }
 
 volatile std::sig_atomic_t g_stop_requested = 0;
@@ -126,11 +148,9 @@ class PlannerNode {
   void takeNodeSettings(const PlannerNodeSettings& s) {
     odom_frame_ = s.odom_frame;
     base_frame_ = s.base_frame;
-    update_on_estimate_ = s.update_on_estimate;
-    use_estimate_covariance_ = s.use_estimate_covariance;
     tf_wait_s_ = s.tf_wait_s;
     max_odom_extrapolation_s_ = s.max_odom_extrapolation_s;
-    feedback_period_s_ = 1.0 / s.feedback_rate_hz;
+    feedback_period_s_ = 1.0 / kFeedbackRateHz;
     client_loss_timeout_s_ = s.client_loss_timeout_s;
   }
 
@@ -275,7 +295,7 @@ class PlannerNode {
   }
 
   // Reports the running goal: its end when the core ended the docking this cycle, otherwise feedback
-  // at feedback_rate_hz; and ends it when no client listens any more.
+  // at kFeedbackRateHz; and ends it when no client listens any more.
   void serveGoal(double now) {
     if (!dock_server_.isActive()) return;
     if (last_.outcome) {
@@ -408,7 +428,7 @@ class PlannerNode {
       ROS_WARN_THROTTLE(5.0, "planner: odometry sample not kept (not finite, or stamp not after the last one)");
     }
     // An estimate that waited for odometry at its stamp can be placed now.
-    if (!pending_.empty() && processPending() && update_on_estimate_) runCycle(last_placed_stamp_);
+    if (!pending_.empty() && processPending()) runCycle(last_placed_stamp_);
   }
 
   void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg, const std::string& publisher) {
@@ -431,7 +451,7 @@ class PlannerNode {
     pending_.push_back(msg);
     // A fresh estimate is acted on at once rather than at the next timer tick: that tick would add up
     // to one period to the image-to-cmd_vel latency.
-    if (processPending() && update_on_estimate_) runCycle(last_placed_stamp_);
+    if (processPending()) runCycle(last_placed_stamp_);
   }
 
   // Estimates wait here until the camera can be placed in odom at their stamp (placeCamera), for at
@@ -540,25 +560,7 @@ class PlannerNode {
           odom_from_camera.rotation() * (Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized() * Eigen::Vector3d::UnitX());
       o.pose.yaw = std::atan2(axis.y(), axis.x());
     }
-    if (use_estimate_covariance_) {
-      // Rotate the camera-frame covariance into odom; the planner's filter takes one sigma for x and y
-      // (the larger of the two, to stay on the safe side) and one for yaw. Variances of 1e6 and more
-      // mean "not estimated" (TargetEstimate): the configured default is used then (sigma 0).
-      Eigen::Matrix3d position_cov, rotation_cov;
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) {
-          position_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>(r * 6 + c)];
-          rotation_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>((r + 3) * 6 + c + 3)];
-        }
-      }
-      const Eigen::Matrix3d rot = odom_from_camera.rotation();
-      const Eigen::Matrix3d position_odom = rot * position_cov * rot.transpose();
-      const Eigen::Matrix3d rotation_odom = rot * rotation_cov * rot.transpose();
-      const double xy_var = std::max(position_odom(0, 0), position_odom(1, 1));
-      const double yaw_var = rotation_odom(2, 2);
-      if (std::isfinite(xy_var) && xy_var > 0.0 && xy_var < 1e5) o.position_sigma_m = std::sqrt(xy_var);
-      if (std::isfinite(yaw_var) && yaw_var > 0.0 && yaw_var < 1e5) o.yaw_sigma_rad = std::sqrt(yaw_var);
-    }
+    takeMeasurementNoise(msg, odom_from_camera.rotation(), &o);
     return o;
   }
 
@@ -689,8 +691,6 @@ class PlannerNode {
   DockingPlanner planner_;
   std::string odom_frame_, base_frame_;
   double tf_wait_s_{0.2};
-  bool update_on_estimate_{true};
-  bool use_estimate_covariance_{true};
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   diagnostic_updater::Updater diagnostics_;
