@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "docking_planner/safe_circle_approach.h"
+#include "shipped_config.h"
 
 using namespace docking_planner;
 
@@ -34,19 +35,19 @@ Vec2 bodyToOdom(const Pose2D& chaser, const BodyTwist& t) {
 }  // namespace
 
 TEST(SafeCircleApproach, RejectsInvalidConfiguration) {
-  ApproachConfig c;
+  ApproachConfig c = shippedConfig().law;
   c.safe_radius_m = 0.1;  // smaller than the probe
-  EXPECT_THROW(SafeCircleApproach{c}, std::invalid_argument);
-  c = ApproachConfig{};
+  EXPECT_THROW(SafeCircleApproach(c, shippedProbeX()), std::invalid_argument);
+  c = shippedConfig().law;
   c.fov_margin_rad = c.camera_half_fov_rad;
-  EXPECT_THROW(SafeCircleApproach{c}, std::invalid_argument);
-  c = ApproachConfig{};
+  EXPECT_THROW(SafeCircleApproach(c, shippedProbeX()), std::invalid_argument);
+  c = shippedConfig().law;
   c.yaw_gain = NAN;
-  EXPECT_THROW(SafeCircleApproach{c}, std::invalid_argument);
+  EXPECT_THROW(SafeCircleApproach(c, shippedProbeX()), std::invalid_argument);
 }
 
 TEST(SafeCircleApproach, MeasuresErrorsWithTheDocumentedSigns) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const Pose2D port{0.0, 0.0, 0.0};  // port axis along odom +x
   ApproachGeometry g = law.measure(Pose2D{1.0, 0.2, M_PI}, port);
   EXPECT_NEAR(g.axial_m, 1.0, kTol);
@@ -64,7 +65,7 @@ TEST(SafeCircleApproach, MeasuresErrorsWithTheDocumentedSigns) {
 }
 
 TEST(SafeCircleApproach, TargetStraightAheadPortFacingUsDrivesStraight) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const Pose2D chaser{-4.0, 0.0, 0.0};
   const PortState port = stillPort(0.0, 0.0, M_PI);  // the port looks back at the chaser
   const Vec2 goal = law.approachGoal(chaser, port.pose);
@@ -79,7 +80,7 @@ TEST(SafeCircleApproach, TargetStraightAheadPortFacingUsDrivesStraight) {
 }
 
 TEST(SafeCircleApproach, RotatedPortPutsTheGoalInFrontOfThePort) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const Pose2D chaser{-4.0, 0.0, 0.0};
   const double port_yaw = M_PI - 0.5;  // turned 0.5 rad: the port axis points up-left
   const Vec2 goal = law.approachGoal(chaser, Pose2D{0.0, 0.0, port_yaw});
@@ -93,12 +94,12 @@ TEST(SafeCircleApproach, RotatedPortPutsTheGoalInFrontOfThePort) {
 }
 
 TEST(SafeCircleApproach, PortFacingAwayGoesToTheTangentPointNotThroughTheCircle) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const Pose2D chaser{-4.0, 0.0, 0.0};
   const Pose2D port{0.0, 0.0, M_PI - 2.0};  // chaser is 2 rad (115 deg) off the port axis
   const Vec2 goal = law.approachGoal(chaser, port);
   EXPECT_NEAR(goal.norm(), 0.6, kTol);  // on the circle
-  const double reach = std::acos(0.6 / 4.0) - law.config().tangent_margin_rad;
+  const double reach = std::acos(0.6 / 4.0) - kTangentMarginRad;
   const double goal_polar = std::atan2(goal.y(), goal.x()) - port.yaw;
   EXPECT_NEAR(goal_polar, 2.0 - reach, 1e-9);  // moved towards the axis by exactly the reach
   // The straight line to it stays outside the safe circle.
@@ -109,7 +110,7 @@ TEST(SafeCircleApproach, PortFacingAwayGoesToTheTangentPointNotThroughTheCircle)
 }
 
 TEST(SafeCircleApproach, FieldOfViewFallbackKeepsThePortInView) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const ApproachConfig& c = law.config();
   const Pose2D chaser{-4.0, 0.0, 0.0};
   // The docked heading would be -1.2 rad, which puts the port 1.2 rad off the camera axis.
@@ -127,7 +128,7 @@ TEST(SafeCircleApproach, FieldOfViewFallbackKeepsThePortInView) {
 }
 
 TEST(SafeCircleApproach, OnTheCircleMisalignedMovesTangentiallyTowardsTheAxis) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const PortState port = stillPort(1.0, 2.0, 0.3);
   for (const double gamma : {0.5, -0.5, 1.5}) {
     const Vec2 radial = unitAt(port.pose.yaw + gamma);
@@ -146,7 +147,7 @@ TEST(SafeCircleApproach, OnTheCircleMisalignedMovesTangentiallyTowardsTheAxis) {
 }
 
 TEST(SafeCircleApproach, OffTheCircleAlignPullsBackToTheRadius) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const PortState port = stillPort(0.0, 0.0, 0.0);
   const Pose2D outside{0.8, 0.0, M_PI};
   EXPECT_LT(law.command(Phase::kAlign, outside, port).velocity_odom.x(), 0.0);  // inwards
@@ -155,7 +156,7 @@ TEST(SafeCircleApproach, OffTheCircleAlignPullsBackToTheRadius) {
 }
 
 TEST(SafeCircleApproach, AlignedFinalGoesAlongTheAxisAndSlowsNearContact) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const ApproachConfig& c = law.config();
   const PortState port = stillPort(0.0, 0.0, M_PI / 2);  // port axis along odom +y
   // On the safe point, facing the port (heading -pi/2).
@@ -164,19 +165,19 @@ TEST(SafeCircleApproach, AlignedFinalGoesAlongTheAxisAndSlowsNearContact) {
   EXPECT_NEAR(cmd.twist.vx, c.final_speed_mps, kTol);  // straight ahead, at the FINAL limit
   EXPECT_NEAR(cmd.twist.vy, 0.0, kTol);
   EXPECT_NEAR(cmd.twist.wz, 0.0, kTol);
-  EXPECT_NEAR(cmd.goal.y, c.probe_x_m, kTol);  // goal: probe tip on the port
+  EXPECT_NEAR(cmd.goal.y, shippedProbeX(), kTol);  // goal: probe tip on the port
   // 3 cm from contact: slow.
-  const Pose2D near_contact{0.0, c.probe_x_m + 0.03, -M_PI / 2};
+  const Pose2D near_contact{0.0, shippedProbeX() + 0.03, -M_PI / 2};
   cmd = law.command(Phase::kFinal, near_contact, port);
   EXPECT_GT(cmd.twist.vx, 0.0);
   EXPECT_LE(cmd.twist.vx, c.final_slow_speed_mps + kTol);
   // Overshoot: backs out.
-  const Pose2D overshoot{0.0, c.probe_x_m - 0.01, -M_PI / 2};
+  const Pose2D overshoot{0.0, shippedProbeX() - 0.01, -M_PI / 2};
   EXPECT_LT(law.command(Phase::kFinal, overshoot, port).twist.vx, 0.0);
 }
 
 TEST(SafeCircleApproach, FinalFixesLateralErrorBeforeAdvancing) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const PortState port = stillPort(0.0, 0.0, 0.0);
   // 5 cm to the port's left (+y), beyond the lateral gate: no advance, move right.
   const Pose2D off_axis{0.4, 0.05, M_PI};
@@ -191,12 +192,12 @@ TEST(SafeCircleApproach, FinalFixesLateralErrorBeforeAdvancing) {
 }
 
 TEST(SafeCircleApproach, RotatingPortIsFedForward) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   PortState port = stillPort(0.0, 0.0, 0.0);
   port.yaw_rate = 0.05;
   port.velocity = Vec2(0.0, 0.01);
   // Exactly docked: the only motion commanded is the port's own (a point of its frame at the chaser).
-  const Pose2D docked{law.config().probe_x_m, 0.0, M_PI};
+  const Pose2D docked{law.probeX(), 0.0, M_PI};
   const LawCommand cmd = law.command(Phase::kFinal, docked, port);
   const Vec2 expected = port.velocity + port.yaw_rate * perpendicular(docked.position() - port.pose.position());
   EXPECT_TRUE(cmd.velocity_odom.isApprox(expected, 1e-12));
@@ -204,7 +205,7 @@ TEST(SafeCircleApproach, RotatingPortIsFedForward) {
 }
 
 TEST(SafeCircleApproach, BackOffMovesRadiallyOutToTheCircleOnly) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const PortState port = stillPort(0.0, 0.0, 0.0);
   const LawCommand inside = law.command(Phase::kBackOff, Pose2D{0.3, 0.1, M_PI}, port);
   EXPECT_GT(inside.velocity_odom.dot(Vec2(0.3, 0.1).normalized()), 0.0);
@@ -214,7 +215,7 @@ TEST(SafeCircleApproach, BackOffMovesRadiallyOutToTheCircleOnly) {
 }
 
 TEST(SafeCircleApproach, PlannedPathEndsDockedAndPassesTheSafePoint) {
-  const SafeCircleApproach law{ApproachConfig{}};
+  const SafeCircleApproach law{shippedConfig().law, shippedProbeX()};
   const Pose2D port{0.0, 0.0, M_PI - 1.0};
   const Pose2D chaser{-4.0, 0.5, 0.0};
   const auto path = law.plannedPath(Phase::kApproach, chaser, port);

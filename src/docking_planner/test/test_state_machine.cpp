@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "docking_planner/docking_planner.h"
+#include "shipped_config.h"
 
 using namespace docking_planner;
 
@@ -35,7 +36,7 @@ TargetObservation portAt(double t, const Pose2D& port) {
 class StateMachineTest : public ::testing::Test {
  protected:
   const Pose2D port_{0.0, 0.0, 0.0};
-  DockingPlanner planner_{PlannerConfig{}};
+  DockingPlanner planner_{shippedConfig(), shippedProbeX()};
   double t_{100.0};
 
   // Every test but the IDLE ones runs inside a docking.
@@ -78,20 +79,20 @@ const Pose2D kDocked{0.18 + 0.002, 0.0, M_PI};      // probe tip 2 mm from the p
 }  // namespace
 
 TEST(DockingPlannerConfig, RejectsInvalidValuesWithTheirName) {
-  PlannerConfig c;
+  PlannerConfig c = shippedConfig();
   c.hold_timeout_s = -1.0;
   try {
-    DockingPlanner p{c};
+    DockingPlanner p{c, shippedProbeX()};
     FAIL() << "accepted a negative hold timeout";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("hold_timeout_s"), std::string::npos);
   }
-  c = PlannerConfig{};
+  c = shippedConfig();
   c.law.safe_radius_m = NAN;
-  EXPECT_THROW(DockingPlanner{c}, std::invalid_argument);
-  c = PlannerConfig{};
+  EXPECT_THROW(DockingPlanner(c, shippedProbeX()), std::invalid_argument);
+  c = shippedConfig();
   c.perception_timeout_s = 1e9;  // the chaser would drive on a dead perception
-  EXPECT_THROW(DockingPlanner{c}, std::invalid_argument);
+  EXPECT_THROW(DockingPlanner(c, shippedProbeX()), std::invalid_argument);
 }
 
 TEST_F(StateMachineTest, SearchStopsThenTurnsSlowly) {
@@ -212,11 +213,11 @@ TEST_F(StateMachineTest, SearchLooksWhereTheTargetWasLastSeen) {
 }
 
 TEST(DockingPlannerConfig, SearchOrbitMemoryZeroAlwaysTurnsInPlace) {
-  PlannerConfig c;
+  PlannerConfig c = shippedConfig();
   c.search_orbit_memory_s = -1.0;
-  EXPECT_THROW(DockingPlanner{c}, std::invalid_argument);
+  EXPECT_THROW(DockingPlanner(c, shippedProbeX()), std::invalid_argument);
   c.search_orbit_memory_s = 0.0;
-  DockingPlanner planner{c};
+  DockingPlanner planner{c, shippedProbeX()};
   double t = 10.0;
   ASSERT_TRUE(planner.start(t, DockingLimits{}, nullptr));
   planner.addObservation(portAt(t, Pose2D{0.0, 0.0, 0.0}));
@@ -472,7 +473,7 @@ TEST_F(StateMachineTest, ResetEndsTheDockingAndForgetsTheTarget) {
 // ---- Docking on command: IDLE until start(), every end back to IDLE with zero velocity ----
 
 TEST(DockingOnCommand, StartsIdleAndNeverMovesWithoutAGoal) {
-  DockingPlanner planner{PlannerConfig{}};
+  DockingPlanner planner{shippedConfig(), shippedProbeX()};
   const Pose2D port{0.0, 0.0, 0.0};
   double t = 10.0;
   for (int i = 0; i < 400; ++i, t += kDt) {  // 20 s with the target in plain view
@@ -490,7 +491,7 @@ TEST(DockingOnCommand, StartsIdleAndNeverMovesWithoutAGoal) {
 }
 
 TEST(DockingOnCommand, RejectsUnusableLimitsAndASecondStart) {
-  DockingPlanner planner{PlannerConfig{}};
+  DockingPlanner planner{shippedConfig(), shippedProbeX()};
   std::string why;
   DockingLimits bad;
   bad.time_budget_s = -1.0;
@@ -668,10 +669,10 @@ TEST_F(StateMachineTest, PositionOnlyEstimatesDoNotMoveAPortHeldFromPoses) {
 // the inner pattern to contact); a jump, a position-only estimate, or the gate off: not used.
 TEST(ContactEstimates, FullPosesNearTheHeldPortAreUsedToContact) {
   for (const bool gate_on : {false, true}) {
-    PlannerConfig c;
+    PlannerConfig c = shippedConfig();
     c.contact_estimate_gate_m = gate_on ? 0.03 : 0.0;
     c.contact_estimate_gate_yaw_rad = gate_on ? 0.05 : 0.0;
-    DockingPlanner planner{c};
+    DockingPlanner planner{c, shippedProbeX()};
     double t = 100.0;
     ASSERT_TRUE(planner.start(t, DockingLimits{}, nullptr));
     const Pose2D port{0.0, 0.0, 0.0};
@@ -707,10 +708,10 @@ TEST(ContactEstimates, FullPosesNearTheHeldPortAreUsedToContact) {
 }
 
 TEST(ContactEstimates, NegativeGateIsRejectedByName) {
-  PlannerConfig c;
+  PlannerConfig c = shippedConfig();
   c.contact_estimate_gate_m = -0.01;
   try {
-    DockingPlanner p{c};
+    DockingPlanner p{c, shippedProbeX()};
     FAIL() << "accepted a negative gate";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("contact_estimate_gate_m"), std::string::npos);
@@ -731,10 +732,10 @@ TEST_F(StateMachineTest, ForgetTargetAcceptsEstimatesOfTheNewTimeline) {
 }
 
 TEST(DockingPlannerConfig, RejectsInvalidStampLimitsWithTheirName) {
-  PlannerConfig c;
-  c.stamp_limits.max_future_s = -0.1;
+  PlannerConfig c = shippedConfig();
+  c.max_future_stamp_s = -0.1;
   try {
-    DockingPlanner p{c};
+    DockingPlanner p{c, shippedProbeX()};
     FAIL() << "accepted a negative max_future_stamp_s";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("max_future_stamp_s"), std::string::npos);
@@ -762,6 +763,6 @@ TEST_F(StateMachineTest, ReportsThePortAndTheGoalItDrivesTo) {
   ASSERT_EQ(out.state, DockingPhase::kFinal) << out.reason;
   ASSERT_TRUE(out.goal);
   // FINAL aims at the docked position: probe tip on the port centre.
-  EXPECT_NEAR(out.goal->x, port_.x + planner_.config().law.probe_x_m, 1e-9);
+  EXPECT_NEAR(out.goal->x, port_.x + planner_.probeX(), 1e-9);
   EXPECT_NEAR(out.goal->y, port_.y, 1e-9);
 }

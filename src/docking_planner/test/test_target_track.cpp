@@ -6,6 +6,7 @@
 #include <random>
 
 #include "docking_planner/target_track.h"
+#include "shipped_config.h"
 
 using namespace docking_planner;
 
@@ -29,16 +30,16 @@ TargetObservation rotatingPort(double t, double rate) {
 }  // namespace
 
 TEST(TargetTrack, RejectsInvalidConfiguration) {
-  TrackConfig c;
-  c.default_position_sigma_m = 0.0;
+  TrackConfig c = shippedConfig().track;
+  c.initial_offset_sigma_m = 0.0;
   EXPECT_THROW(TargetTrack{c}, std::invalid_argument);
-  c = TrackConfig{};
-  c.outlier_reset_count = 0;
+  c = shippedConfig().track;
+  c.outlier_gate_sigma = -1.0;
   EXPECT_THROW(TargetTrack{c}, std::invalid_argument);
 }
 
 TEST(TargetTrack, StillTargetHasNoVelocityAndPredictsInPlace) {
-  TargetTrack track{TrackConfig{}};
+  TargetTrack track{shippedConfig().track};
   for (int i = 0; i < 30; ++i) ASSERT_TRUE(track.update(observe(0.1 * i, 1.0, -0.5, 2.0)).accepted);
   const PortState p = track.predict(2.9 + 5.0);
   EXPECT_NEAR(p.velocity.norm(), 0.0, 1e-6);
@@ -50,7 +51,7 @@ TEST(TargetTrack, StillTargetHasNoVelocityAndPredictsInPlace) {
 
 TEST(TargetTrack, RotatingTargetRateAndPortMotionFromPoses) {
   const double rate = 3.0 * M_PI / 180.0;  // 3 deg/s
-  TargetTrack track{TrackConfig{}};
+  TargetTrack track{shippedConfig().track};
   for (int i = 0; i <= 200; ++i) ASSERT_TRUE(track.update(rotatingPort(0.1 * i, rate)).accepted);
   const PortState now = track.predict(20.0);
   EXPECT_NEAR(now.yaw_rate, rate, 0.02 * rate);
@@ -67,7 +68,7 @@ TEST(TargetTrack, NoisyEstimatesAreAveragedNotDifferenced) {
   // +-10 deg/s of it; the filter's prediction 5 s ahead stays within a few mm and a fraction of a degree.
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, 1.0);
-  TargetTrack track{TrackConfig{}};
+  TargetTrack track{shippedConfig().track};
   for (int i = 0; i < 100; ++i) {
     TargetObservation o = observe(0.1 * i, 1.0 + 0.005 * noise(rng), 2.0 + 0.005 * noise(rng), 0.5 + 0.0087 * noise(rng));
     o.position_sigma_m = 0.005;
@@ -81,26 +82,8 @@ TEST(TargetTrack, NoisyEstimatesAreAveragedNotDifferenced) {
   EXPECT_LT(std::abs(p.yaw_rate), 0.2 * M_PI / 180.0);
 }
 
-TEST(TargetTrack, UsesTheEstimateYawRateOnlyWhenConfiguredTo) {
-  auto run = [](bool use_twist) {
-    TrackConfig c;
-    c.use_estimate_yaw_rate = use_twist;
-    TargetTrack track{c};
-    // Poses say the port is still; the twist says it turns at 0.1 rad/s.
-    for (int i = 0; i <= 50; ++i) {
-      TargetObservation o = observe(0.1 * i, 0.0, 0.0, 0.0);
-      o.yaw_rate_valid = true;
-      o.yaw_rate = 0.1;
-      EXPECT_TRUE(track.update(o).accepted);
-    }
-    return track.predict(5.0).yaw_rate;
-  };
-  EXPECT_GT(run(true), 0.005);
-  EXPECT_NEAR(run(false), 0.0, 1e-6);
-}
-
 TEST(TargetTrack, RejectsNanOutOfOrderAndInvalid) {
-  TargetTrack track{TrackConfig{}};
+  TargetTrack track{shippedConfig().track};
   ASSERT_TRUE(track.update(observe(1.0, 1.0, 1.0, 0.0)).accepted);
   TrackUpdate u = track.update(observe(1.1, NAN, 1.0, 0.0));
   EXPECT_FALSE(u.accepted);
@@ -119,7 +102,7 @@ TEST(TargetTrack, RejectsNanOutOfOrderAndInvalid) {
 }
 
 TEST(TargetTrack, OutlierRejectedUntilItPersists) {
-  TargetTrack track{TrackConfig{}};
+  TargetTrack track{shippedConfig().track};
   double t = 0.0;
   for (int i = 0; i < 20; ++i) ASSERT_TRUE(track.update(observe(t += 0.1, 1.0, 1.0, 0.0)).accepted);
   // One wild estimate (1 m off): rejected, the held pose does not move.
@@ -127,9 +110,9 @@ TEST(TargetTrack, OutlierRejectedUntilItPersists) {
   EXPECT_FALSE(u.accepted);
   EXPECT_NE(u.reason.find("outlier"), std::string::npos);
   EXPECT_NEAR(track.predict(t).pose.x, 1.0, 1e-3);
-  // It persists: after outlier_reset_count in a row the track restarts there.
+  // It persists: after kOutlierResetCount in a row the track restarts there.
   bool accepted = false;
-  for (int i = 0; i < TrackConfig{}.outlier_reset_count && !accepted; ++i) {
+  for (int i = 0; i < kOutlierResetCount && !accepted; ++i) {
     accepted = track.update(observe(t += 0.1, 2.0, 1.0, 0.0)).accepted;
   }
   EXPECT_TRUE(accepted);
@@ -137,7 +120,7 @@ TEST(TargetTrack, OutlierRejectedUntilItPersists) {
 }
 
 TEST(TargetTrack, PositionOnlyEstimateKeepsTheHeldPortAxis) {
-  TargetTrack track{TrackConfig{}};
+  TargetTrack track{shippedConfig().track};
   ASSERT_TRUE(track.update(observe(1.0, 1.0, 1.0, 0.7)).accepted);
   TargetObservation position_only = observe(1.1, 1.005, 1.0, 99.0);
   position_only.orientation_valid = false;
@@ -149,7 +132,7 @@ TEST(TargetTrack, PositionOnlyEstimateKeepsTheHeldPortAxis) {
 }
 
 TEST(TargetTrack, FirstOrientationAfterPositionOnlyKeepsThePosition) {
-  TargetTrack track{TrackConfig{}};
+  TargetTrack track{shippedConfig().track};
   double t = 0.0;
   for (int i = 0; i < 20; ++i) {
     TargetObservation o = observe(t += 0.1, 3.0, -1.0, 0.0);
@@ -164,7 +147,7 @@ TEST(TargetTrack, FirstOrientationAfterPositionOnlyKeepsThePosition) {
 }
 
 TEST(TargetTrack, FirstOrientationRestartsFromItAndPlacesTheTurningCentreBehindThePort) {
-  TrackConfig c;
+  TrackConfig c = shippedConfig().track;
   c.initial_offset_m = 0.15;
   TargetTrack track{c};
   double t = 0.0;
@@ -202,7 +185,7 @@ TEST(TargetTrack, FirstOrientationRestartsFromItAndPlacesTheTurningCentreBehindT
 TEST(TargetTrack, FarPosesWithOverconfidentYawDoNotSetTheTurnRate) {
   const double rate = 2.0 * M_PI / 180.0;
   auto run = [&](double yaw_sigma_per_range2) {
-    TrackConfig config;
+    TrackConfig config = shippedConfig().track;
     config.yaw_sigma_per_range2 = yaw_sigma_per_range2;
     TargetTrack track{config};
     double t = 0.0;
@@ -223,7 +206,7 @@ TEST(TargetTrack, FarPosesWithOverconfidentYawDoNotSetTheTurnRate) {
     return std::abs(wrapAngle(track.predict(t + blind_s).pose.yaw - rotatingPort(t + blind_s, rate).pose.yaw)) *
            180.0 / M_PI;
   };
-  const double with_floor = run(TrackConfig{}.yaw_sigma_per_range2);
+  const double with_floor = run(shippedConfig().track.yaw_sigma_per_range2);
   const double without_floor = run(0.0);
   std::printf("[ yaw floor ] yaw error after 7 s blind: %.3f deg with the range floor, %.3f without\n", with_floor,
               without_floor);

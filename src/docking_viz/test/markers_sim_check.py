@@ -4,20 +4,23 @@ target from 1.5 m). Asserts, from the topics alone:
   - lazy: while nobody subscribes to docking/markers, the markers node subscribes to none of its inputs,
     and again after the subscriber leaves;
   - the planner's safe circle and search orbit: every point at the planner's own radius
-    (/planner/safe_radius_m, /planner/search_orbit_radius_m) from the port it holds (docking/geometry),
+    (safe_radius_m, search_orbit_radius_m: settings/planner.yaml's defaults or /planner's overrides) from the port it holds (docking/geometry),
     in the planner's odom frame;
   - estimates: drawn in a camera optical frame, ellipsoid scales finite and positive, a source drawn;
   - the state label: in the planner's base frame, naming a state the planner published;
   - no NaN or infinite number in any marker.
 """
 import math
+import os
 import sys
 import time
 import unittest
 
 import rosgraph
+import rospkg
 import rospy
 import rostest
+from docking_settings.declarations import Declaration
 from docking_msgs.msg import DockingState, PlannerGeometry
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -33,6 +36,12 @@ OPTICAL_FRAMES = ("stereo_left_optical_frame", "stereo_right_optical_frame", "ir
 def subscriptions_of(node):
     _, subscribers, _ = rosgraph.Master("/markers_sim_check").getSystemState()
     return sorted(topic for topic, nodes in subscribers if node in nodes and topic in INPUTS)
+
+
+def planner_setting(key):
+    """The planner's value in force: its parameter when config/planner.yaml sets it, else its declared default."""
+    declaration = Declaration(os.path.join(rospkg.RosPack().get_path("docking_planner"), "settings", "planner.yaml"))
+    return rospy.get_param("/planner/" + key, declaration.settings[key].default)
 
 
 def numbers_of(marker):
@@ -102,11 +111,11 @@ class MarkersInTheLoop(unittest.TestCase):
                     self.assertTrue(all(math.isfinite(v) for v in numbers_of(m)), "%s/%d: not finite" % (m.ns, m.id))
                     self.assertTrue(m.header.frame_id, "%s/%d: no frame" % (m.ns, m.id))
         port = self.geometry.port
-        for marker_id, parameter in ((0, "/planner/safe_radius_m"), (1, "/planner/search_orbit_radius_m")):
+        for marker_id, parameter in ((0, "safe_radius_m"), (1, "search_orbit_radius_m")):
             circle = self.latest("planner", marker_id)
             self.assertIsNotNone(circle, "planner marker %d" % marker_id)
             self.assertEqual(circle.header.frame_id, self.geometry.header.frame_id)
-            radius = rospy.get_param(parameter)
+            radius = planner_setting(parameter)
             distances = [math.hypot(p.x - port.x, p.y - port.y) for p in circle.points]
             self.assertGreaterEqual(len(distances), 8)
             # The port moves a little between the geometry message and the marker (a fresh estimate): 5 mm.

@@ -70,63 +70,13 @@ struct DockingLimits {
 /// Empty when the limits are usable, otherwise why not (negative, NaN, infinite).
 std::string checkLimits(const DockingLimits& limits);
 
-struct PlannerConfig {
-  ApproachConfig law;
-  TrackConfig track;
-  /// Estimates stamped further ahead of now or older are dropped on arrival by the node
-  /// (max_future_stamp_s, max_stamp_age_s; docking_msgs/estimate_check.h).
-  docking_msgs::checks::StampLimits stamp_limits;
-  double estimate_timeout_s{0.6};          ///< the target is visible while its last estimate is younger
-  /// No message on the estimate topic for this long (arbiter dead or stalled; it re-publishes at its
-  /// status rate even when nothing is seen): perception is gone, HOLD still.
-  double perception_timeout_s{0.3};
-  double odom_timeout_s{0.3};              ///< older odometry: zero velocity (HOLD)
-  double orientation_timeout_s{20.0};      ///< a held port axis older than this is forgotten (>= max_blind_s)
-  double search_wait_s{2.0};               ///< SEARCH: stand still this long before turning
-  double search_yaw_rate_radps{0.3};       ///< SEARCH: then turn in place at this rate
-  /// SEARCH this long without a target, or HOLD this long with perception gone: the docking ends (IDLE)
-  double search_timeout_s{60.0};
-  double hold_timeout_s{3.0};              ///< HOLD: then ABORT or SEARCH
-  double abort_timeout_s{20.0};            ///< ABORT: give up backing off after this (-> SEARCH)
-  double approach_goal_tolerance_m{0.05};  ///< APPROACH -> ALIGN within this of the goal on the circle
-  double circle_tolerance_m{0.05};         ///< "on the safe circle": |r - R| within this
-  double align_lateral_tolerance_m{0.02};  ///< ALIGN -> FINAL: off the port axis by less than this...
-  double align_yaw_tolerance_rad{0.05};    ///< ...and heading error below this
-  double docked_position_tolerance_m{0.003};  ///< DOCKED: probe tip within this of the port centre...
-  double docked_yaw_tolerance_rad{0.005};     ///< ...and heading error within this
-  double final_abort_lateral_m{0.08};      ///< FINAL -> ABORT when off the axis by more than this...
-  double final_abort_yaw_rad{0.3};         ///< ...or the heading error exceeds this
-  double divergence_margin_m{0.3};         ///< APPROACH/ALIGN -> ABORT when the goal distance grows this much
-  double blind_final_range_m{0.35};        ///< FINAL: with the probe tip this near, a lost target is dead-reckoned
-  double odometry_only_range_m{0.12};      ///< FINAL: with the probe tip this near, estimates are ignored...
-  /// ...unless they are full poses (orientation valid: the visible camera's inner pattern near contact)
-  /// within these of the held port predicted to their stamp: then they keep tracking the port to
-  /// contact. Farther: a jump, not used. 0: no estimates there (the blind finish on odometry).
-  double contact_estimate_gate_m{0.0};
-  double contact_estimate_gate_yaw_rad{0.0};
-  double max_blind_s{15.0};                ///< FINAL on odometry for longer than this -> ABORT
-  /// Port orientation unknown (position-only source, far away or the face turned away): approach to
-  /// this radius around the target only, then orbit it there until a camera sees the face. Must be
-  /// >= safe_radius_m; the stereo detector still sees the target well at this range.
-  double search_orbit_radius_m{1.3};
-  double orbit_speed_mps{0.2};             ///< speed along that orbit
-  /// SEARCH for a target seen within this long: after search_wait_s, go to that orbit around where it
-  /// was last seen and orbit it, instead of turning in place (a target turning its face away, campaign
-  /// seed 7827). Older (or never seen): turn in place. 0: always turn in place.
-  double search_orbit_memory_s{60.0};
-  /// While a port orientation is held (a monocular pose within orientation_timeout_s), a position-only
-  /// estimate near the held target only counts as "seen": it does not move the held port. It locates
-  /// the stereo blob's centre, a decimetre or more off the port; taken into the track between two
-  /// monocular poses, it pulled the port's offset from the target's turning centre, and the blind
-  /// finish on a turning target followed that offset (a campaign run docked 7.5 cm off).
-  /// A position-only estimate farther than this from the held target (predicted to its stamp) is not
-  /// used, while the target was seen within hold_timeout_s (the stereo detector can lock on to another
-  /// object of the scene near the target). 0: no such gate.
-  double position_only_gate_m{0.5};
-};
-
-/// Throws std::invalid_argument naming the bad field.
+/// The settings (settings/planner.yaml: PlannerConfig, with the law's and the track's) and what one
+/// range cannot say (two settings that contradict); throws naming the bad field.
 void validate(const PlannerConfig& config);
+
+/// Estimates stamped further ahead of now or older are dropped on arrival by the node
+/// (docking_msgs/estimate_check.h).
+docking_msgs::checks::StampLimits stampLimits(const PlannerConfig& config);
 
 /// The chaser's odometry: pose of base_link in odom, body-frame twist.
 struct ChaserOdometry {
@@ -160,8 +110,9 @@ struct PlannerOutput {
 
 class DockingPlanner {
  public:
-  /// Throws std::invalid_argument for an invalid configuration.
-  explicit DockingPlanner(const PlannerConfig& config);
+  /// probe_x_m: the docking probe tip on base_link +x (robot data, config/robot.yaml). Throws
+  /// std::invalid_argument for an invalid configuration.
+  DockingPlanner(const PlannerConfig& config, double probe_x_m);
 
   /// Gives the planner an estimate. Invalid, NaN and out-of-order ones are not used; the returned
   /// reason says why (and shows up in the next update's reason while the target is not visible).
@@ -204,8 +155,40 @@ class DockingPlanner {
 
   DockingPhase state() const { return state_; }
   const PlannerConfig& config() const { return config_; }
+  double probeX() const { return law_.probeX(); }
 
  private:
+  /// What one update() sees: the time, the chaser, the port predicted to now, and the output so far.
+  struct Cycle {
+    double now_s{0.0};
+    std::string odom_problem;  ///< empty: the odometry is usable
+    Pose2D chaser;
+    PortState port;
+    bool orientation_known{false};
+    PlannerOutput out;
+  };
+  // The stages of update(), in order.
+  std::string odometryProblem(double now_s, const std::optional<ChaserOdometry>& odometry) const;
+  Cycle observe(double now_s, const std::optional<ChaserOdometry>& odometry);
+  std::optional<PlannerOutput> checkInputs(Cycle& c);
+  std::optional<PlannerOutput> holdWhilePerceptionGone(Cycle& c);
+  PlannerOutput runStateMachine(Cycle& c);
+  // One state's step: its output, or nothing after a transition (the new state runs in the same cycle).
+  std::optional<PlannerOutput> stepState(Cycle& c);
+  std::optional<PlannerOutput> stepSearch(Cycle& c);
+  std::optional<PlannerOutput> stepHold(Cycle& c);
+  std::optional<PlannerOutput> stepAbort(Cycle& c);
+  std::optional<PlannerOutput> stepMoving(Cycle& c);
+  bool continueOnOdometry(const Cycle& c, std::string* reason);
+  std::optional<PlannerOutput> stepApproach(Cycle& c);
+  std::optional<PlannerOutput> stepAlign(Cycle& c);
+  std::optional<PlannerOutput> stepFinal(Cycle& c, const std::string& blind_reason);
+  // The cycle's output: state and time in it, the speed cap; ending the docking; the law's command.
+  PlannerOutput finish(const Cycle& c, PlannerOutput o) const;
+  PlannerOutput endDocking(const Cycle& c, PlannerOutput o, DockingOutcome outcome, const std::string& reason);
+  PlannerOutput drive(const Cycle& c, PlannerOutput o, Phase phase, const std::string& reason) const;
+  static bool moving(DockingPhase state);
+
   void enter(DockingPhase state, double now_s, const std::string& reason);
   PlannerOutput stop(PlannerOutput out, const std::string& reason) const;
   bool targetVisible(double now_s) const;

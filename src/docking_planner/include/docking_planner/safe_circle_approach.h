@@ -20,34 +20,15 @@
 #include <vector>
 
 #include "docking_planner/planar.h"
+#include "docking_planner/planner_settings.h"
 
 namespace docking_planner {
 
-struct ApproachConfig {
-  double safe_radius_m{0.6};          ///< safe circle around the port centre (base_link on it)
-  double probe_x_m{0.18};             ///< docking probe tip on base_link +x
-  double camera_half_fov_rad{0.52};   ///< half horizontal field of view of the reference camera
-  double fov_margin_rad{0.12};        ///< keep the port this far inside the field of view
-  double tangent_margin_rad{0.05};    ///< straight approach: stay this far outside the tangent to the circle
+/// The straight approach stays this far outside the tangent to the safe circle, rad (a constant of the
+/// law: the one value ever shipped, a setting until 7 Dec 2026).
+constexpr double kTangentMarginRad = 0.05;
 
-  double approach_gain{0.8};          ///< 1/s: APPROACH velocity per metre of goal error
-  double radial_gain{1.5};            ///< 1/s: ALIGN / BACK_OFF, holding the circle radius
-  double tangential_gain{0.8};        ///< 1/s: ALIGN velocity per metre of arc to the port axis
-  double axial_gain{1.5};             ///< 1/s: FINAL velocity per metre to contact
-  double lateral_gain{1.5};           ///< 1/s: FINAL velocity per metre off the port axis
-  double yaw_gain{1.5};               ///< 1/s: yaw rate per radian of heading error
-
-  double max_speed_mps{0.3};          ///< any phase, including feed-forward
-  double max_yaw_rate_radps{1.0};
-  double align_speed_mps{0.15};       ///< ALIGN / BACK_OFF correction speed limit
-  double final_speed_mps{0.08};       ///< FINAL correction speed limit
-  double final_slow_speed_mps{0.04};  ///< FINAL speed limit with the probe tip near contact
-  double final_slow_distance_m{0.05}; ///< probe tip closer than this to the port: slow speed
-  double final_lateral_gate_m{0.03};  ///< FINAL: axial speed falls to zero at this lateral error...
-  double final_yaw_gate_rad{0.08};    ///< ...or at this heading error (fix those first)
-};
-
-/// Throws std::invalid_argument naming the bad field.
+/// The settings (settings/planner.yaml) and what one range cannot say; throws naming the bad field.
 void validate(const ApproachConfig& config);
 
 /// The docking port in odom: pose, and its velocity (of the port centre) and angular velocity.
@@ -81,10 +62,13 @@ struct LawCommand {
 
 class SafeCircleApproach {
  public:
-  /// Throws std::invalid_argument for an invalid configuration.
-  explicit SafeCircleApproach(const ApproachConfig& config);
+  /// probe_x_m: the docking probe tip on base_link +x (robot data: config/robot.yaml's
+  /// chaser.docking_probe_x_m), inside the safe circle. Throws std::invalid_argument for an invalid
+  /// configuration.
+  SafeCircleApproach(const ApproachConfig& config, double probe_x_m);
 
   const ApproachConfig& config() const { return config_; }
+  double probeX() const { return probe_x_m_; }
 
   ApproachGeometry measure(const Pose2D& chaser, const Pose2D& port) const;
 
@@ -106,10 +90,22 @@ class SafeCircleApproach {
   std::vector<Pose2D> plannedPath(Phase phase, const Pose2D& chaser, const Pose2D& port) const;
 
  private:
+  /// One phase's steering in odom: its goal position, the proportional correction, the feed-forward.
+  struct Steering {
+    Vec2 goal{Vec2::Zero()};
+    Vec2 correction{Vec2::Zero()};
+    Vec2 feed_forward{Vec2::Zero()};
+  };
+  Steering steer(Phase phase, const Pose2D& chaser, const PortState& port) const;
+  Steering steerApproach(const Pose2D& chaser, const PortState& port) const;
+  Steering steerAlign(const Pose2D& chaser, const PortState& port) const;
+  Steering steerFinal(const Pose2D& chaser, const PortState& port) const;
+  Steering steerBackOff(const Pose2D& chaser, const PortState& port) const;
   Vec2 feedForward(const PortState& port, const Vec2& point) const;
   BodyTwist toBody(const Pose2D& chaser, const Vec2& v_odom, double yaw_rate) const;
 
   ApproachConfig config_;
+  double probe_x_m_;
 };
 
 }  // namespace docking_planner

@@ -19,12 +19,6 @@ std::string fmt2(const char* format, double a, double b) {
   return buffer;
 }
 
-void requirePositive(double value, const char* name) {
-  if (!std::isfinite(value) || value <= 0.0) {
-    throw std::invalid_argument(std::string(name) + " must be a positive number");
-  }
-}
-
 bool finite(const ChaserOdometry& o) {
   return std::isfinite(o.stamp_s) && std::isfinite(o.pose.x) && std::isfinite(o.pose.y) &&
          std::isfinite(o.pose.yaw) && std::isfinite(o.twist.vx) && std::isfinite(o.twist.vy) &&
@@ -32,9 +26,8 @@ bool finite(const ChaserOdometry& o) {
 }
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-// Perception may be gone this long at most before the chaser stops (the 0.6 s stop budget
-// includes the arbiter's own silence timeout and the base's deceleration).
-constexpr double kMaxPerceptionTimeoutS = 1.0;
+// ALIGN: off the safe circle by more than this many circle tolerances, back to APPROACH.
+constexpr double kOffCircleTolerances = 4.0;
 // Orbit without a known port axis: the axis is placed this far ahead, so the ALIGN law moves the chaser
 // along the circle (counter-clockwise seen from above) at its speed limit.
 constexpr double kOrbitLeadRad = 0.5;
@@ -101,62 +94,29 @@ std::string checkLimits(const DockingLimits& limits) {
 }
 
 void validate(const PlannerConfig& c) {
+  docking_settings::validateSettings(c);
   validate(c.law);
-  validate(c.track);
-  docking_msgs::checks::validate(c.stamp_limits);
-  requirePositive(c.estimate_timeout_s, "estimate_timeout_s");
-  requirePositive(c.odom_timeout_s, "odom_timeout_s");
-  requirePositive(c.orientation_timeout_s, "orientation_timeout_s");
-  requirePositive(c.search_wait_s, "search_wait_s");
-  if (!std::isfinite(c.search_yaw_rate_radps) || std::abs(c.search_yaw_rate_radps) > c.law.max_yaw_rate_radps) {
-    throw std::invalid_argument("search_yaw_rate_radps must be finite and within max_yaw_rate_radps");
+  docking_msgs::checks::validate(stampLimits(c));
+  if (std::abs(c.search_yaw_rate_radps) > c.law.max_yaw_rate_radps) {
+    throw std::invalid_argument("search_yaw_rate_radps must be within max_yaw_rate_radps");
   }
-  requirePositive(c.search_timeout_s, "search_timeout_s");
-  requirePositive(c.hold_timeout_s, "hold_timeout_s");
-  requirePositive(c.perception_timeout_s, "perception_timeout_s");
-  if (c.perception_timeout_s > kMaxPerceptionTimeoutS) {
-    throw std::invalid_argument(fmt("perception_timeout_s must be <= %.1f s: longer, the chaser drives on a dead perception",
-                                    kMaxPerceptionTimeoutS));
-  }
-  requirePositive(c.abort_timeout_s, "abort_timeout_s");
-  requirePositive(c.approach_goal_tolerance_m, "approach_goal_tolerance_m");
-  requirePositive(c.circle_tolerance_m, "circle_tolerance_m");
-  requirePositive(c.align_lateral_tolerance_m, "align_lateral_tolerance_m");
-  requirePositive(c.align_yaw_tolerance_rad, "align_yaw_tolerance_rad");
-  requirePositive(c.docked_position_tolerance_m, "docked_position_tolerance_m");
-  requirePositive(c.docked_yaw_tolerance_rad, "docked_yaw_tolerance_rad");
-  requirePositive(c.final_abort_lateral_m, "final_abort_lateral_m");
-  requirePositive(c.final_abort_yaw_rad, "final_abort_yaw_rad");
   if (c.final_abort_lateral_m <= c.align_lateral_tolerance_m || c.final_abort_yaw_rad <= c.align_yaw_tolerance_rad) {
     throw std::invalid_argument(
         "final_abort_lateral_m / final_abort_yaw_rad must exceed align_lateral_tolerance_m / align_yaw_tolerance_rad");
   }
-  requirePositive(c.divergence_margin_m, "divergence_margin_m");
-  requirePositive(c.blind_final_range_m, "blind_final_range_m");
-  if (!std::isfinite(c.odometry_only_range_m) || c.odometry_only_range_m < 0.0 ||
-      c.odometry_only_range_m > c.blind_final_range_m) {
+  if (c.odometry_only_range_m > c.blind_final_range_m) {
     throw std::invalid_argument("odometry_only_range_m must be in [0, blind_final_range_m]");
   }
-  if (!std::isfinite(c.contact_estimate_gate_m) || c.contact_estimate_gate_m < 0.0) {
-    throw std::invalid_argument("contact_estimate_gate_m must be a number >= 0");
-  }
-  if (!std::isfinite(c.contact_estimate_gate_yaw_rad) || c.contact_estimate_gate_yaw_rad < 0.0) {
-    throw std::invalid_argument("contact_estimate_gate_yaw_rad must be a number >= 0");
-  }
-  requirePositive(c.max_blind_s, "max_blind_s");
-  if (!std::isfinite(c.search_orbit_radius_m) || c.search_orbit_radius_m < c.law.safe_radius_m) {
+  if (c.search_orbit_radius_m < c.law.safe_radius_m) {
     throw std::invalid_argument("search_orbit_radius_m must be a number >= safe_radius_m");
-  }
-  requirePositive(c.orbit_speed_mps, "orbit_speed_mps");
-  if (!std::isfinite(c.search_orbit_memory_s) || c.search_orbit_memory_s < 0.0) {
-    throw std::invalid_argument("search_orbit_memory_s must be a number >= 0");
-  }
-  if (!std::isfinite(c.position_only_gate_m) || c.position_only_gate_m < 0.0) {
-    throw std::invalid_argument("position_only_gate_m must be a number >= 0");
   }
   if (c.orientation_timeout_s < c.max_blind_s) {
     throw std::invalid_argument("orientation_timeout_s must be >= max_blind_s (the blind finish needs the port axis)");
   }
+}
+
+docking_msgs::checks::StampLimits stampLimits(const PlannerConfig& c) {
+  return docking_msgs::checks::StampLimits{c.max_future_stamp_s, c.max_stamp_age_s};
 }
 
 namespace {
@@ -168,8 +128,11 @@ ApproachConfig orbitLaw(const PlannerConfig& c) {
 }
 }  // namespace
 
-DockingPlanner::DockingPlanner(const PlannerConfig& config)
-    : config_((validate(config), config)), law_(config.law), orbit_law_(orbitLaw(config)), track_(config.track) {}
+DockingPlanner::DockingPlanner(const PlannerConfig& config, double probe_x_m)
+    : config_((validate(config), config)),
+      law_(config.law, probe_x_m),
+      orbit_law_(orbitLaw(config), probe_x_m),
+      track_(config.track) {}
 
 void DockingPlanner::reset(double now_s) {
   track_.reset();
@@ -358,272 +321,318 @@ PlannerOutput DockingPlanner::orbitForTheFace(PlannerOutput out, const Pose2D& c
   return out;
 }
 
+// One cycle: what the inputs say now, whether they let the chaser move at all, then the state machine.
 PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdometry>& odometry) {
-  PlannerOutput out;
   if (!std::isfinite(now_s)) {
+    PlannerOutput out;
     out.state = state_;
     return stop(out, "planner time is not finite");
   }
   if (!state_since_s_) state_since_s_ = now_s;
+  Cycle cycle = observe(now_s, odometry);
+  if (std::optional<PlannerOutput> stopped = checkInputs(cycle)) return *stopped;
+  return runStateMachine(cycle);
+}
 
-  std::string odom_problem;
-  if (!odometry) {
-    odom_problem = "no odometry yet";
-  } else if (!finite(*odometry)) {
-    odom_problem = "odometry contains NaN or infinity";
-  } else if (now_s - odometry->stamp_s > config_.odom_timeout_s) {
-    odom_problem = fmt("odometry stale (%.2f s old)", now_s - odometry->stamp_s);
+std::string DockingPlanner::odometryProblem(double now_s, const std::optional<ChaserOdometry>& odometry) const {
+  if (!odometry) return "no odometry yet";
+  if (!finite(*odometry)) return "odometry contains NaN or infinity";
+  if (now_s - odometry->stamp_s > config_.odom_timeout_s) {
+    return fmt("odometry stale (%.2f s old)", now_s - odometry->stamp_s);
   }
+  return "";
+}
 
+DockingPlanner::Cycle DockingPlanner::observe(double now_s, const std::optional<ChaserOdometry>& odometry) {
+  Cycle c;
+  c.now_s = now_s;
+  c.odom_problem = odometryProblem(now_s, odometry);
+  const bool odometry_ok = c.odom_problem.empty();
   const bool visible = targetVisible(now_s);
-  const bool orientation_known =
+  c.orientation_known =
       track_.hasOrientation() && now_s - track_.lastOrientationStamp() <= config_.orientation_timeout_s;
-  PortState port;
-  if (track_.hasPosition()) port = track_.predict(now_s);
-  Pose2D chaser;
-  if (odom_problem.empty()) chaser = odometry->pose;
-  if (track_.hasPosition() && odom_problem.empty() && !orientation_known) {
-    takeAsFacingTheChaser(chaser, &port);  // position only (far away, disparity)
+  if (track_.hasPosition()) c.port = track_.predict(now_s);
+  if (odometry_ok) c.chaser = odometry->pose;
+  if (track_.hasPosition() && odometry_ok && !c.orientation_known) {
+    takeAsFacingTheChaser(c.chaser, &c.port);  // position only (far away, disparity)
   }
-  out.has_target = track_.hasPosition() && odom_problem.empty();
+  PlannerOutput& out = c.out;
+  out.has_target = track_.hasPosition() && odometry_ok;
   if (out.has_target) {
-    out.geometry = law_.measure(chaser, port.pose);
-    out.port = port;
-    out.port_orientation_known = orientation_known;
+    out.geometry = law_.measure(c.chaser, c.port.pose);
+    out.port = c.port;
+    out.port_orientation_known = c.orientation_known;
     last_tip_error_m_ = out.geometry.tip_error_m;
   }
-  out.target_visible = visible && odom_problem.empty();
+  out.target_visible = visible && odometry_ok;
   out.estimate_source = track_.lastSource();
+  return c;
+}
 
-  const auto moving = [](DockingPhase s) {
-    return s == DockingPhase::kApproach || s == DockingPhase::kAlign || s == DockingPhase::kFinal ||
-           s == DockingPhase::kAbort;
-  };
-  auto finish = [&](PlannerOutput o) {
-    o.state = state_;
-    o.time_in_state_s = now_s - *state_since_s_;
-    scaleToSpeedCap(&o.command);
-    return o;
-  };
-  // The docking ends by itself: the outcome is reported in this cycle's output, IDLE from the next.
-  auto end = [&](PlannerOutput o, DockingOutcome outcome, const std::string& reason) {
-    o = finish(stop(o, reason));
-    o.outcome = outcome;
-    enter(DockingPhase::kIdle, now_s, reason);
-    return o;
-  };
+bool DockingPlanner::moving(DockingPhase s) {
+  return s == DockingPhase::kApproach || s == DockingPhase::kAlign || s == DockingPhase::kFinal ||
+         s == DockingPhase::kAbort;
+}
 
-  if (state_ == DockingPhase::kIdle) return finish(stop(out, state_reason_));
-  if (limits_.time_budget_s > 0.0 && now_s - started_s_ > limits_.time_budget_s) {
-    return end(out, DockingOutcome::kTimeBudget,
-               fmt("time budget of %.1f s spent", limits_.time_budget_s) + " in " + stateName(state_));
+PlannerOutput DockingPlanner::finish(const Cycle& c, PlannerOutput o) const {
+  o.state = state_;
+  o.time_in_state_s = c.now_s - *state_since_s_;
+  scaleToSpeedCap(&o.command);
+  return o;
+}
+
+// The docking ends by itself: the outcome is reported in this cycle's output, IDLE from the next.
+PlannerOutput DockingPlanner::endDocking(const Cycle& c, PlannerOutput o, DockingOutcome outcome,
+                                         const std::string& reason) {
+  o = finish(c, stop(o, reason));
+  o.outcome = outcome;
+  enter(DockingPhase::kIdle, c.now_s, reason);
+  return o;
+}
+
+PlannerOutput DockingPlanner::drive(const Cycle& c, PlannerOutput o, Phase phase, const std::string& reason) const {
+  const LawCommand cmd = law_.command(phase, c.chaser, c.port);
+  o.command = cmd.twist;
+  o.goal_distance_m = cmd.goal_distance_m;
+  o.goal = cmd.goal;
+  o.path = law_.plannedPath(phase, c.chaser, c.port.pose);
+  o.reason = reason + (cmd.fov_limited ? " (heading held at the edge of the camera's view)" : "");
+  return o;
+}
+
+// Stops the chaser for this cycle when no docking runs, its time budget is spent, the odometry is bad or
+// perception is gone; otherwise nothing (a NaN estimate only sends a moving docking to HOLD).
+std::optional<PlannerOutput> DockingPlanner::checkInputs(Cycle& c) {
+  if (state_ == DockingPhase::kIdle) return finish(c, stop(c.out, state_reason_));
+  if (limits_.time_budget_s > 0.0 && c.now_s - started_s_ > limits_.time_budget_s) {
+    return endDocking(c, c.out, DockingOutcome::kTimeBudget,
+                      fmt("time budget of %.1f s spent", limits_.time_budget_s) + " in " + stateName(state_));
   }
-
-  if (!odom_problem.empty()) {
+  if (!c.odom_problem.empty()) {
     if (moving(state_)) {
       resume_state_ = state_;
-      enter(DockingPhase::kHold, now_s, odom_problem);
+      enter(DockingPhase::kHold, c.now_s, c.odom_problem);
     }
-    return finish(stop(out, odom_problem));
+    return finish(c, stop(c.out, c.odom_problem));
   }
-  std::string perception_problem = perceptionProblem(now_s);
-  if (perception_problem.empty() && !input_problem_.empty() && !out.target_visible) {
-    perception_problem = "target not seen with a camera at fault: " + input_problem_;
-  }
-  if (!perception_problem.empty()) {
-    // Stop and wait, without the hold's timeout: searching or backing off needs eyes. Not for ever:
-    // after the search timeout the docking ends, saying what is missing.
-    if (!perception_down_) perception_down_since_s_ = now_s;
-    perception_down_ = true;
-    const double limit_s = limits_.search_timeout_s > 0.0 ? limits_.search_timeout_s : config_.search_timeout_s;
-    if (now_s - perception_down_since_s_ > limit_s) {
-      return end(out, DockingOutcome::kPerceptionLost, fmt("no usable estimate for %.0f s: ", limit_s) + perception_problem);
-    }
-    if (state_ != DockingPhase::kHold && state_ != DockingPhase::kDocked) {
-      resume_state_ = state_;
-      enter(DockingPhase::kHold, now_s, perception_problem);
-    }
-    return finish(stop(out, "holding: " + perception_problem));
-  }
-  if (perception_down_) {
-    perception_down_ = false;
-    // The hold's timeout runs from the moment perception is back.
-    if (state_ == DockingPhase::kHold) enter(DockingPhase::kHold, now_s, "perception back: holding for the target");
-  }
+  if (std::optional<PlannerOutput> held = holdWhilePerceptionGone(c)) return held;
   if (nan_estimate_ && moving(state_)) {
     resume_state_ = state_;
-    enter(DockingPhase::kHold, now_s, "latest estimate contains NaN");
+    enter(DockingPhase::kHold, c.now_s, "latest estimate contains NaN");
   }
+  return std::nullopt;
+}
 
-  const double r_safe = config_.law.safe_radius_m;
-  auto drive = [&](PlannerOutput o, Phase phase, const std::string& reason) {
-    const LawCommand cmd = law_.command(phase, chaser, port);
-    o.command = cmd.twist;
-    o.goal_distance_m = cmd.goal_distance_m;
-    o.goal = cmd.goal;
-    o.path = law_.plannedPath(phase, chaser, port.pose);
-    o.reason = reason + (cmd.fov_limited ? " (heading held at the edge of the camera's view)" : "");
-    return o;
-  };
-
-  // A transition re-evaluates the new state in the same cycle, so that no cycle is lost; the state
-  // graph has no loop that can be taken without time passing, the bound is only a guard.
-  for (int pass = 0; pass < 6; ++pass) {
-    const double in_state_s = now_s - *state_since_s_;
-    switch (state_) {
-      case DockingPhase::kIdle:
-        return finish(stop(out, state_reason_));
-
-      case DockingPhase::kDocked:
-        return end(out, DockingOutcome::kDocked, state_reason_);
-
-      case DockingPhase::kSearch: {
-        if (out.target_visible) {
-          enter(DockingPhase::kApproach, now_s, "target found");
-          continue;
-        }
-        const double search_timeout_s =
-            limits_.search_timeout_s > 0.0 ? limits_.search_timeout_s : config_.search_timeout_s;
-        if (in_state_s > search_timeout_s) {
-          return end(out, DockingOutcome::kTargetLost,
-                     fmt("no target for %.0f s of search", search_timeout_s) + " (" + lostReason(now_s) + ")");
-        }
-        if (in_state_s < config_.search_wait_s) return finish(stop(out, lostReason(now_s) + ": waiting"));
-        if (out.has_target && now_s - last_seen_s_ <= config_.search_orbit_memory_s) {
-          // Seen not long ago: it is most likely still there with its face turned away (a turning
-          // target), or just outside the view. Turning in place would look away from it 5 s in 6;
-          // orbiting where it was keeps it in view and brings the face round.
-          return finish(orbitForTheFace(out, chaser, port, lostReason(now_s) + ": looking where it was; "));
-        }
-        out.command = BodyTwist{0.0, 0.0, config_.search_yaw_rate_radps};
-        out.reason = lostReason(now_s) + ": turning to look for it";
-        return finish(out);
-      }
-
-      case DockingPhase::kHold:
-        if (out.target_visible) {
-          enter(resume_state_, now_s, "target back after a hold");
-          continue;
-        }
-        if (in_state_s > config_.hold_timeout_s) {
-          if (out.has_target && out.geometry.range_m < r_safe - config_.circle_tolerance_m) {
-            enter(DockingPhase::kAbort, now_s, lostReason(now_s) + ": backing off to the safe circle");
-          } else {
-            enter(DockingPhase::kSearch, now_s, lostReason(now_s));
-          }
-          continue;
-        }
-        return finish(stop(out, "holding: " + lostReason(now_s)));
-
-      case DockingPhase::kAbort: {
-        if (!out.has_target) {
-          enter(DockingPhase::kSearch, now_s, "abort: no target pose held");
-          continue;
-        }
-        // ABORT lasts at least one cycle (zero velocity outside the circle), so that it is published.
-        if (in_state_s > 0.0 && out.geometry.range_m >= r_safe - config_.circle_tolerance_m) {
-          enter(DockingPhase::kSearch, now_s, "backed off to the safe circle after: " + state_reason_);
-          continue;
-        }
-        if (in_state_s > config_.abort_timeout_s) {
-          enter(DockingPhase::kSearch, now_s, "backing off took too long");
-          continue;
-        }
-        return finish(drive(out, Phase::kBackOff, "abort: " + state_reason_));
-      }
-
-      case DockingPhase::kApproach:
-      case DockingPhase::kAlign:
-      case DockingPhase::kFinal: {
-        const ApproachGeometry& g = out.geometry;
-        bool on_odometry = false;
-        std::string blind_reason;
-        if (!out.target_visible) {
-          const double blind_s = now_s - track_.lastStamp();
-          const bool near_contact = out.has_target && g.tip_error_m < config_.blind_final_range_m;
-          if (state_ == DockingPhase::kFinal && near_contact && orientation_known && !nan_estimate_) {
-            if (blind_s > config_.max_blind_s) {
-              enter(DockingPhase::kAbort, now_s, fmt("final approach on odometry for too long (%.1f s)", blind_s));
-              continue;
-            }
-            on_odometry = true;
-            blind_reason = g.tip_error_m < config_.odometry_only_range_m
-                               ? fmt("on odometry: probe tip within %.2f m, estimates no longer used",
-                                     config_.odometry_only_range_m)
-                               : fmt("on odometry: target not seen for %.1f s, pose held in odom", blind_s);
-          } else {
-            resume_state_ = state_;
-            enter(DockingPhase::kHold, now_s, lostReason(now_s));
-            continue;
-          }
-        }
-        out.on_odometry = on_odometry;
-
-        if (state_ == DockingPhase::kApproach) {
-          // Position only (stereo far away, or the face turned away): go to the search orbit, not to
-          // the safe circle (the stereo detector does not see the target well inside it), and orbit
-          // there, always the same way (counter-clockwise), until a camera sees the face.
-          if (!orientation_known) return finish(orbitForTheFace(out, chaser, port, ""));
-          const LawCommand cmd = law_.command(Phase::kApproach, chaser, port);
-          if (cmd.goal_distance_m < config_.approach_goal_tolerance_m) {
-            enter(DockingPhase::kAlign, now_s,
-                  fmt("on the safe circle, %.0f deg off the port axis", g.polar_angle_rad * kRadToDeg));
-            continue;
-          }
-          if (cmd.goal_distance_m > min_goal_distance_m_ + config_.divergence_margin_m) {
-            enter(DockingPhase::kAbort, now_s,
-                  fmt2("approach diverging: goal %.2f m away, was %.2f m", cmd.goal_distance_m, min_goal_distance_m_));
-            continue;
-          }
-          min_goal_distance_m_ = std::min(min_goal_distance_m_, cmd.goal_distance_m);
-          return finish(drive(out, Phase::kApproach, "straight to the safe circle"));
-        }
-
-        if (state_ == DockingPhase::kAlign) {
-          const double arc_m = std::abs(g.polar_angle_rad) * r_safe;
-          if (arc_m < config_.align_lateral_tolerance_m &&
-              std::abs(g.yaw_error_rad) < config_.align_yaw_tolerance_rad &&
-              std::abs(g.range_m - r_safe) < config_.circle_tolerance_m) {
-            enter(DockingPhase::kFinal, now_s, "aligned with the port axis");
-            continue;
-          }
-          if (std::abs(g.range_m - r_safe) > 4.0 * config_.circle_tolerance_m) {
-            enter(DockingPhase::kApproach, now_s, fmt("off the safe circle by %.2f m", g.range_m - r_safe));
-            continue;
-          }
-          if (arc_m > min_goal_distance_m_ + config_.divergence_margin_m) {
-            enter(DockingPhase::kAbort, now_s, fmt2("alignment diverging: %.2f m of arc left, was %.2f m", arc_m,
-                                                    min_goal_distance_m_));
-            continue;
-          }
-          min_goal_distance_m_ = std::min(min_goal_distance_m_, arc_m);
-          return finish(drive(out, Phase::kAlign,
-                              fmt("on the safe circle towards the port axis, %.0f deg to go",
-                                  g.polar_angle_rad * kRadToDeg)));
-        }
-
-        // FINAL
-        if (g.tip_error_m <= config_.docked_position_tolerance_m &&
-            std::abs(g.yaw_error_rad) <= config_.docked_yaw_tolerance_rad) {
-          enter(DockingPhase::kDocked, now_s,
-                fmt2("docked: probe tip %.1f mm from the port, yaw error %.2f deg", g.tip_error_m * 1000.0,
-                     g.yaw_error_rad * kRadToDeg) +
-                    (on_odometry ? " (final approach on odometry)" : ""));
-          continue;
-        }
-        if (std::abs(g.lateral_m) > config_.final_abort_lateral_m ||
-            std::abs(g.yaw_error_rad) > config_.final_abort_yaw_rad) {
-          enter(DockingPhase::kAbort, now_s,
-                fmt2("final approach errors growing: lateral %.3f m, yaw %.1f deg", g.lateral_m,
-                     g.yaw_error_rad * kRadToDeg));
-          continue;
-        }
-        return finish(drive(out, Phase::kFinal,
-                            on_odometry ? "final approach " + blind_reason : std::string("final approach along the port axis")));
-      }
+// Perception gone: stop and wait, without the hold's timeout (searching or backing off needs eyes). Not
+// for ever: after the search timeout the docking ends, saying what is missing.
+std::optional<PlannerOutput> DockingPlanner::holdWhilePerceptionGone(Cycle& c) {
+  std::string problem = perceptionProblem(c.now_s);
+  if (problem.empty() && !input_problem_.empty() && !c.out.target_visible) {
+    problem = "target not seen with a camera at fault: " + input_problem_;
+  }
+  if (problem.empty()) {
+    if (perception_down_) {
+      perception_down_ = false;
+      // The hold's timeout runs from the moment perception is back.
+      if (state_ == DockingPhase::kHold) enter(DockingPhase::kHold, c.now_s, "perception back: holding for the target");
     }
+    return std::nullopt;
   }
-  return finish(stop(out, "state machine did not settle: " + state_reason_));
+  if (!perception_down_) perception_down_since_s_ = c.now_s;
+  perception_down_ = true;
+  const double limit_s = limits_.search_timeout_s > 0.0 ? limits_.search_timeout_s : config_.search_timeout_s;
+  if (c.now_s - perception_down_since_s_ > limit_s) {
+    return endDocking(c, c.out, DockingOutcome::kPerceptionLost,
+                      fmt("no usable estimate for %.0f s: ", limit_s) + problem);
+  }
+  if (state_ != DockingPhase::kHold && state_ != DockingPhase::kDocked) {
+    resume_state_ = state_;
+    enter(DockingPhase::kHold, c.now_s, problem);
+  }
+  return finish(c, stop(c.out, "holding: " + problem));
+}
+
+// A transition re-evaluates the new state in the same cycle, so that no cycle is lost; the state graph
+// has no loop that can be taken without time passing, the bound is only a guard.
+PlannerOutput DockingPlanner::runStateMachine(Cycle& c) {
+  for (int pass = 0; pass < 6; ++pass) {
+    if (std::optional<PlannerOutput> done = stepState(c)) return *done;
+  }
+  return finish(c, stop(c.out, "state machine did not settle: " + state_reason_));
+}
+
+// The current state's step: its output, or nothing when it moved to another state.
+std::optional<PlannerOutput> DockingPlanner::stepState(Cycle& c) {
+  switch (state_) {
+    case DockingPhase::kIdle:
+      return finish(c, stop(c.out, state_reason_));
+    case DockingPhase::kDocked:
+      return endDocking(c, c.out, DockingOutcome::kDocked, state_reason_);
+    case DockingPhase::kSearch:
+      return stepSearch(c);
+    case DockingPhase::kHold:
+      return stepHold(c);
+    case DockingPhase::kAbort:
+      return stepAbort(c);
+    case DockingPhase::kApproach:
+    case DockingPhase::kAlign:
+    case DockingPhase::kFinal:
+      return stepMoving(c);
+  }
+  return finish(c, stop(c.out, "unknown state"));
+}
+
+std::optional<PlannerOutput> DockingPlanner::stepSearch(Cycle& c) {
+  PlannerOutput& out = c.out;
+  const double in_state_s = c.now_s - *state_since_s_;
+  if (out.target_visible) {
+    enter(DockingPhase::kApproach, c.now_s, "target found");
+    return std::nullopt;
+  }
+  const double search_timeout_s = limits_.search_timeout_s > 0.0 ? limits_.search_timeout_s : config_.search_timeout_s;
+  if (in_state_s > search_timeout_s) {
+    return endDocking(c, out, DockingOutcome::kTargetLost,
+                      fmt("no target for %.0f s of search", search_timeout_s) + " (" + lostReason(c.now_s) + ")");
+  }
+  if (in_state_s < config_.search_wait_s) return finish(c, stop(out, lostReason(c.now_s) + ": waiting"));
+  if (out.has_target && c.now_s - last_seen_s_ <= config_.search_orbit_memory_s) {
+    // Seen not long ago: it is most likely still there with its face turned away (a turning target), or
+    // just outside the view. Turning in place would look away from it 5 s in 6; orbiting where it was
+    // keeps it in view and brings the face round.
+    return finish(c, orbitForTheFace(out, c.chaser, c.port, lostReason(c.now_s) + ": looking where it was; "));
+  }
+  out.command = BodyTwist{0.0, 0.0, config_.search_yaw_rate_radps};
+  out.reason = lostReason(c.now_s) + ": turning to look for it";
+  return finish(c, out);
+}
+
+std::optional<PlannerOutput> DockingPlanner::stepHold(Cycle& c) {
+  const double in_state_s = c.now_s - *state_since_s_;
+  if (c.out.target_visible) {
+    enter(resume_state_, c.now_s, "target back after a hold");
+    return std::nullopt;
+  }
+  if (in_state_s > config_.hold_timeout_s) {
+    if (c.out.has_target && c.out.geometry.range_m < config_.law.safe_radius_m - config_.circle_tolerance_m) {
+      enter(DockingPhase::kAbort, c.now_s, lostReason(c.now_s) + ": backing off to the safe circle");
+    } else {
+      enter(DockingPhase::kSearch, c.now_s, lostReason(c.now_s));
+    }
+    return std::nullopt;
+  }
+  return finish(c, stop(c.out, "holding: " + lostReason(c.now_s)));
+}
+
+std::optional<PlannerOutput> DockingPlanner::stepAbort(Cycle& c) {
+  const double in_state_s = c.now_s - *state_since_s_;
+  if (!c.out.has_target) {
+    enter(DockingPhase::kSearch, c.now_s, "abort: no target pose held");
+    return std::nullopt;
+  }
+  // ABORT lasts at least one cycle (zero velocity outside the circle), so that it is published.
+  if (in_state_s > 0.0 && c.out.geometry.range_m >= config_.law.safe_radius_m - config_.circle_tolerance_m) {
+    enter(DockingPhase::kSearch, c.now_s, "backed off to the safe circle after: " + state_reason_);
+    return std::nullopt;
+  }
+  if (in_state_s > config_.abort_timeout_s) {
+    enter(DockingPhase::kSearch, c.now_s, "backing off took too long");
+    return std::nullopt;
+  }
+  return finish(c, drive(c, c.out, Phase::kBackOff, "abort: " + state_reason_));
+}
+
+// APPROACH, ALIGN, FINAL: with the target in view, or FINAL near contact on the pose held in odom.
+std::optional<PlannerOutput> DockingPlanner::stepMoving(Cycle& c) {
+  std::string blind_reason;
+  if (!c.out.target_visible && !continueOnOdometry(c, &blind_reason)) return std::nullopt;
+  c.out.on_odometry = !c.out.target_visible;
+  if (state_ == DockingPhase::kApproach) return stepApproach(c);
+  if (state_ == DockingPhase::kAlign) return stepAlign(c);
+  return stepFinal(c, blind_reason);
+}
+
+// The target not seen while moving: FINAL near contact goes on, on odometry (true, with why in `reason`);
+// otherwise HOLD, or ABORT when on odometry too long (false: another state).
+bool DockingPlanner::continueOnOdometry(const Cycle& c, std::string* reason) {
+  const ApproachGeometry& g = c.out.geometry;
+  const double blind_s = c.now_s - track_.lastStamp();
+  const bool near_contact = c.out.has_target && g.tip_error_m < config_.blind_final_range_m;
+  if (state_ == DockingPhase::kFinal && near_contact && c.orientation_known && !nan_estimate_) {
+    if (blind_s > config_.max_blind_s) {
+      enter(DockingPhase::kAbort, c.now_s, fmt("final approach on odometry for too long (%.1f s)", blind_s));
+      return false;
+    }
+    *reason = g.tip_error_m < config_.odometry_only_range_m
+                  ? fmt("on odometry: probe tip within %.2f m, estimates no longer used", config_.odometry_only_range_m)
+                  : fmt("on odometry: target not seen for %.1f s, pose held in odom", blind_s);
+    return true;
+  }
+  resume_state_ = state_;
+  enter(DockingPhase::kHold, c.now_s, lostReason(c.now_s));
+  return false;
+}
+
+std::optional<PlannerOutput> DockingPlanner::stepApproach(Cycle& c) {
+  // Position only (stereo far away, or the face turned away): go to the search orbit, not to the safe
+  // circle (the stereo detector does not see the target well inside it), and orbit there, always the
+  // same way (counter-clockwise), until a camera sees the face.
+  if (!c.orientation_known) return finish(c, orbitForTheFace(c.out, c.chaser, c.port, ""));
+  const LawCommand cmd = law_.command(Phase::kApproach, c.chaser, c.port);
+  if (cmd.goal_distance_m < config_.approach_goal_tolerance_m) {
+    enter(DockingPhase::kAlign, c.now_s,
+          fmt("on the safe circle, %.0f deg off the port axis", c.out.geometry.polar_angle_rad * kRadToDeg));
+    return std::nullopt;
+  }
+  if (cmd.goal_distance_m > min_goal_distance_m_ + config_.divergence_margin_m) {
+    enter(DockingPhase::kAbort, c.now_s,
+          fmt2("approach diverging: goal %.2f m away, was %.2f m", cmd.goal_distance_m, min_goal_distance_m_));
+    return std::nullopt;
+  }
+  min_goal_distance_m_ = std::min(min_goal_distance_m_, cmd.goal_distance_m);
+  return finish(c, drive(c, c.out, Phase::kApproach, "straight to the safe circle"));
+}
+
+std::optional<PlannerOutput> DockingPlanner::stepAlign(Cycle& c) {
+  const ApproachGeometry& g = c.out.geometry;
+  const double r_safe = config_.law.safe_radius_m;
+  const double arc_m = std::abs(g.polar_angle_rad) * r_safe;
+  if (arc_m < config_.align_lateral_tolerance_m && std::abs(g.yaw_error_rad) < config_.align_yaw_tolerance_rad &&
+      std::abs(g.range_m - r_safe) < config_.circle_tolerance_m) {
+    enter(DockingPhase::kFinal, c.now_s, "aligned with the port axis");
+    return std::nullopt;
+  }
+  if (std::abs(g.range_m - r_safe) > kOffCircleTolerances * config_.circle_tolerance_m) {
+    enter(DockingPhase::kApproach, c.now_s, fmt("off the safe circle by %.2f m", g.range_m - r_safe));
+    return std::nullopt;
+  }
+  if (arc_m > min_goal_distance_m_ + config_.divergence_margin_m) {
+    enter(DockingPhase::kAbort, c.now_s,
+          fmt2("alignment diverging: %.2f m of arc left, was %.2f m", arc_m, min_goal_distance_m_));
+    return std::nullopt;
+  }
+  min_goal_distance_m_ = std::min(min_goal_distance_m_, arc_m);
+  return finish(c, drive(c, c.out, Phase::kAlign,
+                         fmt("on the safe circle towards the port axis, %.0f deg to go", g.polar_angle_rad * kRadToDeg)));
+}
+
+std::optional<PlannerOutput> DockingPlanner::stepFinal(Cycle& c, const std::string& blind_reason) {
+  const ApproachGeometry& g = c.out.geometry;
+  if (g.tip_error_m <= config_.docked_position_tolerance_m &&
+      std::abs(g.yaw_error_rad) <= config_.docked_yaw_tolerance_rad) {
+    enter(DockingPhase::kDocked, c.now_s,
+          fmt2("docked: probe tip %.1f mm from the port, yaw error %.2f deg", g.tip_error_m * 1000.0,
+               g.yaw_error_rad * kRadToDeg) +
+              (c.out.on_odometry ? " (final approach on odometry)" : ""));
+    return std::nullopt;
+  }
+  if (std::abs(g.lateral_m) > config_.final_abort_lateral_m || std::abs(g.yaw_error_rad) > config_.final_abort_yaw_rad) {
+    enter(DockingPhase::kAbort, c.now_s,
+          fmt2("final approach errors growing: lateral %.3f m, yaw %.1f deg", g.lateral_m, g.yaw_error_rad * kRadToDeg));
+    return std::nullopt;
+  }
+  return finish(c, drive(c, c.out, Phase::kFinal,
+                         c.out.on_odometry ? "final approach " + blind_reason
+                                           : std::string("final approach along the port axis")));
 }
 
 }  // namespace docking_planner

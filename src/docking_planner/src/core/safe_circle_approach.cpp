@@ -6,21 +6,6 @@
 #include <string>
 
 namespace docking_planner {
-namespace {
-
-void requirePositive(double value, const char* name) {
-  if (!std::isfinite(value) || value <= 0.0) {
-    throw std::invalid_argument(std::string(name) + " must be a positive number");
-  }
-}
-
-void requireNonNegative(double value, const char* name) {
-  if (!std::isfinite(value) || value < 0.0) {
-    throw std::invalid_argument(std::string(name) + " must be a number >= 0");
-  }
-}
-
-}  // namespace
 
 const char* phaseName(Phase phase) {
   switch (phase) {
@@ -37,34 +22,19 @@ const char* phaseName(Phase phase) {
 }
 
 void validate(const ApproachConfig& c) {
-  requirePositive(c.safe_radius_m, "safe_radius_m");
-  requireNonNegative(c.probe_x_m, "probe_x_m");
-  if (c.probe_x_m >= c.safe_radius_m) {
-    throw std::invalid_argument("probe_x_m must be smaller than safe_radius_m");
-  }
-  requirePositive(c.camera_half_fov_rad, "camera_half_fov_rad");
-  requireNonNegative(c.fov_margin_rad, "fov_margin_rad");
+  docking_settings::validateSettings(c);
   if (c.fov_margin_rad >= c.camera_half_fov_rad || c.camera_half_fov_rad >= M_PI / 2) {
     throw std::invalid_argument("fov_margin_rad must be below camera_half_fov_rad, itself below pi/2");
   }
-  requireNonNegative(c.tangent_margin_rad, "tangent_margin_rad");
-  requirePositive(c.approach_gain, "approach_gain");
-  requirePositive(c.radial_gain, "radial_gain");
-  requirePositive(c.tangential_gain, "tangential_gain");
-  requirePositive(c.axial_gain, "axial_gain");
-  requirePositive(c.lateral_gain, "lateral_gain");
-  requirePositive(c.yaw_gain, "yaw_gain");
-  requirePositive(c.max_speed_mps, "max_speed_mps");
-  requirePositive(c.max_yaw_rate_radps, "max_yaw_rate_radps");
-  requirePositive(c.align_speed_mps, "align_speed_mps");
-  requirePositive(c.final_speed_mps, "final_speed_mps");
-  requirePositive(c.final_slow_speed_mps, "final_slow_speed_mps");
-  requireNonNegative(c.final_slow_distance_m, "final_slow_distance_m");
-  requirePositive(c.final_lateral_gate_m, "final_lateral_gate_m");
-  requirePositive(c.final_yaw_gate_rad, "final_yaw_gate_rad");
 }
 
-SafeCircleApproach::SafeCircleApproach(const ApproachConfig& config) : config_(config) { validate(config_); }
+SafeCircleApproach::SafeCircleApproach(const ApproachConfig& config, double probe_x_m)
+    : config_(config), probe_x_m_(probe_x_m) {
+  validate(config_);
+  if (!std::isfinite(probe_x_m_) || probe_x_m_ < 0.0 || probe_x_m_ >= config_.safe_radius_m) {
+    throw std::invalid_argument("probe_x_m must be in [0, safe_radius_m)");
+  }
+}
 
 ApproachGeometry SafeCircleApproach::measure(const Pose2D& chaser, const Pose2D& port) const {
   ApproachGeometry g;
@@ -76,7 +46,7 @@ ApproachGeometry SafeCircleApproach::measure(const Pose2D& chaser, const Pose2D&
   g.lateral_m = rel.dot(perpendicular(axis));
   g.yaw_error_rad = wrapAngle(chaser.yaw - (port.yaw + M_PI));
   g.bearing_rad = wrapAngle(std::atan2(-rel.y(), -rel.x()) - chaser.yaw);
-  g.tip_error_m = (chaser.position() + config_.probe_x_m * unitAt(chaser.yaw) - port.position()).norm();
+  g.tip_error_m = (chaser.position() + probe_x_m_ * unitAt(chaser.yaw) - port.position()).norm();
   return g;
 }
 
@@ -89,14 +59,14 @@ Vec2 SafeCircleApproach::approachGoal(const Pose2D& chaser, const Pose2D& port) 
   if (r > r_safe) {
     // A straight segment to the circle point at polar angle g stays outside the circle while
     // |g - gamma| <= acos(R / r) (the tangent points); move the goal towards the axis by at most that.
-    const double reach = std::max(0.0, std::acos(r_safe / r) - config_.tangent_margin_rad);
+    const double reach = std::max(0.0, std::acos(r_safe / r) - kTangentMarginRad);
     goal_gamma = gamma - clampAbs(gamma, reach);
   }
   return port.position() + r_safe * unitAt(port.yaw + goal_gamma);
 }
 
 Vec2 SafeCircleApproach::dockedPosition(const Pose2D& port) const {
-  return port.position() + config_.probe_x_m * unitAt(port.yaw);
+  return port.position() + probe_x_m_ * unitAt(port.yaw);
 }
 
 double SafeCircleApproach::desiredHeading(const Pose2D& chaser, const Pose2D& port, bool* fov_limited) const {
@@ -132,76 +102,106 @@ BodyTwist SafeCircleApproach::toBody(const Pose2D& chaser, const Vec2& v_odom, d
   return t;
 }
 
-LawCommand SafeCircleApproach::command(Phase phase, const Pose2D& chaser, const PortState& port) const {
+namespace {
+// The unit vector port centre -> chaser (the port axis when the chaser is on the centre).
+Vec2 radialOf(const Vec2& rel, double r, const Pose2D& port) { return r > 1e-9 ? Vec2(rel / r) : unitAt(port.yaw); }
+}  // namespace
+
+SafeCircleApproach::Steering SafeCircleApproach::steerApproach(const Pose2D& chaser, const PortState& port) const {
+  Steering s;
+  s.goal = approachGoal(chaser, port.pose);
+  s.correction = clampNorm(config_.approach_gain * (s.goal - chaser.position()), config_.max_speed_mps);
+  s.feed_forward = feedForward(port, s.goal);  // far away the goal, not the chaser, moves with the port
+  return s;
+}
+
+// Along the arc towards gamma = 0 (paper: v ~ SafeDistance * theta), holding the radius.
+SafeCircleApproach::Steering SafeCircleApproach::steerAlign(const Pose2D& chaser, const PortState& port) const {
   const ApproachConfig& c = config_;
+  const Pose2D& p = port.pose;
+  const Vec2 rel = chaser.position() - p.position();
+  const double r = rel.norm();
+  const Vec2 radial = radialOf(rel, r, p);
+  const double gamma = wrapAngle(std::atan2(radial.y(), radial.x()) - p.yaw);
+  const Vec2 tangent = perpendicular(radial);  // direction of increasing gamma
+  const double v_t = clampAbs(-c.tangential_gain * c.safe_radius_m * gamma, c.align_speed_mps);
+  const double v_r = clampAbs(c.radial_gain * (c.safe_radius_m - r), c.align_speed_mps);
+  Steering s;
+  s.correction = v_t * tangent + v_r * radial;
+  s.goal = p.position() + c.safe_radius_m * unitAt(p.yaw);
+  s.feed_forward = feedForward(port, chaser.position());
+  return s;
+}
+
+// Along the port axis to contact; the lateral and heading errors are closed before advancing: full
+// axial speed only when both are small.
+SafeCircleApproach::Steering SafeCircleApproach::steerFinal(const Pose2D& chaser, const PortState& port) const {
+  const ApproachConfig& c = config_;
+  const Pose2D& p = port.pose;
+  const Vec2 rel = chaser.position() - p.position();
+  const Vec2 axis = unitAt(p.yaw);
+  const Vec2 left = perpendicular(axis);
+  const double axial_to_contact = rel.dot(axis) - probe_x_m_;  // > 0: not there yet
+  const double lateral = rel.dot(left);
+  const double yaw_error = wrapAngle(chaser.yaw - (p.yaw + M_PI));
+  const double gate = std::clamp(
+      1.0 - std::max(std::abs(lateral) / c.final_lateral_gate_m, std::abs(yaw_error) / c.final_yaw_gate_rad), 0.0, 1.0);
+  const double tip_distance = std::max(axial_to_contact, 0.0);
+  const double speed_limit = tip_distance < c.final_slow_distance_m ? c.final_slow_speed_mps : c.final_speed_mps;
+  double v_axial = clampAbs(-c.axial_gain * axial_to_contact, speed_limit);
+  if (v_axial < 0.0) v_axial *= gate;  // advancing is gated; backing out of an overshoot is not
+  const double v_lateral = clampAbs(-c.lateral_gain * lateral, c.final_speed_mps);
+  Steering s;
+  s.correction = v_axial * axis + v_lateral * left;
+  s.goal = dockedPosition(p);
+  s.feed_forward = feedForward(port, chaser.position());
+  return s;
+}
+
+// Radially out to the safe circle; nothing once outside it.
+SafeCircleApproach::Steering SafeCircleApproach::steerBackOff(const Pose2D& chaser, const PortState& port) const {
   const Pose2D& p = port.pose;
   const Vec2 pc = chaser.position();
   const Vec2 rel = pc - p.position();
   const double r = rel.norm();
-  const Vec2 radial = r > 1e-9 ? Vec2(rel / r) : unitAt(p.yaw);
-  const double gamma = wrapAngle(std::atan2(radial.y(), radial.x()) - p.yaw);
+  Steering s;
+  s.goal = p.position() + config_.safe_radius_m * radialOf(rel, r, p);
+  s.correction = r < config_.safe_radius_m ? clampNorm(config_.radial_gain * (s.goal - pc), config_.align_speed_mps)
+                                           : Vec2::Zero();
+  s.feed_forward = feedForward(port, pc);
+  return s;
+}
 
-  LawCommand out;
-  Vec2 correction = Vec2::Zero();
-  Vec2 ff = feedForward(port, pc);
+SafeCircleApproach::Steering SafeCircleApproach::steer(Phase phase, const Pose2D& chaser, const PortState& port) const {
   switch (phase) {
-    case Phase::kApproach: {
-      const Vec2 goal = approachGoal(chaser, p);
-      out.goal.x = goal.x();
-      out.goal.y = goal.y();
-      correction = clampNorm(c.approach_gain * (goal - pc), c.max_speed_mps);
-      ff = feedForward(port, goal);  // far away the goal, not the chaser, moves with the port
+    case Phase::kApproach:
+      return steerApproach(chaser, port);
+    case Phase::kAlign:
+      return steerAlign(chaser, port);
+    case Phase::kFinal:
+      return steerFinal(chaser, port);
+    case Phase::kBackOff:
       break;
-    }
-    case Phase::kAlign: {
-      // Along the arc towards gamma = 0 (paper: v ~ SafeDistance * theta), holding the radius.
-      const Vec2 tangent = perpendicular(radial);  // direction of increasing gamma
-      const double v_t = clampAbs(-c.tangential_gain * c.safe_radius_m * gamma, c.align_speed_mps);
-      const double v_r = clampAbs(c.radial_gain * (c.safe_radius_m - r), c.align_speed_mps);
-      correction = v_t * tangent + v_r * radial;
-      const Vec2 goal = p.position() + c.safe_radius_m * unitAt(p.yaw);
-      out.goal.x = goal.x();
-      out.goal.y = goal.y();
-      break;
-    }
-    case Phase::kFinal: {
-      const Vec2 axis = unitAt(p.yaw);
-      const Vec2 left = perpendicular(axis);
-      const double axial_to_contact = rel.dot(axis) - c.probe_x_m;  // > 0: not there yet
-      const double lateral = rel.dot(left);
-      const double yaw_error = wrapAngle(chaser.yaw - (p.yaw + M_PI));
-      // Close the lateral and heading errors before advancing: full axial speed only when both are small.
-      const double gate = std::clamp(
-          1.0 - std::max(std::abs(lateral) / c.final_lateral_gate_m, std::abs(yaw_error) / c.final_yaw_gate_rad),
-          0.0, 1.0);
-      const double tip_distance = std::max(axial_to_contact, 0.0);
-      const double speed_limit = tip_distance < c.final_slow_distance_m ? c.final_slow_speed_mps : c.final_speed_mps;
-      double v_axial = clampAbs(-c.axial_gain * axial_to_contact, speed_limit);
-      if (v_axial < 0.0) v_axial *= gate;  // advancing is gated; backing out of an overshoot is not
-      const double v_lateral = clampAbs(-c.lateral_gain * lateral, c.final_speed_mps);
-      correction = v_axial * axis + v_lateral * left;
-      const Vec2 goal = dockedPosition(p);
-      out.goal.x = goal.x();
-      out.goal.y = goal.y();
-      break;
-    }
-    case Phase::kBackOff: {
-      const Vec2 goal = p.position() + c.safe_radius_m * radial;
-      correction = r < c.safe_radius_m ? clampNorm(c.radial_gain * (goal - pc), c.align_speed_mps) : Vec2::Zero();
-      out.goal.x = goal.x();
-      out.goal.y = goal.y();
-      break;
-    }
   }
+  return steerBackOff(chaser, port);
+}
+
+// The phase's steering, the heading, the port's motion fed forward, the limits.
+LawCommand SafeCircleApproach::command(Phase phase, const Pose2D& chaser, const PortState& port) const {
+  const Pose2D& p = port.pose;
+  const Steering steering = steer(phase, chaser, port);
+  LawCommand out;
+  out.goal.x = steering.goal.x();
+  out.goal.y = steering.goal.y();
   // FINAL keeps the docked heading exactly (the port is too close and too wide to matter for the
   // field of view; contact needs the heading); the other phases keep the port in view.
   const double heading =
       phase == Phase::kFinal ? wrapAngle(p.yaw + M_PI) : desiredHeading(chaser, p, &out.fov_limited);
   out.goal.yaw = heading;
-  const double yaw_rate = port.yaw_rate + c.yaw_gain * wrapAngle(heading - chaser.yaw);
-  out.velocity_odom = clampNorm(correction + ff, c.max_speed_mps);
+  const double yaw_rate = port.yaw_rate + config_.yaw_gain * wrapAngle(heading - chaser.yaw);
+  out.velocity_odom = clampNorm(steering.correction + steering.feed_forward, config_.max_speed_mps);
   out.twist = toBody(chaser, out.velocity_odom, yaw_rate);
-  out.goal_distance_m = (out.goal.position() - pc).norm();
+  out.goal_distance_m = (out.goal.position() - chaser.position()).norm();
   return out;
 }
 

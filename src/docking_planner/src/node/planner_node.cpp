@@ -2,8 +2,8 @@
 // the estimate's stamp, feeds it and the odometry to the core on a ros::Timer (sim-time friendly),
 // and publishes cmd_vel, DockingState, the planned path and diagnostics. Docking runs on command: the
 // action server docking/dock (docking_msgs/Dock) starts it; until then, and after every end, the
-// planner is IDLE with zero velocity. Parameters: config/planner.yaml (see README.md); a missing or
-// invalid one stops the node, naming it.
+// planner is IDLE with zero velocity. Settings: declared in settings/planner.yaml, overridden by
+// config/planner.yaml (README.md's table); an invalid one parks the node, naming it.
 #include <cmath>
 #include <csignal>
 #include <deque>
@@ -30,6 +30,7 @@
 #include <ros/ros.h>
 #include <std_srvs/Empty.h>
 #include <docking_settings/param_reader.h>
+#include <docking_settings/ros_loader.h>
 #include <docking_settings/run_node.h>
 #include <tf2/utils.h>
 #include <tf2_eigen/tf2_eigen.h>
@@ -43,89 +44,47 @@
 namespace docking_planner {
 namespace {
 
-double requireDouble(const ros::NodeHandle& nh, const std::string& name) {
-  return docking_settings::ParamReader(nh).require<double>(name);
+// The probe tip is robot data: config/robot.yaml, loaded under ~robot by guidance.launch (one home).
+constexpr char kRobotNamespace[] = "robot";
+// The docking action's feedback (the current DockingState) rate, Hz.
+constexpr double kFeedbackRateHz = 5.0;
+constexpr char kProbeTipKey[] = "robot/chaser/docking_probe_x_m";
+
+/// The node's settings: the declared defaults with the parameter server's values (config/planner.yaml).
+PlannerNodeSettings loadSettings(const ros::NodeHandle& pnh) {
+  PlannerNodeSettings settings;
+  docking_settings::loadSettings(pnh, settings);
+  docking_settings::warnUnknownKeys(pnh, settings, {kRobotNamespace});
+  docking_settings::ParamReader(pnh).validated([&] { validate(settings.core); });
+  return settings;
 }
 
-bool requireBool(const ros::NodeHandle& nh, const std::string& name) {
-  return docking_settings::ParamReader(nh).require<bool>(name);
+/// The probe tip (robot data), checked against the law's geometry (inside the safe circle).
+double loadProbeTip(const ros::NodeHandle& pnh, const ApproachConfig& law) {
+  const docking_settings::ParamReader reader(pnh);
+  const double probe_x_m = reader.require<double>(kProbeTipKey);
+  reader.validated([&] { SafeCircleApproach(law, probe_x_m); });
+  return probe_x_m;
 }
 
-PlannerConfig loadConfig(const ros::NodeHandle& p) {
-  PlannerConfig c;
-  ApproachConfig& l = c.law;
-  l.safe_radius_m = requireDouble(p, "safe_radius_m");
-  // The robot's geometry has one home, config/robot.yaml, loaded under ~robot by the launch file.
-  l.probe_x_m = requireDouble(p, "robot/chaser/docking_probe_x_m");
-  l.camera_half_fov_rad = requireDouble(p, "camera_half_fov_rad");
-  l.fov_margin_rad = requireDouble(p, "fov_margin_rad");
-  l.tangent_margin_rad = requireDouble(p, "tangent_margin_rad");
-  l.approach_gain = requireDouble(p, "approach_gain");
-  l.radial_gain = requireDouble(p, "radial_gain");
-  l.tangential_gain = requireDouble(p, "tangential_gain");
-  l.axial_gain = requireDouble(p, "axial_gain");
-  l.lateral_gain = requireDouble(p, "lateral_gain");
-  l.yaw_gain = requireDouble(p, "yaw_gain");
-  l.max_speed_mps = requireDouble(p, "max_speed_mps");
-  l.max_yaw_rate_radps = requireDouble(p, "max_yaw_rate_radps");
-  l.align_speed_mps = requireDouble(p, "align_speed_mps");
-  l.final_speed_mps = requireDouble(p, "final_speed_mps");
-  l.final_slow_speed_mps = requireDouble(p, "final_slow_speed_mps");
-  l.final_slow_distance_m = requireDouble(p, "final_slow_distance_m");
-  l.final_lateral_gate_m = requireDouble(p, "final_lateral_gate_m");
-  l.final_yaw_gate_rad = requireDouble(p, "final_yaw_gate_rad");
-  TrackConfig& t = c.track;
-  t.default_position_sigma_m = requireDouble(p, "default_position_sigma_m");
-  t.default_yaw_sigma_rad = requireDouble(p, "default_yaw_sigma_rad");
-  t.yaw_rate_sigma_radps = requireDouble(p, "yaw_rate_sigma_radps");
-  t.yaw_sigma_per_range2 = requireDouble(p, "yaw_sigma_per_range2");
-  t.use_estimate_yaw_rate = requireBool(p, "use_estimate_yaw_rate");
-  t.yaw_rate_random_walk = requireDouble(p, "yaw_rate_random_walk");
-  t.centre_random_walk = requireDouble(p, "centre_random_walk");
-  t.model_target_drift = requireBool(p, "model_target_drift");
-  t.centre_velocity_random_walk = requireDouble(p, "centre_velocity_random_walk");
-  t.initial_centre_speed_sigma_mps = requireDouble(p, "initial_centre_speed_sigma_mps");
-  t.offset_random_walk = requireDouble(p, "offset_random_walk");
-  t.initial_offset_m = requireDouble(p, "initial_offset_m");
-  t.initial_offset_sigma_m = requireDouble(p, "initial_offset_sigma_m");
-  t.initial_yaw_rate_sigma_radps = requireDouble(p, "initial_yaw_rate_sigma_radps");
-  t.max_port_yaw_rate_radps = requireDouble(p, "max_port_yaw_rate_radps");
-  t.max_port_speed_mps = requireDouble(p, "max_port_speed_mps");
-  t.outlier_gate_sigma = requireDouble(p, "outlier_gate_sigma");
-  const double reset_count = requireDouble(p, "outlier_reset_count");
-  docking_settings::ParamReader(p).checkRange("outlier_reset_count", reset_count, 1.0, 1000.0);
-  t.outlier_reset_count = static_cast<int>(reset_count);
-  c.stamp_limits.max_future_s = requireDouble(p, "max_future_stamp_s");
-  c.stamp_limits.max_age_s = requireDouble(p, "max_stamp_age_s");
-  c.estimate_timeout_s = requireDouble(p, "estimate_timeout_s");
-  c.perception_timeout_s = requireDouble(p, "perception_timeout_s");
-  c.odom_timeout_s = requireDouble(p, "odom_timeout_s");
-  c.orientation_timeout_s = requireDouble(p, "orientation_timeout_s");
-  c.search_wait_s = requireDouble(p, "search_wait_s");
-  c.search_yaw_rate_radps = requireDouble(p, "search_yaw_rate_radps");
-  c.search_timeout_s = requireDouble(p, "search_timeout_s");
-  c.hold_timeout_s = requireDouble(p, "hold_timeout_s");
-  c.abort_timeout_s = requireDouble(p, "abort_timeout_s");
-  c.approach_goal_tolerance_m = requireDouble(p, "approach_goal_tolerance_m");
-  c.circle_tolerance_m = requireDouble(p, "circle_tolerance_m");
-  c.align_lateral_tolerance_m = requireDouble(p, "align_lateral_tolerance_m");
-  c.align_yaw_tolerance_rad = requireDouble(p, "align_yaw_tolerance_rad");
-  c.docked_position_tolerance_m = requireDouble(p, "docked_position_tolerance_m");
-  c.docked_yaw_tolerance_rad = requireDouble(p, "docked_yaw_tolerance_rad");
-  c.final_abort_lateral_m = requireDouble(p, "final_abort_lateral_m");
-  c.final_abort_yaw_rad = requireDouble(p, "final_abort_yaw_rad");
-  c.divergence_margin_m = requireDouble(p, "divergence_margin_m");
-  c.blind_final_range_m = requireDouble(p, "blind_final_range_m");
-  c.odometry_only_range_m = requireDouble(p, "odometry_only_range_m");
-  c.contact_estimate_gate_m = requireDouble(p, "contact_estimate_gate_m");
-  c.contact_estimate_gate_yaw_rad = requireDouble(p, "contact_estimate_gate_yaw_rad");
-  c.max_blind_s = requireDouble(p, "max_blind_s");
-  c.search_orbit_radius_m = requireDouble(p, "search_orbit_radius_m");
-  c.orbit_speed_mps = requireDouble(p, "orbit_speed_mps");
-  c.search_orbit_memory_s = requireDouble(p, "search_orbit_memory_s");
-  c.position_only_gate_m = requireDouble(p, "position_only_gate_m");
-  docking_settings::ParamReader(p).validated([&] { validate(c); });  // messages start with the parameter's name
-  return c;
+/// The estimate's covariance rotated into odom, as the track's sigmas.
+void takeMeasurementNoise(const docking_msgs::TargetEstimate& msg, const Eigen::Matrix3d& rot, TargetObservation* o) {
+  // Rotate the camera-frame covariance into odom; the planner's filter takes one sigma for x and y
+  // (the larger of the two, to stay on the safe side) and one for yaw. Variances of 1e6 and more
+  // mean "not estimated" (TargetEstimate): the track's default is used then (sigma 0).
+  Eigen::Matrix3d position_cov, rotation_cov;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      position_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>(r * 6 + c)];
+      rotation_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>((r + 3) * 6 + c + 3)];
+    }
+  }
+  const Eigen::Matrix3d position_odom = rot * position_cov * rot.transpose();
+  const Eigen::Matrix3d rotation_odom = rot * rotation_cov * rot.transpose();
+  const double xy_var = std::max(position_odom(0, 0), position_odom(1, 1));
+  const double yaw_var = rotation_odom(2, 2);
+  if (std::isfinite(xy_var) && xy_var > 0.0 && xy_var < 1e5) o->position_sigma_m = std::sqrt(xy_var);
+  if (std::isfinite(yaw_var) && yaw_var > 0.0 && yaw_var < 1e5) o->yaw_sigma_rad = std::sqrt(yaw_var);
 }
 
 volatile std::sig_atomic_t g_stop_requested = 0;
@@ -163,29 +122,47 @@ static_assert(static_cast<int>(DockingPhase::kIdle) == docking_msgs::DockingStat
 
 class PlannerNode {
  public:
-  PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
-      : planner_(loadConfig(pnh)),
+  PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const PlannerNodeSettings& settings)
+      : planner_(settings.core, loadProbeTip(pnh, settings.core.law)),
         tf_listener_(tf_buffer_),
         diagnostics_(nh, pnh),
         dock_server_(actionServerHandle(nh), docking_msgs::topics::kDockAction, false) {
-    odom_frame_ = pnh.param<std::string>("odom_frame", docking_msgs::frames::kOdom);
-    base_frame_ = pnh.param<std::string>("base_frame", docking_msgs::frames::kBaseLink);
-    const double rate_hz = requireDouble(pnh, "rate_hz");
-    if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) docking_settings::ParamReader(pnh).invalid("rate_hz", "must be in (0, 1000]");
-    update_on_estimate_ = requireBool(pnh, "update_on_estimate");
-    use_estimate_covariance_ = requireBool(pnh, "use_estimate_covariance");
-    tf_wait_s_ = requireDouble(pnh, "tf_wait_s");
-    if (!(tf_wait_s_ >= 0.0)) docking_settings::ParamReader(pnh).invalid("tf_wait_s", "must be >= 0");
-    max_odom_extrapolation_s_ = requireDouble(pnh, "max_odom_extrapolation_s");
-    if (!(max_odom_extrapolation_s_ >= 0.0 && max_odom_extrapolation_s_ <= 0.2)) {
-      docking_settings::ParamReader(pnh).invalid("max_odom_extrapolation_s", "must be in [0, 0.2]");
-    }
+    takeNodeSettings(settings);
+    advertiseOutputs(nh);
+    subscribeInputs(nh);
+    reset_service_ = pnh.advertiseService("reset", &PlannerNode::onReset, this);
+    startDockServer(nh);
+    diagnostics_.setHardwareID("none");
+    diagnostics_.add("docking planner", this, &PlannerNode::diagnose);
+    timer_ = nh.createTimer(ros::Duration(1.0 / settings.rate_hz), &PlannerNode::onTimer, this);
+  }
 
+  /// Zero velocity on the way out (the base would also stop on its own after its cmd_vel timeout), and
+  /// the running goal, if any, ended.
+  void shutdown() {
+    endGoal(DockingOutcome::kShutdown, "the planner is shutting down");
+    cmd_pub_.publish(geometry_msgs::Twist());
+  }
+
+ private:
+  void takeNodeSettings(const PlannerNodeSettings& s) {
+    odom_frame_ = s.odom_frame;
+    base_frame_ = s.base_frame;
+    tf_wait_s_ = s.tf_wait_s;
+    max_odom_extrapolation_s_ = s.max_odom_extrapolation_s;
+    feedback_period_s_ = 1.0 / kFeedbackRateHz;
+    client_loss_timeout_s_ = s.client_loss_timeout_s;
+  }
+
+  void advertiseOutputs(ros::NodeHandle& nh) {
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>(docking_msgs::topics::kCmdVel, 1);
     state_pub_ = nh.advertise<docking_msgs::DockingState>(docking_msgs::topics::kDockingState, 10);
     path_pub_ = nh.advertise<nav_msgs::Path>(docking_msgs::topics::kDockingPath, 1, true);
     // For display only (docking_viz): filled and sent only while someone subscribes.
     geometry_pub_ = nh.advertise<docking_msgs::PlannerGeometry>(docking_msgs::topics::kDockingGeometry, 1);
+  }
+
+  void subscribeInputs(ros::NodeHandle& nh) {
     // TCP_NODELAY: small messages on the way to cmd_vel, not held back by Nagle's algorithm.
     estimate_sub_ = nh.subscribe(docking_msgs::topics::kTargetEstimate, 10, &PlannerNode::onEstimateEvent, this,
                                  ros::TransportHints().tcpNoDelay());
@@ -194,17 +171,9 @@ class PlannerNode {
     // The cameras' own word on their sources, cited when perception is gone (diagnostic_updater publishes
     // on the absolute /diagnostics).
     diagnostics_sub_ = nh.subscribe("/diagnostics", 20, &PlannerNode::onDiagnostics, this);
+  }
 
-    reset_service_ = pnh.advertiseService("reset", &PlannerNode::onReset, this);
-
-    feedback_period_s_ = 1.0 / requireDouble(pnh, "feedback_rate_hz");
-    client_loss_timeout_s_ = requireDouble(pnh, "client_loss_timeout_s");
-    if (!(feedback_period_s_ > 0.0 && feedback_period_s_ <= 10.0)) {
-      docking_settings::ParamReader(pnh).invalid("feedback_rate_hz", "must be in [0.1, inf)");
-    }
-    if (!(client_loss_timeout_s_ >= 0.0 && client_loss_timeout_s_ <= 60.0)) {
-      docking_settings::ParamReader(pnh).invalid("client_loss_timeout_s", "must be in [0, 60] (0: never)");
-    }
+  void startDockServer(ros::NodeHandle& nh) {
     // The client's liveness: an action client subscribes to the server's feedback topic. roscpp shares
     // one publication per topic within a node, so this publisher's connect/disconnect callbacks see the
     // server's feedback subscribers by node name; a publisher notices a subscriber's connection closing
@@ -221,20 +190,8 @@ class PlannerNode {
     dock_server_.registerGoalCallback(boost::bind(&PlannerNode::onGoal, this));
     dock_server_.registerPreemptCallback(boost::bind(&PlannerNode::onPreempt, this));
     dock_server_.start();
-
-    diagnostics_.setHardwareID("none");
-    diagnostics_.add("docking planner", this, &PlannerNode::diagnose);
-    timer_ = nh.createTimer(ros::Duration(1.0 / rate_hz), &PlannerNode::onTimer, this);
   }
 
-  /// Zero velocity on the way out (the base would also stop on its own after its cmd_vel timeout), and
-  /// the running goal, if any, ended.
-  void shutdown() {
-    endGoal(DockingOutcome::kShutdown, "the planner is shutting down");
-    cmd_pub_.publish(geometry_msgs::Twist());
-  }
-
- private:
   // IDLE with no target; a running docking ends as cancelled.
   bool onReset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
     endGoal(DockingOutcome::kCancelled, "the planner was reset (~reset service)");
@@ -297,7 +254,7 @@ class PlannerNode {
 
   void restampIfFuture(actionlib_msgs::GoalID* id, const char* what, const std::string& publisher) {
     const double ahead_s = id->stamp.toSec() - ros::Time::now().toSec();
-    if (id->stamp.isZero() || ahead_s <= planner_.config().stamp_limits.max_future_s) return;
+    if (id->stamp.isZero() || ahead_s <= stampLimits(planner_.config()).max_future_s) return;
     ++restamped_ids_;
     last_restamped_ = std::string(what) + " '" + id->id + "' from " + publisher + ", stamped " +
                       std::to_string(ahead_s) + " s ahead";
@@ -338,7 +295,7 @@ class PlannerNode {
   }
 
   // Reports the running goal: its end when the core ended the docking this cycle, otherwise feedback
-  // at feedback_rate_hz; and ends it when no client listens any more.
+  // at kFeedbackRateHz; and ends it when no client listens any more.
   void serveGoal(double now) {
     if (!dock_server_.isActive()) return;
     if (last_.outcome) {
@@ -423,7 +380,7 @@ class PlannerNode {
   /// A stamp outside [now - max_stamp_age_s, now + max_future_stamp_s] (or not finite): the message is
   /// recorded as dropped and true is returned.
   bool stampRefused(const char* what, const std::string& publisher, double stamp_s, double now_s) {
-    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, planner_.config().stamp_limits);
+    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, stampLimits(planner_.config()));
     if (stamp == docking_msgs::checks::StampProblem::kNone) return false;
     recordDrop(what, publisher, docking_msgs::checks::stampProblemName(stamp),
                "stamp " + std::to_string(stamp_s - now_s) + " s from now");
@@ -471,7 +428,7 @@ class PlannerNode {
       ROS_WARN_THROTTLE(5.0, "planner: odometry sample not kept (not finite, or stamp not after the last one)");
     }
     // An estimate that waited for odometry at its stamp can be placed now.
-    if (!pending_.empty() && processPending() && update_on_estimate_) runCycle(last_placed_stamp_);
+    if (!pending_.empty() && processPending()) runCycle(last_placed_stamp_);
   }
 
   void onEstimate(const docking_msgs::TargetEstimateConstPtr& msg, const std::string& publisher) {
@@ -494,7 +451,7 @@ class PlannerNode {
     pending_.push_back(msg);
     // A fresh estimate is acted on at once rather than at the next timer tick: that tick would add up
     // to one period to the image-to-cmd_vel latency.
-    if (processPending() && update_on_estimate_) runCycle(last_placed_stamp_);
+    if (processPending()) runCycle(last_placed_stamp_);
   }
 
   // Estimates wait here until the camera can be placed in odom at their stamp (placeCamera), for at
@@ -603,32 +560,7 @@ class PlannerNode {
           odom_from_camera.rotation() * (Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized() * Eigen::Vector3d::UnitX());
       o.pose.yaw = std::atan2(axis.y(), axis.x());
     }
-    if (use_estimate_covariance_) {
-      // Rotate the camera-frame covariance into odom; the planner's filter takes one sigma for x and y
-      // (the larger of the two, to stay on the safe side) and one for yaw. Variances of 1e6 and more
-      // mean "not estimated" (TargetEstimate): the configured default is used then (sigma 0).
-      Eigen::Matrix3d position_cov, rotation_cov;
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) {
-          position_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>(r * 6 + c)];
-          rotation_cov(r, c) = msg.pose.covariance[static_cast<std::size_t>((r + 3) * 6 + c + 3)];
-        }
-      }
-      const Eigen::Matrix3d rot = odom_from_camera.rotation();
-      const Eigen::Matrix3d position_odom = rot * position_cov * rot.transpose();
-      const Eigen::Matrix3d rotation_odom = rot * rotation_cov * rot.transpose();
-      const double xy_var = std::max(position_odom(0, 0), position_odom(1, 1));
-      const double yaw_var = rotation_odom(2, 2);
-      if (std::isfinite(xy_var) && xy_var > 0.0 && xy_var < 1e5) o.position_sigma_m = std::sqrt(xy_var);
-      if (std::isfinite(yaw_var) && yaw_var > 0.0 && yaw_var < 1e5) o.yaw_sigma_rad = std::sqrt(yaw_var);
-    }
-    if (msg.twist_valid && odometry_) {
-      // The twist is relative to the camera, which turns with base_link: add the chaser's own yaw rate.
-      const auto& w = msg.twist.twist.angular;
-      const Eigen::Vector3d relative = odom_from_camera.rotation() * Eigen::Vector3d(w.x, w.y, w.z);
-      o.yaw_rate_valid = true;
-      o.yaw_rate = relative.z() + odometry_->twist.wz;
-    }
+    takeMeasurementNoise(msg, odom_from_camera.rotation(), &o);
     return o;
   }
 
@@ -759,8 +691,6 @@ class PlannerNode {
   DockingPlanner planner_;
   std::string odom_frame_, base_frame_;
   double tf_wait_s_{0.2};
-  bool update_on_estimate_{true};
-  bool use_estimate_covariance_{true};
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   diagnostic_updater::Updater diagnostics_;
@@ -815,7 +745,7 @@ int main(int argc, char** argv) {
   const int exit_code = docking_settings::runNode([] {
     ros::NodeHandle nh;
     ros::NodeHandle pnh("~");
-    docking_planner::PlannerNode node(nh, pnh);
+    docking_planner::PlannerNode node(nh, pnh, docking_planner::loadSettings(pnh));
     while (ros::ok() && !docking_planner::g_stop_requested) {
       ros::spinOnce();
       ros::WallDuration(0.002).sleep();

@@ -27,6 +27,7 @@ import unittest
 import actionlib
 import rospy
 import rostest
+from docking_settings.declarations import Declaration
 from actionlib_msgs.msg import GoalStatus
 from docking_msgs.msg import DockAction, DockGoal, DockResult, DockingState, TargetEstimate
 from geometry_msgs.msg import Twist
@@ -36,6 +37,12 @@ from sensor_msgs.msg import Image, JointState
 PKG = "docking_planner"
 WORKSPACE = pathlib.Path(__file__).resolve().parents[4]
 STOPPED_RAD_S = 0.5  # a wheel slower than this (1.2 cm/s at the rim) counts as stopped
+
+
+def planner_setting(key):
+    """The planner's value in force: its parameter when config/planner.yaml sets it, else its declared default."""
+    declaration = Declaration(pathlib.Path(__file__).resolve().parents[2] / "settings" / "planner.yaml")
+    return rospy.get_param("/planner/" + key, declaration.settings[key].default)
 
 
 class RobotBench(unittest.TestCase):
@@ -174,7 +181,7 @@ class RobotBench(unittest.TestCase):
         t_kill = time.time()
         proc.send_signal(signal.SIGKILL)
         proc.wait()
-        loss_timeout = rospy.get_param("/planner/client_loss_timeout_s")
+        loss_timeout = planner_setting("client_loss_timeout_s")
         time.sleep(loss_timeout + 3.0)
         stop_s = self.wheels_stopped_since(t_kill)
         self.assertIsNotNone(stop_s, "the wheels never stopped after the client died")

@@ -3,7 +3,8 @@
 // as one visualization_msgs/MarkerArray at a fixed rate, but only while the marker topic has a
 // subscriber: with none, it subscribes to nothing and does no work. The shapes come from the ROS-free
 // core (docking_viz_core); geometry that is not finite is never published (skipped and counted).
-// Parameters: config/markers.yaml (~), the radii from the planner's own namespace. README.md lists both.
+// Settings: settings/markers.yaml, overridden by config/markers.yaml (~); the radii are the planner's
+// settings, read from its namespace. README.md lists both.
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -13,6 +14,8 @@
 #include <vector>
 
 #include "docking_settings/param_reader.h"
+#include "docking_settings/ros_loader.h"
+#include "docking_planner/planner_settings.h"
 #include "docking_settings/run_node.h"
 #include <docking_msgs/DockingState.h>
 #include <docking_msgs/PlannerGeometry.h>
@@ -68,32 +71,23 @@ constexpr char kCommandNamespace[] = "cmd_vel";
 constexpr char kStateNamespace[] = "state";
 std::string estimateNamespace(std::uint8_t source) { return std::string("estimate/") + sourceStyle(source).key; }
 
-template <typename T>
-T requireParam(const ros::NodeHandle& nh, const std::string& key) {
-  return docking_settings::ParamReader(nh).require<T>(key);
-}
-
+/// The node's settings: the declared defaults with the parameter server's values (config/markers.yaml).
 MarkerConfig loadConfig(const ros::NodeHandle& pnh) {
   MarkerConfig c;
-  c.publish_rate_hz = requireParam<double>(pnh, "publish_rate_hz");
-  c.marker_lifetime_s = requireParam<double>(pnh, "marker_lifetime_s");
-  c.input_timeout_s = requireParam<double>(pnh, "input_timeout_s");
-  c.sigma_scale = requireParam<double>(pnh, "sigma_scale");
-  c.circle_segments = requireParam<int>(pnh, "circle_segments");
-  c.text_height_m = requireParam<double>(pnh, "text_height_m");
-  c.text_offset_z_m = requireParam<double>(pnh, "text_offset_z_m");
-  c.velocity_arrow_s = requireParam<double>(pnh, "velocity_arrow_s");
-  c.axis_arrow_length_m = requireParam<double>(pnh, "axis_arrow_length_m");
-  c.planner_namespace = requireParam<std::string>(pnh, "planner_namespace");
+  docking_settings::loadSettings(pnh, c);
+  docking_settings::warnUnknownKeys(pnh, c);
   docking_settings::ParamReader(pnh).validated([&] { validate(c); });
   return c;
 }
 
-/// The planner's own radii, from its namespace (config/planner.yaml as the planner loads it): no copy.
+/// The planner's own radii, read with the planner's declaration from its namespace (its defaults and
+/// config/planner.yaml's overrides, as the planner loads them): no copy.
 PlannerRadii loadPlannerRadii(const ros::NodeHandle& planner_nh) {
+  docking_planner::PlannerNodeSettings planner;
+  docking_settings::loadSettings(planner_nh, planner);
   PlannerRadii radii;
-  radii.safe_radius_m = requireParam<double>(planner_nh, "safe_radius_m");
-  radii.search_orbit_radius_m = requireParam<double>(planner_nh, "search_orbit_radius_m");
+  radii.safe_radius_m = planner.core.law.safe_radius_m;
+  radii.search_orbit_radius_m = planner.core.search_orbit_radius_m;
   docking_settings::ParamReader(planner_nh).validated([&] { validate(radii); });
   return radii;
 }
