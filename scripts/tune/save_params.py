@@ -33,7 +33,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 LAUNCH_DIR = ROOT / "launch"
 CONFIG_DIR = ROOT / "config"
 sys.path.insert(0, str(ROOT / "src" / "docking_settings" / "src"))
-from docking_settings.declarations import find_declarations  # noqa: E402
+from docking_settings.declarations import declared_defaults  # noqa: E402
 
 # A top-level `key: value` line; the key is a ROS parameter name (no quoting, no nesting).
 TOP_LEVEL_KEY = re.compile(r"^(?P<key>[A-Za-z_][A-Za-z0-9_]*)(?P<colon>[ \t]*:)(?P<rest>.*)$")
@@ -305,14 +305,6 @@ def with_empty_mapping_marker(lines):
     if not marker:
         return lines + ["{}\n"]
     return lines
-
-
-def declared_defaults(path):
-    """{key: declared default} of the node whose declaration claims this YAML; None when none does."""
-    for declaration in find_declarations(ROOT):
-        if any(pathlib.Path(c).name == pathlib.Path(path).name for c in declaration.config):
-            return {key: setting.default for key, setting in declaration.settings.items()}
-    return None
 
 
 def replace_file(path, text):

@@ -20,6 +20,8 @@ import sys
 import yaml
 
 WORKSPACE = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(WORKSPACE / "src" / "docking_settings" / "src"))
+from docking_settings.declarations import declared_defaults  # noqa: E402
 
 # `  key: value  # comment` (block mapping entries only; a flow mapping `{a: 1}` is one value).
 KEY_LINE = re.compile(r"^(?P<indent>[ ]*)(?P<key>[A-Za-z0-9_\-]+)[ ]*:(?P<rest>.*)$")
@@ -96,18 +98,6 @@ def edited_line(line, new_value, dotted_key):
     return text + line[len(body):]
 
 
-def declared_defaults(path):
-    """{key: default} of the settings the declaration claiming the config file `path` declares (empty if
-    none claims it)."""
-    sys.path.insert(0, str(WORKSPACE / "src" / "docking_settings" / "src"))
-    from docking_settings.declarations import find_declarations
-    name = pathlib.Path(path).name
-    for declaration in find_declarations(WORKSPACE):
-        if name in {pathlib.Path(c).name for c in declaration.config}:
-            return {key: setting.default for key, setting in declaration.settings.items()}
-    return {}
-
-
 def added_line(lines, dotted_key, new_value):
     """`lines` with `dotted_key: new_value` appended (an empty-mapping `{}` line dropped)."""
     kept = [line for line in lines if line.strip() != "{}"]
@@ -129,7 +119,7 @@ def set_key(path, dotted_key, new_value):
         index = find_key_line(lines, dotted_key)
     except KeyEditError as err:
         raise KeyEditError("%s: %s" % (path, err))
-    defaults = declared_defaults(path) if index is None else {}
+    defaults = (declared_defaults(path) or {}) if index is None else {}
     if index is None and dotted_key not in defaults:
         raise KeyEditError("%s: no key %s, and no settings declaration declares it (check its spelling and "
                            "nesting; nested keys with dots, e.g. chaser.cameras.ir.xyz_m)" % (path, dotted_key))

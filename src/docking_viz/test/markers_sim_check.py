@@ -11,16 +11,14 @@ target from 1.5 m). Asserts, from the topics alone:
   - no NaN or infinite number in any marker.
 """
 import math
-import os
 import sys
 import time
 import unittest
 
 import rosgraph
-import rospkg
 import rospy
 import rostest
-from docking_settings.declarations import Declaration
+from docking_settings.declarations import declared_defaults
 from docking_msgs.msg import DockingState, PlannerGeometry
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -40,8 +38,7 @@ def subscriptions_of(node):
 
 def planner_setting(key):
     """The planner's value in force: its parameter when config/planner.yaml sets it, else its declared default."""
-    declaration = Declaration(os.path.join(rospkg.RosPack().get_path("docking_planner"), "settings", "planner.yaml"))
-    return rospy.get_param("/planner/" + key, declaration.settings[key].default)
+    return rospy.get_param("/planner/" + key, declared_defaults("planner.yaml")[key])
 
 
 def numbers_of(marker):

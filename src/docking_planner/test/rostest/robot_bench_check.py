@@ -27,7 +27,7 @@ import unittest
 import actionlib
 import rospy
 import rostest
-from docking_settings.declarations import Declaration
+from docking_settings.declarations import declared_defaults
 from actionlib_msgs.msg import GoalStatus
 from docking_msgs.msg import DockAction, DockGoal, DockResult, DockingState, TargetEstimate
 from geometry_msgs.msg import Twist
@@ -41,8 +41,7 @@ STOPPED_RAD_S = 0.5  # a wheel slower than this (1.2 cm/s at the rim) counts as 
 
 def planner_setting(key):
     """The planner's value in force: its parameter when config/planner.yaml sets it, else its declared default."""
-    declaration = Declaration(pathlib.Path(__file__).resolve().parents[2] / "settings" / "planner.yaml")
-    return rospy.get_param("/planner/" + key, declaration.settings[key].default)
+    return rospy.get_param("/planner/" + key, declared_defaults("planner.yaml")[key])
 
 
 class RobotBench(unittest.TestCase):

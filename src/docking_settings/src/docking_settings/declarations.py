@@ -252,17 +252,21 @@ def flatten(mapping, prefix=""):
     return out
 
 
-def effective_values(config_file):
-    """What a node reads from a shipped (or copied) config file: its declaration's defaults with the file's
-    overrides on top, keyed as the loader reads them. For a script that needs one value of a node's settings
-    (e.g. a camera's rate_hz) from a configuration folder. The declaration is the one that claims a file of
-    this name; a file no declaration claims is read as it is."""
-    config_file = pathlib.Path(config_file)
+def declared_defaults(config_file):
+    """{key: declared default} of the node whose declaration claims a config file of this name (the shipped
+    one or a copy; keyed as the loader reads them); None when no declaration claims it."""
+    name = pathlib.Path(config_file).name
     workspace = pathlib.Path(__file__).resolve().parents[4]
-    values = {}
     for declaration in find_declarations(workspace):
-        if config_file.name in {pathlib.Path(c).name for c in declaration.config}:
-            values = {key: setting.default for key, setting in declaration.settings.items()}
-            break
-    values.update(flatten(yaml.safe_load(config_file.read_text()) or {}))
+        if name in {pathlib.Path(c).name for c in declaration.config}:
+            return {key: setting.default for key, setting in declaration.settings.items()}
+    return None
+
+
+def effective_values(config_file):
+    """What a node reads from a config file: its declaration's defaults with the file's overrides on top, keyed
+    as the loader reads them. For a script that needs one value of a node's settings (e.g. a camera's rate_hz)
+    from a configuration folder. A file no declaration claims is read as it is."""
+    values = dict(declared_defaults(config_file) or {})
+    values.update(flatten(yaml.safe_load(pathlib.Path(config_file).read_text()) or {}))
     return values
