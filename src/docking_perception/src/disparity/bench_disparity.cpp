@@ -44,6 +44,7 @@
 #include "docking_perception/disparity/disparity_detector.h"
 #include "docking_perception/disparity/face_appearance.h"
 #include "docking_perception/mono/target_model.h"
+#include "docking_msgs/thread_cpu_time.h"
 #include "synthetic_stereo.h"
 
 namespace {
@@ -253,13 +254,6 @@ struct FarStage {
   cv::Rect valid_region;
 };
 
-// CPU time of this thread: on a shared machine, wall time measures the other users too.
-double threadCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
 /// Per stage, the CPU ms of each timed frame; the last frame's detection and appearance; wall ms per frame.
 struct BenchRun {
   std::map<std::string, std::vector<double>> samples;
@@ -271,6 +265,8 @@ struct BenchRun {
 /// Three untimed warm-up frames, then `frames` timed ones: rectify, disparity, detection (with the
 /// appearance check when enabled).
 BenchRun timeFrames(const Options& o, const BenchInputs& in, FarStage& stage) {
+  // CPU time of this thread: on a shared machine, wall time measures the other users too.
+  using docking_msgs::threadCpuMs;
   auto ms_since = [](double start_ms) { return threadCpuMs() - start_ms; };
   const auto wall_start = std::chrono::steady_clock::now();
   BenchRun run;
