@@ -185,69 +185,76 @@ EncodeResult encode(const ImageView& image, const EncodeSettings& settings) {
   return result;
 }
 
-DecodeResult decode(const std::string& format, const std::uint8_t* data, std::size_t size) {
-  if (data == nullptr || size == 0) return decodeFailure(DecodeError::kEmpty, "no data");
-  if (size > static_cast<std::size_t>(INT_MAX))
-    return decodeFailure(DecodeError::kCorrupt, "stream of " + std::to_string(size) + " bytes is too large");
+namespace {
 
-  // "<encoding>; <jpeg|png> compressed [target]", or the old bare "jpeg" / "png" (encoding then follows
-  // from the decoded channels).
-  std::string encoding;
-  std::string scheme;
+// decode's steps: each returns a failed DecodeResult, or an ok one to go on.
+
+/// "<encoding>; <jpeg|png> compressed [target]", or the old bare "jpeg" / "png" (encoding then follows
+/// from the decoded channels): the encoding (may be empty), the codec and its layout.
+DecodeResult parseFormat(const std::string& format, std::string* encoding, std::string* scheme, Codec* codec,
+                         Layout* layout) {
   const auto semicolon = format.find(';');
   if (semicolon == std::string::npos) {
-    scheme = trim(format);
+    *scheme = trim(format);
   } else {
-    encoding = trim(format.substr(0, semicolon));
+    *encoding = trim(format.substr(0, semicolon));
     const std::string rest = trim(format.substr(semicolon + 1));
     if (startsWith(rest, "compressedDepth"))
       return decodeFailure(DecodeError::kUnsupportedEncoding, "compressedDepth images are not supported");
-    if (startsWith(rest, "jpeg compressed")) scheme = "jpeg";
-    else if (startsWith(rest, "png compressed")) scheme = "png";
+    if (startsWith(rest, "jpeg compressed")) *scheme = "jpeg";
+    else if (startsWith(rest, "png compressed")) *scheme = "png";
     else return decodeFailure(DecodeError::kBadFormat, "format '" + format + "' is not '<encoding>; jpeg|png compressed ...'");
   }
-  Codec codec;
-  if (!parseCodec(scheme, &codec))
+  if (!parseCodec(*scheme, codec))
     return decodeFailure(DecodeError::kBadFormat, "format '" + format + "' names no jpeg or png stream");
-  Layout layout;
-  if (!encoding.empty()) {
-    layout = layoutOf(encoding);
-    if (layout.channels == 0)
+  if (!encoding->empty()) {
+    *layout = layoutOf(*encoding);
+    if (layout->channels == 0)
       return decodeFailure(DecodeError::kUnsupportedEncoding,
-                           "encoding '" + encoding + "' is not supported (mono8, bgr8, rgb8, mono16)");
+                           "encoding '" + *encoding + "' is not supported (mono8, bgr8, rgb8, mono16)");
   }
+  return {};
+}
+
+/// The complete stream through cv::imdecode.
+DecodeResult decodeStream(Codec codec, const std::string& scheme, const std::uint8_t* data, std::size_t size,
+                          cv::Mat* decoded) {
   std::string reason;
   if (!looksComplete(codec, data, size, &reason)) return decodeFailure(DecodeError::kCorrupt, reason);
-
-  cv::Mat decoded;
   try {
     const cv::Mat buffer(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data));
-    decoded = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
+    *decoded = cv::imdecode(buffer, cv::IMREAD_UNCHANGED);
   } catch (const std::exception& e) {
     return decodeFailure(DecodeError::kCorrupt, std::string("cv::imdecode: ") + e.what());
   } catch (...) {
     return decodeFailure(DecodeError::kCorrupt, "cv::imdecode failed");
   }
-  if (decoded.empty()) return decodeFailure(DecodeError::kCorrupt, std::string(scheme) + " stream does not decode");
+  if (decoded->empty()) return decodeFailure(DecodeError::kCorrupt, std::string(scheme) + " stream does not decode");
+  return {};
+}
 
-  if (encoding.empty()) {
-    if (decoded.type() == CV_8UC1) encoding = "mono8";
-    else if (decoded.type() == CV_8UC3) encoding = "bgr8";
-    else if (decoded.type() == CV_16UC1) encoding = "mono16";
+/// The decoded image against the encoding: named by the format, or (bare format) from its channels.
+DecodeResult checkDecodedShape(const cv::Mat& decoded, std::string* encoding, Layout* layout) {
+  if (encoding->empty()) {
+    if (decoded.type() == CV_8UC1) *encoding = "mono8";
+    else if (decoded.type() == CV_8UC3) *encoding = "bgr8";
+    else if (decoded.type() == CV_16UC1) *encoding = "mono16";
     else return decodeFailure(DecodeError::kUnsupportedEncoding, "decoded image has " +
                                   std::to_string(decoded.channels()) + " channels of " +
                                   std::to_string(decoded.elemSize1() * 8) + " bits");
-    layout = layoutOf(encoding);
+    *layout = layoutOf(*encoding);
   }
-  const int expected = CV_MAKETYPE(layout.depth_bytes == 1 ? CV_8U : CV_16U, layout.channels);
+  const int expected = CV_MAKETYPE(layout->depth_bytes == 1 ? CV_8U : CV_16U, layout->channels);
   if (decoded.type() != expected)
     return decodeFailure(DecodeError::kShapeMismatch,
-                         "format says " + encoding + " but the stream decodes to " + std::to_string(decoded.channels()) +
+                         "format says " + *encoding + " but the stream decodes to " + std::to_string(decoded.channels()) +
                              " channel(s) of " + std::to_string(decoded.elemSize1() * 8) + " bits");
-  if (layout.swap_rb) cv::cvtColor(decoded, decoded, cv::COLOR_BGR2RGB);
+  return {};
+}
 
-  DecodeResult result;
-  Image& out = result.image;
+/// The decoded pixels as an Image (rows packed).
+Image toImage(const cv::Mat& decoded, const std::string& encoding) {
+  Image out;
   out.width = decoded.cols;
   out.height = decoded.rows;
   out.encoding = encoding;
@@ -255,6 +262,28 @@ DecodeResult decode(const std::string& format, const std::uint8_t* data, std::si
   out.data.resize(out.step * static_cast<std::size_t>(decoded.rows));
   for (int r = 0; r < decoded.rows; ++r)
     std::memcpy(out.data.data() + out.step * static_cast<std::size_t>(r), decoded.ptr(r), out.step);
+  return out;
+}
+
+}  // namespace
+
+DecodeResult decode(const std::string& format, const std::uint8_t* data, std::size_t size) {
+  if (data == nullptr || size == 0) return decodeFailure(DecodeError::kEmpty, "no data");
+  if (size > static_cast<std::size_t>(INT_MAX))
+    return decodeFailure(DecodeError::kCorrupt, "stream of " + std::to_string(size) + " bytes is too large");
+  std::string encoding, scheme;
+  Codec codec;
+  Layout layout;
+  DecodeResult step = parseFormat(format, &encoding, &scheme, &codec, &layout);
+  if (!step.ok()) return step;
+  cv::Mat decoded;
+  step = decodeStream(codec, scheme, data, size, &decoded);
+  if (!step.ok()) return step;
+  step = checkDecodedShape(decoded, &encoding, &layout);
+  if (!step.ok()) return step;
+  if (layout.swap_rb) cv::cvtColor(decoded, decoded, cv::COLOR_BGR2RGB);
+  DecodeResult result;
+  result.image = toImage(decoded, encoding);
   return result;
 }
 

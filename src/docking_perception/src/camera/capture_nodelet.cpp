@@ -89,50 +89,57 @@ void CaptureNodelet::onInit() {
     NODELET_FATAL("%s: not starting", e.what());
     throw;  // nodelet::Loader drops the nodelet; the standalone executable parks (docking_settings::runNode)
   }
-
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
   std::vector<camera::SourceSpec> sources;
   std::string hardware_id;
   for (Channel& channel : channels_) {
-    // camera_info_manager lives in the camera's namespace (stereo/left), where cameracalibrator.py calls
-    // its set_camera_info service.
-    const std::string camera_ns = ros::names::parentNamespace(channel.defaults.image_topic);
-    ros::NodeHandle camera_nh(nh, camera_ns);
-    channel.info_manager = std::make_shared<camera_info_manager::CameraInfoManager>(
-        camera_nh, channel.defaults.camera_name);
-    if (!channel.calibration_url.empty() && !channel.info_manager->validateURL(channel.calibration_url)) {
-      const std::string param = getPrivateNodeHandle().resolveName(channel.defaults.param_prefix + "camera_info_url");
-      NODELET_FATAL("parameter %s: '%s' is not a valid calibration URL (file:///path.yaml): not starting",
-                    param.c_str(), channel.calibration_url.c_str());
-      throw docking_settings::ConfigError(param, docking_settings::ConfigProblem::kInvalid, "not a calibration URL");
-    }
-    channel.info_manager->loadCameraInfo(channel.calibration_url);
-    channel.calibration_file = channel.calibration_url.empty()
-                                   ? "(camera_info_manager default for " + channel.defaults.camera_name + ")"
-                                   : camera::calibrationFileFromUrl(channel.calibration_url);
-    const std::string& calibration_file = channel.calibration_file;
-    if (!channel.info_manager->isCalibrated()) {
-      NODELET_WARN("%s: no calibration loaded from '%s': publishing an uncalibrated camera_info (see the README "
-                   "to calibrate)", channel.defaults.camera_name.c_str(), calibration_file.c_str());
-    } else {
-      const auto info = channel.info_manager->getCameraInfo();
-      const std::string problem = camera::calibrationSizeProblem(
-          calibration_file, static_cast<int>(info.width), static_cast<int>(info.height), settings_.width,
-          settings_.height, "the configured resolution (~width, ~height)");
-      if (!problem.empty() && channel.source.isLiveDevice()) {
-        NODELET_ERROR("%s: %s", getName().c_str(), problem.c_str());
-      }
-    }
+    loadCalibration(channel);
     channel.publisher = image_transport_->advertiseCamera(channel.defaults.image_topic, 1);
     sources.push_back(channel.source);
     hardware_id += (hardware_id.empty() ? "" : " + ") + channel.source.text;
     NODELET_INFO("%s: %s -> %s (frame %s, calibration %s)", channel.defaults.camera_name.c_str(),
                  channel.source.describe().c_str(), nh.resolveName(channel.defaults.image_topic).c_str(),
-                 channel.frame_id.c_str(), calibration_file.c_str());
+                 channel.frame_id.c_str(), channel.calibration_file.c_str());
   }
   rig_ = std::make_unique<camera::CaptureRig>(sources, settings_, backoff_);
+  startDiagnostics(hardware_id);
+  capture_thread_ = std::thread(&CaptureNodelet::captureLoop, this);
+}
 
-  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, getPrivateNodeHandle(), getName());
+void CaptureNodelet::loadCalibration(Channel& channel) {
+  // camera_info_manager lives in the camera's namespace (stereo/left), where cameracalibrator.py calls
+  // its set_camera_info service.
+  const std::string camera_ns = ros::names::parentNamespace(channel.defaults.image_topic);
+  ros::NodeHandle camera_nh(getNodeHandle(), camera_ns);
+  channel.info_manager = std::make_shared<camera_info_manager::CameraInfoManager>(
+      camera_nh, channel.defaults.camera_name);
+  if (!channel.calibration_url.empty() && !channel.info_manager->validateURL(channel.calibration_url)) {
+    const std::string param = getPrivateNodeHandle().resolveName(channel.defaults.param_prefix + "camera_info_url");
+    NODELET_FATAL("parameter %s: '%s' is not a valid calibration URL (file:///path.yaml): not starting",
+                  param.c_str(), channel.calibration_url.c_str());
+    throw docking_settings::ConfigError(param, docking_settings::ConfigProblem::kInvalid, "not a calibration URL");
+  }
+  channel.info_manager->loadCameraInfo(channel.calibration_url);
+  channel.calibration_file = channel.calibration_url.empty()
+                                 ? "(camera_info_manager default for " + channel.defaults.camera_name + ")"
+                                 : camera::calibrationFileFromUrl(channel.calibration_url);
+  const std::string& calibration_file = channel.calibration_file;
+  if (!channel.info_manager->isCalibrated()) {
+    NODELET_WARN("%s: no calibration loaded from '%s': publishing an uncalibrated camera_info (see the README "
+                 "to calibrate)", channel.defaults.camera_name.c_str(), calibration_file.c_str());
+  } else {
+    const auto info = channel.info_manager->getCameraInfo();
+    const std::string problem = camera::calibrationSizeProblem(
+        calibration_file, static_cast<int>(info.width), static_cast<int>(info.height), settings_.width,
+        settings_.height, "the configured resolution (~width, ~height)");
+    if (!problem.empty() && channel.source.isLiveDevice()) {
+      NODELET_ERROR("%s: %s", getName().c_str(), problem.c_str());
+    }
+  }
+}
+
+void CaptureNodelet::startDiagnostics(const std::string& hardware_id) {
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(), getPrivateNodeHandle(), getName());
   diagnostics_->setHardwareID(hardware_id);
   diagnostics_->add(docking_msgs::diagnostics::kCameraCapture, this, &CaptureNodelet::diagnoseCapture);
   min_rate_hz_ = rate_hz_;
@@ -140,8 +147,6 @@ void CaptureNodelet::onInit() {
   publish_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
       diagnostic_updater::FrequencyStatusParam(&min_rate_hz_, &max_rate_hz_, rate_tolerance_, 10), "publishing rate");
   diagnostics_->add(*publish_rate_);
-
-  capture_thread_ = std::thread(&CaptureNodelet::captureLoop, this);
 }
 
 void CaptureNodelet::captureLoop() {

@@ -61,6 +61,10 @@ class CaptureNodelet : public nodelet::Nodelet {
   void readParameters();
   void readChannel(const docking_settings::ParamReader& reader, const camera::ChannelSettings& settings,
                    Channel& channel);
+  /// The channel's camera_info_manager (in the camera's namespace) with its calibration loaded and checked.
+  void loadCalibration(Channel& channel);
+  /// The capture status and the publishing rate on /diagnostics.
+  void startDiagnostics(const std::string& hardware_id);
   void captureLoop();
   void handleFrames(const std::vector<cv::Mat>& frames, const ros::Time& stamp);
   void diagnoseCapture(diagnostic_updater::DiagnosticStatusWrapper& status);

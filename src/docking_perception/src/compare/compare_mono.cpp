@@ -155,127 +155,162 @@ int usage() {
   return 2;
 }
 
+struct Arguments {
+  std::string seq_dir, tagged_dir, target_yaml, tagged_yaml, mono_yaml, out_path;
+  double decimate = 2.0;
+};
+
+/// False on a malformed command line (then usage()).
+bool parseArguments(int argc, char** argv, Arguments* a) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (i + 1 >= argc) return false;
+    const std::string value = argv[++i];
+    if (arg == "--sequence") a->seq_dir = value;
+    else if (arg == "--tagged-sequence") a->tagged_dir = value;
+    else if (arg == "--target") a->target_yaml = value;
+    else if (arg == "--tagged-target") a->tagged_yaml = value;
+    else if (arg == "--mono-config") a->mono_yaml = value;
+    else if (arg == "--out") a->out_path = value;
+    else if (arg == "--apriltag-decimate") a->decimate = std::stod(value);
+    else return false;
+  }
+  if (a->seq_dir.empty() || a->target_yaml.empty() || a->mono_yaml.empty() || a->out_path.empty()) return false;
+  return a->tagged_dir.empty() == a->tagged_yaml.empty();
+}
+
+/// Medians of the sequence's truth: range, the face's angle off the line of sight, speeds.
+struct TruthSummary {
+  double range_m, off_axis_deg, speed_m_s, angular_speed_deg_s;
+};
+
+TruthSummary summarizeTruth(const std::vector<cmp::SequenceFrame>& truth) {
+  std::vector<double> range;
+  for (const auto& f : truth) range.push_back(f.position_m.norm());
+  // Angle between the face normal (x of `target`) and the line of sight back to the camera.
+  std::vector<double> off_axis;
+  for (const auto& f : truth)
+    off_axis.push_back(std::acos(std::clamp(f.rotation.col(0).dot(-f.position_m.normalized()), -1.0, 1.0)) *
+                       180.0 / M_PI);
+  std::vector<double> true_v, true_w;
+  for (const auto& f : truth) {
+    true_v.push_back(f.linear_m_s.norm());
+    true_w.push_back(f.angular_rad_s.norm() * 180.0 / M_PI);
+  }
+  return {cmp::percentile(range, 0.5), cmp::percentile(off_axis, 0.5), cmp::percentile(true_v, 0.5),
+          cmp::percentile(true_w, 0.5)};
+}
+
+/// Our estimator with `solver` over the untagged frames, tracking as the node runs.
+std::vector<Outcome> runOurs(dp::mono::PoseSolverType solver, const dp::mono::TargetModel& model,
+                             const cmp::Sequence& seq, const dp::mono::MonoPoseParams& params,
+                             const std::vector<cv::Mat>& images) {
+  dp::mono::MonoPoseParams p = params;
+  p.solver = dp::mono::toString(solver);
+  dp::mono::MonoPoseEstimator estimator(model, seq.camera, p);
+  std::vector<Outcome> out;
+  for (std::size_t i = 0; i < seq.frames.size(); ++i) {
+    const dp::mono::MonoPoseResult r = estimator.process(images[i], seq.frames[i].stamp_s);
+    Outcome o;
+    o.valid = r.valid;
+    o.rotation = r.pose.rotation;
+    o.position = r.pose.translation;
+    o.ms = r.processing_time_ms;
+    o.status = r.status;
+    o.filter = fromTwist(r.twist_filter);
+    o.frame_difference = fromTwist(r.twist_frame_difference);
+    out.push_back(o);
+  }
+  return out;
+}
+
+/// AprilTag on the tagged frames (then tag -> target), velocity by frame differences.
+std::vector<Outcome> runAprilTag(const cmp::Sequence& tagged, const Arguments& a, double max_gap_s) {
+  const cmp::TagSpec spec = cmp::loadTagSpec(a.tagged_yaml);
+  cmp::TagDetector detector(spec, 1, a.decimate);
+  dp::mono::FrameDifferenceVelocity difference(max_gap_s);
+  std::vector<Outcome> out;
+  for (std::size_t i = 0; i < tagged.frames.size(); ++i) {
+    const cv::Mat image = readGray(tagged.frames[i].image_path);
+    const cmp::TagResult r = detector.detect(image, tagged.camera);
+    Outcome o;
+    o.valid = r.found;
+    o.rotation = r.camera_T_target.linear();
+    o.position = r.camera_T_target.translation();
+    o.ms = r.processing_time_ms;
+    o.status = r.status;
+    if (r.found) {
+      dp::mono::PoseWithCovariance pose;
+      pose.rotation = o.rotation;
+      pose.translation = o.position;
+      pose.covariance = dp::mono::Matrix6d::Identity() * 1e-6;  // apriltag gives none; unused for the error
+      std::string reason;
+      difference.update(tagged.frames[i].stamp_s, pose, &reason);
+      o.frame_difference = fromTwist(difference.twist());
+    }
+    out.push_back(o);
+  }
+  return out;
+}
+
+/// The report: the sequence, its truth summary, the settings, then each method's JSON.
+std::string reportJson(const cmp::Sequence& seq, const TruthSummary& t, const Arguments& a,
+                       const std::string& methods) {
+  std::ostringstream json;
+  json << "{\n  \"scenario\": \"" << seq.scenario << "\", \"frames\": " << seq.frames.size()
+       << ", \"dt_s\": " << num(seq.dt_s) << ",\n  \"range_m\": " << num(t.range_m)
+       << ", \"face_off_axis_deg\": " << num(t.off_axis_deg) << ", \"true_speed_m_s\": " << num(t.speed_m_s)
+       << ", \"true_angular_speed_deg_s\": " << num(t.angular_speed_deg_s) << ",\n  \"untagged_frames\": \""
+       << a.seq_dir << "\", \"tagged_frames\": \"" << a.tagged_dir << "\""
+       << ",\n  \"apriltag_quad_decimate\": " << num(a.decimate) << ", \"threads\": 1"
+       << ",\n  \"note\": \"ours (paper_5point, pnp; tracking as the node runs) on the untagged target, apriltag "
+          "(tag36h11, estimate_tag_pose, then tag -> target) on the tagged variant rendered with the same poses "
+          "and noise seed; velocity errors over frames with a valid pose and velocity; ms = thread CPU time\""
+       << ",\n  \"methods\": {\n" << methods << "\n  }\n}\n";
+  return json.str();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string seq_dir, tagged_dir, target_yaml, tagged_yaml, mono_yaml, out_path;
-  double decimate = 2.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (i + 1 >= argc) return usage();
-    const std::string value = argv[++i];
-    if (arg == "--sequence") seq_dir = value;
-    else if (arg == "--tagged-sequence") tagged_dir = value;
-    else if (arg == "--target") target_yaml = value;
-    else if (arg == "--tagged-target") tagged_yaml = value;
-    else if (arg == "--mono-config") mono_yaml = value;
-    else if (arg == "--out") out_path = value;
-    else if (arg == "--apriltag-decimate") decimate = std::stod(value);
-    else return usage();
-  }
-  if (seq_dir.empty() || target_yaml.empty() || mono_yaml.empty() || out_path.empty()) return usage();
-  if (tagged_dir.empty() != tagged_yaml.empty()) return usage();
+  Arguments a;
+  if (!parseArguments(argc, argv, &a)) return usage();
   cv::setNumThreads(1);  // one core, as the node runs
   try {
-    const cmp::Sequence seq = cmp::readSequence(seq_dir);
+    const cmp::Sequence seq = cmp::readSequence(a.seq_dir);
     const std::vector<cmp::SequenceFrame>& truth = seq.frames;
     std::vector<cv::Mat> images;
     for (const auto& f : truth) images.push_back(readGray(f.image_path));
-
     // The shipped configuration (the declared defaults with the file's overrides, checked).
     const dp::mono::MonoPoseParams params =
-        docking_settings::shippedSettings<dp::mono::MonoPoseNodeSettings>(mono_yaml).core;
-    const dp::mono::TargetModel model = dp::mono::TargetModel::loadFromYaml(target_yaml);
-
-    std::vector<double> range;
-    for (const auto& f : truth) range.push_back(f.position_m.norm());
-    // Angle between the face normal (x of `target`) and the line of sight back to the camera.
-    std::vector<double> off_axis;
-    for (const auto& f : truth)
-      off_axis.push_back(std::acos(std::clamp(f.rotation.col(0).dot(-f.position_m.normalized()), -1.0, 1.0)) *
-                         180.0 / M_PI);
-    std::vector<double> true_v, true_w;
-    for (const auto& f : truth) {
-      true_v.push_back(f.linear_m_s.norm());
-      true_w.push_back(f.angular_rad_s.norm() * 180.0 / M_PI);
-    }
+        docking_settings::shippedSettings<dp::mono::MonoPoseNodeSettings>(a.mono_yaml).core;
+    const dp::mono::TargetModel model = dp::mono::TargetModel::loadFromYaml(a.target_yaml);
+    const TruthSummary summary = summarizeTruth(truth);
     std::printf("%s: %zu frames, range %.3f m, face %.1f deg off the line of sight, |v| %.4f m/s, |w| %.2f deg/s\n",
-                seq.scenario.c_str(), truth.size(), cmp::percentile(range, 0.5), cmp::percentile(off_axis, 0.5),
-                cmp::percentile(true_v, 0.5), cmp::percentile(true_w, 0.5));
+                seq.scenario.c_str(), truth.size(), summary.range_m, summary.off_axis_deg, summary.speed_m_s,
+                summary.angular_speed_deg_s);
 
     std::ostringstream methods;
     bool first = true;
     for (const dp::mono::PoseSolverType solver : {dp::mono::PoseSolverType::kPaperFivePoint, dp::mono::PoseSolverType::kPnp}) {
-      dp::mono::MonoPoseParams p = params;
-      p.solver = dp::mono::toString(solver);
-      dp::mono::MonoPoseEstimator estimator(model, seq.camera, p);
-      std::vector<Outcome> out;
-      for (std::size_t i = 0; i < truth.size(); ++i) {
-        const dp::mono::MonoPoseResult r = estimator.process(images[i], truth[i].stamp_s);
-        Outcome o;
-        o.valid = r.valid;
-        o.rotation = r.pose.rotation;
-        o.position = r.pose.translation;
-        o.ms = r.processing_time_ms;
-        o.status = r.status;
-        o.filter = fromTwist(r.twist_filter);
-        o.frame_difference = fromTwist(r.twist_frame_difference);
-        out.push_back(o);
-      }
+      const std::vector<Outcome> out = runOurs(solver, model, seq, params, images);
       methods << (first ? "" : ",\n") << methodJson(dp::mono::toString(solver), "untagged", out, truth, true, true);
       first = false;
     }
-
-    if (!tagged_dir.empty()) {
-      const cmp::Sequence tagged = cmp::readSequence(tagged_dir);
+    if (!a.tagged_dir.empty()) {
+      const cmp::Sequence tagged = cmp::readSequence(a.tagged_dir);
       std::string error;
       if (!cmp::sameTrajectory(seq, tagged, 1e-9, 1e-9, &error)) {
         std::cerr << "the tagged sequence is not the same trajectory: " << error << "\n";
         return 1;
       }
-      const cmp::TagSpec spec = cmp::loadTagSpec(tagged_yaml);
-      cmp::TagDetector detector(spec, 1, decimate);
-      dp::mono::FrameDifferenceVelocity difference(params.filter.max_gap_s);
-      std::vector<Outcome> out;
-      for (std::size_t i = 0; i < tagged.frames.size(); ++i) {
-        const cv::Mat image = readGray(tagged.frames[i].image_path);
-        const cmp::TagResult r = detector.detect(image, tagged.camera);
-        Outcome o;
-        o.valid = r.found;
-        o.rotation = r.camera_T_target.linear();
-        o.position = r.camera_T_target.translation();
-        o.ms = r.processing_time_ms;
-        o.status = r.status;
-        if (r.found) {
-          dp::mono::PoseWithCovariance pose;
-          pose.rotation = o.rotation;
-          pose.translation = o.position;
-          pose.covariance = dp::mono::Matrix6d::Identity() * 1e-6;  // apriltag gives none; unused for the error
-          std::string reason;
-          difference.update(tagged.frames[i].stamp_s, pose, &reason);
-          o.frame_difference = fromTwist(difference.twist());
-        }
-        out.push_back(o);
-      }
+      const std::vector<Outcome> out = runAprilTag(tagged, a, params.filter.max_gap_s);
       methods << ",\n" << methodJson("apriltag", "tagged", out, truth, false, true);
     }
-
-    std::ostringstream json;
-    json << "{\n  \"scenario\": \"" << seq.scenario << "\", \"frames\": " << truth.size()
-         << ", \"dt_s\": " << num(seq.dt_s) << ",\n  \"range_m\": " << num(cmp::percentile(range, 0.5))
-         << ", \"face_off_axis_deg\": " << num(cmp::percentile(off_axis, 0.5))
-         << ", \"true_speed_m_s\": " << num(cmp::percentile(true_v, 0.5))
-         << ", \"true_angular_speed_deg_s\": " << num(cmp::percentile(true_w, 0.5))
-         << ",\n  \"untagged_frames\": \"" << seq_dir << "\", \"tagged_frames\": \"" << tagged_dir << "\""
-         << ",\n  \"apriltag_quad_decimate\": " << num(decimate) << ", \"threads\": 1"
-         << ",\n  \"note\": \"ours (paper_5point, pnp; tracking as the node runs) on the untagged target, apriltag "
-            "(tag36h11, estimate_tag_pose, then tag -> target) on the tagged variant rendered with the same poses "
-            "and noise seed; velocity errors over frames with a valid pose and velocity; ms = thread CPU time\""
-         << ",\n  \"methods\": {\n" << methods.str() << "\n  }\n}\n";
-    std::ofstream file(out_path);
-    file << json.str();
+    std::ofstream file(a.out_path);
+    file << reportJson(seq, summary, a, methods.str());
     if (!file) {
-      std::cerr << "cannot write " << out_path << "\n";
+      std::cerr << "cannot write " << a.out_path << "\n";
       return 1;
     }
   } catch (const std::exception& e) {

@@ -151,62 +151,85 @@ TrialPose StressRenderer::drawPose(const StressCondition& condition, uint64_t se
   }
 }
 
-StressFrame StressRenderer::render(const StressCondition& condition, const TrialPose& pose, uint64_t scene_seed,
-                                   uint64_t frame_seed) const {
-  std::mt19937_64 scene_rng(scene_seed * 104729 + 3);
-  std::mt19937_64 rng(frame_seed * 15485863 + 11);
-  const Eigen::Vector3d normal = pose.rotation.col(0);
-  auto toCamera = [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(pose.rotation * p + pose.translation); };
-  const double range = pose.translation.norm();
+namespace {
 
-  docking_sim::Scene scene;
-  // The face, on a body slightly larger than it (a mockup's front plate).
-  const double w = model_.faceWidth();
-  const double h = model_.faceHeight();
-  docking_sim::Surface plate = surfaceFrom(toCamera({-0.002, -0.6 * w, 0.62 * h}), toCamera({-0.002, 0.6 * w, 0.62 * h}),
-                                           toCamera({-0.002, -0.6 * w, -0.62 * h}));
+using TexturePtr = std::shared_ptr<docking_sim::Texture>;
+
+Eigen::Vector3d toCamera(const TrialPose& pose, const Eigen::Vector3d& p) {
+  return Eigen::Vector3d(pose.rotation * p + pose.translation);
+}
+
+// The face, on a body slightly larger than it (a mockup's front plate); textured in the visible band
+// (when the model has a texture), a dark square in the IR.
+void addTargetFace(const mono::TargetModel& model, const TexturePtr& face_texture, bool infrared,
+                   const TrialPose& pose, docking_sim::Scene* scene) {
+  const double w = model.faceWidth();
+  const double h = model.faceHeight();
+  docking_sim::Surface plate =
+      surfaceFrom(toCamera(pose, {-0.002, -0.6 * w, 0.62 * h}), toCamera(pose, {-0.002, 0.6 * w, 0.62 * h}),
+                  toCamera(pose, {-0.002, -0.6 * w, -0.62 * h}));
   plate.color = cv::Vec3b(150, 150, 155);
-  scene.addSurface(plate);
-  if (!condition.infrared && impl_->face) {
-    const cv::Size ts = model_.textureGray().size();
+  scene->addSurface(plate);
+  if (!infrared && face_texture) {
+    const cv::Size ts = model.textureGray().size();
     docking_sim::Surface face = surfaceFrom(
-        toCamera(model_.texturePixelToPoint({-0.5f, -0.5f})),
-        toCamera(model_.texturePixelToPoint({static_cast<float>(ts.width) - 0.5f, -0.5f})),
-        toCamera(model_.texturePixelToPoint({-0.5f, static_cast<float>(ts.height) - 0.5f})));
-    face.texture = impl_->face;
+        toCamera(pose, model.texturePixelToPoint({-0.5f, -0.5f})),
+        toCamera(pose, model.texturePixelToPoint({static_cast<float>(ts.width) - 0.5f, -0.5f})),
+        toCamera(pose, model.texturePixelToPoint({-0.5f, static_cast<float>(ts.height) - 0.5f})));
+    face.texture = face_texture;
     face.bilinear = true;  // as docking_sim draws the target's face (Surface::bilinear)
     face.color = cv::Vec3b(255, 255, 255);
-    scene.addSurface(face);
+    scene->addSurface(face);
   } else {
-    docking_sim::Surface face = surfaceFrom(toCamera({0, -0.5 * w, 0.5 * h}), toCamera({0, 0.5 * w, 0.5 * h}),
-                                            toCamera({0, -0.5 * w, -0.5 * h}));
+    docking_sim::Surface face = surfaceFrom(toCamera(pose, {0, -0.5 * w, 0.5 * h}),
+                                            toCamera(pose, {0, 0.5 * w, 0.5 * h}),
+                                            toCamera(pose, {0, -0.5 * w, -0.5 * h}));
     face.color = cv::Vec3b(60, 60, 60);
-    scene.addSurface(face);
+    scene->addSurface(face);
   }
-  // Background: a wall 0.4-1.5 m behind the target, and with clutter busy boards beside the target at
-  // about its depth (the hard case: the same apparent scale as the face).
+}
+
+// Background: a wall 0.4-1.5 m behind the target, and with clutter busy boards beside the target at
+// about its depth (the hard case: the same apparent scale as the face).
+void addBackground(const StressCondition& condition, const TrialPose& pose, uint64_t scene_seed,
+                   const std::vector<TexturePtr>& busy, const TexturePtr& plain, std::mt19937_64& scene_rng,
+                   docking_sim::Scene* scene) {
   const double wall_z = pose.translation.z() + uniform(scene_rng, 0.4, 1.5);
   docking_sim::Surface wall = surfaceFrom({-6, -6, wall_z}, {6, -6, wall_z}, {-6, 6, wall_z});
-  wall.texture = condition.clutter ? impl_->busy[scene_seed % impl_->busy.size()] : impl_->plain;
+  wall.texture = condition.clutter ? busy[scene_seed % busy.size()] : plain;
   wall.repeat_u = wall.repeat_v = condition.clutter ? 12.0 : 6.0;
   wall.color = cv::Vec3b(255, 255, 255);
-  scene.addSurface(wall);
-  if (condition.clutter) {
-    for (int i = 0; i < 6; ++i) {
-      // Boards beside the target and a little behind it (never over the face: the card condition does that).
-      const double side = (i % 2 == 0) ? -1.0 : 1.0;
-      const double size = uniform(scene_rng, 0.15, 0.4);
-      const double x = pose.translation.x() + side * (0.2 + 0.5 * size + uniform(scene_rng, 0.0, 0.3));
-      const double y = pose.translation.y() + uniform(scene_rng, -0.4, 0.4);
-      const double z = pose.translation.z() + uniform(scene_rng, 0.08, 0.4);
-      docking_sim::Surface board = surfaceFrom({x - size / 2, y - size / 2, z}, {x + size / 2, y - size / 2, z},
-                                               {x - size / 2, y + size / 2, z});
-      board.texture = impl_->busy[(scene_seed + static_cast<uint64_t>(i) + 1) % impl_->busy.size()];
-      board.repeat_u = board.repeat_v = uniform(scene_rng, 0.5, 1.5);
-      board.color = cv::Vec3b(255, 255, 255);
-      scene.addSurface(board);
-    }
+  scene->addSurface(wall);
+  if (!condition.clutter) return;
+  for (int i = 0; i < 6; ++i) {
+    // Boards beside the target and a little behind it (never over the face: the card condition does that).
+    const double side = (i % 2 == 0) ? -1.0 : 1.0;
+    const double size = uniform(scene_rng, 0.15, 0.4);
+    const double x = pose.translation.x() + side * (0.2 + 0.5 * size + uniform(scene_rng, 0.0, 0.3));
+    const double y = pose.translation.y() + uniform(scene_rng, -0.4, 0.4);
+    const double z = pose.translation.z() + uniform(scene_rng, 0.08, 0.4);
+    docking_sim::Surface board = surfaceFrom({x - size / 2, y - size / 2, z}, {x + size / 2, y - size / 2, z},
+                                             {x - size / 2, y + size / 2, z});
+    board.texture = busy[(scene_seed + static_cast<uint64_t>(i) + 1) % busy.size()];
+    board.repeat_u = board.repeat_v = uniform(scene_rng, 0.5, 1.5);
+    board.color = cv::Vec3b(255, 255, 255);
+    scene->addSurface(board);
   }
+}
+
+void addLeds(const mono::TargetModel& model, const TrialPose& pose, docking_sim::Scene* scene) {
+  for (const Eigen::Vector3d& m : model.markers()) {
+    docking_sim::Led led;
+    led.centre = toCamera(pose, m);
+    led.normal = pose.rotation.col(0);
+    led.radius_m = model.ledRadius();
+    scene->addLed(led);
+  }
+}
+
+// The scene through docking_sim's renderer (no noise, no distortion; the harness adds its own), as
+// grey levels in CV_32F.
+cv::Mat renderGray(const StressCondition& condition, uint64_t frame_seed, docking_sim::Scene* scene) {
   docking_sim::LightingScenario light;
   light.visible.noise_sigma = 0.0;
   light.ir.noise_sigma = 0.0;
@@ -219,23 +242,14 @@ StressFrame StressRenderer::render(const StressCondition& condition, const Trial
   ir_effects.blur_sigma_px = 0.8;
   ir_effects.vignetting = 0.0;
   ir_effects.led_radiance = 10.0;  // config/sim.yaml
-  if (condition.infrared) {
-    for (const Eigen::Vector3d& m : model_.markers()) {
-      docking_sim::Led led;
-      led.centre = toCamera(m);
-      led.normal = normal;
-      led.radius_m = model_.ledRadius();
-      scene.addLed(led);
-    }
-  }
-  scene.setLighting(light, Eigen::Vector3d(0.3, 0.4, 1.0), 0.45, visible_effects, ir_effects);
-  scene.update(Eigen::Isometry3d::Identity());
+  scene->setLighting(light, Eigen::Vector3d(0.3, 0.4, 1.0), 0.45, visible_effects, ir_effects);
+  scene->update(Eigen::Isometry3d::Identity());
   docking_sim::RenderOptions options;
   options.distortion = false;
   docking_sim::CameraRenderer renderer(pinholeCalibration(),
                                        condition.infrared ? docking_sim::Band::kInfrared : docking_sim::Band::kVisible,
                                        condition.infrared ? ir_effects : visible_effects, light, frame_seed, options);
-  const cv::Mat& rendered = renderer.render(scene, Eigen::Isometry3d::Identity());
+  const cv::Mat& rendered = renderer.render(*scene, Eigen::Isometry3d::Identity());
   cv::Mat gray;
   if (rendered.channels() == 3) {
     cv::cvtColor(rendered, gray, cv::COLOR_BGR2GRAY);
@@ -244,85 +258,122 @@ StressFrame StressRenderer::render(const StressCondition& condition, const Trial
   }
   cv::Mat image;
   gray.convertTo(image, CV_32F);
+  return image;
+}
 
-  // Scene-side degradations (before the optics blur them).
-  const std::vector<Eigen::Vector3d> corners = model_.faceCorners();
+// A card over 25-45 % of the face from a random side: the half plane beyond a line across the face,
+// only near the face (a hand-held card, not a wall).
+void occludeWithCard(const mono::CameraIntrinsics& camera, const TrialPose& pose, const std::vector<cv::Point>& outline,
+                     double face_px, std::mt19937_64& rng, cv::Mat* image) {
+  const double angle = uniform(rng, 0, 2 * M_PI);
+  const Eigen::Vector2d dir(std::cos(angle), std::sin(angle));
+  const Eigen::Vector2d centre = camera.project(pose.translation);
+  const double offset = uniform(rng, 0.1, 0.3) * face_px;  // the card edge this far from the centre
+  const Eigen::Vector2d edge_point = centre + dir * offset;
+  const Eigen::Vector2d along(-dir.y(), dir.x());
+  const double big = 2000.0;
+  std::vector<cv::Point> card;
+  const std::vector<Eigen::Vector2d> card_corners = {edge_point + along * big, edge_point + along * big + dir * big,
+                                                     edge_point - along * big + dir * big, edge_point - along * big};
+  for (const Eigen::Vector2d& q : card_corners) {
+    card.emplace_back(static_cast<int>(q.x()), static_cast<int>(q.y()));
+  }
+  cv::Mat mask = cv::Mat::zeros(image->size(), CV_8U);
+  cv::fillConvexPoly(mask, card, cv::Scalar(255));
+  cv::Mat near = cv::Mat::zeros(image->size(), CV_8U);
+  cv::Rect box = cv::boundingRect(outline);
+  box.x -= box.width / 3;
+  box.y -= box.height / 3;
+  box.width += 2 * box.width / 3;
+  box.height += 2 * box.height / 3;
+  cv::rectangle(near, box, cv::Scalar(255), cv::FILLED);
+  cv::bitwise_and(mask, near, mask);
+  image->setTo(cv::Scalar(uniform(rng, 60, 200)), mask);
+}
+
+// IR: one LED covered, and/or a reflection of it on a nearby surface (a bright spot 1.5-3 spot radii
+// away, merging with it).
+void degradeLed(const StressCondition& condition, const mono::TargetModel& model, const mono::CameraIntrinsics& camera,
+                const TrialPose& pose, std::mt19937_64& rng, cv::Mat* image) {
+  const double range = pose.translation.norm();
+  const int which = static_cast<int>(uniform(rng, 0, 4.999));
+  const Eigen::Vector3d led = toCamera(pose, model.markers()[static_cast<size_t>(which)]);
+  const Eigen::Vector2d p = camera.project(led);
+  const double led_px = std::max(1.0, kFocalPx * model.ledRadius() / range);
+  if (condition.occlusion) {
+    cv::circle(*image, cv::Point(static_cast<int>(p.x()), static_cast<int>(p.y())),
+               static_cast<int>(std::ceil(4 * led_px + 4)), cv::Scalar(15), cv::FILLED);
+  }
+  if (condition.reflection) {
+    const double angle = uniform(rng, 0, 2 * M_PI);
+    const double distance = uniform(rng, 1.5, 3.0) * (led_px + 1.2);
+    addGaussianBlob(image, {p.x() + distance * std::cos(angle), p.y() + distance * std::sin(angle)},
+                    uniform(rng, 0.8, 1.5) * (led_px + 0.8), uniform(rng, 300, 700));
+  }
+}
+
+// Scene-side degradations (before the optics blur them): a glint, an occluding card, LED troubles.
+void addSceneDegradations(const StressCondition& condition, const mono::TargetModel& model,
+                          const mono::CameraIntrinsics& camera, const TrialPose& pose, std::mt19937_64& rng,
+                          cv::Mat* image) {
   std::vector<cv::Point> outline;
-  for (const Eigen::Vector3d& c : corners) {
-    const Eigen::Vector2d p = camera_.project(toCamera(c));
+  for (const Eigen::Vector3d& c : model.faceCorners()) {
+    const Eigen::Vector2d p = camera.project(toCamera(pose, c));
     outline.emplace_back(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));
   }
-  const double face_px = kFocalPx * w / range;
+  const double w = model.faceWidth();
+  const double face_px = kFocalPx * w / pose.translation.norm();
   if (condition.specular) {
     // A glint somewhere on the face: saturated core, 1/8..1/4 of the face wide.
     const double s = uniform(rng, -0.35, 0.35);
     const double t = uniform(rng, -0.35, 0.35);
-    const Eigen::Vector2d p = camera_.project(toCamera({0, s * w, t * h}));
-    addGaussianBlob(&image, {p.x(), p.y()}, uniform(rng, 0.06, 0.12) * face_px, uniform(rng, 400, 900));
+    const Eigen::Vector2d p = camera.project(toCamera(pose, {0, s * w, t * model.faceHeight()}));
+    addGaussianBlob(image, {p.x(), p.y()}, uniform(rng, 0.06, 0.12) * face_px, uniform(rng, 400, 900));
   }
-  if (condition.occlusion && !condition.infrared) {
-    // A card over 25-45 % of the face from a random side: the half plane beyond a line across the face.
-    const double angle = uniform(rng, 0, 2 * M_PI);
-    const Eigen::Vector2d dir(std::cos(angle), std::sin(angle));
-    const Eigen::Vector2d centre = camera_.project(pose.translation);
-    const double offset = uniform(rng, 0.1, 0.3) * face_px;  // the card edge this far from the centre
-    const Eigen::Vector2d edge_point = centre + dir * offset;
-    const Eigen::Vector2d along(-dir.y(), dir.x());
-    const double big = 2000.0;
-    std::vector<cv::Point> card;
-    const std::vector<Eigen::Vector2d> card_corners = {edge_point + along * big, edge_point + along * big + dir * big,
-                                                       edge_point - along * big + dir * big, edge_point - along * big};
-    for (const Eigen::Vector2d& q : card_corners) {
-      card.emplace_back(static_cast<int>(q.x()), static_cast<int>(q.y()));
-    }
-    cv::Mat mask = cv::Mat::zeros(image.size(), CV_8U);
-    cv::fillConvexPoly(mask, card, cv::Scalar(255));
-    // Only near the face: a hand-held card, not a wall.
-    cv::Mat near = cv::Mat::zeros(image.size(), CV_8U);
-    cv::Rect box = cv::boundingRect(outline);
-    box.x -= box.width / 3;
-    box.y -= box.height / 3;
-    box.width += 2 * box.width / 3;
-    box.height += 2 * box.height / 3;
-    cv::rectangle(near, box, cv::Scalar(255), cv::FILLED);
-    cv::bitwise_and(mask, near, mask);
-    image.setTo(cv::Scalar(uniform(rng, 60, 200)), mask);
-  }
+  if (condition.occlusion && !condition.infrared) occludeWithCard(camera, pose, outline, face_px, rng, image);
   if (condition.infrared && (condition.occlusion || condition.reflection)) {
-    const int which = static_cast<int>(uniform(rng, 0, 4.999));
-    const Eigen::Vector3d led = toCamera(model_.markers()[static_cast<size_t>(which)]);
-    const Eigen::Vector2d p = camera_.project(led);
-    const double led_px = std::max(1.0, kFocalPx * model_.ledRadius() / range);
-    if (condition.occlusion) {
-      cv::circle(image, cv::Point(static_cast<int>(p.x()), static_cast<int>(p.y())),
-                 static_cast<int>(std::ceil(4 * led_px + 4)), cv::Scalar(15), cv::FILLED);
-    }
-    if (condition.reflection) {
-      // A reflection of the LED on a nearby surface: a bright spot 1.5-3 spot radii away (merges with it).
-      const double angle = uniform(rng, 0, 2 * M_PI);
-      const double distance = uniform(rng, 1.5, 3.0) * (led_px + 1.2);
-      addGaussianBlob(&image, {p.x() + distance * std::cos(angle), p.y() + distance * std::sin(angle)},
-                      uniform(rng, 0.8, 1.5) * (led_px + 0.8), uniform(rng, 300, 700));
-    }
+    degradeLed(condition, model, camera, pose, rng, image);
   }
-  // Optics: defocus, then motion during the exposure.
-  if (condition.defocus_sigma_px > 0.0) cv::GaussianBlur(image, image, cv::Size(0, 0), condition.defocus_sigma_px);
+}
+
+// Optics: defocus, then motion during the exposure.
+void applyOptics(const StressCondition& condition, std::mt19937_64& rng, cv::Mat* image) {
+  if (condition.defocus_sigma_px > 0.0) cv::GaussianBlur(*image, *image, cv::Size(0, 0), condition.defocus_sigma_px);
   if (condition.motion_length_px > 1.0) {
     // One draw whatever the spread, so that the other conditions' images stay the same.
     const double draw = uniform(rng, 0, M_PI);
     const double angle = condition.motion_max_angle_deg >= 90.0 ? draw
                                                                 : (draw - 0.5 * M_PI) * condition.motion_max_angle_deg / 90.0;
-    cv::filter2D(image, image, -1, mono::linearMotionKernel(condition.motion_length_px, angle), cv::Point(-1, -1), 0,
+    cv::filter2D(*image, *image, -1, mono::linearMotionKernel(condition.motion_length_px, angle), cv::Point(-1, -1), 0,
                  cv::BORDER_REFLECT);
   }
-  // Sensor: clip (saturated highlights stay flat), noise, quantise.
-  cv::min(image, 255.0, image);
+}
+
+// Sensor: clip (saturated highlights stay flat), noise; quantised by the caller.
+void applySensor(const StressCondition& condition, uint64_t frame_seed, cv::Mat* image) {
+  cv::min(*image, 255.0, *image);
   if (condition.noise_sigma > 0.0) {
-    cv::Mat noise(image.size(), CV_32F);
+    cv::Mat noise(image->size(), CV_32F);
     cv::RNG noise_rng(frame_seed * 31 + 7);
     noise_rng.fill(noise, cv::RNG::NORMAL, 0.0, condition.noise_sigma);
-    image += noise;
+    *image += noise;
   }
+}
+
+}  // namespace
+
+StressFrame StressRenderer::render(const StressCondition& condition, const TrialPose& pose, uint64_t scene_seed,
+                                   uint64_t frame_seed) const {
+  std::mt19937_64 scene_rng(scene_seed * 104729 + 3);
+  std::mt19937_64 rng(frame_seed * 15485863 + 11);
+  docking_sim::Scene scene;
+  addTargetFace(model_, impl_->face, condition.infrared, pose, &scene);
+  addBackground(condition, pose, scene_seed, impl_->busy, impl_->plain, scene_rng, &scene);
+  if (condition.infrared) addLeds(model_, pose, &scene);
+  cv::Mat image = renderGray(condition, frame_seed, &scene);
+  addSceneDegradations(condition, model_, camera_, pose, rng, &image);
+  applyOptics(condition, rng, &image);
+  applySensor(condition, frame_seed, &image);
   StressFrame frame;
   image.convertTo(frame.gray, CV_8U);
   frame.truth = pose;

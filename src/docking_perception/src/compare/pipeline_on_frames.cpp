@@ -91,6 +91,69 @@ int usage() {
   return 2;
 }
 
+std::string disparityJson(const dp::disparity::Detection& d) {
+  std::string s = "{\"valid\": " + std::string(d.found ? "true" : "false");
+  if (d.found)
+    s += ", \"position_m\": [" + num(d.position_m.x()) + ", " + num(d.position_m.y()) + ", " + num(d.position_m.z()) +
+         "]";
+  else
+    s += ", \"status\": " + jsonString(dp::disparity::outcomeName(d.outcome));
+  return s + "}";
+}
+
+/// perception.launch's image path, each stage with its shipped configuration from the config folder.
+class Pipeline {
+ public:
+  explicit Pipeline(const std::string& config)
+      : left_cal_(dt::loadCameraCalibration(config + "/cameras/stereo_left.yaml")),
+        right_cal_(dt::loadCameraCalibration(config + "/cameras/stereo_right.yaml")),
+        ir_cal_(dt::loadCameraCalibration(config + "/cameras/ir.yaml")),
+        left_rect_(left_cal_),
+        right_rect_(right_cal_),
+        ir_rect_(ir_cal_),
+        matcher_settings_(dt::loadMatcherSettings(config + "/stereo_image_proc.yaml")),
+        matcher_(dt::createMatcher(matcher_settings_)),
+        detector_(dt::shippedDetectorSettings(config).detector,
+                  dp::disparity::loadTargetShape(config + "/target.yaml")) {
+    geometry_.focal_px = left_rect_.intrinsics.fx;
+    geometry_.cx_px = left_rect_.intrinsics.cx;
+    geometry_.cy_px = left_rect_.intrinsics.cy;
+    geometry_.baseline_m = -right_cal_.projection.at<double>(0, 3) / right_cal_.projection.at<double>(0, 0);
+    const dp::mono::TargetModel model = dp::mono::TargetModel::loadFromYaml(config + "/target.yaml");
+    const char* mono_files[2] = {"/mono_pose_visible.yaml", "/mono_pose_ir.yaml"};
+    const Rectifier* mono_rect[2] = {&left_rect_, &ir_rect_};
+    for (int m = 0; m < 2; ++m) {
+      const dp::mono::MonoPoseParams params =
+          docking_settings::shippedSettings<dp::mono::MonoPoseNodeSettings>(config + mono_files[m]).core;
+      mono_[m] = std::make_unique<dp::mono::MonoPoseEstimator>(model, mono_rect[m]->intrinsics, params);
+    }
+  }
+
+  /// One frame's JSON line: rectify, disparity and the detector, both mono_pose instances.
+  std::string process(const std::string& prefix, const cv::Mat& left, const cv::Mat& right, const cv::Mat& ir,
+                      double stamp) {
+    const cv::Mat l = left_rect_(left), r = right_rect_(right), i = ir_rect_(ir);
+    const cv::Mat disparity = dt::computeDisparity(*matcher_, l, r);
+    const dp::disparity::Detection d =
+        detector_.detect(disparity, geometry_, matcher_settings_.min_disparity, dt::maxDisparity(matcher_settings_),
+                         dt::matcherValidRegion(matcher_settings_, disparity.size()));
+    std::string line = "{\"frame\": " + jsonString(prefix) + ", \"stamp_s\": " + num(stamp) +
+                       ", \"disparity\": " + disparityJson(d);
+    line += ", \"mono_visible\": " + monoJson(mono_[0]->process(l, stamp));
+    line += ", \"mono_ir\": " + monoJson(mono_[1]->process(i, stamp)) + "}";
+    return line;
+  }
+
+ private:
+  const dt::CameraCalibration left_cal_, right_cal_, ir_cal_;
+  const Rectifier left_rect_, right_rect_, ir_rect_;
+  const dt::MatcherSettings matcher_settings_;
+  cv::Ptr<cv::StereoMatcher> matcher_;
+  const dp::disparity::DisparityDetector detector_;
+  dp::disparity::StereoGeometry geometry_;
+  std::unique_ptr<dp::mono::MonoPoseEstimator> mono_[2];
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -112,31 +175,7 @@ int main(int argc, char** argv) {
   if (config.empty() || prefixes.empty() || !(dt_s > 0.0)) return usage();
   cv::setNumThreads(1);
   try {
-    const dt::CameraCalibration left_cal = dt::loadCameraCalibration(config + "/cameras/stereo_left.yaml");
-    const dt::CameraCalibration right_cal = dt::loadCameraCalibration(config + "/cameras/stereo_right.yaml");
-    const dt::CameraCalibration ir_cal = dt::loadCameraCalibration(config + "/cameras/ir.yaml");
-    const Rectifier left_rect(left_cal), right_rect(right_cal), ir_rect(ir_cal);
-
-    const dt::MatcherSettings matcher_settings = dt::loadMatcherSettings(config + "/stereo_image_proc.yaml");
-    cv::Ptr<cv::StereoMatcher> matcher = dt::createMatcher(matcher_settings);
-    const dp::disparity::DisparityDetector detector(dt::shippedDetectorSettings(config).detector,
-                                                    dp::disparity::loadTargetShape(config + "/target.yaml"));
-    dp::disparity::StereoGeometry geometry;
-    geometry.focal_px = left_rect.intrinsics.fx;
-    geometry.cx_px = left_rect.intrinsics.cx;
-    geometry.cy_px = left_rect.intrinsics.cy;
-    geometry.baseline_m = -right_cal.projection.at<double>(0, 3) / right_cal.projection.at<double>(0, 0);
-
-    const dp::mono::TargetModel model = dp::mono::TargetModel::loadFromYaml(config + "/target.yaml");
-    std::unique_ptr<dp::mono::MonoPoseEstimator> mono[2];
-    const char* mono_files[2] = {"/mono_pose_visible.yaml", "/mono_pose_ir.yaml"};
-    const Rectifier* mono_rect[2] = {&left_rect, &ir_rect};
-    for (int m = 0; m < 2; ++m) {
-      const dp::mono::MonoPoseParams params =
-          docking_settings::shippedSettings<dp::mono::MonoPoseNodeSettings>(config + mono_files[m]).core;
-      mono[m] = std::make_unique<dp::mono::MonoPoseEstimator>(model, mono_rect[m]->intrinsics, params);
-    }
-
+    Pipeline pipeline(config);
     for (std::size_t k = 0; k < prefixes.size(); ++k) {
       const std::string& p = prefixes[k];
       const cv::Mat left = cv::imread(p + "_stereo_left.png", cv::IMREAD_UNCHANGED);
@@ -146,22 +185,7 @@ int main(int argc, char** argv) {
         std::cerr << p << "_{stereo_left,stereo_right,ir}.png: missing or unreadable\n";
         return 1;
       }
-      const double stamp = static_cast<double>(k) * dt_s;
-      const cv::Mat l = left_rect(left), r = right_rect(right), i = ir_rect(ir);
-      const cv::Mat disparity = dt::computeDisparity(*matcher, l, r);
-      const dp::disparity::Detection d =
-          detector.detect(disparity, geometry, matcher_settings.min_disparity, dt::maxDisparity(matcher_settings),
-                          dt::matcherValidRegion(matcher_settings, disparity.size()));
-      std::string line = "{\"frame\": " + jsonString(p) + ", \"stamp_s\": " + num(stamp) + ", \"disparity\": {\"valid\": " +
-                         (d.found ? "true" : "false");
-      if (d.found)
-        line += ", \"position_m\": [" + num(d.position_m.x()) + ", " + num(d.position_m.y()) + ", " +
-                num(d.position_m.z()) + "]";
-      else
-        line += ", \"status\": " + jsonString(dp::disparity::outcomeName(d.outcome));
-      line += "}, \"mono_visible\": " + monoJson(mono[0]->process(l, stamp));
-      line += ", \"mono_ir\": " + monoJson(mono[1]->process(i, stamp)) + "}";
-      std::cout << line << std::endl;
+      std::cout << pipeline.process(p, left, right, ir, static_cast<double>(k) * dt_s) << std::endl;
     }
   } catch (const std::exception& e) {
     std::cerr << "pipeline_on_frames: " << e.what() << "\n";

@@ -134,54 +134,70 @@ struct ViewResult {
   std::vector<PrintProblem> problems;
 };
 
-// Matching as mono_pose does while tracking (predicted region and face width), then the dots as the
-// 5-point solver finds them (predicted through the matched homography).
-ViewResult examineView(const cv::Mat& gray, const mono::TargetModel& model,
-                       const Eigen::Matrix3d& truth, double face_width_px,
-                       const mono::FeatureMatcher& matcher, const mono::DarkDotLocator& locator,
-                       int required_inliers, const CheckParams& params) {
-  const cv::Size texture_size = model.textureGray().size();
-  const std::vector<cv::Point2d> corners = {
-      {-0.5, -0.5}, {texture_size.width - 0.5, -0.5},
-      {texture_size.width - 0.5, texture_size.height - 0.5}, {-0.5, texture_size.height - 0.5}};
+// The texture's outer corners (pixel edges) in texture pixels.
+std::vector<cv::Point2d> textureCorners(const cv::Size& texture_size) {
+  return {{-0.5, -0.5},
+          {texture_size.width - 0.5, -0.5},
+          {texture_size.width - 0.5, texture_size.height - 0.5},
+          {-0.5, texture_size.height - 0.5}};
+}
+
+// Matching as mono_pose does while tracking: in the true outline's bounding box plus the search margin.
+mono::FaceMatch matchInPredictedRegion(const cv::Mat& gray, const Eigen::Matrix3d& truth,
+                                       const std::vector<cv::Point2d>& corners, double face_width_px,
+                                       const mono::FeatureMatcher& matcher, const CheckParams& params) {
   std::vector<cv::Point> outline;
   for (const auto& corner : corners) outline.push_back(applyHomography(truth, corner));
   const int margin = static_cast<int>(params.search_margin_px);
   cv::Rect roi = cv::boundingRect(outline);
   roi = cv::Rect(roi.x - margin, roi.y - margin, roi.width + 2 * margin, roi.height + 2 * margin) &
         cv::Rect(0, 0, gray.cols, gray.rows);
-  const mono::FaceMatch match = matcher.match(gray, roi, face_width_px);
+  return matcher.match(gray, roi, face_width_px);
+}
 
-  ViewResult result;
-  result.matches = match.matches;
-  result.inliers = match.inliers;
+// The match's homography (truth when there is none); fills the outline error and the inliers' coverage.
+Eigen::Matrix3d measureMatch(const mono::FaceMatch& match, const Eigen::Matrix3d& truth,
+                             const std::vector<cv::Point2d>& corners, const cv::Size& texture_size,
+                             ViewResult* result) {
+  result->matches = match.matches;
+  result->inliers = match.inliers;
   Eigen::Matrix3d found = truth;
-  if (match.found) {
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) found(r, c) = match.homography(r, c);
-    }
-    for (const auto& corner : corners) {
-      result.outline_error_px = std::max(
-          result.outline_error_px, cv::norm(applyHomography(found, corner) - applyHomography(truth, corner)));
-    }
-    if (match.inlier_texture_points.size() >= 3) {
-      std::vector<cv::Point2f> hull;
-      cv::convexHull(match.inlier_texture_points, hull);
-      result.coverage = cv::contourArea(hull) / texture_size.area();
-    }
+  if (!match.found) return found;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) found(r, c) = match.homography(r, c);
   }
-  const bool enough = match.found && match.inliers >= required_inliers;
-  const bool placed = match.found && result.outline_error_px <= params.max_outline_error_fraction * face_width_px;
-  if (!enough) {
-    result.problems.push_back(PrintProblem::kLowTexture);
-  } else if (!placed) {
-    result.problems.push_back(PrintProblem::kWrongMatch);
-  } else if (result.coverage < params.min_coverage) {
-    result.problems.push_back(PrintProblem::kPoorCoverage);
+  for (const auto& corner : corners) {
+    result->outline_error_px = std::max(
+        result->outline_error_px, cv::norm(applyHomography(found, corner) - applyHomography(truth, corner)));
   }
-  result.face_ok = result.problems.empty();
+  if (match.inlier_texture_points.size() >= 3) {
+    std::vector<cv::Point2f> hull;
+    cv::convexHull(match.inlier_texture_points, hull);
+    result->coverage = cv::contourArea(hull) / texture_size.area();
+  }
+  return found;
+}
 
-  // Dots, predicted as the estimator does (through the matched homography when there is one).
+// The face's verdict: too few inliers, the wrong place, or too little of the face covered.
+void judgeFace(const mono::FaceMatch& match, int required_inliers, double face_width_px, const CheckParams& params,
+               ViewResult* result) {
+  const bool enough = match.found && match.inliers >= required_inliers;
+  const bool placed = match.found && result->outline_error_px <= params.max_outline_error_fraction * face_width_px;
+  if (!enough) {
+    result->problems.push_back(PrintProblem::kLowTexture);
+  } else if (!placed) {
+    result->problems.push_back(PrintProblem::kWrongMatch);
+  } else if (result->coverage < params.min_coverage) {
+    result->problems.push_back(PrintProblem::kPoorCoverage);
+  }
+  result->face_ok = result->problems.empty();
+}
+
+// Dots, predicted as the estimator does (through the homography `found`), found within
+// max_dot_error_px of where they truly are.
+int countDots(const cv::Mat& gray, const mono::TargetModel& model, const Eigen::Matrix3d& found,
+              const Eigen::Matrix3d& truth, const mono::DarkDotLocator& locator, const CheckParams& params) {
+  int dots_found = 0;
   for (const auto& marker : model.markers()) {
     const cv::Point2d texture_pixel = model.pointToTexturePixel(marker);
     const cv::Point2d edge = model.pointToTexturePixel(marker + Eigen::Vector3d(0.0, model.markerRadius(), 0.0));
@@ -194,9 +210,25 @@ ViewResult examineView(const cv::Mat& gray, const mono::TargetModel& model,
     if (locator.locate(gray, {predicted.x, predicted.y}, radius_px, &located, &reason) &&
         cv::norm(cv::Point2d(located.x(), located.y()) - applyHomography(truth, texture_pixel)) <=
             params.max_dot_error_px) {
-      ++result.dots_found;
+      ++dots_found;
     }
   }
+  return dots_found;
+}
+
+// Matching as mono_pose does while tracking (predicted region and face width), then the dots as the
+// 5-point solver finds them (predicted through the matched homography).
+ViewResult examineView(const cv::Mat& gray, const mono::TargetModel& model,
+                       const Eigen::Matrix3d& truth, double face_width_px,
+                       const mono::FeatureMatcher& matcher, const mono::DarkDotLocator& locator,
+                       int required_inliers, const CheckParams& params) {
+  const cv::Size texture_size = model.textureGray().size();
+  const std::vector<cv::Point2d> corners = textureCorners(texture_size);
+  const mono::FaceMatch match = matchInPredictedRegion(gray, truth, corners, face_width_px, matcher, params);
+  ViewResult result;
+  const Eigen::Matrix3d found = measureMatch(match, truth, corners, texture_size, &result);
+  judgeFace(match, required_inliers, face_width_px, params, &result);
+  result.dots_found = countDots(gray, model, found, truth, locator, params);
   if (result.dots_found < mono::kMarkerCount) result.problems.push_back(PrintProblem::kDotsNotFound);
   result.passed = result.problems.empty();
   return result;

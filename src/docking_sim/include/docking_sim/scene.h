@@ -114,7 +114,27 @@ class Scene {
  private:
   void addBox(const Eigen::Isometry3d& pose, const Eigen::Vector3d& size, const std::shared_ptr<Texture>& tex,
               const cv::Vec3b& color, double texture_scale_m, bool moves_with_target, bool bottom);
+  // The room (Scene's constructor, in this order: rng's draws depend on it).
+  /// Floor (facing up) or ceiling pieces of `step` m at height z.
+  void addTiles(const RoomConfig& room, double z, double step, const std::shared_ptr<Texture>& tex, bool facing_up);
+  /// The four walls in 1 m pieces with skirting boards, and their decorations.
+  void addWalls(const RoomConfig& room, const std::shared_ptr<Texture>& wall_tex, cv::RNG& rng);
+  /// A door on the first wall (from corner a along dir), posters on every wall.
+  void addWallDecorations(int wall, const Eigen::Vector2d& a, const Eigen::Vector2d& dir, double length,
+                          cv::RNG& rng);
+  void addCeilingLights(const RoomConfig& room);
+  /// The boxes of room.clutter, textured by their material.
+  void addClutter(const RoomConfig& room, cv::RNG& rng);
+  // The target robot: face (and inner pattern), body, solar panels, LEDs, the base under it.
   void addTargetRobot(const TargetModel& target);
+  /// Adds a surface given in the docking port's frame to the target robot (moves with it).
+  void addInPortFrame(const TargetModel& target, Surface s);
+  void addTargetFace(const TargetModel& target);
+  void addTargetBody(const TargetModel& target);
+  void addSolarPanels(const TargetModel& target);
+  void addTargetLeds(const TargetModel& target);
+  /// The robot base under the mockup, up to base_top (m).
+  void addTargetBase(double base_top);
 
   std::vector<Surface> local_;   ///< static surfaces in world, target surfaces in the robot frame
   std::vector<Surface> world_;

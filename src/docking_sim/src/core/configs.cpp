@@ -171,65 +171,79 @@ std::string resolvePath(const std::string& folder, const std::string& relative) 
   return folder + "/" + relative;
 }
 
-SimSettings loadSimSettings(const std::string& path) {
-  const YamlField root = YamlField::open(path);
-  SimSettings s;
-  s.file = path;
-  const YamlField sim = root["sim"];
-  s.physics_rate_hz = sim["physics_rate_hz"].asDouble(10.0, 5000.0);
-  s.camera_rate_hz = sim["camera_rate_hz"].asDouble(0.1, 200.0);
-  s.encoder_rate_hz = sim["encoder_rate_hz"].asDouble(1.0, 1000.0);
-  s.truth_tf_rate_hz = sim["truth_tf_rate_hz"].asDouble(1.0, 1000.0);
-  s.real_time_factor = sim["real_time_factor"].asDouble(0.0, 100.0);
-  s.render_threads = static_cast<int>(sim["render_threads"].asInteger(1, 3));
-  s.stereo_right_rate_hz = sim["stereo_right_rate_hz"].asDouble(0.0, 200.0);
-  s.command_timeout_s = sim["command_timeout_s"].asDouble(0.01, 10.0);
+namespace {
 
-  const YamlField shading = root["shading"];
+// sim.yaml's sections, read in file order (the first bad value is the one reported).
+
+void readSimRates(const YamlField& sim, SimSettings* s) {
+  s->physics_rate_hz = sim["physics_rate_hz"].asDouble(10.0, 5000.0);
+  s->camera_rate_hz = sim["camera_rate_hz"].asDouble(0.1, 200.0);
+  s->encoder_rate_hz = sim["encoder_rate_hz"].asDouble(1.0, 1000.0);
+  s->truth_tf_rate_hz = sim["truth_tf_rate_hz"].asDouble(1.0, 1000.0);
+  s->real_time_factor = sim["real_time_factor"].asDouble(0.0, 100.0);
+  s->render_threads = static_cast<int>(sim["render_threads"].asInteger(1, 3));
+  s->stereo_right_rate_hz = sim["stereo_right_rate_hz"].asDouble(0.0, 200.0);
+  s->command_timeout_s = sim["command_timeout_s"].asDouble(0.01, 10.0);
+}
+
+void readShading(const YamlField& shading, SimSettings* s) {
   const auto dir = shading["light_direction"].asVector(3);
-  s.light_direction = Eigen::Vector3d(dir[0], dir[1], dir[2]);
-  if (s.light_direction.norm() < 1e-6) shading["light_direction"].fail("must not be the zero vector");
-  s.light_direction.normalize();
-  s.ambient = shading["ambient"].asDouble(0.0, 1.0);
+  s->light_direction = Eigen::Vector3d(dir[0], dir[1], dir[2]);
+  if (s->light_direction.norm() < 1e-6) shading["light_direction"].fail("must not be the zero vector");
+  s->light_direction.normalize();
+  s->ambient = shading["ambient"].asDouble(0.0, 1.0);
+}
 
-  readCameraEffects(root["cameras"]["visible"], false, false, &s.visible_effects);
-  readCameraEffects(root["cameras"]["ir"], false, true, &s.ir_effects);
-
-  const YamlField lighting = root["lighting"];
-  for (const auto& name : lighting.keys()) {
-    const YamlField l = lighting[name];
-    LightingScenario ls;
-    ls.name = name;
-    ls.visible = readBand(l["visible"]);
-    ls.ir = readBand(l["ir"]);
-    ls.led_intensity = l["led_intensity"].asDouble(0.0, 10.0);
-    if (l.has("glare")) {
-      const YamlField g = l["glare"];
-      const auto center = g["center"].asVector(2);
-      ls.glare.enabled = true;
-      ls.glare.center_u_frac = center[0];
-      ls.glare.center_v_frac = center[1];
-      ls.glare.radius_frac = g["radius"].asDouble(0.01, 2.0);
-      ls.glare.peak = g["peak"].asDouble(0.0, 5000.0);
-    }
-    s.lighting[name] = ls;
+LightingScenario readLightingScenario(const std::string& name, const YamlField& l) {
+  LightingScenario ls;
+  ls.name = name;
+  ls.visible = readBand(l["visible"]);
+  ls.ir = readBand(l["ir"]);
+  ls.led_intensity = l["led_intensity"].asDouble(0.0, 10.0);
+  if (l.has("glare")) {
+    const YamlField g = l["glare"];
+    const auto center = g["center"].asVector(2);
+    ls.glare.enabled = true;
+    ls.glare.center_u_frac = center[0];
+    ls.glare.center_v_frac = center[1];
+    ls.glare.radius_frac = g["radius"].asDouble(0.01, 2.0);
+    ls.glare.peak = g["peak"].asDouble(0.0, 5000.0);
   }
-  if (s.lighting.empty()) lighting.fail("needs at least one lighting scenario");
+  return ls;
+}
 
-  const YamlField room = root["room"];
+RoomConfig readRoom(const YamlField& room) {
+  RoomConfig r;
   const auto xr = room["x_m"].asVector(2);
   const auto yr = room["y_m"].asVector(2);
   if (!(xr[1] - xr[0] > 1.0)) room["x_m"].fail("needs [min, max] with max - min > 1 m");
   if (!(yr[1] - yr[0] > 1.0)) room["y_m"].fail("needs [min, max] with max - min > 1 m");
-  s.room.x_min_m = xr[0];
-  s.room.x_max_m = xr[1];
-  s.room.y_min_m = yr[0];
-  s.room.y_max_m = yr[1];
-  s.room.height_m = room["height_m"].asDouble(1.0, 20.0);
+  r.x_min_m = xr[0];
+  r.x_max_m = xr[1];
+  r.y_min_m = yr[0];
+  r.y_max_m = yr[1];
+  r.height_m = room["height_m"].asDouble(1.0, 20.0);
   if (room.has("clutter")) {
     const YamlField clutter = room["clutter"];
-    for (std::size_t i = 0; i < clutter.size(); ++i) s.room.clutter.push_back(readClutterBox(clutter.at(i)));
+    for (std::size_t i = 0; i < clutter.size(); ++i) r.clutter.push_back(readClutterBox(clutter.at(i)));
   }
+  return r;
+}
+
+}  // namespace
+
+SimSettings loadSimSettings(const std::string& path) {
+  const YamlField root = YamlField::open(path);
+  SimSettings s;
+  s.file = path;
+  readSimRates(root["sim"], &s);
+  readShading(root["shading"], &s);
+  readCameraEffects(root["cameras"]["visible"], false, false, &s.visible_effects);
+  readCameraEffects(root["cameras"]["ir"], false, true, &s.ir_effects);
+  const YamlField lighting = root["lighting"];
+  for (const auto& name : lighting.keys()) s.lighting[name] = readLightingScenario(name, lighting[name]);
+  if (s.lighting.empty()) lighting.fail("needs at least one lighting scenario");
+  s.room = readRoom(root["room"]);
   return s;
 }
 

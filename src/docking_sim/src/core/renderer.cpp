@@ -79,6 +79,39 @@ inline uint32_t lerpPacked(uint32_t a, uint32_t b, uint32_t w, bool round) {
   return even | odd;
 }
 
+}  // namespace
+
+/// Per 1/64 px of defocus sigma: the lower bracketing level (kDefocusSigmas) and the upper one's weight
+/// (of 256), and the entry a pixel's 1/z falls on.
+struct CameraRenderer::DefocusLut {
+  DefocusLut(int top, float inv_s, float lut_scale)
+      : size(static_cast<int>(kDefocusSigmas[top] * kDefocusLutPerPx) + 1),
+        level(static_cast<std::size_t>(size)),
+        weight(static_cast<std::size_t>(size)),
+        inv_s_f(inv_s),
+        scale_f(lut_scale) {
+    for (int i = 0; i < size; ++i) {
+      const double sigma = static_cast<double>(i) / kDefocusLutPerPx;
+      int k = 0;
+      while (k + 1 < top && kDefocusSigmas[k + 1] <= sigma) ++k;
+      const double lo = kDefocusSigmas[k], hi = kDefocusSigmas[k + 1];
+      const double w = std::clamp((sigma * sigma - lo * lo) / (hi * hi - lo * lo), 0.0, 1.0);
+      level[static_cast<std::size_t>(i)] = static_cast<uint16_t>(k);
+      weight[static_cast<std::size_t>(i)] = static_cast<uint16_t>(std::lround(256.0 * w));
+    }
+  }
+  std::size_t index(float inv_z) const {
+    return static_cast<std::size_t>(std::min(size - 1, static_cast<int>(std::abs(inv_s_f - inv_z) * scale_f + 0.5f)));
+  }
+  int size;
+  std::vector<uint16_t> level;
+  std::vector<uint16_t> weight;
+  float inv_s_f;  ///< 1 / focus distance
+  float scale_f;  ///< LUT entries per unit of |1/s - 1/z|
+};
+
+namespace {
+
 /// A texel index wrapped (repeating textures: sizes are powers of two) or clamped to the texture.
 template <bool kRepeat>
 inline int64_t texelIndex(int64_t i, int64_t mask) {
@@ -170,121 +203,142 @@ CameraRenderer::CameraRenderer(const CameraCalibration& calibration, Band band, 
   const int type = band == Band::kVisible ? CV_8UC3 : CV_8UC1;
   noise_sigma_ = band == Band::kVisible ? lighting.visible.noise_sigma : lighting.ir.noise_sigma;
 
-  // Where each raw (distorted) pixel looks in the ideal pinhole image: undistort every pixel centre
-  // once. Barrel distortion looks beyond the pinhole frame, so the ideal image gets a margin.
   cv::Mat map_x, map_y;  // where each output pixel samples ideal_ (kept for the lookup tables below)
-  if (options.distortion) {
-    std::vector<cv::Point2f> raw;
-    raw.reserve(static_cast<std::size_t>(w) * h);
-    for (int y = 0; y < h; ++y) {
-      for (int x = 0; x < w; ++x) raw.emplace_back(static_cast<float>(x), static_cast<float>(y));
-    }
-    std::vector<cv::Point2f> ideal;
-    cv::undistortPoints(raw, ideal, cv::Mat(calibration.K), cv::Mat(calibration.D), cv::noArray(),
-                        cv::Mat(calibration.K), cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-9));
-    float min_x = 0, min_y = 0, max_x = static_cast<float>(w - 1), max_y = static_cast<float>(h - 1);
-    for (const auto& p : ideal) {
-      min_x = std::min(min_x, p.x);
-      min_y = std::min(min_y, p.y);
-      max_x = std::max(max_x, p.x);
-      max_y = std::max(max_y, p.y);
-    }
-    pad_.x = static_cast<int>(std::ceil(std::max(-min_x, max_x - (w - 1)))) + 2;
-    pad_.y = static_cast<int>(std::ceil(std::max(-min_y, max_y - (h - 1)))) + 2;
-    map_x.create(h, w, CV_32F);
-    map_y.create(h, w, CV_32F);
-    for (int y = 0; y < h; ++y) {
-      for (int x = 0; x < w; ++x) {
-        const cv::Point2f& p = ideal[static_cast<std::size_t>(y) * w + x];
-        map_x.at<float>(y, x) = p.x + static_cast<float>(pad_.x);  // inside the margin by construction
-        map_y.at<float>(y, x) = p.y + static_cast<float>(pad_.y);
-      }
-    }
-  }
+  if (options.distortion) undistortPixelCentres(&map_x, &map_y);
   ideal_K_ = calibration.K;
   ideal_K_(0, 2) += pad_.x;
   ideal_K_(1, 2) += pad_.y;
   // Visible: 4 bytes per ideal pixel (b, g, r, 0) so that the rasteriser moves whole texels and the
   // distortion lookup interpolates all channels of a pixel in one SIMD register.
   ideal_.create(h + 2 * pad_.y, w + 2 * pad_.x, band == Band::kVisible ? CV_8UC4 : CV_8UC1);
-  if (options.distortion) {
-    // Per output pixel: byte offset of the top-left source pixel and the four bilinear weights
-    // (7-bit per axis, products <= 2^14, summing to 2^14), in the order the SIMD loops consume them.
-    const bool visible = band == Band::kVisible;
-    remap_offset_.resize(static_cast<std::size_t>(w) * h);
-    remap_weights_.assign(4 * ((remap_offset_.size() + 3) / 4 * 4), 0);
-    for (int y = 0; y < h; ++y) {
-      for (int x = 0; x < w; ++x) {
-        const std::size_t i = static_cast<std::size_t>(y) * w + x;
-        const double sx = map_x.at<float>(y, x), sy = map_y.at<float>(y, x);
-        const int x0 = static_cast<int>(std::floor(sx)), y0 = static_cast<int>(std::floor(sy));
-        const int wx = static_cast<int>(std::lround((sx - x0) * 128.0)), wy = static_cast<int>(std::lround((sy - y0) * 128.0));
-        remap_offset_[i] = static_cast<int32_t>(y0 * ideal_.step + x0 * ideal_.elemSize());
-        const auto tl = static_cast<int16_t>((128 - wx) * (128 - wy)), tr = static_cast<int16_t>(wx * (128 - wy));
-        const auto bl = static_cast<int16_t>((128 - wx) * wy), br = static_cast<int16_t>(wx * wy);
-        if (visible) {  // per pixel: TL, BL, TR, BR
-          const int16_t wts[4] = {tl, bl, tr, br};
-          std::copy(wts, wts + 4, remap_weights_.begin() + 4 * i);
-        } else {  // per group of 4 pixels: (TL, TR) of each, then (BL, BR) of each
-          const std::size_t group = 16 * (i / 4), k = 2 * (i % 4);
-          remap_weights_[group + k] = tl;
-          remap_weights_[group + k + 1] = tr;
-          remap_weights_[group + 8 + k] = bl;
-          remap_weights_[group + 8 + k + 1] = br;
-        }
-      }
-    }
-  }
+  if (options.distortion) buildRemapTables(map_x, map_y);
   depth_.create(ideal_.size(), CV_32F);
   depth_.setTo(cv::Scalar(0.0f));  // read before the first frame (projectedMotionPx): "nothing there"
   output_.create(h, w, type);
+  buildVignette();
+  buildNoiseTable();
+  initExposure();
+  if (band == Band::kVisible && lighting.glare.enabled) buildGlare();
+}
 
+void CameraRenderer::undistortPixelCentres(cv::Mat* map_x, cv::Mat* map_y) {
+  // Where each raw (distorted) pixel looks in the ideal pinhole image: undistort every pixel centre
+  // once. Barrel distortion looks beyond the pinhole frame, so the ideal image gets a margin.
+  const int w = calibration_.width, h = calibration_.height;
+  std::vector<cv::Point2f> raw;
+  raw.reserve(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) raw.emplace_back(static_cast<float>(x), static_cast<float>(y));
+  }
+  std::vector<cv::Point2f> ideal;
+  cv::undistortPoints(raw, ideal, cv::Mat(calibration_.K), cv::Mat(calibration_.D), cv::noArray(),
+                      cv::Mat(calibration_.K), cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-9));
+  float min_x = 0, min_y = 0, max_x = static_cast<float>(w - 1), max_y = static_cast<float>(h - 1);
+  for (const auto& p : ideal) {
+    min_x = std::min(min_x, p.x);
+    min_y = std::min(min_y, p.y);
+    max_x = std::max(max_x, p.x);
+    max_y = std::max(max_y, p.y);
+  }
+  pad_.x = static_cast<int>(std::ceil(std::max(-min_x, max_x - (w - 1)))) + 2;
+  pad_.y = static_cast<int>(std::ceil(std::max(-min_y, max_y - (h - 1)))) + 2;
+  map_x->create(h, w, CV_32F);
+  map_y->create(h, w, CV_32F);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const cv::Point2f& p = ideal[static_cast<std::size_t>(y) * w + x];
+      map_x->at<float>(y, x) = p.x + static_cast<float>(pad_.x);  // inside the margin by construction
+      map_y->at<float>(y, x) = p.y + static_cast<float>(pad_.y);
+    }
+  }
+}
+
+void CameraRenderer::buildRemapTables(const cv::Mat& map_x, const cv::Mat& map_y) {
+  // Per output pixel: byte offset of the top-left source pixel and the four bilinear weights
+  // (7-bit per axis, products <= 2^14, summing to 2^14), in the order the SIMD loops consume them.
+  const int w = calibration_.width, h = calibration_.height;
+  const bool visible = band_ == Band::kVisible;
+  remap_offset_.resize(static_cast<std::size_t>(w) * h);
+  remap_weights_.assign(4 * ((remap_offset_.size() + 3) / 4 * 4), 0);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      const double sx = map_x.at<float>(y, x), sy = map_y.at<float>(y, x);
+      const int x0 = static_cast<int>(std::floor(sx)), y0 = static_cast<int>(std::floor(sy));
+      const int wx = static_cast<int>(std::lround((sx - x0) * 128.0)), wy = static_cast<int>(std::lround((sy - y0) * 128.0));
+      remap_offset_[i] = static_cast<int32_t>(y0 * ideal_.step + x0 * ideal_.elemSize());
+      const auto tl = static_cast<int16_t>((128 - wx) * (128 - wy)), tr = static_cast<int16_t>(wx * (128 - wy));
+      const auto bl = static_cast<int16_t>((128 - wx) * wy), br = static_cast<int16_t>(wx * wy);
+      if (visible) {  // per pixel: TL, BL, TR, BR
+        const int16_t wts[4] = {tl, bl, tr, br};
+        std::copy(wts, wts + 4, remap_weights_.begin() + 4 * i);
+      } else {  // per group of 4 pixels: (TL, TR) of each, then (BL, BR) of each
+        const std::size_t group = 16 * (i / 4), k = 2 * (i % 4);
+        remap_weights_[group + k] = tl;
+        remap_weights_[group + k + 1] = tr;
+        remap_weights_[group + 8 + k] = bl;
+        remap_weights_[group + 8 + k + 1] = br;
+      }
+    }
+  }
+}
+
+void CameraRenderer::buildVignette() {
   // Vignetting: cos^4-like fall-off, `vignetting` darker at the corners.
+  const int w = calibration_.width, h = calibration_.height;
   vignette_.resize(static_cast<std::size_t>(w) * h * output_.channels());
-  const double cx = calibration.K(0, 2), cy = calibration.K(1, 2);
+  const double cx = calibration_.K(0, 2), cy = calibration_.K(1, 2);
   const double r_corner2 = cx * cx + cy * cy;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const double r2 = ((x - cx) * (x - cx) + (y - cy) * (y - cy)) / r_corner2;
-      const auto factor = static_cast<uint16_t>(std::lround(256.0 * (1.0 - effects.vignetting * r2)));
+      const auto factor = static_cast<uint16_t>(std::lround(256.0 * (1.0 - effects_.vignetting * r2)));
       for (int c = 0; c < output_.channels(); ++c) {
         vignette_[(static_cast<std::size_t>(y) * w + x) * output_.channels() + c] = factor;
       }
     }
   }
+}
 
+void CameraRenderer::buildNoiseTable() {
   // Noise: a table twice the frame size; each frame reads it from a random offset (no RNG per pixel).
-  const std::size_t frame_bytes = static_cast<std::size_t>(w) * h * output_.channels();
+  const std::size_t frame_bytes =
+      static_cast<std::size_t>(calibration_.width) * calibration_.height * output_.channels();
   noise_table_.resize(2 * frame_bytes);
   std::normal_distribution<double> normal(0.0, kNoiseTableSigma);
   for (auto& n : noise_table_) n = static_cast<int8_t>(std::clamp(std::lround(normal(rng_)), -127L, 127L));
-  exposure_time_s_ = effects.exposure_time_s;
-  if (effects.ae_enabled) {
-    // Start inside the camera's range, the lost brightness in gain (as updateExposure would).
-    exposure_time_s_ = std::clamp(effects.exposure_time_s, effects.ae_min_exposure_s, effects.ae_max_exposure_s);
-    gain_ = std::clamp(effects.exposure_time_s / exposure_time_s_, 1.0, effects.ae_max_gain);
-    brightness_ = exposure_time_s_ / effects.exposure_time_s * gain_;
-  }
+}
 
-  // Glare: an additive bright spot with a faint horizontal streak (visible cameras only).
-  if (band == Band::kVisible && lighting.glare.enabled) {
-    cv::Mat glare(h, w, CV_32F);
-    const double gx = lighting.glare.center_u_frac * w, gy = lighting.glare.center_v_frac * h;
-    const double radius = lighting.glare.radius_frac * w;
-    for (int y = 0; y < h; ++y) {
-      for (int x = 0; x < w; ++x) {
-        const double dx = (x - gx) / radius, dy = (y - gy) / radius;
-        const double spot = std::exp(-(dx * dx + dy * dy));
-        const double streak = 0.25 * std::exp(-dy * dy * 60.0) * std::exp(-std::abs(dx) * 0.8);
-        glare.at<float>(y, x) = static_cast<float>(lighting.glare.peak * (spot + streak));
-      }
-    }
-    cv::Mat glare8;
-    glare.convertTo(glare8, CV_8U);
-    cv::cvtColor(glare8, glare_, cv::COLOR_GRAY2BGR);
-    // Warm the spot slightly (a lamp, not a white card).
-    cv::multiply(glare_, cv::Scalar(0.92, 0.98, 1.0), glare_);
+void CameraRenderer::initExposure() {
+  exposure_time_s_ = effects_.exposure_time_s;
+  if (effects_.ae_enabled) {
+    // Start inside the camera's range, the lost brightness in gain (as updateExposure would).
+    exposure_time_s_ = std::clamp(effects_.exposure_time_s, effects_.ae_min_exposure_s, effects_.ae_max_exposure_s);
+    gain_ = std::clamp(effects_.exposure_time_s / exposure_time_s_, 1.0, effects_.ae_max_gain);
+    brightness_ = exposure_time_s_ / effects_.exposure_time_s * gain_;
   }
+}
+
+void CameraRenderer::buildGlare() {
+  // Glare: an additive bright spot with a faint horizontal streak (visible cameras only).
+  const int w = calibration_.width, h = calibration_.height;
+  const auto& glare_config = lighting_.glare;
+  cv::Mat glare(h, w, CV_32F);
+  const double gx = glare_config.center_u_frac * w, gy = glare_config.center_v_frac * h;
+  const double radius = glare_config.radius_frac * w;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double dx = (x - gx) / radius, dy = (y - gy) / radius;
+      const double spot = std::exp(-(dx * dx + dy * dy));
+      const double streak = 0.25 * std::exp(-dy * dy * 60.0) * std::exp(-std::abs(dx) * 0.8);
+      glare.at<float>(y, x) = static_cast<float>(glare_config.peak * (spot + streak));
+    }
+  }
+  cv::Mat glare8;
+  glare.convertTo(glare8, CV_8U);
+  cv::cvtColor(glare8, glare_, cv::COLOR_GRAY2BGR);
+  // Warm the spot slightly (a lamp, not a white card).
+  cv::multiply(glare_, cv::Scalar(0.92, 0.98, 1.0), glare_);
 }
 
 const cv::Mat& CameraRenderer::render(const Scene& scene, const Eigen::Isometry3d& world_T_camera) {
@@ -475,14 +529,8 @@ void CameraRenderer::applyDefocus() {
   const double inv_s = 1.0 / effects_.focus_distance_m;
   // A point at infinity has |1/s - 1/z| = 1/s: the factor from the one thin-lens formula (configs.cpp).
   const double scale = defocusSigmaPx(effects_, 1e15) * effects_.focus_distance_m;
-  double min_inv_z, max_inv_z;
-  cv::minMaxLoc(depth_, &min_inv_z, &max_inv_z);
-  const double max_sigma =
-      std::min(kDefocusSigmas[kDefocusLevels - 1],
-               scale * std::max(std::abs(inv_s - min_inv_z), std::abs(inv_s - max_inv_z)));
-  const double min_sigma = scale * (inv_s >= min_inv_z && inv_s <= max_inv_z
-                                        ? 0.0
-                                        : std::min(std::abs(inv_s - min_inv_z), std::abs(inv_s - max_inv_z)));
+  double min_sigma, max_sigma;
+  defocusSigmaRange(inv_s, scale, &min_sigma, &max_sigma);
   const double residual2 = effects_.blur_sigma_px * effects_.blur_sigma_px;
   if (std::sqrt(residual2 + max_sigma * max_sigma) - std::sqrt(residual2 + min_sigma * min_sigma) <
       kUniformDefocusSpreadPx) {
@@ -491,29 +539,31 @@ void CameraRenderer::applyDefocus() {
   }
   int top = 1;
   while (top < kDefocusLevels - 1 && kDefocusSigmas[top] < max_sigma) ++top;
-  // Per 1/64 px of sigma: the lower bracketing level and the upper one's weight (of 256).
-  const int lut_size = static_cast<int>(kDefocusSigmas[top] * kDefocusLutPerPx) + 1;
-  std::vector<uint16_t> lut_level(static_cast<std::size_t>(lut_size));
-  std::vector<uint16_t> lut_weight(static_cast<std::size_t>(lut_size));
-  for (int i = 0; i < lut_size; ++i) {
-    const double sigma = static_cast<double>(i) / kDefocusLutPerPx;
-    int k = 0;
-    while (k + 1 < top && kDefocusSigmas[k + 1] <= sigma) ++k;
-    const double lo = kDefocusSigmas[k], hi = kDefocusSigmas[k + 1];
-    const double w = std::clamp((sigma * sigma - lo * lo) / (hi * hi - lo * lo), 0.0, 1.0);
-    lut_level[static_cast<std::size_t>(i)] = static_cast<uint16_t>(k);
-    lut_weight[static_cast<std::size_t>(i)] = static_cast<uint16_t>(std::lround(256.0 * w));
-  }
+  const DefocusLut lut(top, static_cast<float>(inv_s), static_cast<float>(scale * kDefocusLutPerPx));
+  blurUsedDefocusLevels(lut, top);
+  blendDefocusLevels(lut, top);
+  std::swap(ideal_, defocus_out_);
+}
+
+void CameraRenderer::defocusSigmaRange(double inv_s, double scale, double* min_sigma, double* max_sigma) const {
+  double min_inv_z, max_inv_z;
+  cv::minMaxLoc(depth_, &min_inv_z, &max_inv_z);
+  *max_sigma = std::min(kDefocusSigmas[kDefocusLevels - 1],
+                        scale * std::max(std::abs(inv_s - min_inv_z), std::abs(inv_s - max_inv_z)));
+  *min_sigma = scale * (inv_s >= min_inv_z && inv_s <= max_inv_z
+                            ? 0.0
+                            : std::min(std::abs(inv_s - min_inv_z), std::abs(inv_s - max_inv_z)));
+}
+
+void CameraRenderer::blurUsedDefocusLevels(const DefocusLut& lut, int top) {
   // Blur only the levels some pixel blends (a pass over the z-buffer, ~0.3 ms).
-  const float lut_scale = static_cast<float>(scale * kDefocusLutPerPx);
-  const float inv_s_f = static_cast<float>(inv_s);
   bool used[kDefocusLevels] = {};
   for (int y = 0; y < depth_.rows; ++y) {
     const float* depth = depth_.ptr<float>(y);
     for (int x = 0; x < depth_.cols; ++x) {
-      const int i = std::min(lut_size - 1, static_cast<int>(std::abs(inv_s_f - depth[x]) * lut_scale + 0.5f));
-      used[lut_level[static_cast<std::size_t>(i)]] = true;
-      used[lut_level[static_cast<std::size_t>(i)] + 1] = true;
+      const int level = lut.level[lut.index(depth[x])];
+      used[level] = true;
+      used[level + 1] = true;
     }
   }
   defocus_levels_.resize(kDefocusLevels);
@@ -527,6 +577,9 @@ void CameraRenderer::applyDefocus() {
     cv::GaussianBlur(ideal_, defocus_levels_[static_cast<std::size_t>(k)], cv::Size(2 * half + 1, 2 * half + 1),
                      sigma, sigma, cv::BORDER_REPLICATE);
   }
+}
+
+void CameraRenderer::blendDefocusLevels(const DefocusLut& lut, int top) {
   defocus_out_.create(ideal_.size(), ideal_.type());
   const int channels = ideal_.channels();
   const uchar* level_rows[kDefocusLevels];
@@ -536,9 +589,9 @@ void CameraRenderer::applyDefocus() {
     for (int k = 1; k <= top; ++k) level_rows[k] = defocus_levels_[static_cast<std::size_t>(k)].ptr<uchar>(y);
     uchar* out = defocus_out_.ptr<uchar>(y);
     for (int x = 0; x < ideal_.cols; ++x) {
-      const int i = std::min(lut_size - 1, static_cast<int>(std::abs(inv_s_f - depth[x]) * lut_scale + 0.5f));
-      const int k = lut_level[static_cast<std::size_t>(i)];
-      const int w = lut_weight[static_cast<std::size_t>(i)];
+      const std::size_t i = lut.index(depth[x]);
+      const int k = lut.level[i];
+      const int w = lut.weight[i];
       const uchar* a = level_rows[k] + x * channels;
       const uchar* b = level_rows[k + 1] + x * channels;
       if (channels == 4) {
@@ -553,7 +606,6 @@ void CameraRenderer::applyDefocus() {
       }
     }
   }
-  std::swap(ideal_, defocus_out_);
 }
 
 void CameraRenderer::applyDistortion() {
@@ -840,10 +892,54 @@ double pixelCoverage(const std::vector<Eigen::Vector2d>& poly, double x, double 
 
 }  // namespace
 
+namespace {
+
+/// pixel + cover * (colour - pixel), rounded to nearest, per colour channel (weight: cover of 256).
+template <int kChannels>
+inline void blendTowards(uchar* pixel, uint32_t colour, int weight) {
+  for (int c = 0; c < (kChannels == 4 ? 3 : 1); ++c) {
+    uchar& px = pixel[c];
+    const int diff = static_cast<int>((colour >> (8 * c)) & 0xffu) - px;
+    const int step = diff >= 0 ? (diff * weight + 128) >> 8 : -((-diff * weight + 128) >> 8);
+    px = static_cast<uchar>(px + step);
+  }
+}
+
+}  // namespace
+
 template <int kChannels>
 void CameraRenderer::drawDecal(const Surface& surface, const Eigen::Isometry3d& camera_T_world) {
   Eigen::Matrix3d H;
   if (!projectOutline(surface, camera_T_world, &H)) return;
+  PixelRange pixels;
+  if (!decalEdges(&pixels)) return;
+
+  const double gain = (band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir) * brightness_;
+  const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
+  const uint32_t flat = flatColour<kChannels>(surface, gain_fixed);
+  // A pixel square lies wholly inside an edge's half-plane when its centre is more than half the
+  // diagonal inside, wholly outside when more than that outside.
+  constexpr double kHalfDiagonal = 0.70710678118654752 + 1e-9;
+  // The depth tie with the surface the decal lies on: 1e-4 relative (0.1 mm at 1 m) is far above
+  // float rounding and far below any real gap between surfaces.
+  constexpr float kDepthBias = 1.0f + 1e-4f;
+  for (int y = pixels.y_begin; y <= pixels.y_end; ++y) {
+    const float* depth = depth_.ptr<float>(y);
+    uchar* row = ideal_.ptr<uchar>(y);
+    for (int x = pixels.x_begin; x <= pixels.x_end; ++x) {
+      double outside = -1e300;
+      for (const auto& e : edges_) outside = std::max(outside, e.x() * x + e.y() * y - e.z());
+      if (outside >= kHalfDiagonal) continue;
+      const double inv_z = H(2, 0) * x + H(2, 1) * y + H(2, 2);
+      if (static_cast<float>(inv_z) * kDepthBias <= depth[x]) continue;  // behind something
+      const double cover = outside <= -kHalfDiagonal ? 1.0 : pixelCoverage(projected_, x, y, cover_a_, cover_b_);
+      if (cover <= 0.0) continue;
+      blendTowards<kChannels>(row + x * kChannels, flat, static_cast<int>(std::lround(cover * 256.0)));
+    }
+  }
+}
+
+bool CameraRenderer::decalEdges(PixelRange* pixels) {
   const std::size_t n = projected_.size();
   double twice_area = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -851,7 +947,7 @@ void CameraRenderer::drawDecal(const Surface& surface, const Eigen::Isometry3d& 
     const Eigen::Vector2d& q = projected_[(i + 1) % n];
     twice_area += p.x() * q.y() - q.x() * p.y();
   }
-  if (std::abs(twice_area) < 1e-12) return;
+  if (std::abs(twice_area) < 1e-12) return false;
   const double orientation = twice_area > 0 ? 1.0 : -1.0;
   // Per edge of the projected (convex) outline: outward unit normal and offset, (nx, ny, c); the
   // signed distance of a pixel centre p outside the edge's line is nx * p.x + ny * p.y - c.
@@ -870,154 +966,143 @@ void CameraRenderer::drawDecal(const Surface& surface, const Eigen::Isometry3d& 
     edges_.emplace_back(normal.x(), normal.y(), normal.dot(p));
   }
   // Every pixel whose square the outline touches.
-  const int x_begin = std::max(0, static_cast<int>(std::floor(min_x + 0.5)));
-  const int x_end = std::min(ideal_.cols - 1, static_cast<int>(std::ceil(max_x - 0.5)));
-  const int y_begin = std::max(0, static_cast<int>(std::floor(min_y + 0.5)));
-  const int y_end = std::min(ideal_.rows - 1, static_cast<int>(std::ceil(max_y - 0.5)));
-
-  const double gain = (band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir) * brightness_;
-  const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
-  const uint32_t flat = flatColour<kChannels>(surface, gain_fixed);
-  // A pixel square lies wholly inside an edge's half-plane when its centre is more than half the
-  // diagonal inside, wholly outside when more than that outside.
-  constexpr double kHalfDiagonal = 0.70710678118654752 + 1e-9;
-  // The depth tie with the surface the decal lies on: 1e-4 relative (0.1 mm at 1 m) is far above
-  // float rounding and far below any real gap between surfaces.
-  constexpr float kDepthBias = 1.0f + 1e-4f;
-  for (int y = y_begin; y <= y_end; ++y) {
-    const float* depth = depth_.ptr<float>(y);
-    uchar* row = ideal_.ptr<uchar>(y);
-    for (int x = x_begin; x <= x_end; ++x) {
-      double outside = -1e300;
-      for (const auto& e : edges_) outside = std::max(outside, e.x() * x + e.y() * y - e.z());
-      if (outside >= kHalfDiagonal) continue;
-      const double inv_z = H(2, 0) * x + H(2, 1) * y + H(2, 2);
-      if (static_cast<float>(inv_z) * kDepthBias <= depth[x]) continue;  // behind something
-      const double cover = outside <= -kHalfDiagonal ? 1.0 : pixelCoverage(projected_, x, y, cover_a_, cover_b_);
-      if (cover <= 0.0) continue;
-      // Blend: pixel + cover * (colour - pixel), rounded to nearest, per channel.
-      const int weight = static_cast<int>(std::lround(cover * 256.0));
-      for (int c = 0; c < (kChannels == 4 ? 3 : 1); ++c) {
-        uchar& px = row[x * kChannels + c];
-        const int diff = static_cast<int>((flat >> (8 * c)) & 0xffu) - px;
-        const int step = diff >= 0 ? (diff * weight + 128) >> 8 : -((-diff * weight + 128) >> 8);
-        px = static_cast<uchar>(px + step);
-      }
-    }
-  }
+  pixels->x_begin = std::max(0, static_cast<int>(std::floor(min_x + 0.5)));
+  pixels->x_end = std::min(ideal_.cols - 1, static_cast<int>(std::ceil(max_x - 0.5)));
+  pixels->y_begin = std::max(0, static_cast<int>(std::floor(min_y + 0.5)));
+  pixels->y_end = std::min(ideal_.rows - 1, static_cast<int>(std::ceil(max_y - 0.5)));
+  return true;
 }
 
 template <int kChannels>
 void CameraRenderer::drawSurface(const Surface& surface, const Eigen::Isometry3d& camera_T_world) {
   Eigen::Matrix3d H;
   if (!projectOutline(surface, camera_T_world, &H)) return;
-  const int width = ideal_.cols, height = ideal_.rows;
   double min_y = 1e300, max_y = -1e300;
   for (const auto& q : projected_) {
     min_y = std::min(min_y, q.y());
     max_y = std::max(max_y, q.y());
   }
-
-  // Texture set-up.
-  const Texture* tex = surface.texture.get();
-  const std::vector<BlockedLevel>* levels = tex ? &tex->blocked : nullptr;
   const double gain = (band_ == Band::kVisible ? surface.gain_visible : surface.gain_ir) * brightness_;
   const int gain_fixed = static_cast<int>(std::lround(std::max(0.0, gain) * 256.0));
   const uint32_t flat = flatColour<kChannels>(surface, gain_fixed);
-  const bool saturates = gain_fixed > 256;
-  const auto gain_u = static_cast<uint32_t>(gain_fixed);
-  const double su = surface.repeat_u, sv = surface.repeat_v;
-  const double ou = surface.offset_u, ov = surface.offset_v;
-
   const int y_begin = std::max(0, static_cast<int>(std::ceil(min_y)));
-  const int y_end = std::min(height - 1, static_cast<int>(std::floor(max_y)));
-  const std::size_t n = projected_.size();
+  const int y_end = std::min(ideal_.rows - 1, static_cast<int>(std::floor(max_y)));
   for (int y = y_begin; y <= y_end; ++y) {
-    // Span of a convex polygon on this row (pixel centres at integer coordinates).
-    double xl = 1e300, xr = -1e300;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Eigen::Vector2d& a = projected_[i];
-      const Eigen::Vector2d& b = projected_[(i + 1) % n];
-      if ((a.y() <= y && b.y() > y) || (b.y() <= y && a.y() > y)) {
-        const double x = a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
-        xl = std::min(xl, x);
-        xr = std::max(xr, x);
-      }
+    int x0, x1;
+    if (!projectedSpan(y, &x0, &x1)) continue;
+    if (surface.texture) {
+      shadeTexturedSpan<kChannels>(surface, H, y, x0, x1, static_cast<uint32_t>(gain_fixed));
+    } else {
+      fillFlatSpan<kChannels>(H, y, x0, x1, flat);
     }
-    if (xl > xr) continue;
-    const int x0 = std::max(0, static_cast<int>(std::ceil(xl)));
-    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(xr)) - 1);
-    if (x0 > x1) continue;
+  }
+}
 
-    double nw = H(2, 0) * x0 + H(2, 1) * y + H(2, 2);
-    float* depth = depth_.ptr<float>(y);
-    uchar* row = ideal_.ptr<uchar>(y);
-    if (!tex) {
-      // CV_8UC4 rows are 4-byte aligned (cv::Mat allocates aligned; the step is a multiple of 4).
-      uint32_t* row4 = reinterpret_cast<uint32_t*>(row);
-      for (int x = x0; x <= x1; ++x, nw += H(2, 0)) {
-        const float inv_z = static_cast<float>(nw);
-        if (inv_z <= depth[x]) continue;
-        depth[x] = inv_z;
-        if (kChannels == 4) {
-          row4[x] = flat;
-        } else {
-          row[x] = static_cast<uchar>(flat);
-        }
-      }
-      continue;
+// Always inlined (renderer.h): a call per row and surface costs ~5 % of the rasterising.
+__attribute__((always_inline)) inline bool CameraRenderer::projectedSpan(int y, int* x0, int* x1) const {
+  // Span of a convex polygon on this row (pixel centres at integer coordinates).
+  double xl = 1e300, xr = -1e300;
+  const std::size_t n = projected_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d& a = projected_[i];
+    const Eigen::Vector2d& b = projected_[(i + 1) % n];
+    if ((a.y() <= y && b.y() > y) || (b.y() <= y && a.y() > y)) {
+      const double x = a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
+      xl = std::min(xl, x);
+      xr = std::max(xr, x);
     }
+  }
+  if (xl > xr) return false;
+  *x0 = std::max(0, static_cast<int>(std::ceil(xl)));
+  *x1 = std::min(ideal_.cols - 1, static_cast<int>(std::ceil(xr)) - 1);
+  return *x0 <= *x1;
+}
 
-    // Texture level for this span: the texel footprint of one pixel at the span's middle.
-    const BlockedLevel& base = (*levels)[0];
-    const double xm = 0.5 * (x0 + x1);
-    auto uv_at = [&](double px, double py) {
-      const double inv_w = 1.0 / (H(2, 0) * px + H(2, 1) * py + H(2, 2));  // one division, not two
-      return Eigen::Vector2d((H(0, 0) * px + H(0, 1) * py + H(0, 2)) * inv_w * su * base.width,
-                             (H(1, 0) * px + H(1, 1) * py + H(1, 2)) * inv_w * sv * base.height);
-    };
-    const Eigen::Vector2d c0 = uv_at(xm, y);
-    const double footprint2 =
-        std::max((uv_at(xm + 1, y) - c0).squaredNorm(), (uv_at(xm, y + 1) - c0).squaredNorm());
-    // Level whose texel best matches the pixel footprint f (rounded: a little softer, far less
-    // aliasing): round(log2 f), i.e. level L for f in [2^(L-1/2), 2^(L+1/2)), found on f^2 against
-    // 2^(2L+1) without a log or a square root.
-    const int max_level = static_cast<int>(levels->size()) - 1;
-    int level = 0;
-    for (double limit = 2.0; level < max_level && footprint2 >= limit; limit *= 4.0) ++level;
-    const BlockedLevel& img = (*levels)[static_cast<std::size_t>(level)];
-    const int tw = img.width, th = img.height;
-    const double scale_u = su * tw, scale_v = sv * th;
-    const double off_u = ou * tw, off_v = ov * th;
-
-    // Perspective-correct coordinates exactly at the ends of 16-pixel segments, linear in between
-    // (the error is far below a texel at these sizes and saves a division per pixel).
-    const bool repeat = tex->repeat;
-    const double bias_u = repeat ? off_u + 4096.0 * tw : off_u;  // keeps the cast positive when wrapping
-    const double bias_v = repeat ? off_v + 4096.0 * th : off_v;
-    auto texel_at = [&](int px, double* u, double* v) {
-      const double inv_w = 1.0 / (H(2, 0) * px + H(2, 1) * y + H(2, 2));
-      *u = (H(0, 0) * px + H(0, 1) * y + H(0, 2)) * inv_w * scale_u + bias_u;
-      *v = (H(1, 0) * px + H(1, 1) * y + H(1, 2)) * inv_w * scale_v + bias_v;
-    };
-    constexpr int kSegment = 16;
-    double u_start, v_start;
-    texel_at(x0, &u_start, &v_start);
-    for (int xs = x0; xs <= x1; xs += kSegment) {
-      const int xe = std::min(xs + kSegment, x1 + 1);
-      double u_end = u_start, v_end = v_start;
-      if (xe - 1 > xs) texel_at(xe - 1, &u_end, &v_end);
-      // Fixed point inside the segment: integer steps instead of a double add and two double->int
-      // conversions per pixel (1/65536 texel is far below the texel size).
-      // The steps come from the double difference (a 64-bit integer division costs more than the
-      // whole segment's pixels).
-      int64_t u = toFixed(u_start), v = toFixed(v_start);
-      const double steps = xe - 1 > xs ? 1.0 / (xe - 1 - xs) : 0.0;
-      const int64_t du = toFixed((u_end - u_start) * steps), dv = toFixed((v_end - v_start) * steps);
-      nw = shadeSegment<kChannels>(surface.bilinear, repeat, saturates, xe - xs, nw, H(2, 0), u, du, v, dv, depth + xs,
-                                   row + static_cast<std::size_t>(xs) * kChannels, img, gain_u);
-      if (xe <= x1) texel_at(xe, &u_start, &v_start);
+template <int kChannels>
+__attribute__((always_inline)) inline void CameraRenderer::fillFlatSpan(const Eigen::Matrix3d& H, int y, int x0,
+                                                                         int x1, uint32_t flat) {
+  double nw = H(2, 0) * x0 + H(2, 1) * y + H(2, 2);
+  float* depth = depth_.ptr<float>(y);
+  uchar* row = ideal_.ptr<uchar>(y);
+  // CV_8UC4 rows are 4-byte aligned (cv::Mat allocates aligned; the step is a multiple of 4).
+  uint32_t* row4 = reinterpret_cast<uint32_t*>(row);
+  for (int x = x0; x <= x1; ++x, nw += H(2, 0)) {
+    const float inv_z = static_cast<float>(nw);
+    if (inv_z <= depth[x]) continue;
+    depth[x] = inv_z;
+    if (kChannels == 4) {
+      row4[x] = flat;
+    } else {
+      row[x] = static_cast<uchar>(flat);
     }
+  }
+}
+
+namespace {
+
+/// The texture level for a span: the texel footprint of one pixel at (xm, y). Level whose texel best
+/// matches the pixel footprint f (rounded: a little softer, far less aliasing): round(log2 f), i.e.
+/// level L for f in [2^(L-1/2), 2^(L+1/2)), found on f^2 against 2^(2L+1) without a log or a square root.
+const BlockedLevel& spanTextureLevel(const std::vector<BlockedLevel>& levels, const Eigen::Matrix3d& H, double su,
+                                     double sv, double xm, int y) {
+  const BlockedLevel& base = levels[0];
+  auto uv_at = [&](double px, double py) {
+    const double inv_w = 1.0 / (H(2, 0) * px + H(2, 1) * py + H(2, 2));  // one division, not two
+    return Eigen::Vector2d((H(0, 0) * px + H(0, 1) * py + H(0, 2)) * inv_w * su * base.width,
+                           (H(1, 0) * px + H(1, 1) * py + H(1, 2)) * inv_w * sv * base.height);
+  };
+  const Eigen::Vector2d c0 = uv_at(xm, y);
+  const double footprint2 = std::max((uv_at(xm + 1, y) - c0).squaredNorm(), (uv_at(xm, y + 1) - c0).squaredNorm());
+  const int max_level = static_cast<int>(levels.size()) - 1;
+  int level = 0;
+  for (double limit = 2.0; level < max_level && footprint2 >= limit; limit *= 4.0) ++level;
+  return levels[static_cast<std::size_t>(level)];
+}
+
+}  // namespace
+
+template <int kChannels>
+__attribute__((always_inline)) inline void CameraRenderer::shadeTexturedSpan(const Surface& surface,
+                                                                              const Eigen::Matrix3d& H, int y, int x0,
+                                                                              int x1, uint32_t gain_u) {
+  const Texture* tex = surface.texture.get();
+  const double su = surface.repeat_u, sv = surface.repeat_v;
+  const BlockedLevel& img = spanTextureLevel(tex->blocked, H, su, sv, 0.5 * (x0 + x1), y);
+  const int tw = img.width, th = img.height;
+  const double scale_u = su * tw, scale_v = sv * th;
+  const double off_u = surface.offset_u * tw, off_v = surface.offset_v * th;
+
+  // Perspective-correct coordinates exactly at the ends of 16-pixel segments, linear in between
+  // (the error is far below a texel at these sizes and saves a division per pixel).
+  const bool repeat = tex->repeat;
+  const bool saturates = gain_u > 256;
+  const double bias_u = repeat ? off_u + 4096.0 * tw : off_u;  // keeps the cast positive when wrapping
+  const double bias_v = repeat ? off_v + 4096.0 * th : off_v;
+  auto texel_at = [&](int px, double* u, double* v) {
+    const double inv_w = 1.0 / (H(2, 0) * px + H(2, 1) * y + H(2, 2));
+    *u = (H(0, 0) * px + H(0, 1) * y + H(0, 2)) * inv_w * scale_u + bias_u;
+    *v = (H(1, 0) * px + H(1, 1) * y + H(1, 2)) * inv_w * scale_v + bias_v;
+  };
+  double nw = H(2, 0) * x0 + H(2, 1) * y + H(2, 2);
+  float* depth = depth_.ptr<float>(y);
+  uchar* row = ideal_.ptr<uchar>(y);
+  constexpr int kSegment = 16;
+  double u_start, v_start;
+  texel_at(x0, &u_start, &v_start);
+  for (int xs = x0; xs <= x1; xs += kSegment) {
+    const int xe = std::min(xs + kSegment, x1 + 1);
+    double u_end = u_start, v_end = v_start;
+    if (xe - 1 > xs) texel_at(xe - 1, &u_end, &v_end);
+    // Fixed point inside the segment: integer steps instead of a double add and two double->int
+    // conversions per pixel (1/65536 texel is far below the texel size).
+    // The steps come from the double difference (a 64-bit integer division costs more than the
+    // whole segment's pixels).
+    int64_t u = toFixed(u_start), v = toFixed(v_start);
+    const double steps = xe - 1 > xs ? 1.0 / (xe - 1 - xs) : 0.0;
+    const int64_t du = toFixed((u_end - u_start) * steps), dv = toFixed((v_end - v_start) * steps);
+    nw = shadeSegment<kChannels>(surface.bilinear, repeat, saturates, xe - xs, nw, H(2, 0), u, du, v, dv, depth + xs,
+                                 row + static_cast<std::size_t>(xs) * kChannels, img, gain_u);
+    if (xe <= x1) texel_at(xe, &u_start, &v_start);
   }
 }
 

@@ -42,83 +42,106 @@ cv::Mat tint(const cv::Mat& detail, const cv::Vec3b& color) {
   return out;
 }
 
+// Detail maps per material: d starts at 1 everywhere; fine is unit Gaussian noise (drawn first, for
+// every material, so the generator's sequence does not depend on the material).
+
+/// Wood grain: stretched noise along u, rings from a wavy sine.
+void woodDetail(cv::Mat& d, const cv::Mat& fine, cv::RNG& rng, int size) {
+  cv::Mat stretched;
+  cv::resize(smoothNoise(rng, size, 8), stretched, cv::Size(size, size));
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      const double ring = std::sin((y + 18.0 * stretched.at<float>(y, x)) * 0.35);
+      d.at<float>(y, x) = static_cast<float>(0.85 + 0.12 * ring + 0.03 * fine.at<float>(y, x));
+    }
+  }
+}
+
+void cardboardDetail(cv::Mat& d, const cv::Mat& fine, cv::RNG& rng, int size) {
+  cv::Mat blotch = smoothNoise(rng, size, 6);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      d.at<float>(y, x) = static_cast<float>(0.9 + 0.1 * blotch.at<float>(y, x) + 0.04 * fine.at<float>(y, x));
+    }
+  }
+  // Packing tape across the middle and a printed label.
+  cv::rectangle(d, cv::Rect(0, size / 2 - size / 16, size, size / 8), cv::Scalar(1.15), -1);
+  cv::rectangle(d, cv::Rect(size / 8, size / 8, size / 4, size / 6), cv::Scalar(1.35), -1);
+  cv::putText(d, "FRAGILE", cv::Point(size / 2, size - size / 6), cv::FONT_HERSHEY_SIMPLEX, size / 300.0,
+              cv::Scalar(0.25), 2, cv::LINE_AA);
+  cv::line(d, cv::Point(size * 5 / 8, size / 8), cv::Point(size * 7 / 8, size * 3 / 8), cv::Scalar(0.3), 3);
+}
+
+/// Brushed metal: noise smeared along u.
+void metalDetail(cv::Mat& d, const cv::Mat& fine, int size) {
+  cv::Mat brushed;
+  cv::blur(fine, brushed, cv::Size(31, 1), cv::Point(-1, -1), cv::BORDER_REFLECT_101);
+  d = 1.0 + 0.25 * brushed;
+  for (int k = 1; k < 4; ++k) {
+    cv::line(d, cv::Point(0, k * size / 4), cv::Point(size, k * size / 4), cv::Scalar(0.55), 2);
+  }
+  cv::circle(d, cv::Point(size * 7 / 8, size / 8), size / 40, cv::Scalar(0.4), -1, cv::LINE_AA);
+}
+
+void fabricDetail(cv::Mat& d, const cv::Mat& fine, int size) {
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      const double weave = ((x / 2 + y / 2) % 2) ? 0.06 : -0.06;
+      d.at<float>(y, x) = static_cast<float>(0.95 + weave + 0.08 * fine.at<float>(y, x));
+    }
+  }
+}
+
+/// A busy print (packaging, a poster of shapes and text): many corners for a keypoint detector.
+void busyDetail(cv::Mat& d, cv::RNG& rng, int size) {
+  rng.fill(d, cv::RNG::UNIFORM, 0.55, 1.35);
+  cv::blur(d, d, cv::Size(9, 9));
+  for (int i = 0; i < 90; ++i) {
+    const cv::Scalar shade(rng.uniform(0.15, 1.6));
+    const cv::Point a(rng.uniform(0, size), rng.uniform(0, size));
+    const int r = rng.uniform(size / 40, size / 8);
+    switch (i % 4) {
+      case 0: cv::rectangle(d, a, a + cv::Point(r, rng.uniform(size / 40, size / 8)), shade, -1); break;
+      case 1: cv::circle(d, a, r / 2, shade, -1, cv::LINE_AA); break;
+      case 2: {
+        const cv::Point tri[3] = {a, a + cv::Point(r, r / 3), a + cv::Point(r / 4, r)};
+        cv::fillConvexPoly(d, tri, 3, shade, cv::LINE_AA);
+        break;
+      }
+      default: cv::putText(d, i % 8 == 3 ? "A7-X" : "K42", a, cv::FONT_HERSHEY_SIMPLEX, size / 400.0, shade, 2,
+                           cv::LINE_AA);
+    }
+  }
+}
+
+/// Photo-like: noise over many scales (1/f-ish) with a few hard-edged objects.
+void photoDetail(cv::Mat& d, const cv::Mat& fine, cv::RNG& rng, int size) {
+  d = 0.35 * smoothNoise(rng, size, 4) + 0.3 * smoothNoise(rng, size, 16) + 0.25 * smoothNoise(rng, size, 64) +
+      0.35 + 0.05 * fine;
+  for (int i = 0; i < 25; ++i) {
+    const cv::Point a(rng.uniform(0, size), rng.uniform(0, size));
+    cv::rectangle(d, a, a + cv::Point(rng.uniform(8, size / 6), rng.uniform(8, size / 6)),
+                  cv::Scalar(rng.uniform(0.2, 1.5)), -1);
+  }
+}
+
+void plasticDetail(cv::Mat& d, const cv::Mat& fine, cv::RNG& rng, int size) {
+  cv::Mat blotch = smoothNoise(rng, size, 4);
+  d = 0.95 + 0.08 * blotch + 0.015 * fine;
+  cv::rectangle(d, cv::Rect(size / 10, size / 10, size * 8 / 10, size * 8 / 10), cv::Scalar(0.7), 2);
+}
+
 cv::Mat materialDetail(const std::string& material, cv::RNG& rng, int size) {
   cv::Mat d(size, size, CV_32F, cv::Scalar(1.0));
   cv::Mat fine(size, size, CV_32F);
   rng.fill(fine, cv::RNG::NORMAL, 0.0, 1.0);
-  if (material == "wood") {
-    // Grain: stretched noise along u, rings from a wavy sine.
-    cv::Mat stretched;
-    cv::resize(smoothNoise(rng, size, 8), stretched, cv::Size(size, size));
-    for (int y = 0; y < size; ++y) {
-      for (int x = 0; x < size; ++x) {
-        const double ring = std::sin((y + 18.0 * stretched.at<float>(y, x)) * 0.35);
-        d.at<float>(y, x) = static_cast<float>(0.85 + 0.12 * ring + 0.03 * fine.at<float>(y, x));
-      }
-    }
-  } else if (material == "cardboard") {
-    cv::Mat blotch = smoothNoise(rng, size, 6);
-    for (int y = 0; y < size; ++y) {
-      for (int x = 0; x < size; ++x) {
-        d.at<float>(y, x) = static_cast<float>(0.9 + 0.1 * blotch.at<float>(y, x) + 0.04 * fine.at<float>(y, x));
-      }
-    }
-    // Packing tape across the middle and a printed label.
-    cv::rectangle(d, cv::Rect(0, size / 2 - size / 16, size, size / 8), cv::Scalar(1.15), -1);
-    cv::rectangle(d, cv::Rect(size / 8, size / 8, size / 4, size / 6), cv::Scalar(1.35), -1);
-    cv::putText(d, "FRAGILE", cv::Point(size / 2, size - size / 6), cv::FONT_HERSHEY_SIMPLEX, size / 300.0,
-                cv::Scalar(0.25), 2, cv::LINE_AA);
-    cv::line(d, cv::Point(size * 5 / 8, size / 8), cv::Point(size * 7 / 8, size * 3 / 8), cv::Scalar(0.3), 3);
-  } else if (material == "metal") {
-    // Brushed: noise smeared along u.
-    cv::Mat brushed;
-    cv::blur(fine, brushed, cv::Size(31, 1), cv::Point(-1, -1), cv::BORDER_REFLECT_101);
-    d = 1.0 + 0.25 * brushed;
-    for (int k = 1; k < 4; ++k) {
-      cv::line(d, cv::Point(0, k * size / 4), cv::Point(size, k * size / 4), cv::Scalar(0.55), 2);
-    }
-    cv::circle(d, cv::Point(size * 7 / 8, size / 8), size / 40, cv::Scalar(0.4), -1, cv::LINE_AA);
-  } else if (material == "fabric") {
-    for (int y = 0; y < size; ++y) {
-      for (int x = 0; x < size; ++x) {
-        const double weave = ((x / 2 + y / 2) % 2) ? 0.06 : -0.06;
-        d.at<float>(y, x) = static_cast<float>(0.95 + weave + 0.08 * fine.at<float>(y, x));
-      }
-    }
-  } else if (material == "busy") {
-    // A busy print (packaging, a poster of shapes and text): many corners for a keypoint detector.
-    rng.fill(d, cv::RNG::UNIFORM, 0.55, 1.35);
-    cv::blur(d, d, cv::Size(9, 9));
-    for (int i = 0; i < 90; ++i) {
-      const cv::Scalar shade(rng.uniform(0.15, 1.6));
-      const cv::Point a(rng.uniform(0, size), rng.uniform(0, size));
-      const int r = rng.uniform(size / 40, size / 8);
-      switch (i % 4) {
-        case 0: cv::rectangle(d, a, a + cv::Point(r, rng.uniform(size / 40, size / 8)), shade, -1); break;
-        case 1: cv::circle(d, a, r / 2, shade, -1, cv::LINE_AA); break;
-        case 2: {
-          const cv::Point tri[3] = {a, a + cv::Point(r, r / 3), a + cv::Point(r / 4, r)};
-          cv::fillConvexPoly(d, tri, 3, shade, cv::LINE_AA);
-          break;
-        }
-        default: cv::putText(d, i % 8 == 3 ? "A7-X" : "K42", a, cv::FONT_HERSHEY_SIMPLEX, size / 400.0, shade, 2,
-                             cv::LINE_AA);
-      }
-    }
-  } else if (material == "photo") {
-    // Photo-like: noise over many scales (1/f-ish) with a few hard-edged objects.
-    d = 0.35 * smoothNoise(rng, size, 4) + 0.3 * smoothNoise(rng, size, 16) + 0.25 * smoothNoise(rng, size, 64) +
-        0.35 + 0.05 * fine;
-    for (int i = 0; i < 25; ++i) {
-      const cv::Point a(rng.uniform(0, size), rng.uniform(0, size));
-      cv::rectangle(d, a, a + cv::Point(rng.uniform(8, size / 6), rng.uniform(8, size / 6)),
-                    cv::Scalar(rng.uniform(0.2, 1.5)), -1);
-    }
-  } else {  // plastic
-    cv::Mat blotch = smoothNoise(rng, size, 4);
-    d = 0.95 + 0.08 * blotch + 0.015 * fine;
-    cv::rectangle(d, cv::Rect(size / 10, size / 10, size * 8 / 10, size * 8 / 10), cv::Scalar(0.7), 2);
-  }
+  if (material == "wood") woodDetail(d, fine, rng, size);
+  else if (material == "cardboard") cardboardDetail(d, fine, rng, size);
+  else if (material == "metal") metalDetail(d, fine, size);
+  else if (material == "fabric") fabricDetail(d, fine, size);
+  else if (material == "busy") busyDetail(d, rng, size);
+  else if (material == "photo") photoDetail(d, fine, rng, size);
+  else plasticDetail(d, fine, rng, size);
   return d;
 }
 
@@ -324,30 +347,39 @@ void Scene::addBox(const Eigen::Isometry3d& pose, const Eigen::Vector3d& size, c
 }
 
 void Scene::addTargetRobot(const TargetModel& t) {
+  addTargetFace(t);
+  addTargetBody(t);
+  if (t.panel_span_m > 0 && t.panel_height_m > 0) addSolarPanels(t);
+  addTargetLeds(t);
+  // The target robot under the mockup: a dark base on a low wheel block, filling the gap up to the face.
+  const double base_top = t.robot_T_port.translation().z() - t.face_height_m / 2;
+  if (base_top > 0.05) addTargetBase(base_top);
+}
+
+void Scene::addInPortFrame(const TargetModel& t, Surface s) {
+  const Eigen::Isometry3d& rp = t.robot_T_port;
+  s.origin = rp * s.origin;
+  s.edge_u = rp.linear() * s.edge_u;
+  s.edge_v = rp.linear() * s.edge_v;
+  s.moves_with_target = true;
+  s.bilinear = true;
+  local_.push_back(s);
+}
+
+void Scene::addTargetFace(const TargetModel& t) {
   cv::Mat face = cv::imread(t.texture_path, cv::IMREAD_COLOR);
   if (face.empty()) {
     throw ConfigError(t.file, "target.face.texture", "cannot read the image '" + t.texture_path + "'");
   }
-  const auto face_tex = makeTexture(face, false);
-  const Eigen::Isometry3d& rp = t.robot_T_port;
-  const double w = t.face_width_m, h = t.face_height_m, d = t.body_depth_m;
-  auto addInPortFrame = [&](Surface s) {
-    s.origin = rp * s.origin;
-    s.edge_u = rp.linear() * s.edge_u;
-    s.edge_v = rp.linear() * s.edge_v;
-    s.moves_with_target = true;
-    s.bilinear = true;
-    local_.push_back(s);
-  };
-
+  const double w = t.face_width_m, h = t.face_height_m;
   // The docking face (x = 0 in the port frame): column u along +y, row v along -z (target.yaml).
   Surface face_surface;
   face_surface.origin = Eigen::Vector3d(0, -w / 2, h / 2);
   face_surface.edge_u = Eigen::Vector3d(0, w, 0);
   face_surface.edge_v = Eigen::Vector3d(0, 0, -h);
-  face_surface.texture = face_tex;
+  face_surface.texture = makeTexture(face, false);
   face_surface.glossy = true;  // a printed, laminated face: specular highlights (cameras.<band>.specular)
-  addInPortFrame(face_surface);
+  addInPortFrame(t, face_surface);
 
   // The inner pattern (target.inner_pattern): a printed tag a hair (kInnerPrintLift_m) in front of the
   // face, so the depth test puts it over the face texture; both bands see the print.
@@ -360,10 +392,13 @@ void Scene::addTargetRobot(const TargetModel& t) {
     print.edge_u = Eigen::Vector3d(0, edge, 0);
     print.edge_v = Eigen::Vector3d(0, 0, -edge);
     print.texture = makeTexture(innerPatternPrint(t.inner_pattern, kPxPerCell), false);
-    addInPortFrame(print);
+    addInPortFrame(t, print);
   }
+}
 
-  // Body: the box behind the face (its front is the face itself), brushed-foil look.
+void Scene::addTargetBody(const TargetModel& t) {
+  // The box behind the face (its front is the face itself), brushed-foil look.
+  const double w = t.face_width_m, h = t.face_height_m, d = t.body_depth_m;
   cv::RNG rng(4242);
   const auto foil = makeTexture(tint(materialDetail("metal", rng, 256), t.body_bgr), true);
   auto body_side = [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& eu, const Eigen::Vector3d& ev) {
@@ -374,37 +409,41 @@ void Scene::addTargetRobot(const TargetModel& t) {
     s.texture = foil;
     s.repeat_u = eu.norm() / 0.3;
     s.repeat_v = ev.norm() / 0.3;
-    addInPortFrame(s);
+    addInPortFrame(t, s);
   };
   body_side({-d, w / 2, h / 2}, {0, -w, 0}, {0, 0, -h});       // back
   body_side({0, w / 2, h / 2}, {-d, 0, 0}, {0, 0, -h});        // +y side
   body_side({-d, -w / 2, h / 2}, {d, 0, 0}, {0, 0, -h});       // -y side
   body_side({-d, -w / 2, h / 2}, {0, w, 0}, {d, 0, 0});        // top
   body_side({-d, -w / 2, -h / 2}, {0, w, 0}, {d, 0, 0});       // bottom
+}
 
-  // Solar panels: flat wings beside the box, in the plane x = offset.
-  if (t.panel_span_m > 0 && t.panel_height_m > 0) {
-    cv::Mat solar = solarTexture();
-    // Recolour the cells to the configured colour (keep the bus bars).
-    solar.setTo(cv::Scalar(t.panel_bgr[0], t.panel_bgr[1], t.panel_bgr[2]), [&] {
-      cv::Mat mask;
-      cv::inRange(solar, cv::Scalar(110, 40, 20), cv::Scalar(110, 40, 20), mask);
-      return mask;
-    }());
-    const auto solar_tex = makeTexture(solar, false);
-    for (int side = -1; side <= 1; side += 2) {
-      Surface s;
-      const double y0 = side * w / 2;
-      s.origin = Eigen::Vector3d(t.panel_offset_x_m, side > 0 ? y0 : y0 - t.panel_span_m, t.panel_height_m / 2);
-      s.edge_u = Eigen::Vector3d(0, t.panel_span_m, 0);
-      s.edge_v = Eigen::Vector3d(0, 0, -t.panel_height_m);
-      s.texture = solar_tex;
-      addInPortFrame(s);
-    }
+void Scene::addSolarPanels(const TargetModel& t) {
+  // Flat wings beside the box, in the plane x = offset.
+  const double w = t.face_width_m;
+  cv::Mat solar = solarTexture();
+  // Recolour the cells to the configured colour (keep the bus bars).
+  solar.setTo(cv::Scalar(t.panel_bgr[0], t.panel_bgr[1], t.panel_bgr[2]), [&] {
+    cv::Mat mask;
+    cv::inRange(solar, cv::Scalar(110, 40, 20), cv::Scalar(110, 40, 20), mask);
+    return mask;
+  }());
+  const auto solar_tex = makeTexture(solar, false);
+  for (int side = -1; side <= 1; side += 2) {
+    Surface s;
+    const double y0 = side * w / 2;
+    s.origin = Eigen::Vector3d(t.panel_offset_x_m, side > 0 ? y0 : y0 - t.panel_span_m, t.panel_height_m / 2);
+    s.edge_u = Eigen::Vector3d(0, t.panel_span_m, 0);
+    s.edge_v = Eigen::Vector3d(0, 0, -t.panel_height_m);
+    s.texture = solar_tex;
+    addInPortFrame(t, s);
   }
+}
 
+void Scene::addTargetLeds(const TargetModel& t) {
   // IR LEDs at the marker positions, in the face plane exactly where target.yaml puts them, facing
   // out of the face (+x of the port frame); IR cameras only (the renderer draws them as light spots).
+  const Eigen::Isometry3d& rp = t.robot_T_port;
   for (const auto& m : t.markers_m) {
     Led led;
     led.centre = rp * m;
@@ -413,53 +452,61 @@ void Scene::addTargetRobot(const TargetModel& t) {
     led.moves_with_target = true;
     leds_local_.push_back(led);
   }
+}
 
-  // The target robot under the mockup: a dark base on a low wheel block, filling the gap up to the face.
-  const double base_top = rp.translation().z() - h / 2;
-  if (base_top > 0.05) {
-    cv::RNG rng_base(99);
-    const auto plastic = makeTexture(tint(materialDetail("plastic", rng_base, 128), cv::Vec3b(60, 60, 62)), true);
-    Eigen::Isometry3d wheels = Eigen::Isometry3d::Identity();
-    addBox(wheels, Eigen::Vector3d(0.22, 0.22, 0.04), nullptr, cv::Vec3b(25, 25, 25), 0, true, false);
-    Eigen::Isometry3d deck = Eigen::Isometry3d::Identity();
-    deck.translation().z() = 0.04;
-    addBox(deck, Eigen::Vector3d(0.34, 0.34, base_top - 0.04), plastic, cv::Vec3b(60, 60, 62), 0.34, true, false);
-  }
+void Scene::addTargetBase(double base_top) {
+  cv::RNG rng_base(99);
+  const auto plastic = makeTexture(tint(materialDetail("plastic", rng_base, 128), cv::Vec3b(60, 60, 62)), true);
+  Eigen::Isometry3d wheels = Eigen::Isometry3d::Identity();
+  addBox(wheels, Eigen::Vector3d(0.22, 0.22, 0.04), nullptr, cv::Vec3b(25, 25, 25), 0, true, false);
+  Eigen::Isometry3d deck = Eigen::Isometry3d::Identity();
+  deck.translation().z() = 0.04;
+  addBox(deck, Eigen::Vector3d(0.34, 0.34, base_top - 0.04), plastic, cv::Vec3b(60, 60, 62), 0.34, true, false);
 }
 
 Scene::Scene(const SimSettings& settings, const TargetModel& target, const LightingScenario& lighting, uint64_t seed) {
+  // One generator for the whole room, drawn in this order: floor, wall and ceiling textures, posters, clutter.
   cv::RNG rng(seed ^ 0x5eed);
   const RoomConfig& room = settings.room;
   const auto floor_tex = makeTexture(floorTexture(rng), true);
   const auto wall_tex = makeTexture(wallTexture(rng), true);
   const auto ceiling_tex = makeTexture(ceilingTexture(rng), true);
+  addTiles(room, 0.0, 1.0, floor_tex, true);
+  addTiles(room, room.height_m, 2.0, ceiling_tex, false);
+  addWalls(room, wall_tex, rng);
+  addCeilingLights(room);
+  addClutter(room, rng);
+  addTargetRobot(target);
+  setLighting(lighting, settings.light_direction, settings.ambient, settings.visible_effects, settings.ir_effects);
+  update(Eigen::Isometry3d::Identity());
+}
 
+void Scene::addTiles(const RoomConfig& room, double z, double step, const std::shared_ptr<Texture>& tex,
+                     bool facing_up) {
   // Floor and ceiling in 1 m (floor) and 2 m (ceiling) pieces: small polygons keep the per-span
   // texture level accurate across a receding plane.
-  auto tiles = [&](double z, double step, const std::shared_ptr<Texture>& tex, bool facing_up) {
-    for (double x = room.x_min_m; x < room.x_max_m - 1e-9; x += step) {
-      for (double y = room.y_min_m; y < room.y_max_m - 1e-9; y += step) {
-        Surface s;
-        const double sx = std::min(step, room.x_max_m - x), sy = std::min(step, room.y_max_m - y);
-        s.origin = Eigen::Vector3d(x, y, z);
-        s.edge_u = Eigen::Vector3d(sx, 0, 0);
-        s.edge_v = Eigen::Vector3d(0, sy, 0);
-        if (!facing_up) std::swap(s.edge_u, s.edge_v);
-        s.texture = tex;
-        // The pattern tiles every 2 m; offsets continue it across pieces.
-        s.repeat_u = s.edge_u.norm() / 2.0;
-        s.repeat_v = s.edge_v.norm() / 2.0;
-        const double ou = (facing_up ? x - room.x_min_m : y - room.y_min_m) / 2.0;
-        const double ov = (facing_up ? y - room.y_min_m : x - room.x_min_m) / 2.0;
-        s.offset_u = ou - std::floor(ou);
-        s.offset_v = ov - std::floor(ov);
-        local_.push_back(s);
-      }
+  for (double x = room.x_min_m; x < room.x_max_m - 1e-9; x += step) {
+    for (double y = room.y_min_m; y < room.y_max_m - 1e-9; y += step) {
+      Surface s;
+      const double sx = std::min(step, room.x_max_m - x), sy = std::min(step, room.y_max_m - y);
+      s.origin = Eigen::Vector3d(x, y, z);
+      s.edge_u = Eigen::Vector3d(sx, 0, 0);
+      s.edge_v = Eigen::Vector3d(0, sy, 0);
+      if (!facing_up) std::swap(s.edge_u, s.edge_v);
+      s.texture = tex;
+      // The pattern tiles every 2 m; offsets continue it across pieces.
+      s.repeat_u = s.edge_u.norm() / 2.0;
+      s.repeat_v = s.edge_v.norm() / 2.0;
+      const double ou = (facing_up ? x - room.x_min_m : y - room.y_min_m) / 2.0;
+      const double ov = (facing_up ? y - room.y_min_m : x - room.x_min_m) / 2.0;
+      s.offset_u = ou - std::floor(ou);
+      s.offset_v = ov - std::floor(ov);
+      local_.push_back(s);
     }
-  };
-  tiles(0.0, 1.0, floor_tex, true);
-  tiles(room.height_m, 2.0, ceiling_tex, false);
+  }
+}
 
+void Scene::addWalls(const RoomConfig& room, const std::shared_ptr<Texture>& wall_tex, cv::RNG& rng) {
   // Walls in 1 m pieces, with a dark skirting board.
   const Eigen::Vector2d corners[4] = {{room.x_min_m, room.y_min_m}, {room.x_max_m, room.y_min_m},
                                       {room.x_max_m, room.y_max_m}, {room.x_min_m, room.y_max_m}};
@@ -487,32 +534,39 @@ Scene::Scene(const SimSettings& settings, const TargetModel& target, const Light
       skirting.color = cv::Vec3b(70, 70, 75);
       local_.push_back(skirting);
     }
-    // Wall decorations: a door on the first wall, posters on the others, 1 cm in front of the wall.
-    const Eigen::Vector3d inward(-dir.y(), dir.x(), 0);
-    const Eigen::Vector3d along(dir.x(), dir.y(), 0);
-    if (i == 0 && length > 3.0) {
-      Surface door;
-      door.origin = Eigen::Vector3d(a.x(), a.y(), 2.05) + along * (length * 0.3) + inward * 0.01;
-      door.edge_u = along * 0.9;
-      door.edge_v = Eigen::Vector3d(0, 0, -2.05);
-      door.texture = makeTexture(doorTexture(), false);
-      local_.push_back(door);
-    }
-    const int posters = static_cast<int>(length / 2.5);
-    for (int k = 0; k < posters; ++k) {
-      Surface poster;
-      const double at = (k + 0.5 + rng.uniform(-0.2, 0.2)) * length / posters;
-      if (i == 0 && std::abs(at - length * 0.3 - 0.45) < 1.2) continue;  // not over the door
-      const double size = rng.uniform(0.5, 0.9);
-      poster.origin = Eigen::Vector3d(a.x(), a.y(), rng.uniform(1.3, 1.8)) + along * at + inward * 0.01;
-      poster.edge_u = along * size;
-      poster.edge_v = Eigen::Vector3d(0, 0, -size * rng.uniform(0.7, 1.3));
-      poster.texture = makeTexture(posterTexture(rng), false);
-      local_.push_back(poster);
-    }
+    addWallDecorations(i, a, dir, length, rng);
   }
+}
 
-  // Ceiling lights: bright panels just under the ceiling (lit from inside, off in the dark).
+void Scene::addWallDecorations(int wall, const Eigen::Vector2d& a, const Eigen::Vector2d& dir, double length,
+                               cv::RNG& rng) {
+  // A door on the first wall, posters on the others, 1 cm in front of the wall.
+  const Eigen::Vector3d inward(-dir.y(), dir.x(), 0);
+  const Eigen::Vector3d along(dir.x(), dir.y(), 0);
+  if (wall == 0 && length > 3.0) {
+    Surface door;
+    door.origin = Eigen::Vector3d(a.x(), a.y(), 2.05) + along * (length * 0.3) + inward * 0.01;
+    door.edge_u = along * 0.9;
+    door.edge_v = Eigen::Vector3d(0, 0, -2.05);
+    door.texture = makeTexture(doorTexture(), false);
+    local_.push_back(door);
+  }
+  const int posters = static_cast<int>(length / 2.5);
+  for (int k = 0; k < posters; ++k) {
+    Surface poster;
+    const double at = (k + 0.5 + rng.uniform(-0.2, 0.2)) * length / posters;
+    if (wall == 0 && std::abs(at - length * 0.3 - 0.45) < 1.2) continue;  // not over the door
+    const double size = rng.uniform(0.5, 0.9);
+    poster.origin = Eigen::Vector3d(a.x(), a.y(), rng.uniform(1.3, 1.8)) + along * at + inward * 0.01;
+    poster.edge_u = along * size;
+    poster.edge_v = Eigen::Vector3d(0, 0, -size * rng.uniform(0.7, 1.3));
+    poster.texture = makeTexture(posterTexture(rng), false);
+    local_.push_back(poster);
+  }
+}
+
+void Scene::addCeilingLights(const RoomConfig& room) {
+  // Bright panels just under the ceiling (lit from inside, off in the dark).
   for (double x = room.x_min_m + 1.5; x < room.x_max_m - 1.0; x += 3.0) {
     for (double y = room.y_min_m + 1.5; y < room.y_max_m - 1.0; y += 3.0) {
       Surface lamp;
@@ -525,7 +579,9 @@ Scene::Scene(const SimSettings& settings, const TargetModel& target, const Light
       local_.push_back(lamp);
     }
   }
+}
 
+void Scene::addClutter(const RoomConfig& room, cv::RNG& rng) {
   for (const auto& c : room.clutter) {
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     pose.translation() = Eigen::Vector3d(c.x_m, c.y_m, 0);
@@ -536,10 +592,6 @@ Scene::Scene(const SimSettings& settings, const TargetModel& target, const Light
     const double scale = c.material == "cardboard" || busy ? std::max(c.size_x_m, c.size_y_m) : 0.5;
     addBox(pose, Eigen::Vector3d(c.size_x_m, c.size_y_m, c.size_z_m), tex, c.color_bgr, scale, false, false);
   }
-
-  addTargetRobot(target);
-  setLighting(lighting, settings.light_direction, settings.ambient, settings.visible_effects, settings.ir_effects);
-  update(Eigen::Isometry3d::Identity());
 }
 
 void Scene::setLighting(const LightingScenario& lighting, const Eigen::Vector3d& light_direction, double ambient,

@@ -81,6 +81,51 @@ geometry_msgs::Pose toPose(const Eigen::Isometry3d& t) {
 class SimNode {
  public:
   SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), image_transport_(nh), diagnostics_(nh, pnh) {
+    sim_ = std::make_unique<docking_sim::Simulation>(simulationFiles(pnh));
+    readRunParameters(pnh);
+    advertise();
+    if (publish_world_to_odom_) publishWorldToOdom();
+    diagnostics_.setHardwareID("docking_sim");
+    diagnostics_.add("Simulator", this, &SimNode::diagnose);
+    const auto& sc = sim_->scenario();
+    ROS_INFO("docking_sim: scenario '%s' (%s), lighting %s, seed %llu, duration %.0f s, real-time factor %.2f, "
+             "cameras %.1f Hz (right stereo camera %.2f Hz), %d render thread(s)",
+             sc.name.c_str(), sc.description.c_str(), sc.lighting.c_str(), static_cast<unsigned long long>(sc.seed),
+             sc.duration_s, real_time_factor_, camera_rate_hz_, camera_rate_hz_ / right_camera_every_, render_threads_);
+  }
+
+  void run() {
+    Schedule schedule(sim_->settings(), camera_rate_hz_);
+    double last_clock_s = sim_->time();
+    const ros::WallTime wall_start = ros::WallTime::now();
+    ros::WallTime last_behind_warning = wall_start;
+    while (ros::ok()) {
+      const double next = schedule.next();
+      if (real_time_factor_ > 0.0) keepRealTimeFactor(next, wall_start, &last_behind_warning);
+      ros::spinOnce();  // wheel commands arrive at the sim time they are applied
+      diagnostics_.update();
+      sim_->advance(next - sim_->time());
+      publishDueEvents(next, &schedule, &last_clock_s);
+      if (scenarioFinished() && exit_at_end_) break;  // otherwise time keeps running, so that other nodes do not hang
+    }
+  }
+
+ private:
+  /// When each periodic event is next due: integer counters, so that stamps are exact multiples of their periods.
+  struct Schedule {
+    Schedule(const docking_sim::SimSettings& settings, double camera_rate_hz)
+        : physics_dt(1.0 / settings.physics_rate_hz),
+          camera_dt(1.0 / camera_rate_hz),
+          encoder_dt(1.0 / settings.encoder_rate_hz),
+          tf_dt(1.0 / settings.truth_tf_rate_hz) {}
+    double next() const {
+      return std::min({physics_n * physics_dt, camera_n * camera_dt, encoder_n * encoder_dt, tf_n * tf_dt});
+    }
+    double physics_dt, camera_dt, encoder_dt, tf_dt;
+    long physics_n = 1, camera_n = 1, encoder_n = 1, tf_n = 1;
+  };
+
+  static docking_sim::SimulationFiles simulationFiles(const ros::NodeHandle& pnh) {
     docking_sim::SimulationFiles files;
     files.sim_config = requireString(pnh, "sim_config");
     files.target_config = requireString(pnh, "target_config");
@@ -92,8 +137,11 @@ class SimNode {
     } else {
       files.scenario = requireString(pnh, "scenario_dir") + "/" + requireString(pnh, "scenario") + ".yaml";
     }
-    sim_ = std::make_unique<docking_sim::Simulation>(files);
+    return files;
+  }
 
+  /// The node's own parameters (rates, threads, flags); sim.yaml's values where absent.
+  void readRunParameters(const ros::NodeHandle& pnh) {
     const auto& settings = sim_->settings();
     real_time_factor_ = optionalTyped(pnh, "real_time_factor", settings.real_time_factor, "a number");
     camera_rate_hz_ = optionalTyped(pnh, "camera_rate_hz", settings.camera_rate_hz, "a number");
@@ -114,8 +162,11 @@ class SimNode {
     right_camera_every_ = rightCameraEvery(camera_rate_hz_, right_rate_hz);
     exit_at_end_ = optionalTyped(pnh, "exit_at_end", true, "true or false");
     publish_world_to_odom_ = optionalTyped(pnh, "publish_world_to_odom", true, "true or false");
+  }
 
-    // Camera info straight from the calibration files the robot uses (camera_calibration_parsers).
+  /// Camera publishers (camera info straight from the calibration files the robot uses, through
+  /// camera_calibration_parsers), clock, encoders, truth, and the wheel command subscriber.
+  void advertise() {
     const char* image_topics[3] = {names::topics::kStereoLeftImageRaw, names::topics::kStereoRightImageRaw,
                                    names::topics::kIrImageRaw};
     for (int i = 0; i < 3; ++i) {
@@ -135,89 +186,70 @@ class SimNode {
     truth_ir_pub_ = nh_.advertise<nav_msgs::Odometry>(names::topics::kTruthIr, 10);
     truth_chaser_pub_ = nh_.advertise<nav_msgs::Odometry>(names::topics::kTruthChaserOdom, 10);
     command_sub_ = nh_.subscribe(names::topics::kWheelCommand, 10, &SimNode::onWheelCommand, this);
-
-    if (publish_world_to_odom_) {
-      // odom starts where the chaser starts, so rviz can show odometry and truth in one tree.
-      geometry_msgs::TransformStamped t;
-      t.header.stamp = ros::Time(kTimeOffsetS);
-      t.header.frame_id = names::frames::kWorld;
-      t.child_frame_id = names::frames::kOdom;
-      t.transform = toTransform(sim_->worldTChaser());
-      static_broadcaster_.sendTransform(t);
-    }
-    diagnostics_.setHardwareID("docking_sim");
-    diagnostics_.add("Simulator", this, &SimNode::diagnose);
-    const auto& sc = sim_->scenario();
-    ROS_INFO("docking_sim: scenario '%s' (%s), lighting %s, seed %llu, duration %.0f s, real-time factor %.2f, "
-             "cameras %.1f Hz (right stereo camera %.2f Hz), %d render thread(s)",
-             sc.name.c_str(), sc.description.c_str(), sc.lighting.c_str(), static_cast<unsigned long long>(sc.seed),
-             sc.duration_s, real_time_factor_, camera_rate_hz_, camera_rate_hz_ / right_camera_every_, render_threads_);
   }
 
-  void run() {
-    const auto& settings = sim_->settings();
-    const double physics_dt = 1.0 / settings.physics_rate_hz;
-    const double camera_dt = 1.0 / camera_rate_hz_;
-    const double encoder_dt = 1.0 / settings.encoder_rate_hz;
-    const double tf_dt = 1.0 / settings.truth_tf_rate_hz;
-    // Events are scheduled by integer counters so that stamps are exact multiples of their periods.
-    long physics_n = 1, camera_n = 1, encoder_n = 1, tf_n = 1;
-    double last_clock_s = sim_->time();
-    const ros::WallTime wall_start = ros::WallTime::now();
-    ros::WallTime last_behind_warning = wall_start;
+  /// odom starts where the chaser starts, so rviz can show odometry and truth in one tree.
+  void publishWorldToOdom() {
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = ros::Time(kTimeOffsetS);
+    t.header.frame_id = names::frames::kWorld;
+    t.child_frame_id = names::frames::kOdom;
+    t.transform = toTransform(sim_->worldTChaser());
+    static_broadcaster_.sendTransform(t);
+  }
 
-    while (ros::ok()) {
-      const double next = std::min({physics_n * physics_dt, camera_n * camera_dt, encoder_n * encoder_dt,
-                                    tf_n * tf_dt});
-      if (real_time_factor_ > 0.0) {
-        const ros::WallTime due = wall_start + ros::WallDuration(next / real_time_factor_);
-        const ros::WallTime now = ros::WallTime::now();
-        if (due > now) {
-          (due - now).sleep();
-        } else if ((now - due).toSec() > 0.5 && (now - last_behind_warning).toSec() > 10.0) {
-          ROS_WARN("docking_sim: %.1f s behind the requested real-time factor %.2f (rendering is the bottleneck)",
-                   (now - due).toSec() * real_time_factor_, real_time_factor_);
-          last_behind_warning = now;
-        }
-      }
-      ros::spinOnce();  // wheel commands arrive at the sim time they are applied
-      diagnostics_.update();
-      sim_->advance(next - sim_->time());
-      const ros::Time stamp(sim_->time() + kTimeOffsetS);
-
-      const double eps = 1e-9;
-      const bool encoders_due = encoder_n * encoder_dt <= next + eps;
-      const bool tf_due = tf_n * tf_dt <= next + eps;
-      const bool cameras_due = camera_n * camera_dt <= next + eps;
-      if (encoders_due || tf_due || cameras_due || sim_->time() - last_clock_s >= kMaxClockGapS - eps) {
-        publishClock(stamp);
-        last_clock_s = sim_->time();
-      }
-      if (physics_n * physics_dt <= next + eps) ++physics_n;
-      if (encoders_due) {
-        ++encoder_n;
-        publishEncoders(stamp);
-      }
-      if (tf_due) {
-        ++tf_n;
-        publishTruthTf(stamp);
-      }
-      if (cameras_due) {
-        publishCameras(stamp, camera_n);
-        ++camera_n;
-      }
-      const double duration = sim_->scenario().duration_s;
-      if (duration > 0.0 && sim_->time() >= duration && !finished_) {
-        finished_ = true;
-        ROS_INFO("docking_sim: scenario '%s' finished after %.1f s of sim time", sim_->scenario().name.c_str(),
-                 sim_->time());
-        if (exit_at_end_) break;
-        // Otherwise time keeps running, so that other nodes do not hang.
-      }
+  /// Sleeps until sim time `next` is due on the wall clock; warns (every 10 s at most) when behind.
+  void keepRealTimeFactor(double next, const ros::WallTime& wall_start, ros::WallTime* last_behind_warning) const {
+    const ros::WallTime due = wall_start + ros::WallDuration(next / real_time_factor_);
+    const ros::WallTime now = ros::WallTime::now();
+    if (due > now) {
+      (due - now).sleep();
+    } else if ((now - due).toSec() > 0.5 && (now - *last_behind_warning).toSec() > 10.0) {
+      ROS_WARN("docking_sim: %.1f s behind the requested real-time factor %.2f (rendering is the bottleneck)",
+               (now - due).toSec() * real_time_factor_, real_time_factor_);
+      *last_behind_warning = now;
     }
   }
 
- private:
+  /// At sim time `next`: /clock (with every stamped message, and at least every kMaxClockGapS), then
+  /// the encoders, truth tf and cameras that are due; advances their counters.
+  void publishDueEvents(double next, Schedule* s, double* last_clock_s) {
+    const ros::Time stamp(sim_->time() + kTimeOffsetS);
+    const double eps = 1e-9;
+    const bool encoders_due = s->encoder_n * s->encoder_dt <= next + eps;
+    const bool tf_due = s->tf_n * s->tf_dt <= next + eps;
+    const bool cameras_due = s->camera_n * s->camera_dt <= next + eps;
+    if (encoders_due || tf_due || cameras_due || sim_->time() - *last_clock_s >= kMaxClockGapS - eps) {
+      publishClock(stamp);
+      *last_clock_s = sim_->time();
+    }
+    if (s->physics_n * s->physics_dt <= next + eps) ++s->physics_n;
+    if (encoders_due) {
+      ++s->encoder_n;
+      publishEncoders(stamp);
+    }
+    if (tf_due) {
+      ++s->tf_n;
+      publishTruthTf(stamp);
+    }
+    if (cameras_due) {
+      publishCameras(stamp, s->camera_n);
+      ++s->camera_n;
+    }
+  }
+
+  /// True from the moment the scenario's duration has passed (logged once).
+  bool scenarioFinished() {
+    const double duration = sim_->scenario().duration_s;
+    if (duration > 0.0 && sim_->time() >= duration && !finished_) {
+      finished_ = true;
+      ROS_INFO("docking_sim: scenario '%s' finished after %.1f s of sim time", sim_->scenario().name.c_str(),
+               sim_->time());
+      return true;
+    }
+    return false;
+  }
+
   static constexpr uint32_t kImageQueueSize = 5;
 
   /// The right camera renders every n-th frame of the cameras' clock: the largest n whose rate still

@@ -163,31 +163,25 @@ std::string describe(const docking_sim::Simulation& sim, int cam) {
   return buf;
 }
 
-/// The sequence mode: one camera's frames rectified as image_proc does it on the robot
-/// (image_proc/debayer: bgr8 -> mono8 with cvtColor; image_proc/rectify: cv::remap of the
-/// initUndistortRectifyMap(K, D, R, P) maps, bilinear), with the truth in the rectified frame.
-int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, const std::string& target_file,
-                   int cam, int frames, double dt_s, const std::string& folder) {
-  const bool ir = cam == docking_sim::RobotModel::kIr;
-  const std::string camera_name = ir ? "ir" : "stereo_left";
-  const char* file_prefix = ir ? "ir" : "left";
-  const docking_sim::CameraCalibration& cal = sim.robot().cameras[cam].calibration;
-  // R: the rectification rotation (rectified <- raw optical frame), from the calibration file (the loader
-  // keeps K, D, P only); P's left 3x3: the rectified intrinsics. Our left and IR cameras have R = I, P = K.
-  cv::Matx33d rect_R = cv::Matx33d::eye();
+/// R: the rectification rotation (rectified <- raw optical frame), from the calibration file (the loader
+/// keeps K, D, P only). False (reported) when the file's rectification_matrix does not parse.
+bool loadRectification(const docking_sim::CameraCalibration& cal, cv::Matx33d* rect_R) {
+  *rect_R = cv::Matx33d::eye();
   try {
     const YAML::Node r = YAML::LoadFile(cal.file)["rectification_matrix"]["data"];
     if (r && r.IsSequence() && r.size() == 9)
-      for (int i = 0; i < 9; ++i) rect_R(i / 3, i % 3) = r[static_cast<std::size_t>(i)].as<double>();
+      for (int i = 0; i < 9; ++i) (*rect_R)(i / 3, i % 3) = r[static_cast<std::size_t>(i)].as<double>();
   } catch (const YAML::Exception& e) {
     std::cerr << cal.file << ": rectification_matrix: " << e.what() << "\n";
-    return 1;
+    return false;
   }
-  const cv::Matx33d new_K(cal.P(0, 0), cal.P(0, 1), cal.P(0, 2), cal.P(1, 0), cal.P(1, 1), cal.P(1, 2), 0, 0, 1);
-  cv::Mat map1, map2;
-  cv::initUndistortRectifyMap(cal.K, cal.D, rect_R, new_K, cv::Size(cal.width, cal.height), CV_16SC2, map1, map2);
-  ::mkdir(folder.c_str(), 0755);
-  std::ostringstream json;
+  return true;
+}
+
+/// sequence.json up to the frames list: scenario, target, camera, the rectified intrinsics new_K, dt.
+void writeSequenceHeader(std::ostringstream& json, const std::string& scenario, const std::string& target_file,
+                         const std::string& camera_name, const docking_sim::CameraCalibration& cal,
+                         const cv::Matx33d& new_K, double dt_s) {
   json << "{\n  \"scenario\": " << jsonString(scenario) << ",\n  \"target\": " << jsonString(target_file)
        << ",\n  \"camera\": " << jsonString(camera_name) << ",\n"
        << "  \"rectification\": \"rendered with the calibration's plumb_bob distortion, converted to grey and "
@@ -197,6 +191,48 @@ int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, co
        << num(new_K(0, 0)) << ", \"fy\": " << num(new_K(1, 1)) << ", \"cx\": " << num(new_K(0, 2))
        << ", \"cy\": " << num(new_K(1, 2)) << "},\n"
        << "  \"dt_s\": " << num(dt_s) << ",\n  \"frames\": [\n";
+}
+
+/// One frame's entry of sequence.json (without the separator): stamp, image, the truth in the rectified
+/// frame (R_rect), the target's blur and the exposure.
+void writeSequenceFrame(std::ostringstream& json, const docking_sim::Simulation& sim, int cam, int k,
+                        const char* name, const Eigen::Matrix3d& R_rect) {
+  const docking_sim::RelativeTruth truth = sim.truthInCamera(cam);
+  const Eigen::Matrix3d R = R_rect * truth.camera_T_port.linear();
+  const Eigen::Vector3d t = R_rect * truth.camera_T_port.translation();
+  const Eigen::Quaterniond q(R);
+  const Eigen::Vector3d v = R_rect * truth.linear_m_s, w = R_rect * truth.angular_rad_s;
+  Eigen::Matrix<double, 9, 1> r9;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r9(3 * i + j) = R(i, j);
+  json << "    {\"index\": " << k << ", \"stamp_s\": " << num(sim.time()) << ", \"image\": \"" << name
+       << "\", \"position_m\": " << jsonArray(t, 3) << ", \"rotation\": " << jsonArray(r9, 9)
+       << ", \"quaternion_xyzw\": [" << num(q.x()) << ", " << num(q.y()) << ", " << num(q.z()) << ", "
+       << num(q.w()) << "], \"linear_m_s\": " << jsonArray(v, 3) << ", \"angular_rad_s\": " << jsonArray(w, 3);
+  const TargetBlur blur = targetBlur(sim, cam);
+  const auto& exposure = sim.renderer(cam).lastExposure();
+  json << ", \"defocus_sigma_px\": " << num(blur.defocus_sigma_px) << ", \"motion_blur_px\": " << num(blur.motion_px)
+       << ", \"exposure_s\": " << num(exposure.exposure_time_s) << ", \"gain\": " << num(exposure.gain) << "}";
+}
+
+/// The sequence mode: one camera's frames rectified as image_proc does it on the robot
+/// (image_proc/debayer: bgr8 -> mono8 with cvtColor; image_proc/rectify: cv::remap of the
+/// initUndistortRectifyMap(K, D, R, P) maps, bilinear), with the truth in the rectified frame.
+int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, const std::string& target_file,
+                   int cam, int frames, double dt_s, const std::string& folder) {
+  const bool ir = cam == docking_sim::RobotModel::kIr;
+  const std::string camera_name = ir ? "ir" : "stereo_left";
+  const char* file_prefix = ir ? "ir" : "left";
+  const docking_sim::CameraCalibration& cal = sim.robot().cameras[cam].calibration;
+  // P's left 3x3: the rectified intrinsics. Our left and IR cameras have R = I, P = K.
+  cv::Matx33d rect_R;
+  if (!loadRectification(cal, &rect_R)) return 1;
+  const cv::Matx33d new_K(cal.P(0, 0), cal.P(0, 1), cal.P(0, 2), cal.P(1, 0), cal.P(1, 1), cal.P(1, 2), 0, 0, 1);
+  cv::Mat map1, map2;
+  cv::initUndistortRectifyMap(cal.K, cal.D, rect_R, new_K, cv::Size(cal.width, cal.height), CV_16SC2, map1, map2);
+  ::mkdir(folder.c_str(), 0755);
+  std::ostringstream json;
+  writeSequenceHeader(json, scenario, target_file, camera_name, cal, new_K, dt_s);
   Eigen::Matrix3d R_rect;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) R_rect(i, j) = rect_R(i, j);
@@ -213,23 +249,8 @@ int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, co
       std::cerr << "cannot write " << folder << "/" << name << "\n";
       return 1;
     }
-    const docking_sim::RelativeTruth truth = sim.truthInCamera(cam);
-    const Eigen::Matrix3d R = R_rect * truth.camera_T_port.linear();
-    const Eigen::Vector3d t = R_rect * truth.camera_T_port.translation();
-    const Eigen::Quaterniond q(R);
-    const Eigen::Vector3d v = R_rect * truth.linear_m_s, w = R_rect * truth.angular_rad_s;
-    Eigen::Matrix<double, 9, 1> r9;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) r9(3 * i + j) = R(i, j);
-    json << "    {\"index\": " << k << ", \"stamp_s\": " << num(sim.time()) << ", \"image\": \"" << name
-         << "\", \"position_m\": " << jsonArray(t, 3) << ", \"rotation\": " << jsonArray(r9, 9)
-         << ", \"quaternion_xyzw\": [" << num(q.x()) << ", " << num(q.y()) << ", " << num(q.z()) << ", "
-         << num(q.w()) << "], \"linear_m_s\": " << jsonArray(v, 3) << ", \"angular_rad_s\": " << jsonArray(w, 3);
-    const TargetBlur blur = targetBlur(sim, cam);
-    const auto& exposure = sim.renderer(cam).lastExposure();
-    json << ", \"defocus_sigma_px\": " << num(blur.defocus_sigma_px) << ", \"motion_blur_px\": " << num(blur.motion_px)
-         << ", \"exposure_s\": " << num(exposure.exposure_time_s) << ", \"gain\": " << num(exposure.gain) << "}"
-         << (k + 1 < frames ? "," : "") << "\n";
+    writeSequenceFrame(json, sim, cam, k, name, R_rect);
+    json << (k + 1 < frames ? "," : "") << "\n";
   }
   json << "  ]\n}\n";
   std::ofstream file(folder + "/sequence.json");
@@ -242,84 +263,100 @@ int renderSequence(docking_sim::Simulation& sim, const std::string& scenario, co
   return 0;
 }
 
-}  // namespace
+const char* const kCameraNames[3] = {"stereo_left", "stereo_right", "ir"};
 
-int main(int argc, char** argv) {
+/// --bench: CPU ms per frame per camera (with its stages), then the three cameras of an instant together
+/// on 1 and on render_threads threads (as the node renders them: Simulation::renderCameras).
+void runBench(docking_sim::Simulation& sim, const std::string& scenario, int bench) {
+  std::cout << "scenario " << scenario << ", " << bench << " frames per camera, 640x480\n";
+  double total = 0.0;
+  for (int cam = 0; cam < 3; ++cam) {
+    sim.render(cam);  // warm-up: first-touch allocations
+    docking_sim::RenderTiming stages;
+    const double start = cpuSeconds();
+    for (int k = 0; k < bench; ++k) {
+      sim.advance(1.0 / 30.0);
+      sim.render(cam);
+      const auto& t = sim.renderer(cam).lastTiming();
+      stages.rasterize_ms += t.rasterize_ms / bench;
+      stages.defocus_ms += t.defocus_ms / bench;
+      stages.distort_ms += t.distort_ms / bench;
+      stages.effects_ms += t.effects_ms / bench;
+    }
+    const double ms = 1e3 * (cpuSeconds() - start) / bench;
+    total += ms;
+    std::cout << "  " << kCameraNames[cam] << ": " << ms << " ms CPU per frame (rasterize incl. sub-frames "
+              << stages.rasterize_ms << ", defocus " << stages.defocus_ms << ", distortion " << stages.distort_ms
+              << ", blur/glare/vignette/noise/metering " << stages.effects_ms << "); last frame "
+              << sim.renderer(cam).lastExposure().subframes << " sub-frame(s)\n";
+  }
+  std::cout << "  mean over cameras: " << total / 3 << " ms CPU per frame\n";
+  for (int threads : {1, sim.settings().render_threads}) {
+    const auto start = std::chrono::steady_clock::now();
+    for (int k = 0; k < bench; ++k) {
+      sim.advance(1.0 / 30.0);
+      sim.renderCameras({{true, true, true}}, threads);
+    }
+    const std::chrono::duration<double, std::milli> wall = std::chrono::steady_clock::now() - start;
+    std::cout << "  three cameras on " << threads << " thread(s): " << wall.count() / bench
+              << " ms wall per instant\n";
+    if (threads == sim.settings().render_threads) break;
+  }
+}
+
+struct Arguments {
   std::string config_dir, scenario = "default", out = "frame", target_file, approach_file;
   double time_s = 0.0, dt_s = 1.0 / 30.0;
   int bench = 0, sequence = 0, sequence_camera = docking_sim::RobotModel::kStereoLeft;
+};
+
+/// False on a malformed command line (then usage()).
+bool parseArguments(int argc, char** argv, Arguments* a) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (i + 1 >= argc) return usage();
+    if (i + 1 >= argc) return false;
     const std::string value = argv[++i];
-    if (arg == "--config") config_dir = value;
-    else if (arg == "--scenario") scenario = value;
-    else if (arg == "--time") time_s = std::stod(value);
-    else if (arg == "--out") out = value;
-    else if (arg == "--bench") bench = std::stoi(value);
-    else if (arg == "--sequence") sequence = std::stoi(value);
-    else if (arg == "--dt") dt_s = std::stod(value);
-    else if (arg == "--target") target_file = value;
-    else if (arg == "--approach") approach_file = value;
+    if (arg == "--config") a->config_dir = value;
+    else if (arg == "--scenario") a->scenario = value;
+    else if (arg == "--time") a->time_s = std::stod(value);
+    else if (arg == "--out") a->out = value;
+    else if (arg == "--bench") a->bench = std::stoi(value);
+    else if (arg == "--sequence") a->sequence = std::stoi(value);
+    else if (arg == "--dt") a->dt_s = std::stod(value);
+    else if (arg == "--target") a->target_file = value;
+    else if (arg == "--approach") a->approach_file = value;
     else if (arg == "--camera" && (value == "stereo_left" || value == "ir"))
-      sequence_camera = value == "ir" ? docking_sim::RobotModel::kIr : docking_sim::RobotModel::kStereoLeft;
-    else return usage();
+      a->sequence_camera = value == "ir" ? docking_sim::RobotModel::kIr : docking_sim::RobotModel::kStereoLeft;
+    else return false;
   }
-  if (config_dir.empty() || sequence < 0 || !(dt_s > 0.0)) return usage();
+  return !a->config_dir.empty() && a->sequence >= 0 && a->dt_s > 0.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Arguments a;
+  if (!parseArguments(argc, argv, &a)) return usage();
   docking_sim::SimulationFiles files;
-  files.sim_config = config_dir + "/sim.yaml";
-  files.scenario = config_dir + "/scenarios/" + scenario + ".yaml";
-  files.target_config = target_file.empty() ? config_dir + "/target.yaml" : target_file;
-  files.robot_config = config_dir + "/robot.yaml";
-  files.omni_base_config = config_dir + "/omni_base.yaml";
+  files.sim_config = a.config_dir + "/sim.yaml";
+  files.scenario = a.config_dir + "/scenarios/" + a.scenario + ".yaml";
+  files.target_config = a.target_file.empty() ? a.config_dir + "/target.yaml" : a.target_file;
+  files.robot_config = a.config_dir + "/robot.yaml";
+  files.omni_base_config = a.config_dir + "/omni_base.yaml";
   // One core, as the node runs: OpenCV's worker threads would only add hand-over cost here.
   cv::setNumThreads(1);
   try {
     docking_sim::Simulation sim(files);
-    while (sim.time() < time_s - 1e-9) sim.advance(std::min(0.005, time_s - sim.time()));
-    if (sequence > 0) return renderSequence(sim, scenario, files.target_config, sequence_camera, sequence, dt_s, out);
-    if (!approach_file.empty()) return renderApproach(sim, approach_file, out);
-    const char* names[3] = {"stereo_left", "stereo_right", "ir"};
-    if (bench > 0) {
-      std::cout << "scenario " << scenario << ", " << bench << " frames per camera, 640x480\n";
-      double total = 0.0;
-      for (int cam = 0; cam < 3; ++cam) {
-        sim.render(cam);  // warm-up: first-touch allocations
-        docking_sim::RenderTiming stages;
-        const double start = cpuSeconds();
-        for (int k = 0; k < bench; ++k) {
-          sim.advance(1.0 / 30.0);
-          sim.render(cam);
-          const auto& t = sim.renderer(cam).lastTiming();
-          stages.rasterize_ms += t.rasterize_ms / bench;
-          stages.defocus_ms += t.defocus_ms / bench;
-          stages.distort_ms += t.distort_ms / bench;
-          stages.effects_ms += t.effects_ms / bench;
-        }
-        const double ms = 1e3 * (cpuSeconds() - start) / bench;
-        total += ms;
-        std::cout << "  " << names[cam] << ": " << ms << " ms CPU per frame (rasterize incl. sub-frames "
-                  << stages.rasterize_ms << ", defocus " << stages.defocus_ms << ", distortion " << stages.distort_ms
-                  << ", blur/glare/vignette/noise/metering " << stages.effects_ms << "); last frame "
-                  << sim.renderer(cam).lastExposure().subframes << " sub-frame(s)\n";
-      }
-      std::cout << "  mean over cameras: " << total / 3 << " ms CPU per frame\n";
-      // The node renders the three cameras of an instant together (Simulation::renderCameras).
-      for (int threads : {1, sim.settings().render_threads}) {
-        const auto start = std::chrono::steady_clock::now();
-        for (int k = 0; k < bench; ++k) {
-          sim.advance(1.0 / 30.0);
-          sim.renderCameras({{true, true, true}}, threads);
-        }
-        const std::chrono::duration<double, std::milli> wall = std::chrono::steady_clock::now() - start;
-        std::cout << "  three cameras on " << threads << " thread(s): " << wall.count() / bench
-                  << " ms wall per instant\n";
-        if (threads == sim.settings().render_threads) break;
-      }
+    while (sim.time() < a.time_s - 1e-9) sim.advance(std::min(0.005, a.time_s - sim.time()));
+    if (a.sequence > 0)
+      return renderSequence(sim, a.scenario, files.target_config, a.sequence_camera, a.sequence, a.dt_s, a.out);
+    if (!a.approach_file.empty()) return renderApproach(sim, a.approach_file, a.out);
+    if (a.bench > 0) {
+      runBench(sim, a.scenario, a.bench);
       return 0;
     }
     for (int cam = 0; cam < 3; ++cam) {
-      const std::string path = out + "_" + names[cam] + ".png";
+      const std::string path = a.out + "_" + kCameraNames[cam] + ".png";
       cv::imwrite(path, sim.render(cam));
       std::cout << "wrote " << path << ": " << describe(sim, cam) << "\n";
     }
