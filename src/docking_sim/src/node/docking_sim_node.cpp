@@ -5,6 +5,7 @@
 #include <docking_msgs/WheelCommand.h>
 #include <docking_msgs/WheelEncoders.h>
 #include <docking_msgs/names.h>
+#include <docking_settings/param_reader.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <image_transport/image_transport.h>
 #include <nav_msgs/Odometry.h>
@@ -32,25 +33,10 @@ namespace {
 namespace names = docking_msgs;
 using docking_sim::RobotModel;
 
-std::string requireString(const ros::NodeHandle& nh, const std::string& name) {
-  std::string value;
-  if (!nh.getParam(name, value) || value.empty()) {
-    throw std::runtime_error("missing parameter ~" + name + " (a path or name string)");
-  }
-  return value;
-}
-
-/// A parameter that may be absent (then `fallback`), but if present must have type T: `camera_rate_hz:=fast`
-/// must stop the node, not run it at the default rate.
-template <typename T>
-T optionalTyped(const ros::NodeHandle& nh, const std::string& name, const T& fallback, const char* type_name) {
-  if (!nh.hasParam(name)) return fallback;
-  T value;
-  if (!nh.getParam(name, value)) {
-    std::string text;
-    nh.getParam(name, text);
-    throw std::runtime_error("parameter " + nh.resolveName(name) + " must be " + type_name + ", got '" + text + "'");
-  }
+/// A path or name the node cannot run without (missing, not a string or empty: ConfigError).
+std::string requireName(const docking_settings::ParamReader& reader, const std::string& name) {
+  const auto value = reader.require<std::string>(name);
+  if (value.empty()) reader.invalid(name, "is empty (a path or name string)");
   return value;
 }
 
@@ -126,16 +112,17 @@ class SimNode {
   };
 
   static docking_sim::SimulationFiles simulationFiles(const ros::NodeHandle& pnh) {
+    const docking_settings::ParamReader reader(pnh);
     docking_sim::SimulationFiles files;
-    files.sim_config = requireString(pnh, "sim_config");
-    files.target_config = requireString(pnh, "target_config");
-    files.robot_config = requireString(pnh, "robot_config");
-    files.omni_base_config = requireString(pnh, "omni_base_config");
+    files.sim_config = requireName(reader, "sim_config");
+    files.target_config = requireName(reader, "target_config");
+    files.robot_config = requireName(reader, "robot_config");
+    files.omni_base_config = requireName(reader, "omni_base_config");
     std::string scenario_file;
     if (pnh.getParam("scenario_file", scenario_file) && !scenario_file.empty()) {
       files.scenario = scenario_file;
     } else {
-      files.scenario = requireString(pnh, "scenario_dir") + "/" + requireString(pnh, "scenario") + ".yaml";
+      files.scenario = requireName(reader, "scenario_dir") + "/" + requireName(reader, "scenario") + ".yaml";
     }
     return files;
   }
@@ -143,25 +130,26 @@ class SimNode {
   /// The node's own parameters (rates, threads, flags); sim.yaml's values where absent.
   void readRunParameters(const ros::NodeHandle& pnh) {
     const auto& settings = sim_->settings();
-    real_time_factor_ = optionalTyped(pnh, "real_time_factor", settings.real_time_factor, "a number");
-    camera_rate_hz_ = optionalTyped(pnh, "camera_rate_hz", settings.camera_rate_hz, "a number");
+    const docking_settings::ParamReader reader(pnh);
+    real_time_factor_ = reader.optional("real_time_factor", settings.real_time_factor);
+    camera_rate_hz_ = reader.optional("camera_rate_hz", settings.camera_rate_hz);
     if (!std::isfinite(real_time_factor_) || real_time_factor_ < 0.0) {
-      throw std::runtime_error("parameter ~real_time_factor must be >= 0 (0 = as fast as possible)");
+      reader.invalid("real_time_factor", "must be >= 0 (0 = as fast as possible)");
     }
     if (!std::isfinite(camera_rate_hz_) || camera_rate_hz_ <= 0.0 || camera_rate_hz_ > 200.0) {
-      throw std::runtime_error("parameter ~camera_rate_hz must be within (0, 200]");
+      reader.invalid("camera_rate_hz", "must be within (0, 200]");
     }
-    render_threads_ = optionalTyped(pnh, "render_threads", settings.render_threads, "an integer");
+    render_threads_ = reader.optional("render_threads", settings.render_threads);
     if (render_threads_ < 1 || render_threads_ > 3) {
-      throw std::runtime_error("parameter ~render_threads must be 1, 2 or 3");
+      reader.invalid("render_threads", "must be 1, 2 or 3");
     }
-    const double right_rate_hz = optionalTyped(pnh, "stereo_right_rate_hz", settings.stereo_right_rate_hz, "a number");
+    const double right_rate_hz = reader.optional("stereo_right_rate_hz", settings.stereo_right_rate_hz);
     if (!std::isfinite(right_rate_hz) || right_rate_hz < 0.0) {
-      throw std::runtime_error("parameter ~stereo_right_rate_hz must be >= 0 (0 = camera_rate_hz)");
+      reader.invalid("stereo_right_rate_hz", "must be >= 0 (0 = camera_rate_hz)");
     }
     right_camera_every_ = rightCameraEvery(camera_rate_hz_, right_rate_hz);
-    exit_at_end_ = optionalTyped(pnh, "exit_at_end", true, "true or false");
-    publish_world_to_odom_ = optionalTyped(pnh, "publish_world_to_odom", true, "true or false");
+    exit_at_end_ = reader.optional("exit_at_end", true);
+    publish_world_to_odom_ = reader.optional("publish_world_to_odom", true);
   }
 
   /// Camera publishers (camera info straight from the calibration files the robot uses, through
