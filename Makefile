@@ -17,7 +17,7 @@ CATKIN_MAKE_SERIAL := catkin_make -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCATKIN_WHIT
 CATKIN_MAKE := $(CATKIN_MAKE_SERIAL) -j$(JOBS)
 SETUP := source $(CURDIR)/devel/setup.bash
 
-.PHONY: deps build test demo campaign bench eval tune ablate lint clean fuzz-serial fuzz-messages firmware flash-firmware
+.PHONY: deps build test demo campaign bench eval report tune ablate lint clean fuzz-serial fuzz-messages firmware flash-firmware
 
 deps:
 	@scripts/install-deps.sh
@@ -56,6 +56,12 @@ bench: build
 
 eval: build
 	@$(SETUP) && scripts/run_eval.sh
+
+# docs/PERFORMANCE.md from what make demo, campaign, eval, bench and ablate wrote under results/: their figures are
+# merged into docs/performance-figures.json (a row not measured again keeps its own date and commit), then rendered
+# (scripts/report/make_report.py). Needs no build.
+report:
+	@/usr/bin/python3 scripts/report/make_report.py
 
 # Each rule switched off in turn, measured on held-out data (scripts/ablate/ablate.py): ABLATE_ARGS, e.g.
 #   make ablate ABLATE_ARGS="--rules arbiter_consistency --suites replay"
