@@ -8,8 +8,8 @@ which it collects from the results that `make demo`, `make campaign`, `make eval
 write under results/. Do not edit by hand: measure, then run `make report`. Each row names the date and commit it
 was measured on and the command that measures it again; a row not measured again keeps its own. Machine: 2 shared
 cores (x86_64), one thread per stage unless a row says otherwise; simulator figures are against its truth.
-The paper's figures (`/work/shared/docs/paper-notes.md`, its results table) and AprilTag 3's stand beside ours
-where they compare. How the parts work: docs/design/.
+The paper's own figures (its results, section V) and AprilTag 3's stand beside ours where they compare.
+How the parts work and why: docs/design/. Goals: the probe tip within 1 cm and the yaw within 1 deg at DOCKED.
 """
 
 PAPER_FAR = "Paper: range error about 30 cm, growing with distance (used beyond 2 m); 5 Hz on a notebook, 0.5 Hz on a Raspberry Pi 3."
@@ -17,7 +17,7 @@ PAPER_VISIBLE = ("Paper: z error under 2 cm, best below 1 m; yaw fits a gyroscop
                  "20-25 Hz on a notebook.")
 PAPER_IR = "Paper: the IR camera still detects the target by its LEDs in the dark, with no drop in rate (no accuracy figure)."
 PAPER_RATES = {"disparity_total": "5 Hz notebook, 0.5 Hz Pi 3", "mono_full": "20-25 Hz notebook, 2-5 Hz Pi 3"}
-GOALS = "Goal: the probe tip within 1 cm and the yaw within 1 deg of the port at DOCKED (truth); image -> `cmd_vel` p95 <= 30 ms."
+GOALS = "Success: the probe tip within 1 cm and the yaw within 1 deg of the port at DOCKED (against the simulator's truth)."
 
 
 def num(value, digits=1, scale=1.0, missing="-"):
@@ -114,7 +114,7 @@ def perception(figures):
 
 
 def cost(figures):
-    lines = ["## Cost per frame, CPU and latency", ""]
+    lines = ["## Cost per frame, CPU and latency", "", "Goal: image -> `cmd_vel` p95 <= 30 ms.", ""]
     bench = figures.get("bench")
     rows = []
     if bench:
