@@ -213,16 +213,17 @@ def effect(off, on):
 def ablation(figures, rules):
     lines = ["## Ablation: what each rule is worth", "",
              "One row per rule of scripts/ablate/rules/*.yaml: the rule switched off alone, measured on held-out data "
-             "(scripts/ablate/heldout.yaml) against the shipped configuration. Measure: "
-             '`make ablate ABLATE_ARGS="--rules RULE"`.', ""]
+             "(scripts/ablate/heldout.yaml, recorded once by scripts/ablate/record_heldout.py) against the shipped "
+             "configuration.", ""]
     measured_rules = figures.get("ablation", {})
     rows = []
     for rule in rules:
         found = measured_rules.get(rule["rule"])
         rows.append(["`%s`" % rule["rule"], rule["node"], rule["guards"].replace("|", "/"),
                      effect(found["off"], found["on"]) if found else "not measured",
-                     measured(found["measured"]) if found else "-"])
-    lines += table(["rule", "node", "what it guards", "effect when off (on: shipped)", "measured"], rows)
+                     measured(found["measured"]) if found else "-",
+                     '`make ablate ABLATE_ARGS="--rules %s"`' % rule["rule"]])
+    lines += table(["rule", "node", "what it guards", "effect when off (on: shipped)", "measured", "command"], rows)
     return lines
 
 

@@ -66,7 +66,7 @@ class PerformanceReport(unittest.TestCase):
                 line = next((l for l in text.splitlines() if l.startswith("| `%s` |" % rule["rule"])), None)
                 self.assertIsNotNone(line, "no row for rule %s" % rule["rule"])
                 if rule["rule"] != "arbiter_hysteresis":
-                    self.assertIn("| not measured | - |", line)
+                    self.assertIn('| not measured | - | `make ablate ABLATE_ARGS="--rules %s"` |' % rule["rule"], line)
 
     def test_a_later_result_replaces_only_what_it_measures(self):
         self.report(FIXTURE)
