@@ -35,8 +35,9 @@ def load_json(path):
 
 
 def provenance_of(folder, result_file, default_command):
-    """The folder's provenance.json, or (measured without one) the result file's date and an unknown commit."""
-    found = load_json(folder / "provenance.json")
+    """The result's own "provenance", the folder's provenance.json, or (measured without either) the result
+    file's date and an unknown commit."""
+    found = (load_json(result_file) or {}).get("provenance") or load_json(folder / "provenance.json")
     if found:
         return {k: found[k] for k in ("command", "commit", "date")}
     mtime = datetime.datetime.fromtimestamp(result_file.stat().st_mtime, datetime.timezone.utc)
@@ -129,6 +130,22 @@ def collect_campaign(results, figures):
     return {"results/campaign/summary.json": row["measured"]}
 
 
+def collect_stack(results, figures):
+    """scripts/eval/stack_memory.py's result: CPU and memory of the robot's stack in one scenario."""
+    result_file = results / "stack_memory.json"
+    result = load_json(result_file)
+    if result is None:
+        return {}
+    measured = provenance_of(results, result_file, "scripts/eval/stack_memory.py")
+    stack = figures.setdefault("stack", {})
+    stack["%s at %g Hz" % (result["scenario"], result["camera_rate_hz"])] = {
+        "scenario": result["scenario"], "camera_rate_hz": result["camera_rate_hz"],
+        "cpu_cores": result.get("stack_cpu_cores_per_sim_second"),
+        "pss_mb": result.get("stack_peak_of_pss_sum_mb"), "rss_mb": result.get("stack_peak_of_sum_mb"),
+        "measured": measured}
+    return {"results/stack_memory.json": measured}
+
+
 def collect_ablation(results, figures):
     """Every results/ablate/<date-time>/table.json, oldest first: a rule measured again replaces its row."""
     names = {}
@@ -145,7 +162,8 @@ def collect_ablation(results, figures):
     return names
 
 
-COLLECTORS = (collect_demo, collect_campaign, collect_eval, collect_mono_comparison, collect_bench, collect_ablation)
+COLLECTORS = (collect_demo, collect_campaign, collect_eval, collect_mono_comparison, collect_bench, collect_stack,
+              collect_ablation)
 
 
 def collect(results, figures):

@@ -127,6 +127,15 @@ def cost(figures):
                          num(v.get("instructions_per_frame_M"), 1), paper or ("AprilTag 3" if "apriltag" in name else ""),
                          measured(bench["measured"]), "`make bench`"])
     lines += table(["stage", "ms CPU", "Hz", "M instructions", "paper / peer", "measured", "command"], rows)
+    rows = []
+    for key in sorted(figures.get("stack", {})):
+        s = figures["stack"][key]
+        rows.append(["`%s`" % s["scenario"], num(s["camera_rate_hz"], 0), num(s["cpu_cores"], 2), num(s["pss_mb"], 0),
+                     num(s["rss_mb"], 0), measured(s["measured"]), "`%s`" % s["measured"]["command"]])
+    lines += ["The robot's stack in the closed loop (scripts/eval/stack_memory.py: every process but the simulator's "
+              "and the master's; CPU per second of sim time, so the share of a core at that camera rate):", ""]
+    lines += table(["scenario", "cameras Hz", "CPU, cores", "memory MB (PSS, peak of the sum)",
+                    "memory MB (RSS, peak of the sum)", "measured", "command"], rows)
     lines += ["Latency, image -> `cmd_vel` (wall clock, measured from outside the stack by scripts/demo/run_demo.py; "
               "split at the arbiter's estimate into perception and planner):", ""]
     rows = []

@@ -51,6 +51,7 @@ class PerformanceReport(unittest.TestCase):
                 "| `eval_dark_1m` fused | 1.0 | 1.00 | 0.2 (0.02 %) |",
                 "| `disparity_total` | 22.20 | 45 | 239.0 | 5 Hz notebook, 0.5 Hz Pi 3 | 2026-12-01 `f1x7ure` | `make bench` |",
                 "| `make demo`, one docking | 301 | 9.5 | 15.8 | 41.2 | 8.1 / 13.9 | 1.2 / 2.6 |",
+                "| `closed_loop_still_1p5m` | 30 | 0.45 | 252 | 298 | 2026-12-01 `f1x7ure` | `scripts/eval/stack_memory.py` |",
                 "| `eval_near_1m_on` | 1.00 | 0 | 0.6 mm / 0.31 deg / 6.4 ms | 1.9 mm / 1.91 deg / 5.2 ms "
                 "| 3.7 mm / 0.11 deg / 8.1 ms |",
                 "| `eval_real_motion9px_1m` | nominal | 1.0 | 0.97 / 1.00 / 0.00 / 1.00 | 2 | 0.97 |",
