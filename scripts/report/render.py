@@ -83,13 +83,15 @@ def eval_rows(figures, source, keep):
                                                                   num(100.0 * position / s["range_m"], 2)),
                      num(e.get("position_error_p95_m"), 1, 1000.0),
                      "%s / %s" % (num(e.get("orientation_error_median_deg"), 2), num(e.get("orientation_error_p95_deg"), 2)),
+                     "%s / %s" % (num(e.get("linear_velocity_error_median_mps"), 2, 100.0),
+                                  num(e.get("angular_velocity_error_median_dps"), 2)),
                      e.get("confident_wrong", 0), num(e.get("lowest_3_sigma"), 2), measured(s["measured"]),
                      '`make eval EVAL_ARGS="--only %s"`' % name])
     return rows
 
 
 EVAL_HEAD = ["scene", "range m", "detection", "position median mm (% of range)", "position p95 mm",
-             "orientation median / p95 deg", "confidently wrong", "lowest 3σ share", "measured", "command"]
+             "orientation median / p95 deg", "velocity median cm/s / deg/s", "confidently wrong", "lowest 3σ share", "measured", "command"]
 
 
 def plain(name, s):

@@ -45,9 +45,9 @@ class PerformanceReport(unittest.TestCase):
                 "| `make demo`: default scene (4 m, port 40 deg off, target turning 3 deg/s) | 1 | DOCKED | 2.9 | 0.05 | 24.2 "
                 "| 2026-12-01 `f1x7ure` | `make demo` |",
                 "| campaign, seeds 1000-1003 | 4 | 75 % (docked 100 %) | 2.8 / 12.3 / 13.1 | 0.05 / 0.21 / 0.24 | 18.4 |",
-                "| `eval_far_4m_on` | 4.0 | 1.00 | 12.3 (0.31 %) | 24.6 | - / - | 0 | 0.97 | 2026-12-01 `f1x7ure` "
+                "| `eval_far_4m_on` | 4.0 | 1.00 | 12.3 (0.31 %) | 24.6 | - / - | - / - | 0 | 0.97 | 2026-12-01 `f1x7ure` "
                 "| `make eval EVAL_ARGS=\"--only eval_far_4m_on\"` |",
-                "| `eval_near_1m_on` | 1.0 | 1.00 | 0.6 (0.06 %) | 1.2 | 0.31 / 0.62 | 0 | 0.97 |",
+                "| `eval_near_1m_on` | 1.0 | 1.00 | 0.6 (0.06 %) | 1.2 | 0.31 / 0.62 | 0.52 / 0.63 | 0 | 0.97 |",
                 "| `eval_dark_1m` fused | 1.0 | 1.00 | 0.2 (0.02 %) |",
                 "| `disparity_total` | 22.20 | 45 | 239.0 | 5 Hz notebook, 0.5 Hz Pi 3 | 2026-12-01 `f1x7ure` | `make bench` |",
                 "| `make demo`, one docking | 301 | 9.5 | 15.8 | 41.2 | 8.1 / 13.9 | 1.2 / 2.6 |",
@@ -80,7 +80,7 @@ class PerformanceReport(unittest.TestCase):
             {"command": "make bench", "commit": "1a7e500", "date": "2026-12-05 08:00 UTC"}))
         text = self.report(later)
         self.assertIn("| `disparity_total` | 30.50 | 45 | 239.0 | 5 Hz notebook, 0.5 Hz Pi 3 | 2026-12-05 `1a7e500` |", text)
-        self.assertIn("| `eval_far_4m_on` | 4.0 | 1.00 | 12.3 (0.31 %) | 24.6 | - / - | 0 | 0.97 | 2026-12-01 `f1x7ure` |",
+        self.assertIn("| `eval_far_4m_on` | 4.0 | 1.00 | 12.3 (0.31 %) | 24.6 | - / - | - / - | 0 | 0.97 | 2026-12-01 `f1x7ure` |",
                       text)
 
     def test_rendering_is_repeatable(self):
