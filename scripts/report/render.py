@@ -33,9 +33,9 @@ def row(cells):
     return "| " + " | ".join(str(c) for c in cells) + " |"
 
 
-def table(head, rows):
+def table(head, rows, command):
     if not rows:
-        return ["Not measured yet: run the command above, then `make report`.", ""]
+        return ["Not measured yet: `%s`, then `make report`." % command, ""]
     return [row(head), "|" + "---|" * len(head)] + [row(r) for r in rows] + [""]
 
 
@@ -61,7 +61,8 @@ def closed_loop(figures):
                      num((c.get("time_to_dock_s") or {}).get("median")), measured(c["measured"]),
                      "`%s`" % c["measured"]["command"]])
     lines += table(["run", "runs", "within 1 cm and 1 deg", "probe tip mm (median / p95 / max)",
-                    "yaw deg (median / p95 / max)", "time to dock s (median)", "measured", "command"], rows)
+                    "yaw deg (median / p95 / max)", "time to dock s (median)", "measured", "command"], rows,
+                   "make campaign")
     for c in figures.get("campaigns", []):
         if c.get("failure_causes"):
             lines += ["Failures of the campaign %s: %s." % (measured(c["measured"]), ", ".join(
@@ -107,12 +108,22 @@ def perception(figures):
                 ("Near: visible pose", "mono_visible", lambda n, s: plain(n, s) and s["range_m"] <= 2.0, PAPER_VISIBLE),
                 ("Near: IR pose", "mono_ir", lambda n, s: plain(n, s) and s["range_m"] <= 2.0, PAPER_IR)]
     for title, source, keep, paper in sections:
-        lines += ["### %s (`%s`)" % (title, source), "", paper, ""] + table(EVAL_HEAD, eval_rows(figures, source, keep))
+        lines += ["### %s (`%s`)" % (title, source), "", paper, ""] + table(EVAL_HEAD, eval_rows(figures, source, keep),
+                                                                           "make eval")
     dark = lambda n, s: s["lighting"] == "dark" and not n.startswith("eval_real_")  # noqa: E731
     lines += ["### Dark (`mono_ir`, and `fused`: what the planner gets)", "", PAPER_IR, ""]
     lines += table(EVAL_HEAD, eval_rows(figures, "mono_ir", dark) + [
-        [r[0] + " fused"] + r[1:] for r in eval_rows(figures, "fused", dark)])
+        [r[0] + " fused"] + r[1:] for r in eval_rows(figures, "fused", dark)], "make eval")
     return lines
+
+
+def peer(name):
+    """What a bench stage compares with: the paper's rate, or AprilTag 3 on the same frame."""
+    if name in PAPER_RATES:
+        return PAPER_RATES[name]
+    if "apriltag" in name:
+        return "AprilTag 3 (its tag inset in our target's face, 1 m)"
+    return "the same frame as AprilTag 3" if name.endswith("_same_frame") else ""
 
 
 def cost(figures):
@@ -124,11 +135,10 @@ def cost(figures):
                   "counted by callgrind (independent of the machine's load)." % (bench.get("image"), bench.get("threads")),
                   ""]
         for name, v in bench["stages"].items():
-            paper = next((text for key, text in PAPER_RATES.items() if name == key), "")
             rows.append(["`%s`" % name, num(v.get("ms_median"), 2), num(v.get("hz"), 0),
-                         num(v.get("instructions_per_frame_M"), 1), paper or ("AprilTag 3" if "apriltag" in name else ""),
+                         num(v.get("instructions_per_frame_M"), 1), peer(name),
                          measured(bench["measured"]), "`make bench`"])
-    lines += table(["stage", "ms CPU", "Hz", "M instructions", "paper / peer", "measured", "command"], rows)
+    lines += table(["stage", "ms CPU", "Hz", "M instructions", "paper / peer", "measured", "command"], rows, "make bench")
     rows = []
     for key in sorted(figures.get("stack", {})):
         s = figures["stack"][key]
@@ -137,7 +147,7 @@ def cost(figures):
     lines += ["The robot's stack in the closed loop (scripts/eval/stack_memory.py: every process but the simulator's "
               "and the master's; CPU per second of sim time, so the share of a core at that camera rate):", ""]
     lines += table(["scenario", "cameras Hz", "CPU, cores", "memory MB (PSS, peak of the sum)",
-                    "memory MB (RSS, peak of the sum)", "measured", "command"], rows)
+                    "memory MB (RSS, peak of the sum)", "measured", "command"], rows, "scripts/eval/stack_memory.py")
     lines += ["Latency, image -> `cmd_vel` (wall clock, measured from outside the stack by scripts/demo/run_demo.py; "
               "split at the arbiter's estimate into perception and planner):", ""]
     rows = []
@@ -155,7 +165,7 @@ def cost(figures):
                 lat["runs_at_most_30_ms"], lat["runs_measured"]), c["runs"], "-", num(lat["median"]),
                 num(lat["max"]), "-", "-", measured(c["measured"]), "`%s`" % c["measured"]["command"]])
     lines += table(["run", "estimates / runs", "median ms", "p95 ms", "max ms", "perception median / p95 ms",
-                    "planner median / p95 ms", "measured", "command"], rows)
+                    "planner median / p95 ms", "measured", "command"], rows, "make demo")
     return lines
 
 
@@ -177,7 +187,7 @@ def apriltag(figures):
         rows.append(["`%s`" % name, num(s["range_m"], 2), num(s["face_off_axis_deg"], 0)] + cells +
                     [measured(s["measured"]), "`scripts/eval/mono_comparison.py --scenarios %s`" % name])
     lines += table(["scene", "range m", "face off axis deg", "ours: `pnp` (default)", "the paper's 5-point",
-                    "AprilTag 3", "measured", "command"], rows)
+                    "AprilTag 3", "measured", "command"], rows, "make eval")
     return lines
 
 
@@ -201,7 +211,7 @@ def robustness(figures):
                      num(min(shares) if shares else None, 2), measured(s["measured"]),
                      '`make eval EVAL_ARGS="--only %s"`' % name])
     lines += table(["scene", "light", "range m", "detection visible / IR / stereo / fused", "confidently wrong",
-                    "lowest 3σ share", "measured", "command"], rows)
+                    "lowest 3σ share", "measured", "command"], rows, 'make eval EVAL_ARGS="--set realistic"')
     return lines
 
 
@@ -234,7 +244,8 @@ def ablation(figures, rules):
                      effect(found["off"], found["on"]) if found else "not measured",
                      measured(found["measured"]) if found else "-",
                      '`make ablate ABLATE_ARGS="--rules %s"`' % rule["rule"]])
-    lines += table(["rule", "node", "what it guards", "effect when off (on: shipped)", "measured", "command"], rows)
+    lines += table(["rule", "node", "what it guards", "effect when off (on: shipped)", "measured", "command"], rows,
+                   "make ablate")
     return lines
 
 
