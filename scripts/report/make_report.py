@@ -166,15 +166,28 @@ COLLECTORS = (collect_demo, collect_campaign, collect_eval, collect_mono_compari
               collect_ablation)
 
 
+def referenced(node):
+    """Every provenance ("measured") a row of the figures still carries."""
+    if isinstance(node, dict):
+        found = [node["measured"]] if isinstance(node.get("measured"), dict) else []
+        return found + [m for key, value in node.items() if key != "sources" for m in referenced(value)]
+    if isinstance(node, list):
+        return [m for value in node for m in referenced(value)]
+    return []
+
+
 def collect(results, figures):
-    """Merges every result found into figures; figures["sources"]: each result file read, with its provenance."""
+    """Merges every result found into figures. figures["sources"]: per result file, the provenances of the
+    runs whose rows the page still shows (a file measured again by another command keeps both)."""
     read = {}
     for collector in COLLECTORS:
         read.update(collector(results, figures))
-    figures.setdefault("sources", {}).update(read)
-    kept = [c["measured"] for c in figures.get("campaigns", [])]
-    figures["sources"] = {name: m for name, m in figures["sources"].items()
-                          if not name.startswith("results/campaign/") or m in kept}
+    sources = {name: (runs if isinstance(runs, list) else [runs]) for name, runs in figures.get("sources", {}).items()}
+    for name, measured in read.items():
+        sources[name] = [m for m in sources.get(name, []) if m["command"] != measured["command"]] + [measured]
+    in_use = referenced(figures)
+    figures["sources"] = {name: kept for name, kept in
+                          ((name, [m for m in runs if m in in_use]) for name, runs in sources.items()) if kept}
     return sorted(read)
 
 

@@ -254,9 +254,9 @@ def sources(figures):
     found = figures.get("sources", {})
     lines = ["Results this page was generated from:", ""]
     for name in sorted(found):
-        m = found[name]
-        lines.append("- %s: `%s`, %s, commit `%s`%s" % (name, m["command"], m["date"], m["commit"],
-                                                      " (%s)" % m["note"] if m.get("note") else ""))
+        for m in (found[name] if isinstance(found[name], list) else [found[name]]):
+            lines.append("- %s: `%s`, %s, commit `%s`%s" % (name, m["command"], m["date"], m["commit"],
+                                                          " (%s)" % m["note"] if m.get("note") else ""))
     return lines + ([] if found else ["- none yet"]) + [""]
 
 
