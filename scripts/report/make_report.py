@@ -185,10 +185,22 @@ def collect(results, figures):
     sources = {name: (runs if isinstance(runs, list) else [runs]) for name, runs in figures.get("sources", {}).items()}
     for name, measured in read.items():
         sources[name] = [m for m in sources.get(name, []) if m["command"] != measured["command"]] + [measured]
-    in_use = referenced(figures)
-    figures["sources"] = {name: kept for name, kept in
-                          ((name, [m for m in runs if m in in_use]) for name, runs in sources.items()) if kept}
+    kept = {}
+    for name, runs in sources.items():
+        in_use = referenced(figures.get(section_of(name)))
+        if [m for m in runs if m in in_use]:
+            kept[name] = [m for m in runs if m in in_use]
+    figures["sources"] = kept
     return sorted(read)
+
+
+def section_of(result_file):
+    """The part of the figures that a result file's rows go to."""
+    for part, section in (("mono_comparison", "mono_comparison"), ("eval/", "eval"), ("campaign/", "campaigns"),
+                          ("demo/", "demo"), ("bench/", "bench"), ("stack_memory", "stack"), ("ablate/", "ablation")):
+        if part in result_file:
+            return section
+    return None
 
 
 def ablation_rules():
