@@ -17,7 +17,7 @@ CATKIN_MAKE_SERIAL := catkin_make -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCATKIN_WHIT
 CATKIN_MAKE := $(CATKIN_MAKE_SERIAL) -j$(JOBS)
 SETUP := source $(CURDIR)/devel/setup.bash
 
-.PHONY: deps build test demo campaign bench eval tune ablate lint clean fuzz-serial fuzz-messages firmware flash-firmware
+.PHONY: deps build test demo campaign bench eval report tune ablate lint clean fuzz-serial fuzz-messages firmware flash-firmware
 
 deps:
 	@scripts/install-deps.sh
@@ -57,6 +57,12 @@ bench: build
 eval: build
 	@$(SETUP) && scripts/run_eval.sh
 
+# docs/PERFORMANCE.md from what make demo, campaign, eval, bench and ablate wrote under results/: their figures are
+# merged into docs/performance-figures.json (a row not measured again keeps its own date and commit), then rendered
+# (scripts/report/make_report.py). Needs no build.
+report:
+	@/usr/bin/python3 scripts/report/make_report.py
+
 # Each rule switched off in turn, measured on held-out data (scripts/ablate/ablate.py): ABLATE_ARGS, e.g.
 #   make ablate ABLATE_ARGS="--rules arbiter_consistency --suites replay"
 # The held-out runs are recorded once by scripts/ablate/record_heldout.py (about 2 min each).
@@ -88,7 +94,7 @@ tune: $(BUILT)
 FUZZ_INPUTS ?= 1000000
 FUZZ_CORRUPTIONS ?= 2000000
 FUZZ_SEED ?= 12
-# Randomized message campaign against the running closed loop (docs/RELIABILITY.md): FUZZ_PER_TOPIC
+# Randomized message campaign against the running closed loop (docs/design/reliability.md): FUZZ_PER_TOPIC
 # malformed messages on each of 15 input topics, then a docking (2000 took 2 min 45 s). `make test` runs it
 # with 1000 per topic (every random choice of the generator occurs by message 261 of its topic).
 FUZZ_PER_TOPIC ?= 5000

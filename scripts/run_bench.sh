@@ -53,4 +53,6 @@ for name, v in stages.items():
     instructions = v.get("instructions_per_frame_M")
     print(f"  {name:24s} {ms}  {hz}  {instructions if instructions is not None else '-':>13}")
 PY
+# What was measured, when, on which commit (docs/PERFORMANCE.md names it: make report).
+/usr/bin/python3 scripts/report/provenance.py "$out" "make bench"
 exit $status

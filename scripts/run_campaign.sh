@@ -5,4 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH=/usr/bin:$PATH
-exec /usr/bin/python3 scripts/demo/run_campaign.py "$@" ${CAMPAIGN_ARGS:-}
+/usr/bin/python3 scripts/demo/run_campaign.py "$@" ${CAMPAIGN_ARGS:-}
+# What was measured, when, on which commit (docs/PERFORMANCE.md names it: make report).
+args="$* ${CAMPAIGN_ARGS:-}"; args="${args## }"; args="${args%% }"
+runs="${CAMPAIGN_RUNS:+CAMPAIGN_RUNS=$CAMPAIGN_RUNS }"
+/usr/bin/python3 scripts/report/provenance.py results/campaign "make campaign ${runs}${args:+CAMPAIGN_ARGS=\"$args\"}"

@@ -6,4 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH=/usr/bin:$PATH
-exec /usr/bin/python3 scripts/demo/run_demo.py "$@" ${DEMO_ARGS:-}
+/usr/bin/python3 scripts/demo/run_demo.py "$@" ${DEMO_ARGS:-}
+# What was measured, when, on which commit (docs/PERFORMANCE.md names it: make report).
+args="$* ${DEMO_ARGS:-}"; args="${args## }"; args="${args%% }"
+/usr/bin/python3 scripts/report/provenance.py results/demo "make demo${args:+ DEMO_ARGS=\"$args\"}"

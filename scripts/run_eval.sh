@@ -9,3 +9,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 /usr/bin/python3 scripts/eval/run_eval.py "$@" ${EVAL_ARGS:-}
 /usr/bin/python3 scripts/eval/mono_comparison.py --out results/eval/mono_comparison.json
+# What was measured, when, on which commit (docs/PERFORMANCE.md names it: make report).
+args="$* ${EVAL_ARGS:-}"; args="${args## }"; args="${args%% }"
+/usr/bin/python3 scripts/report/provenance.py results/eval "make eval${args:+ EVAL_ARGS=\"$args\"}"

@@ -33,6 +33,8 @@ sys.path.insert(0, str(ROOT / "scripts" / "tune"))
 sys.path.insert(0, str(ROOT / "src" / "docking_settings" / "src"))
 import quality  # noqa: E402
 from yaml_line_edit import set_key  # noqa: E402
+sys.path.insert(0, str(ROOT / "scripts" / "report"))
+from provenance import provenance  # noqa: E402
 from docking_settings.declarations import find_declarations  # noqa: E402
 
 SUITES = ("replay", "stress", "campaign")
@@ -202,6 +204,8 @@ def main():
     (out / "table.json").write_text(json.dumps({"baseline": baseline, "rules": rules, "results": results}, indent=1))
     text = "\n".join(table_rows(rules, results, baseline)) + "\n"
     (out / "table.md").write_text(text)
+    command = "make ablate" + (' ABLATE_ARGS="%s"' % " ".join(sys.argv[1:]) if sys.argv[1:] else "")
+    (out / "provenance.json").write_text(json.dumps(provenance(command), indent=2) + "\n")
     print(text)
 
 

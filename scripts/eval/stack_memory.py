@@ -25,6 +25,9 @@ import time
 
 import rosgraph
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "report"))
+from provenance import provenance  # noqa: E402  (what ran, when, on which commit)
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SIMULATOR_NAMES = ("docking_sim",)       # the simulator's own processes: excluded from the stack's figure
 MASTER_NAMES = ("rosmaster", "rosout", "roslaunch")
@@ -207,7 +210,10 @@ def main():
               "simulator_mb": round(by_group["simulator"], 1), "master_mb": round(by_group["master"], 1),
               "camera_rate_hz": float(args.camera_rate_hz),
               "sim_seconds": round(sim_end - sim_start, 2) if cpu_per_sim_s else 0.0,
-              "cpu_cores_per_sim_second_by_process": {n: round(v, 3) for n, v in cpu_per_sim_s.items()}}
+              "cpu_cores_per_sim_second_by_process": {n: round(v, 3) for n, v in cpu_per_sim_s.items()},
+              # the robot's stack alone (no simulator, master or helpers), for docs/PERFORMANCE.md (make report)
+              "stack_cpu_cores_per_sim_second": round(sum(v for n, v in cpu_per_sim_s.items() if group(n) == "stack"), 3),
+              "provenance": provenance(" ".join(["scripts/eval/stack_memory.py"] + sys.argv[1:]))}
     pathlib.Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     pathlib.Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
     print(f"wrote {args.out}")
