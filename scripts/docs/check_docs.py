@@ -13,13 +13,10 @@ READMEs name must exist today.
   - generated tables current: scripts/settings_tables.py --check;
   - sizes: README.md at most 400 lines of at most 200 characters, each package README (src/*/README.md)
     at most 300 lines, docs/PERFORMANCE.md at most 500 lines.
-Links into docs/design/, and to CHANGELOG.md, are checked once that folder or file exists (they are written
-on another branch of issue 56; this exception goes when it is merged).
 Prints each problem with its file and line; exits 1 when there is any.
 
     scripts/docs/check_docs.py [FILE.md ...]      (default: every doc of the workspace)
 """
-import os
 import pathlib
 import re
 import subprocess
@@ -36,7 +33,6 @@ ROSRUN = re.compile(r"rosrun ([a-z_][a-z0-9_]*) ([A-Za-z0-9_.-]+)")
 PATH_TOKEN = re.compile(r"^[A-Za-z0-9_./*-]+$")
 # (file relative to the root, or a glob of them) -> (most lines, longest line in characters or None)
 SIZE_LIMITS = {"README.md": (400, 200), "src/*/README.md": (300, None), "docs/PERFORMANCE.md": (500, None)}
-NOT_YET_WRITTEN = ("docs/design/", "CHANGELOG.md")
 
 
 def docs():
@@ -67,20 +63,9 @@ def package_programs(package):
     return names
 
 
-def not_yet_written(token, doc):
-    """A link to a document issue 56's other branch writes, before that branch is merged."""
-    try:
-        token = os.path.relpath(os.path.normpath(doc.parent / token), ROOT) if token.startswith("../") else token
-    except ValueError:
-        return False
-    return any(token.startswith(p) and not (ROOT / p).exists() for p in NOT_YET_WRITTEN)
-
-
 def existing(token, doc):
     """Does a path-like token name something in the repository (relative to the root or to the doc)?"""
     token = token.rstrip("/.,;:")
-    if not_yet_written(token, doc):
-        return True
     if "*" in token:
         return any(ROOT.glob(token)) or any(doc.parent.glob(token))
     return (ROOT / token).exists() or (doc.parent / token).exists()
