@@ -67,15 +67,20 @@ def free_port():
     raise RuntimeError("no free port in %d-%d" % (MASTER_PORTS[0], high))
 
 
-def stop(proc):
-    """SIGINT to the launch's process group (roslaunch then stops its nodes in order), then waits."""
-    if proc.poll() is None:
+def stop(proc, timeout_s=60.0):
+    """SIGINT to the launch's process group (roslaunch then stops its nodes in order), then waits; SIGKILL
+    after timeout_s. Nothing to do for no process or one already gone."""
+    if proc is None or proc.poll() is not None:
+        return
+    try:
         os.killpg(proc.pid, signal.SIGINT)
         try:
-            proc.wait(timeout=60)
+            proc.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
+    except ProcessLookupError:
+        pass
 
 
 def failure_context(lines):

@@ -24,7 +24,6 @@ import ipaddress
 import json
 import os
 import pathlib
-import signal
 import socket
 import subprocess
 import sys
@@ -34,6 +33,8 @@ import xmlrpc.client
 
 PKG = "docking_network"
 HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parents[2] / "scripts" / "tune"))
+import launch_runner  # noqa: E402  (one stop() for every process group a test starts)
 SCRIPTS = HERE.parent / "scripts"
 MASTER_PORT = 11311
 NODES = ("/omni_base", "/fake_motor_board", "/victim")
@@ -104,18 +105,6 @@ class Hosts:
         return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def stop(proc):
-    if proc is not None and proc.poll() is None:
-        try:
-            os.killpg(proc.pid, signal.SIGINT)
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-        except ProcessLookupError:
-            pass
-
-
 # ---- helper modes (run inside a namespace) ----------------------------------------------------------
 
 class TimeoutTransport(xmlrpc.client.Transport):
@@ -125,10 +114,10 @@ class TimeoutTransport(xmlrpc.client.Transport):
         return connection
 
 
-def call(uri, method, *args):
-    """'answered' when the call reached the server, else why not ('refused', 'timed out', ...)."""
+def reachability(attempt):
+    """'answered' when `attempt` reached the server (an XML-RPC fault is an answer), else why not."""
     try:
-        getattr(xmlrpc.client.ServerProxy(uri, transport=TimeoutTransport()), method)(*args)
+        attempt()
         return "answered"
     except ConnectionRefusedError:
         return "refused"
@@ -140,16 +129,14 @@ def call(uri, method, *args):
         return "answered"
 
 
+def call(uri, method, *args):
+    """What became of an XML-RPC call: 'answered', 'refused', 'timed out', ..."""
+    return reachability(lambda: getattr(xmlrpc.client.ServerProxy(uri, transport=TimeoutTransport()), method)(*args))
+
+
 def connect(host, port):
-    try:
-        with socket.create_connection((host, port), timeout=CALL_TIMEOUT_S):
-            return "answered"
-    except ConnectionRefusedError:
-        return "refused"
-    except (socket.timeout, TimeoutError):
-        return "timed out"
-    except OSError as error:
-        return "unreachable (%s)" % error.strerror
+    """What became of a TCP connection to host:port."""
+    return reachability(lambda: socket.create_connection((host, port), timeout=CALL_TIMEOUT_S).close())
 
 
 def inventory():
@@ -244,7 +231,7 @@ class NetworkGuard(unittest.TestCase):
 
     def tearDown(self):
         for proc in reversed(self.procs):
-            stop(proc)
+            launch_runner.stop(proc, timeout_s=30.0)
         self.hosts.down()
 
     def start_robot(self, ros_ip, tag):

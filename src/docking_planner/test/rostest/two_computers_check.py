@@ -17,13 +17,14 @@ the truth). The outer test asserts that check passed, and removes the namespaces
 """
 import os
 import pathlib
-import signal
 import subprocess
 import sys
 import time
 import unittest
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[4] / "scripts" / "tune"))
+import launch_runner  # noqa: E402
 
 PKG = "docking_planner"
 WORKSPACE = pathlib.Path(__file__).resolve().parents[4]
@@ -76,18 +77,6 @@ class Network:
                                 stderr=subprocess.STDOUT, start_new_session=True)
 
 
-def stop(proc):
-    if proc is not None and proc.poll() is None:
-        try:
-            os.killpg(proc.pid, signal.SIGINT)
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-        except ProcessLookupError:
-            pass
-
-
 class TwoComputers(unittest.TestCase):
     """The outer test, started by rostest (its own master stays unused: the robot's namespace has one)."""
 
@@ -134,7 +123,7 @@ class TwoComputers(unittest.TestCase):
                 log_dir, output[-3000:]))
         finally:
             for proc in reversed(procs):
-                stop(proc)
+                launch_runner.stop(proc, timeout_s=30.0)
             net.down()
 
 
