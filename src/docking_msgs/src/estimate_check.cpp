@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 
 namespace docking_msgs {
 namespace checks {
@@ -81,15 +80,6 @@ const char* estimateProblemName(EstimateProblem problem) {
       return "no_frame_id";
   }
   return "unknown";
-}
-
-void validate(const StampLimits& limits) {
-  if (!std::isfinite(limits.max_future_s) || limits.max_future_s < 0.0) {
-    throw std::invalid_argument("max_future_stamp_s must be a number >= 0");
-  }
-  if (!std::isfinite(limits.max_age_s) || limits.max_age_s <= 0.0) {
-    throw std::invalid_argument("max_stamp_age_s must be a positive number of seconds");
-  }
 }
 
 StampProblem checkStamp(double stamp_s, double now_s, const StampLimits& limits) {

@@ -44,13 +44,6 @@ TEST(StampCheck, EachKindHasItsCode) {
   EXPECT_STREQ(stampProblemName(StampProblem::kFuture), "stamp_in_future");
 }
 
-TEST(StampCheck, LimitsAreValidated) {
-  EXPECT_NO_THROW(validate(StampLimits{}));
-  EXPECT_THROW(validate(StampLimits{-0.1, 5.0}), std::invalid_argument);
-  EXPECT_THROW(validate(StampLimits{kNaN, 5.0}), std::invalid_argument);
-  EXPECT_THROW(validate(StampLimits{0.5, 0.0}), std::invalid_argument);
-}
-
 TEST(EstimateCheck, GoodEstimatesPass) {
   EXPECT_EQ(checkEstimateFields(goodFullPose()), EstimateProblem::kNone);
   EstimateFields position_only = goodFullPose();

@@ -42,7 +42,7 @@ TEST(SafeCircleApproach, RejectsInvalidConfiguration) {
   c.fov_margin_rad = c.camera_half_fov_rad;
   EXPECT_THROW(SafeCircleApproach(c, shippedProbeX()), std::invalid_argument);
   c = shippedConfig().law;
-  c.yaw_gain = NAN;
+  c.correction_gain = NAN;
   EXPECT_THROW(SafeCircleApproach(c, shippedProbeX()), std::invalid_argument);
 }
 
@@ -140,7 +140,7 @@ TEST(SafeCircleApproach, OnTheCircleMisalignedMovesTangentiallyTowardsTheAxis) {
     EXPECT_LT(cmd.velocity_odom.dot(increasing_gamma) * gamma, 0.0) << "gamma " << gamma;
     EXPECT_NEAR(cmd.velocity_odom.dot(radial), 0.0, 1e-9) << "gamma " << gamma;
     EXPECT_NEAR(std::abs(cmd.velocity_odom.dot(increasing_gamma)),
-                std::min(law.config().tangential_gain * 0.6 * std::abs(gamma), law.config().align_speed_mps), 1e-9);
+                std::min(law.config().travel_gain * 0.6 * std::abs(gamma), law.config().align_speed_mps), 1e-9);
     // The body command is the same motion.
     EXPECT_TRUE(bodyToOdom(chaser, cmd.twist).isApprox(cmd.velocity_odom, 1e-9));
   }
@@ -170,7 +170,7 @@ TEST(SafeCircleApproach, AlignedFinalGoesAlongTheAxisAndSlowsNearContact) {
   const Pose2D near_contact{0.0, shippedProbeX() + 0.03, -M_PI / 2};
   cmd = law.command(Phase::kFinal, near_contact, port);
   EXPECT_GT(cmd.twist.vx, 0.0);
-  EXPECT_LE(cmd.twist.vx, c.final_slow_speed_mps + kTol);
+  EXPECT_LE(cmd.twist.vx, kSlowZoneSpeedFraction * c.final_speed_mps + kTol);
   // Overshoot: backs out.
   const Pose2D overshoot{0.0, shippedProbeX() - 0.01, -M_PI / 2};
   EXPECT_LT(law.command(Phase::kFinal, overshoot, port).twist.vx, 0.0);

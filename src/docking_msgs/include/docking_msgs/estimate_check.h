@@ -31,12 +31,11 @@ enum class StampProblem : std::uint8_t {
 };
 const char* stampProblemName(StampProblem problem);
 
+/// The arbiter and the planner use the defaults (constants, not settings: never shipped otherwise).
 struct StampLimits {
   double max_future_s{0.5};  ///< clock skew between computers and the stamping latency of a camera
   double max_age_s{5.0};     ///< older than this: nothing a pipeline of ~100 ms latency produces
 };
-/// Throws std::invalid_argument naming the bad field (max_future_stamp_s, max_stamp_age_s).
-void validate(const StampLimits& limits);
 
 StampProblem checkStamp(double stamp_s, double now_s, const StampLimits& limits);
 

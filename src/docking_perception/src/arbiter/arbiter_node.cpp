@@ -41,6 +41,11 @@ namespace docking_perception {
 namespace arbiter {
 namespace {
 
+/// The longest wait for a camera's mount transform per estimate, s: the mounts are robot.yaml's static
+/// transforms, there from start-up or not at all; 20 ms keeps a missing one from stalling the node (a
+/// constant of the node, the one value ever shipped; a setting until 7 Dec 2026).
+constexpr double kMountTransformWaitS = 0.02;
+
 /// The node's settings: the declared defaults with the parameter server's values (config/arbiter.yaml).
 ArbiterNodeSettings loadSettings(const ros::NodeHandle& pnh) {
   ArbiterNodeSettings settings;
@@ -110,7 +115,6 @@ class ArbiterNode {
       : arbiter_(settings.core), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
     output_frame_ = settings.output_frame;
     if (output_frame_.empty()) docking_settings::ParamReader(pnh).invalid("output_frame", "is empty");
-    tf_timeout_ = ros::Duration(settings.tf_timeout_s);
     silence_ = std::make_unique<InputSilence>(settings.sources_silent_timeout_s);
     const double status_rate_hz = settings.status_rate_hz;
 
@@ -193,9 +197,9 @@ class ArbiterNode {
       return;
     }
     const double now_s = ros::Time::now().toSec();
-    // The stamp against now before the tf look-up, which would wait tf_timeout_s for a future one.
+    // The stamp against now before the tf look-up, which would wait kMountTransformWaitS for a future one.
     const auto stamp_problem =
-        docking_msgs::checks::checkStamp(msg->header.stamp.toSec(), now_s, arbiter::stampLimits(arbiter_.config()));
+        docking_msgs::checks::checkStamp(msg->header.stamp.toSec(), now_s, arbiter::kStampLimits);
     if (stamp_problem != docking_msgs::checks::StampProblem::kNone) {
       const OfferResult refused = arbiter_.offer(summarize(*msg, source), now_s);  // counted, state untouched
       recordRejection(publisher, source, offerProblemName(refused.problem), refused.reason);
@@ -312,7 +316,8 @@ class ArbiterNode {
     Eigen::Isometry3d out_from_in;
     try {
       out_from_in = tf2::transformToEigen(
-          tf_buffer_.lookupTransform(output_frame_, in.header.frame_id, in.header.stamp, tf_timeout_));
+          tf_buffer_.lookupTransform(output_frame_, in.header.frame_id, in.header.stamp,
+                                     ros::Duration(kMountTransformWaitS)));
     } catch (const tf2::TransformException& e) {
       ++tf_failures_;
       last_tf_error_ = e.what();
@@ -423,7 +428,6 @@ class ArbiterNode {
 
   SourceArbiter arbiter_;
   std::string output_frame_;
-  ros::Duration tf_timeout_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;

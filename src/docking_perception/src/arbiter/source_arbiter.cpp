@@ -96,10 +96,6 @@ void validate(const ArbiterConfig& c) {
   if (c.hysteresis_m >= c.switch_range_m) throw std::invalid_argument("hysteresis_m must be in [0, switch_range_m)");
 }
 
-docking_msgs::checks::StampLimits stampLimits(const ArbiterConfig& c) {
-  return docking_msgs::checks::StampLimits{c.max_future_stamp_s, c.max_stamp_age_s};
-}
-
 SourceArbiter::SourceArbiter(const ArbiterConfig& config) : config_(config) { validate(config_); }
 
 void SourceArbiter::reconfigure(const ArbiterConfig& config) {
@@ -128,7 +124,7 @@ void SourceArbiter::resetOrdering() {
 OfferResult SourceArbiter::offer(const EstimateSummary& estimate, double now_s) {
   followClock(now_s);
   using docking_msgs::checks::StampProblem;
-  const StampProblem stamp = docking_msgs::checks::checkStamp(estimate.stamp_s, now_s, stampLimits(config_));
+  const StampProblem stamp = docking_msgs::checks::checkStamp(estimate.stamp_s, now_s, kStampLimits);
   if (stamp == StampProblem::kNone) return offer(estimate);
   OfferResult result;
   ++rejected_;
@@ -142,11 +138,11 @@ OfferResult SourceArbiter::offer(const EstimateSummary& estimate, double now_s) 
   } else if (stamp == StampProblem::kFuture) {
     result.problem = OfferProblem::kStampInFuture;
     result.reason = std::string(sourceName(estimate.source)) + ": stamped " + formatDouble("%.3f", ahead) +
-                    " s in the future (limit " + formatDouble("%.3f", config_.max_future_stamp_s) + " s)";
+                    " s in the future (limit " + formatDouble("%.3f", kStampLimits.max_future_s) + " s)";
   } else {
     result.problem = OfferProblem::kStampTooOld;
     result.reason = std::string(sourceName(estimate.source)) + ": stamped " + formatDouble("%.3f", -ahead) +
-                    " s in the past (limit " + formatDouble("%.3f", config_.max_stamp_age_s) + " s)";
+                    " s in the past (limit " + formatDouble("%.3f", kStampLimits.max_age_s) + " s)";
   }
   return result;
 }

@@ -3,7 +3,7 @@
 //
 //   IDLE     no docking asked for (the start-up state): zero velocity, whatever the cameras see;
 //            estimates still go into the track, so a docking can start on a target already in view
-//   SEARCH   no target: stop; after search_wait_s orbit where it was last seen (if within
+//   SEARCH   no target: stop; after kSearchWaitS orbit where it was last seen (if within
 //            search_orbit_memory_s), else turn slowly in place to look for it
 //   APPROACH straight to the safe circle (see safe_circle_approach.h)
 //   ALIGN    along the safe circle to the port axis
@@ -61,10 +61,21 @@ enum class DockingOutcome : std::uint8_t {
 };
 const char* outcomeName(DockingOutcome outcome);
 
+// Constants of the state machine (each the one value ever shipped; settings until 7 Dec 2026).
+/// SEARCH stands still this long before it orbits or turns, s: the estimators settle after a start or a
+/// lost target (30 frames of the 15 Hz cameras) before the chaser moves to look.
+constexpr double kSearchWaitS = 2.0;
+/// ABORT stops backing off after this long and searches, s: the longest back-off (from contact to the
+/// 0.6 m circle at align_speed_mps, 0.15 m/s) takes ~4 s; 5x that for a moving target.
+constexpr double kAbortTimeoutS = 20.0;
+/// A goal that sets no search timeout (0) ends after this long without a target, or with perception
+/// gone, s. The goal's search_timeout_s is the per-docking setting (`dock start --search-timeout`).
+constexpr double kDefaultSearchTimeoutS = 60.0;
+
 /// Limits of one docking (the action's goal). 0 means "the planner's configured value" / no limit.
 struct DockingLimits {
   double time_budget_s{0.0};     ///< give up after this long; 0: no limit
-  double search_timeout_s{0.0};  ///< give up after searching this long; 0: PlannerConfig::search_timeout_s
+  double search_timeout_s{0.0};  ///< give up after searching this long; 0: kDefaultSearchTimeoutS
   double max_speed_mps{0.0};     ///< cap on the linear speed; 0: the law's max_speed_mps
 };
 /// Empty when the limits are usable, otherwise why not (negative, NaN, infinite).
@@ -74,9 +85,9 @@ std::string checkLimits(const DockingLimits& limits);
 /// range cannot say (two settings that contradict); throws naming the bad field.
 void validate(const PlannerConfig& config);
 
-/// Estimates stamped further ahead of now or older are dropped on arrival by the node
-/// (docking_msgs/estimate_check.h).
-docking_msgs::checks::StampLimits stampLimits(const PlannerConfig& config);
+/// Estimates and odometry stamped further ahead of now or older are dropped on arrival by the node: the
+/// limits every node that takes estimates from another process uses (docking_msgs/estimate_check.h).
+constexpr docking_msgs::checks::StampLimits kStampLimits{};
 
 /// The chaser's odometry: pose of base_link in odom, body-frame twist.
 struct ChaserOdometry {
@@ -192,6 +203,7 @@ class DockingPlanner {
   void enter(DockingPhase state, double now_s, const std::string& reason);
   PlannerOutput stop(PlannerOutput out, const std::string& reason) const;
   bool targetVisible(double now_s) const;
+  double searchTimeout() const;  // the goal's, else kDefaultSearchTimeoutS
   std::string lostReason(double now_s) const;
   /// Why an estimate inside the odometry-only range is not used (empty: it is; see contact_estimate_gate_m).
   std::string contactEstimateRejection(const TargetObservation& observation) const;

@@ -96,7 +96,6 @@ std::string checkLimits(const DockingLimits& limits) {
 void validate(const PlannerConfig& c) {
   docking_settings::validateSettings(c);
   validate(c.law);
-  docking_msgs::checks::validate(stampLimits(c));
   if (std::abs(c.search_yaw_rate_radps) > c.law.max_yaw_rate_radps) {
     throw std::invalid_argument("search_yaw_rate_radps must be within max_yaw_rate_radps");
   }
@@ -113,10 +112,6 @@ void validate(const PlannerConfig& c) {
   if (c.orientation_timeout_s < c.max_blind_s) {
     throw std::invalid_argument("orientation_timeout_s must be >= max_blind_s (the blind finish needs the port axis)");
   }
-}
-
-docking_msgs::checks::StampLimits stampLimits(const PlannerConfig& c) {
-  return docking_msgs::checks::StampLimits{c.max_future_stamp_s, c.max_stamp_age_s};
 }
 
 namespace {
@@ -254,6 +249,10 @@ std::string DockingPlanner::contactEstimateRejection(const TargetObservation& ob
   return "";
 }
 
+double DockingPlanner::searchTimeout() const {
+  return limits_.search_timeout_s > 0.0 ? limits_.search_timeout_s : kDefaultSearchTimeoutS;
+}
+
 bool DockingPlanner::targetVisible(double now_s) const {
   if (nan_estimate_ || !track_.hasPosition()) return false;
   const double age = now_s - last_seen_s_;
@@ -278,7 +277,7 @@ std::string DockingPlanner::perceptionProblem(double now_s) const {
   const std::string inputs = input_problem_.empty() ? "" : "; " + input_problem_;
   if (sources_silent_) return "perception silent: no estimator publishes (stalled or gone)" + inputs;
   const double age = now_s - last_perception_s_;
-  if (age >= 0.0 && age <= config_.perception_timeout_s) return "";
+  if (age >= 0.0 && age <= config_.input_timeout_s) return "";
   if (last_perception_s_ < -1e299) return "perception silent: no target estimate message yet" + inputs;
   if (age < 0.0) return "";  // the clock went back (a bag looped): the next message decides
   return fmt("perception silent: no target estimate message for %.1f s", age) + inputs;
@@ -312,7 +311,7 @@ PlannerOutput DockingPlanner::orbitForTheFace(PlannerOutput out, const Pose2D& c
   const double line_of_sight = std::atan2(port.pose.y - chaser.y, port.pose.x - chaser.x);
   const double orbit_rate = range_m > 1e-3 ? config_.orbit_speed_mps / range_m : 0.0;
   out.command = cmd.twist;
-  out.command.wz = clampAbs(orbit_rate + config_.law.yaw_gain * wrapAngle(line_of_sight - chaser.yaw),
+  out.command.wz = clampAbs(orbit_rate + config_.law.correction_gain * wrapAngle(line_of_sight - chaser.yaw),
                             config_.law.max_yaw_rate_radps);
   out.goal_distance_m = cmd.goal_distance_m;
   out.goal = cmd.goal;
@@ -337,7 +336,7 @@ PlannerOutput DockingPlanner::update(double now_s, const std::optional<ChaserOdo
 std::string DockingPlanner::odometryProblem(double now_s, const std::optional<ChaserOdometry>& odometry) const {
   if (!odometry) return "no odometry yet";
   if (!finite(*odometry)) return "odometry contains NaN or infinity";
-  if (now_s - odometry->stamp_s > config_.odom_timeout_s) {
+  if (now_s - odometry->stamp_s > config_.input_timeout_s) {
     return fmt("odometry stale (%.2f s old)", now_s - odometry->stamp_s);
   }
   return "";
@@ -440,7 +439,7 @@ std::optional<PlannerOutput> DockingPlanner::holdWhilePerceptionGone(Cycle& c) {
   }
   if (!perception_down_) perception_down_since_s_ = c.now_s;
   perception_down_ = true;
-  const double limit_s = limits_.search_timeout_s > 0.0 ? limits_.search_timeout_s : config_.search_timeout_s;
+  const double limit_s = searchTimeout();
   if (c.now_s - perception_down_since_s_ > limit_s) {
     return endDocking(c, c.out, DockingOutcome::kPerceptionLost,
                       fmt("no usable estimate for %.0f s: ", limit_s) + problem);
@@ -489,12 +488,12 @@ std::optional<PlannerOutput> DockingPlanner::stepSearch(Cycle& c) {
     enter(DockingPhase::kApproach, c.now_s, "target found");
     return std::nullopt;
   }
-  const double search_timeout_s = limits_.search_timeout_s > 0.0 ? limits_.search_timeout_s : config_.search_timeout_s;
+  const double search_timeout_s = searchTimeout();
   if (in_state_s > search_timeout_s) {
     return endDocking(c, out, DockingOutcome::kTargetLost,
                       fmt("no target for %.0f s of search", search_timeout_s) + " (" + lostReason(c.now_s) + ")");
   }
-  if (in_state_s < config_.search_wait_s) return finish(c, stop(out, lostReason(c.now_s) + ": waiting"));
+  if (in_state_s < kSearchWaitS) return finish(c, stop(out, lostReason(c.now_s) + ": waiting"));
   if (out.has_target && c.now_s - last_seen_s_ <= config_.search_orbit_memory_s) {
     // Seen not long ago: it is most likely still there with its face turned away (a turning target), or
     // just outside the view. Turning in place would look away from it 5 s in 6; orbiting where it was
@@ -534,7 +533,7 @@ std::optional<PlannerOutput> DockingPlanner::stepAbort(Cycle& c) {
     enter(DockingPhase::kSearch, c.now_s, "backed off to the safe circle after: " + state_reason_);
     return std::nullopt;
   }
-  if (in_state_s > config_.abort_timeout_s) {
+  if (in_state_s > kAbortTimeoutS) {
     enter(DockingPhase::kSearch, c.now_s, "backing off took too long");
     return std::nullopt;
   }
@@ -578,7 +577,7 @@ std::optional<PlannerOutput> DockingPlanner::stepApproach(Cycle& c) {
   // same way (counter-clockwise), until a camera sees the face.
   if (!c.orientation_known) return finish(c, orbitForTheFace(c.out, c.chaser, c.port, ""));
   const LawCommand cmd = law_.command(Phase::kApproach, c.chaser, c.port);
-  if (cmd.goal_distance_m < config_.approach_goal_tolerance_m) {
+  if (cmd.goal_distance_m < config_.circle_tolerance_m) {
     enter(DockingPhase::kAlign, c.now_s,
           fmt("on the safe circle, %.0f deg off the port axis", c.out.geometry.polar_angle_rad * kRadToDeg));
     return std::nullopt;

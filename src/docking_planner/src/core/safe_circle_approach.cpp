@@ -110,7 +110,7 @@ Vec2 radialOf(const Vec2& rel, double r, const Pose2D& port) { return r > 1e-9 ?
 SafeCircleApproach::Steering SafeCircleApproach::steerApproach(const Pose2D& chaser, const PortState& port) const {
   Steering s;
   s.goal = approachGoal(chaser, port.pose);
-  s.correction = clampNorm(config_.approach_gain * (s.goal - chaser.position()), config_.max_speed_mps);
+  s.correction = clampNorm(config_.travel_gain * (s.goal - chaser.position()), config_.max_speed_mps);
   s.feed_forward = feedForward(port, s.goal);  // far away the goal, not the chaser, moves with the port
   return s;
 }
@@ -124,8 +124,8 @@ SafeCircleApproach::Steering SafeCircleApproach::steerAlign(const Pose2D& chaser
   const Vec2 radial = radialOf(rel, r, p);
   const double gamma = wrapAngle(std::atan2(radial.y(), radial.x()) - p.yaw);
   const Vec2 tangent = perpendicular(radial);  // direction of increasing gamma
-  const double v_t = clampAbs(-c.tangential_gain * c.safe_radius_m * gamma, c.align_speed_mps);
-  const double v_r = clampAbs(c.radial_gain * (c.safe_radius_m - r), c.align_speed_mps);
+  const double v_t = clampAbs(-c.travel_gain * c.safe_radius_m * gamma, c.align_speed_mps);
+  const double v_r = clampAbs(c.correction_gain * (c.safe_radius_m - r), c.align_speed_mps);
   Steering s;
   s.correction = v_t * tangent + v_r * radial;
   s.goal = p.position() + c.safe_radius_m * unitAt(p.yaw);
@@ -147,10 +147,11 @@ SafeCircleApproach::Steering SafeCircleApproach::steerFinal(const Pose2D& chaser
   const double gate = std::clamp(
       1.0 - std::max(std::abs(lateral) / c.final_lateral_gate_m, std::abs(yaw_error) / c.final_yaw_gate_rad), 0.0, 1.0);
   const double tip_distance = std::max(axial_to_contact, 0.0);
-  const double speed_limit = tip_distance < c.final_slow_distance_m ? c.final_slow_speed_mps : c.final_speed_mps;
-  double v_axial = clampAbs(-c.axial_gain * axial_to_contact, speed_limit);
+  const double speed_limit =
+      tip_distance < c.final_slow_distance_m ? kSlowZoneSpeedFraction * c.final_speed_mps : c.final_speed_mps;
+  double v_axial = clampAbs(-c.correction_gain * axial_to_contact, speed_limit);
   if (v_axial < 0.0) v_axial *= gate;  // advancing is gated; backing out of an overshoot is not
-  const double v_lateral = clampAbs(-c.lateral_gain * lateral, c.final_speed_mps);
+  const double v_lateral = clampAbs(-c.correction_gain * lateral, c.final_speed_mps);
   Steering s;
   s.correction = v_axial * axis + v_lateral * left;
   s.goal = dockedPosition(p);
@@ -166,7 +167,7 @@ SafeCircleApproach::Steering SafeCircleApproach::steerBackOff(const Pose2D& chas
   const double r = rel.norm();
   Steering s;
   s.goal = p.position() + config_.safe_radius_m * radialOf(rel, r, p);
-  s.correction = r < config_.safe_radius_m ? clampNorm(config_.radial_gain * (s.goal - pc), config_.align_speed_mps)
+  s.correction = r < config_.safe_radius_m ? clampNorm(config_.correction_gain * (s.goal - pc), config_.align_speed_mps)
                                            : Vec2::Zero();
   s.feed_forward = feedForward(port, pc);
   return s;
@@ -198,7 +199,7 @@ LawCommand SafeCircleApproach::command(Phase phase, const Pose2D& chaser, const 
   const double heading =
       phase == Phase::kFinal ? wrapAngle(p.yaw + M_PI) : desiredHeading(chaser, p, &out.fov_limited);
   out.goal.yaw = heading;
-  const double yaw_rate = port.yaw_rate + config_.yaw_gain * wrapAngle(heading - chaser.yaw);
+  const double yaw_rate = port.yaw_rate + config_.correction_gain * wrapAngle(heading - chaser.yaw);
   out.velocity_odom = clampNorm(steering.correction + steering.feed_forward, config_.max_speed_mps);
   out.twist = toBody(chaser, out.velocity_odom, yaw_rate);
   out.goal_distance_m = (out.goal.position() - chaser.position()).norm();

@@ -44,11 +44,20 @@
 namespace docking_planner {
 namespace {
 
-// The probe tip is robot data: config/robot.yaml, loaded under ~robot by guidance.launch (one home).
+// The probe tip and the base frame are robot data: config/robot.yaml, loaded under ~robot by
+// guidance.launch (one home).
 constexpr char kRobotNamespace[] = "robot";
+constexpr char kProbeTipKey[] = "robot/chaser/docking_probe_x_m";
+constexpr char kBaseFrameKey[] = "robot/chaser/base_frame";
 // The docking action's feedback (the current DockingState) rate, Hz.
 constexpr double kFeedbackRateHz = 5.0;
-constexpr char kProbeTipKey[] = "robot/chaser/docking_probe_x_m";
+// Constants of the node (each the one value ever shipped; settings until 7 Dec 2026):
+// An estimate up to this much newer than the newest odometry is placed by advancing that odometry along
+// its twist, s: a little over two periods of the 50 Hz base, so an image never waits for the next one.
+constexpr double kMaxOdomExtrapolationS = 0.05;
+// An estimate the odometry history cannot place waits at most this long for tf at its stamp, s: 4
+// cycles at 20 Hz, below input_timeout_s (0.3 s), after which the chaser stops anyway.
+constexpr double kTfWaitS = 0.2;
 
 /// The node's settings: the declared defaults with the parameter server's values (config/planner.yaml).
 PlannerNodeSettings loadSettings(const ros::NodeHandle& pnh) {
@@ -127,7 +136,7 @@ class PlannerNode {
         tf_listener_(tf_buffer_),
         diagnostics_(nh, pnh),
         dock_server_(actionServerHandle(nh), docking_msgs::topics::kDockAction, false) {
-    takeNodeSettings(settings);
+    takeNodeSettings(settings, pnh);
     advertiseOutputs(nh);
     subscribeInputs(nh);
     reset_service_ = pnh.advertiseService("reset", &PlannerNode::onReset, this);
@@ -145,11 +154,9 @@ class PlannerNode {
   }
 
  private:
-  void takeNodeSettings(const PlannerNodeSettings& s) {
+  void takeNodeSettings(const PlannerNodeSettings& s, const ros::NodeHandle& pnh) {
     odom_frame_ = s.odom_frame;
-    base_frame_ = s.base_frame;
-    tf_wait_s_ = s.tf_wait_s;
-    max_odom_extrapolation_s_ = s.max_odom_extrapolation_s;
+    base_frame_ = docking_settings::ParamReader(pnh).require<std::string>(kBaseFrameKey);
     feedback_period_s_ = 1.0 / kFeedbackRateHz;
     client_loss_timeout_s_ = s.client_loss_timeout_s;
   }
@@ -254,7 +261,7 @@ class PlannerNode {
 
   void restampIfFuture(actionlib_msgs::GoalID* id, const char* what, const std::string& publisher) {
     const double ahead_s = id->stamp.toSec() - ros::Time::now().toSec();
-    if (id->stamp.isZero() || ahead_s <= stampLimits(planner_.config()).max_future_s) return;
+    if (id->stamp.isZero() || ahead_s <= kStampLimits.max_future_s) return;
     ++restamped_ids_;
     last_restamped_ = std::string(what) + " '" + id->id + "' from " + publisher + ", stamped " +
                       std::to_string(ahead_s) + " s ahead";
@@ -377,10 +384,10 @@ class PlannerNode {
     ROS_WARN_THROTTLE(2.0, "planner: dropped %s from %s: %s: %s", what, publisher.c_str(), code.c_str(), why.c_str());
   }
 
-  /// A stamp outside [now - max_stamp_age_s, now + max_future_stamp_s] (or not finite): the message is
+  /// A stamp outside [now - 5 s, now + 0.5 s] (kStampLimits; or not finite): the message is
   /// recorded as dropped and true is returned.
   bool stampRefused(const char* what, const std::string& publisher, double stamp_s, double now_s) {
-    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, stampLimits(planner_.config()));
+    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, kStampLimits);
     if (stamp == docking_msgs::checks::StampProblem::kNone) return false;
     recordDrop(what, publisher, docking_msgs::checks::stampProblemName(stamp),
                "stamp " + std::to_string(stamp_s - now_s) + " s from now");
@@ -455,7 +462,7 @@ class PlannerNode {
   }
 
   // Estimates wait here until the camera can be placed in odom at their stamp (placeCamera), for at
-  // most tf_wait_s. Returns true when a valid estimate was placed and given to the planner.
+  // most kTfWaitS. Returns true when a valid estimate was placed and given to the planner.
   bool processPending() {
     bool placed = false;
     while (!pending_.empty()) {
@@ -491,12 +498,12 @@ class PlannerNode {
   enum class Placement { kPlaced, kWait, kFailed };
 
   // The camera in odom at the estimate's stamp: base_link from the odometry history (interpolated, or
-  // advanced along the newest twist by at most max_odom_extrapolation_s: no wait for the next odometry
+  // advanced along the newest twist by at most kMaxOdomExtrapolationS: no wait for the next odometry
   // message) times the camera's mount on base_link (static, from tf). Falls back to tf at the stamp
-  // for stamps older than the history. kWait while the stamp is too new for both, up to tf_wait_s.
+  // for stamps older than the history. kWait while the stamp is too new for both, up to kTfWaitS.
   Placement placeCamera(const docking_msgs::TargetEstimate& msg, Eigen::Isometry3d* odom_from_camera) {
     const double stamp = msg.header.stamp.toSec();
-    const std::optional<Pose2D> base = odometry_history_.poseAt(stamp, max_odom_extrapolation_s_);
+    const std::optional<Pose2D> base = odometry_history_.poseAt(stamp, kMaxOdomExtrapolationS);
     if (base) {
       std::string error;
       const std::optional<Eigen::Isometry3d> mount = cameraMount(msg.header.frame_id, &error);
@@ -521,7 +528,7 @@ class PlannerNode {
         return Placement::kFailed;
       }
     }
-    if ((ros::Time::now() - msg.header.stamp).toSec() <= tf_wait_s_) return Placement::kWait;
+    if ((ros::Time::now() - msg.header.stamp).toSec() <= kTfWaitS) return Placement::kWait;
     last_tf_error_ = error;
     return Placement::kFailed;
   }
@@ -690,7 +697,6 @@ class PlannerNode {
 
   DockingPlanner planner_;
   std::string odom_frame_, base_frame_;
-  double tf_wait_s_{0.2};
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   diagnostic_updater::Updater diagnostics_;
@@ -717,7 +723,6 @@ class PlannerNode {
   docking_msgs::DockingState last_state_msg_;
   std::optional<ChaserOdometry> odometry_;
   OdometryHistory odometry_history_;
-  double max_odom_extrapolation_s_{0.05};
   std::map<std::string, Eigen::Isometry3d> camera_mounts_;
   std::uint64_t placed_from_odometry_{0};
   std::deque<docking_msgs::TargetEstimateConstPtr> pending_;

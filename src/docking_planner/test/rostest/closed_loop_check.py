@@ -338,8 +338,8 @@ class ClosedLoopCheck(unittest.TestCase):
         self.assertLess(search_t - hold_t, hold_to_search_max, "HOLD lasted %.1f s" % (search_t - hold_t))
         self.assertLess(hold_t - lost_t, 2.0, "HOLD only %.1f s after the loss" % (hold_t - lost_t))
         # 3. Zero cmd_vel from HOLD (plus one control cycle of slack for topic ordering) until SEARCH
-        #    starts turning (its standing wait included): search_wait_s after SEARCH began.
-        search_wait = rospy.get_param("~search_wait_s", 2.0)
+        #    starts turning (its standing wait included): kSearchWaitS after SEARCH began.
+        search_wait = rospy.get_param("~standing_wait_s", 2.0)
         rospy.sleep(search_wait + 0.5)
         with self.lock:
             between = [(t, c) for t, c in self.cmds if hold_t + 0.1 < t < search_t + search_wait - 0.2]
