@@ -42,8 +42,7 @@ namespace arbiter {
 namespace {
 
 /// The longest wait for a camera's mount transform per estimate, s: the mounts are robot.yaml's static
-/// transforms, there from start-up or not at all; 20 ms keeps a missing one from stalling the node (a
-/// constant of the node, the one value ever shipped; a setting until 7 Dec 2026).
+/// transforms, there from start-up or not at all; 20 ms keeps a missing one from stalling the node.
 constexpr double kMountTransformWaitS = 0.02;
 
 /// The node's settings: the declared defaults with the parameter server's values (config/arbiter.yaml).

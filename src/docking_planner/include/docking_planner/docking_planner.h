@@ -61,7 +61,7 @@ enum class DockingOutcome : std::uint8_t {
 };
 const char* outcomeName(DockingOutcome outcome);
 
-// Constants of the state machine (each the one value ever shipped; settings until 7 Dec 2026).
+// Constants of the state machine.
 /// SEARCH stands still this long before it orbits or turns, s: the estimators settle after a start or a
 /// lost target (30 frames of the 15 Hz cameras) before the chaser moves to look.
 constexpr double kSearchWaitS = 2.0;

@@ -25,11 +25,10 @@
 namespace docking_planner {
 
 /// The straight approach stays this far outside the tangent to the safe circle, rad (a constant of the
-/// law: the one value ever shipped, a setting until 7 Dec 2026).
+/// law).
 constexpr double kTangentMarginRad = 0.05;
 /// FINAL's speed with the probe tip within final_slow_distance_m of the port, as a fraction of
-/// final_speed_mps, so that one speed sets both: half (0.04 of 0.08 m/s since commit 155c4b7's faster
-/// finish, a quarter before; a setting of its own until 7 Dec 2026).
+/// final_speed_mps, so that one speed sets both: half (0.04 of 0.08 m/s).
 constexpr double kSlowZoneSpeedFraction = 0.5;
 
 /// The settings (settings/planner.yaml) and what one range cannot say; throws naming the bad field.

@@ -36,7 +36,7 @@ struct TargetObservation {
   std::string status;                ///< the estimator's reason when not valid
 };
 
-// Constants of the filter's method, each the one value ever shipped (settings until 7 Dec 2026).
+// Constants of the filter's method.
 /// This many rejections in a row: the target did move, the filter restarts from them.
 constexpr int kOutlierResetCount = 5;
 /// Prior on the target's turn rate, rad/s (3 deg/s = 0.052).

@@ -51,7 +51,7 @@ constexpr char kProbeTipKey[] = "robot/chaser/docking_probe_x_m";
 constexpr char kBaseFrameKey[] = "robot/chaser/base_frame";
 // The docking action's feedback (the current DockingState) rate, Hz.
 constexpr double kFeedbackRateHz = 5.0;
-// Constants of the node (each the one value ever shipped; settings until 7 Dec 2026):
+// Constants of the node:
 // An estimate up to this much newer than the newest odometry is placed by advancing that odometry along
 // its twist, s: a little over two periods of the 50 Hz base, so an image never waits for the next one.
 constexpr double kMaxOdomExtrapolationS = 0.05;

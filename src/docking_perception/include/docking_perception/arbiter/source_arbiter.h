@@ -52,7 +52,7 @@ void validate(const ArbiterConfig& config);
 
 /// The stamp limits of offer(e, now): stamps further ahead or older are refused and leave no trace. The
 /// limits every node that takes estimates from another process uses (docking_msgs/estimate_check.h: 0.5 s
-/// ahead, 5 s old; settings until 7 Dec 2026, never changed from these).
+/// ahead, 5 s old).
 constexpr docking_msgs::checks::StampLimits kStampLimits{};
 
 enum class RangeRegime : std::uint8_t { kUnknown, kFar, kNear };
