@@ -23,6 +23,7 @@ using test::detectorWith;
 using test::shippedDetector;
 using test::shippedParams;
 using test::shippedShape;
+using test::shippedRig;
 
 cv::Mat invalidImage() { return cv::Mat(480, 640, CV_32FC1, cv::Scalar(-1.0f)); }
 
@@ -246,7 +247,7 @@ TEST(DisparityDetector, FloorIsIgnoredByTheHeightCut) {
   EXPECT_NEAR(with_cut.position_m.z(), 3.0, 0.01);
   EXPECT_NEAR(with_cut.position_m.x(), 0.1, 0.01);
 
-  params.floor_cut_enabled = false;
+  params.level_floor = false;
   const Detection without_cut = detectorWith(params).detect(disparity, g);
   EXPECT_FALSE(without_cut.found) << "without the cut the floor is the closest object";
 }
@@ -337,7 +338,7 @@ TEST(DisparityDetector, DetectedCovarianceGrowsAsRangeSquared) {
 // top-level).
 std::string refusedKey(const DetectorParams& params) {
   try {
-    validate(params, shippedShape());
+    validate(params, shippedShape(), shippedRig());
   } catch (const docking_settings::ConfigError& e) {
     return e.key();
   }

@@ -171,13 +171,14 @@ TEST(FootprintFit, TheDetectorReportsThePortOfATurnedMockup) {
   const cv::Mat disparity = renderMockupDisparity(shape, port, c.yaw_deg * kPi / 180.0, 0.05, 5);
   const Eigen::Vector3d truth(port.x(), 0.0, port.y());
 
-  const Detection fitted = DisparityDetector(params, shape).detect(disparity, geometry640(), 0.0, 96.0);
+  const RigGeometry rig = testing::shippedRig(kConfigDir);
+  const Detection fitted = DisparityDetector(params, shape, rig).detect(disparity, geometry640(), 0.0, 96.0);
   ASSERT_TRUE(fitted.found) << fitted.reason;
   EXPECT_TRUE(fitted.footprint_fitted);
   EXPECT_LT((fitted.position_m - truth).norm(), 0.02 * c.range_m) << fitted.position_m.transpose();
 
   params.footprint_fit_enabled = false;  // the nearest layer's centroid instead, for comparison
-  const Detection nearest = DisparityDetector(params, shape).detect(disparity, geometry640(), 0.0, 96.0);
+  const Detection nearest = DisparityDetector(params, shape, rig).detect(disparity, geometry640(), 0.0, 96.0);
   ASSERT_TRUE(nearest.found) << nearest.reason;
   EXPECT_FALSE(nearest.footprint_fitted);
   EXPECT_GT((nearest.position_m - truth).norm(), 0.05) << nearest.position_m.transpose();
@@ -200,7 +201,9 @@ TEST(FootprintFit, TheDetectorRefusesABlobOffTheOutline) {
       disparity.at<float>(v, u) = static_cast<float>(g.focal_px * g.baseline_m / z);
     }
   }
-  const Detection d = DisparityDetector(params, loadTargetShape(kConfigDir + "/target.yaml")).detect(disparity, g, 0.0, 96.0);
+  const Detection d =
+      DisparityDetector(params, loadTargetShape(kConfigDir + "/target.yaml"), testing::shippedRig(kConfigDir))
+          .detect(disparity, g, 0.0, 96.0);
   EXPECT_FALSE(d.found);
   EXPECT_EQ(d.outcome, StageOutcome(PortOutcome::kFootprintMisfit)) << d.reason;
 }
