@@ -643,9 +643,8 @@ StageOutcome selectRegion(const cv::Mat& disparity, const StereoGeometry& geomet
 }
 
 // The region's valid disparities (finite, > 0, inside the matcher's search range and, with level_floor, the floor
-// and ceiling cuts) in a copy, everything else 0; returns how many. Floor cut: a point is lower than the cut
-// (RigLimits::floor_cut_m) below the axis when (v - cy) B / d > cut, i.e. d < (v - cy) B / cut; the ceiling
-// cut is the same above.
+// cut) in a copy, everything else 0; returns how many. Floor cut: a point is lower than the cut
+// (RigLimits::floor_cut_m) below the axis when (v - cy) B / d > cut, i.e. d < (v - cy) B / cut.
 int keepValidDisparities(const cv::Mat& disparity, const StereoGeometry& geometry, double search_min_px,
                          double search_max_px, const DetectorParams& p, const RigLimits& limits,
                          SearchImages* images) {
@@ -655,11 +654,9 @@ int keepValidDisparities(const cv::Mat& disparity, const StereoGeometry& geometr
   images->clean = cv::Mat(disparity.size(), CV_32FC1, cv::Scalar(0.0f));
   int valid_count = 0;
   for (int v = region.y; v < region.y + region.height; ++v) {
-    float floor_min_disparity = 0.0f;  // disparities below this are floor (ceiling) points here
+    float floor_min_disparity = 0.0f;  // disparities below this are floor points here
     if (p.level_floor && v > geometry.cy_px) {
       floor_min_disparity = static_cast<float>((v - geometry.cy_px) * geometry.baseline_m / limits.floor_cut_m);
-    } else if (p.level_floor && p.ceiling_cut_y_m > 0.0 && v < geometry.cy_px) {
-      floor_min_disparity = static_cast<float>((geometry.cy_px - v) * geometry.baseline_m / p.ceiling_cut_y_m);
     }
     const float* in = disparity.ptr<float>(v);
     float* out = images->clean.ptr<float>(v);

@@ -252,21 +252,6 @@ TEST(DisparityDetector, FloorIsIgnoredByTheHeightCut) {
   EXPECT_FALSE(without_cut.found) << "without the cut the floor is the closest object";
 }
 
-TEST(DisparityDetector, CeilingIsIgnoredByTheHeightCut) {
-  // A patch 2 m above the cameras at 4.5 m (a ceiling light) is nearer than a target at 6 m.
-  cv::Mat disparity = invalidImage();
-  paintRect(&disparity, 0.0, 0.0, 6.0, 0.30, 0.24);
-  paintRect(&disparity, 1.0, -2.0, 4.5, 0.6, 0.5);
-  DetectorParams params = shippedParams();
-  params.ceiling_cut_y_m = 1.0;
-  const Detection with_cut = detectorWith(params).detect(disparity, ourGeometry());
-  ASSERT_TRUE(with_cut.found) << with_cut.reason;
-  EXPECT_NEAR(with_cut.position_m.z(), 6.0, 0.02);
-  params.ceiling_cut_y_m = 0.0;
-  const Detection without_cut = detectorWith(params).detect(disparity, ourGeometry());
-  EXPECT_LT(without_cut.position_m.z(), 5.0) << "without the cut the ceiling patch wins";
-}
-
 TEST(DisparityDetector, CentreIsTheFaceNotTheWholeBlob) {
   // The face at 3.00 m with a solar panel 0.15 m behind it on one side only: the blob holds both,
   // the centre and depth must be the face's.

@@ -4,7 +4,7 @@
 //
 // detect() runs the detector's stages (stages.h; the package README, section disparity_detector, draws them):
 //  1. input: the image and geometry usable; the searched region: the matcher's valid window;
-//  2. valid disparity: the region's valid disparities above the floor cut (and below the ceiling cut), median
+//  2. valid disparity: the region's valid disparities above the floor cut (level_floor), median
 //     filtered: enough of them;
 //  3. band search: the closest object (the disparity `closest_min_pixels` pixels reach, so a few noisy
 //     pixels cannot win), a threshold just below it that holds the target's own depth, and the band's blobs,

@@ -15,7 +15,7 @@ namespace disparity {
 
 enum class Stage : std::uint8_t {
   kInput = 1,          // the disparity image, its camera model and the searched region are usable
-  kValidDisparity = 2, // enough valid disparities in the region, inside the floor and ceiling cuts, filtered
+  kValidDisparity = 2, // enough valid disparities in the region, above the floor cut, filtered
   kBandSearch = 3,     // the nearest depth band holding a target-shaped blob (nearer bands looked behind)
   kPort = 4,           // the port from the mockup's footprint fitted to the blob's depth profile
   kPlausibility = 5,   // the blob's size, border and disparity range
