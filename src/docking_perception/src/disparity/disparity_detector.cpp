@@ -319,10 +319,10 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
 // The port from the mockup's footprint fitted to the blob's column profile (footprint_fit.h): sets the
 // detection's centre (the port's image point; its row the blob's median row, the mockup being as high
 // above the port as below) and disparity, so that reproject() gives the port and its covariance.
-// Not passed: `reason` says why the blob is not the mockup.
+// Not passed: `reason` says why no footprint could be fitted.
 StageOutcome portFromFootprint(const std::vector<cv::Point>& points, const std::vector<float>& disparities,
-                               const StereoGeometry& geometry, const DetectorParams& p, const TargetShape& shape,
-                               Detection* result, std::string* reason) {
+                               const StereoGeometry& geometry, const TargetShape& shape, Detection* result,
+                               std::string* reason) {
   std::vector<int> columns, rows;
   columns.reserve(points.size());
   rows.reserve(points.size());
@@ -340,12 +340,6 @@ StageOutcome portFromFootprint(const std::vector<cv::Point>& points, const std::
   }
   result->footprint_yaw_rad = fit.yaw_rad;
   result->footprint_inlier_fraction = fit.inlier_fraction;
-  if (fit.inlier_fraction < p.footprint_min_inlier_fraction) {
-    *reason = "footprint fit: " + formatNumber(fit.inlier_fraction) +
-              " of the blob's depth profile on the mockup's outline < footprint_min_inlier_fraction " +
-              formatNumber(p.footprint_min_inlier_fraction);
-    return PortOutcome::kFootprintMisfit;
-  }
   auto middle = rows.begin() + static_cast<std::ptrdiff_t>(rows.size() / 2);
   std::nth_element(rows.begin(), middle, rows.end());
   const double z = fit.port_xz.y();
@@ -957,7 +951,7 @@ void nearestLayer(const std::vector<float>& disparities, const std::vector<cv::P
 }
 
 // Stage 4, port: the port read off the mockup's footprint fitted to the blob (footprint_fit_enabled; else the
-// nearest layer's centre), reprojected with its covariance. `reason`: why the blob is not the mockup.
+// nearest layer's centre), reprojected with its covariance. `reason`: why no port could be placed.
 StageOutcome placePort(const cv::Mat& clean, const StereoGeometry& geometry, const DetectorParams& p,
                        const TargetShape& shape, int blob_area, Detection* result, std::string* reason) {
   std::vector<float> disparities;
@@ -969,7 +963,7 @@ StageOutcome placePort(const cv::Mat& clean, const StereoGeometry& geometry, con
   if (disparities.empty()) return PortOutcome::kPassed;  // plausibility refuses the blob (no pixels)
   nearestLayer(disparities, points, geometry, result);
   StageOutcome outcome = PortOutcome::kPassed;
-  if (p.footprint_fit_enabled) outcome = portFromFootprint(points, disparities, geometry, p, shape, result, reason);
+  if (p.footprint_fit_enabled) outcome = portFromFootprint(points, disparities, geometry, shape, result, reason);
   reproject(geometry, result->centre_px, result->disparity_px, kCentreSigmaPx, kDisparitySigmaPx,
             &result->position_m, &result->covariance_m2);
   // The estimate stands for the port, but the blob's centre is where the visible parts of the mockup are:

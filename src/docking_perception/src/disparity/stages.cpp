@@ -57,7 +57,6 @@ const char* portName(PortOutcome code) {
   switch (code) {
     case PortOutcome::kPassed: return "passed";
     case PortOutcome::kTooFewColumns: return "too_few_columns";
-    case PortOutcome::kFootprintMisfit: return "footprint_misfit";
   }
   return "unknown";
 }

@@ -51,7 +51,6 @@ enum class BandSearchOutcome : std::uint8_t {
 enum class PortOutcome : std::uint8_t {
   kPassed = 0,
   kTooFewColumns = 1,       // too few image columns with depth to fit the footprint
-  kFootprintMisfit = 2,     // too little of the blob's depth profile on the fitted footprint
 };
 enum class PlausibilityOutcome : std::uint8_t {
   kPassed = 0,
