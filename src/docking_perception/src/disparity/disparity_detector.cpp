@@ -157,14 +157,6 @@ bool touchesBorder(const cv::Rect& box, const cv::Rect& region, int margin) {
          box.y <= region.y + margin || box.y + box.height >= region.y + region.height - margin;
 }
 
-// The area the blob-size limit is a fraction of: the searched region, or for a window about the region the
-// full image would have had (the same blind band and matcher border), so that a window does not shrink it.
-int searchedArea(const cv::Rect& region, cv::Size image_size, const ImageWindow& window) {
-  if (!window.isWindow()) return region.area();
-  return std::max(0, window.full_size.width - region.x) *
-         std::max(0, window.full_size.height - (image_size.height - region.height));
-}
-
 // Whether `box` reaches an edge of `region` that is an edge of the tracking window, not of the full image
 // (`image_size`: the disparity image's size; the region's left edge is the matcher's blind band, a window
 // edge only when the window does not start at the image's left edge).
@@ -975,13 +967,12 @@ StageOutcome placePort(const cv::Mat& clean, const StereoGeometry& geometry, con
 
 // Stage 5, plausibility: the blob's size, border and disparity range, with the numbers in the reason so a
 // user can tune live.
-StageOutcome checkPlausibility(const cv::Rect& region, cv::Size image_size, const ImageWindow& window,
-                               const DetectorParams& p, int blob_area, const Detection& result, std::string* reason) {
+StageOutcome checkPlausibility(const cv::Rect& region, const DetectorParams& p, const Detection& result,
+                               std::string* reason) {
   const cv::Rect& box = result.bounding_box;
   const int margin = kBorderMarginPx;
   const bool left = box.x <= region.x + margin, right = box.x + box.width >= region.x + region.width - margin;
   const bool top = box.y <= region.y + margin, bottom = box.y + box.height >= region.y + region.height - margin;
-  const int searched = searchedArea(region, image_size, window);
   if (result.blob_pixels < p.min_blob_area_px) {
     *reason = "blob too small: " + std::to_string(result.blob_pixels) + " px < min_blob_area_px " +
               std::to_string(p.min_blob_area_px);
@@ -996,11 +987,6 @@ StageOutcome checkPlausibility(const cv::Rect& region, cv::Size image_size, cons
     *reason = std::string("blob touches the border of the valid region:") + (left ? " left" : "") +
               (right ? " right" : "") + (top ? " top" : "") + (bottom ? " bottom" : "");
     return PlausibilityOutcome::kBlobTouchesBorder;
-  }
-  if (blob_area > p.max_blob_area_fraction * searched) {
-    *reason = "blob too large: " + std::to_string(blob_area) + " px > max_blob_area_fraction " +
-              formatNumber(p.max_blob_area_fraction) + " of " + std::to_string(searched) + " px";
-    return PlausibilityOutcome::kBlobTooLarge;
   }
   if (result.disparity_px < p.min_disparity_px || result.disparity_px > p.max_disparity_px) {
     *reason = "blob disparity " + formatNumber(result.disparity_px) + " px outside [" +
@@ -1034,8 +1020,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
   // A blob not target-shaped is still placed (its centre in the debug image); the search's outcome decides.
   std::string port_reason, plausibility_reason;
   const StageOutcome port = placePort(images.clean, geometry, params_, shape_, blob.area, &result, &port_reason);
-  const StageOutcome plausible = checkPlausibility(images.region, disparity.size(), window, params_, blob.area,
-                                                  result, &plausibility_reason);
+  const StageOutcome plausible = checkPlausibility(images.region, params_, result, &plausibility_reason);
   if (!result.outcome.passed()) return result;
   result.outcome = !port.passed() ? port : plausible;
   result.reason = !port.passed() ? "not the target: " + port_reason : plausibility_reason;

@@ -67,7 +67,6 @@ const char* plausibilityName(PlausibilityOutcome code) {
     case PlausibilityOutcome::kBlobTooSmall: return "blob_too_small";
     case PlausibilityOutcome::kBlobTooThin: return "blob_too_thin";
     case PlausibilityOutcome::kBlobTouchesBorder: return "blob_touches_border";
-    case PlausibilityOutcome::kBlobTooLarge: return "blob_too_large";
     case PlausibilityOutcome::kDisparityOutOfRange: return "disparity_out_of_range";
   }
   return "unknown";

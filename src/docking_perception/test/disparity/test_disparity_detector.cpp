@@ -212,15 +212,6 @@ TEST(DisparityDetector, TinyNearSpeckDoesNotHideTheTarget) {
   EXPECT_NEAR(result.position_m.z(), 3.0, 0.01);
 }
 
-TEST(DisparityDetector, TooLargeBlobIsRejected) {
-  // The face at 0.35 m: the mockup's shape, but 471 x 377 px, more than max_blob_area_fraction of the image.
-  cv::Mat disparity = invalidImage();
-  paintRect(&disparity, 0.0, 0.0, 0.35, 0.30, 0.24);
-  const Detection result = shippedDetector().detect(disparity, ourGeometry());
-  EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kBlobTooLarge));
-}
-
 TEST(DisparityDetector, DisparityOutsideThePlausibleRangeIsRejected) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.0, 0.0, 0.55, 0.30, 0.24);  // the face at 0.55 m: 100 px > max_disparity_px 92

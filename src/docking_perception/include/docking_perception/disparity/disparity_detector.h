@@ -142,8 +142,7 @@ struct SearchHint {
 // Where the disparity image lies in the camera's full image, when it is a window of it (the far stage's
 // tracking window, far_stereo_rectify: camera_info roi). Edges of the window that are not the full
 // image's are not the target's edge: a blob crossing one is a neighbour of the tracked target (or the
-// target merged with one), never reported as the target cut by the border; the blob-size limit stays the
-// full image's. Default: not a window.
+// target merged with one), never reported as the target cut by the border. Default: not a window.
 struct ImageWindow {
   cv::Point offset{0, 0};  // the window's top-left pixel in the full image
   cv::Size full_size;      // the full image; empty: the disparity image is the full image
