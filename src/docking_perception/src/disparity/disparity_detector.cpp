@@ -33,8 +33,6 @@ constexpr int kMaxNearObjectsSkipped = 8;
 constexpr std::size_t kMaxBlobsPerBand = 6;
 // Yaw steps of the mockup's outline in shapeBounds (0 to 90 deg; the outline is symmetric).
 constexpr int kYawSteps = 90;
-// Columns sampled across the mockup's outline for its fill.
-constexpr int kFillSamples = 200;
 // Constants of the method, not tuning (they were settings until issue 55, at these values everywhere):
 // the band's threshold stays at least this far below the closest disparity (the matcher's noise on a flat
 // face is a fraction of a pixel);
@@ -176,7 +174,7 @@ bool crossesWindowEdge(const cv::Rect& box, const cv::Rect& region, int margin, 
 // Empty when the blob can be the mockup; otherwise what does not fit, with the numbers. A blob cut by
 // the border (`cut`) is only held to the upper bounds: the target partly out of view must stop the
 // search (and be reported as touching the border), not be looked behind.
-std::string shapeMismatch(const BlobShape& shape, const ShapeBounds& bounds, const DetectorParams& p,
+std::string shapeMismatch(const BlobShape& shape, const ShapeBounds& bounds,
                           const RigLimits& limits, double focal_px, bool cut) {
   if (!(shape.range_z_m > 0.0)) return "no valid disparity inside the blob";
   const double pixel_m = limits.shape_margin_px * shape.range_z_m / focal_px;
@@ -190,10 +188,6 @@ std::string shapeMismatch(const BlobShape& shape, const ShapeBounds& bounds, con
   };
   std::string misfit = check("width", shape.width_m, bounds.min_width_m, bounds.max_width_m);
   if (misfit.empty()) misfit = check("height", shape.height_m, bounds.min_height_m, bounds.max_height_m);
-  if (misfit.empty() && !cut && shape.fill < p.min_fill_fraction) {
-    misfit = "fill " + formatNumber(shape.fill) + " < min_fill_fraction " +
-             formatNumber(p.min_fill_fraction) + " (not a solid object)";
-  }
   if (misfit.empty()) return "";
   return misfit + " (blob at " + formatNumber(shape.range_z_m) + " m, " +
          formatNumber(shape.width_m) + " x " + formatNumber(shape.height_m) + " m, fill " +
@@ -281,14 +275,14 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
       const cv::Rect outline_box = cv::boundingRect(contour);
       outline.width_m = outline_box.width * outline.range_z_m / geometry.focal_px;
       outline.height_m = outline_box.height * outline.range_z_m / geometry.focal_px;
-      if (!shapeMismatch(outline, bounds, p, limits, geometry.focal_px, /*cut=*/true).empty()) continue;
+      if (!shapeMismatch(outline, bounds, limits, geometry.focal_px, /*cut=*/true).empty()) continue;
       BlobCandidate part = makeCandidate(contour, level_mask);
       if (part.area < p.min_blob_area_px || part.thickness_px < p.min_blob_thickness_px ||
           touchesBorder(part.box, region, kBorderMarginPx)) {
         continue;
       }
       part.shape = measureBlobShape(part, clean, geometry);
-      if (!shapeMismatch(part.shape, bounds, p, limits, geometry.focal_px, /*cut=*/false).empty() ||
+      if (!shapeMismatch(part.shape, bounds, limits, geometry.focal_px, /*cut=*/false).empty() ||
           !heightMismatch(candidatePosition(part, geometry), p, limits).empty()) {
         continue;
       }
@@ -299,7 +293,7 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
       const cv::Rect parent_box = componentAround(merged, filtered, parent_level, contour.front());
       parent.width_m = parent_box.width * parent.range_z_m / geometry.focal_px;
       parent.height_m = parent_box.height * parent.range_z_m / geometry.focal_px;
-      if (shapeMismatch(parent, bounds, p, limits, geometry.focal_px, /*cut=*/true).empty() &&
+      if (shapeMismatch(parent, bounds, limits, geometry.focal_px, /*cut=*/true).empty() &&
           (!best.valid || part.area > best.area)) {
         best = std::move(part);
       }
@@ -342,8 +336,8 @@ StageOutcome portFromFootprint(const std::vector<cv::Point>& points, const std::
 }
 
 // Extent of the mockup's outline across the line of sight at `yaw` (0: face-on): the box's columns at
-// full height, the panels' at theirs. Returns width and fill (mean column height / box height).
-void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill) {
+// full height, the panels' at theirs.
+double outlineWidthAtYaw(const TargetShape& t, double yaw) {
   const double c = std::cos(yaw), s = std::sin(yaw);
   // Projection of a point (x forward out of the face, y to the side) on the image's horizontal.
   auto across = [&](double x, double y) { return y * c + x * s; };
@@ -355,19 +349,7 @@ void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill)
   const double left_b = std::max(across(mid_x, -half_w - t.panel_span_m), across(mid_x, -half_w));
   const double right_a = std::min(across(mid_x, half_w), across(mid_x, half_w + t.panel_span_m));
   const double right_b = std::max(across(mid_x, half_w), across(mid_x, half_w + t.panel_span_m));
-  const double low = std::min({box_a, left_a, right_a}), high = std::max({box_b, left_b, right_b});
-  *width = high - low;
-  const double box_height = std::max(t.face_height_m, t.panel_height_m);
-  double covered = 0.0;
-  for (int i = 0; i < kFillSamples; ++i) {
-    const double y = low + (i + 0.5) * (*width) / kFillSamples;
-    if (y >= box_a && y <= box_b) {
-      covered += t.face_height_m;
-    } else if ((y >= left_a && y <= left_b) || (y >= right_a && y <= right_b)) {
-      covered += t.panel_height_m;
-    }
-  }
-  *fill = covered / (kFillSamples * box_height);
+  return std::max({box_b, left_b, right_b}) - std::min({box_a, left_a, right_a});
 }
 
 }  // namespace
@@ -375,14 +357,10 @@ void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill)
 ShapeBounds shapeBounds(const TargetShape& shape) {
   ShapeBounds bounds;
   bounds.min_width_m = std::numeric_limits<double>::infinity();
-  bounds.min_fill = 1.0;
   for (int step = 0; step <= kYawSteps; ++step) {
-    const double yaw = 0.5 * M_PI * step / kYawSteps;
-    double width = 0.0, fill = 0.0;
-    outlineAtYaw(shape, yaw, &width, &fill);
+    const double width = outlineWidthAtYaw(shape, 0.5 * M_PI * step / kYawSteps);
     bounds.min_width_m = std::min(bounds.min_width_m, width);
     bounds.max_width_m = std::max(bounds.max_width_m, width);
-    bounds.min_fill = std::min(bounds.min_fill, fill);
   }
   // The box is as tall as the face and shows its full height from any yaw.
   bounds.min_height_m = shape.face_height_m;
@@ -497,11 +475,6 @@ void validate(const DetectorParams& p, const TargetShape& t, const RigGeometry& 
   require(std::isfinite(t.panel_offset_behind_face_m) && t.panel_offset_behind_face_m >= 0.0 &&
               t.panel_offset_behind_face_m <= t.body_depth_m,
           "target_yaml", "the mockup's panels must lie within its body depth");
-  // A fill bound above what the mockup itself shows at some yaw would reject the real target.
-  const double mockup_fill = shapeBounds(t).min_fill;
-  require(p.min_fill_fraction <= mockup_fill, "min_fill_fraction",
-          "must be at most " + formatNumber(mockup_fill) + " (the mockup's own lowest fill; got " +
-              formatNumber(p.min_fill_fraction) + ")");
   require(rig.matcher_window_px > 0, "matcher/correlation_window_size",
           "must be > 0 (got " + std::to_string(rig.matcher_window_px) + ")");
   // The floor cut must lie above the floor, or the floor is the closest object.
@@ -595,9 +568,9 @@ struct BandContext {
 // What the search keeps from band to band: the chosen blob and those that explain a failure.
 struct BandSearchState {
   BlobCandidate chosen, fallback, first_misfit, largest_small;
-  // A blob of a band failed the shape check only on a lower bound or its fill: it may be the target,
-  // degraded (glare, blur, merged holes), so nothing behind it is trusted (issue 11: at 2 m under
-  // glare the face's fill fell to 0.3 and a box stack 1.4 m behind it was taken).
+  // A blob of a band failed the shape check only on a lower bound: it may be the target, degraded (glare,
+  // blur, merged holes), so nothing behind it is trusted (issue 11: at 2 m under glare a box stack 1.4 m
+  // behind the face was taken).
   bool stop_here = false;
   int largest_skipped_area = 0;
 };
@@ -749,9 +722,9 @@ bool shapeCheck(const BandContext& c, const SearchImages& images, double thresho
     ++result->merged_blobs_split;
   }
   const bool cut = touchesBorder(candidate->box, images.region, kBorderMarginPx);
-  candidate->misfit = shapeMismatch(candidate->shape, c.bounds, p, c.limits, g.focal_px, cut);
+  candidate->misfit = shapeMismatch(candidate->shape, c.bounds, c.limits, g.focal_px, cut);
   const bool within_upper_bounds =
-      shapeMismatch(candidate->shape, c.bounds, p, c.limits, g.focal_px, /*cut=*/true).empty();
+      shapeMismatch(candidate->shape, c.bounds, c.limits, g.focal_px, /*cut=*/true).empty();
   const std::string height_misfit = heightMismatch(candidatePosition(*candidate, g), p, c.limits);
   const bool degraded = !candidate->misfit.empty() && !cut &&
                         candidate->shape.width_m >= p.degraded_min_width_fraction * c.bounds.min_width_m &&

@@ -60,8 +60,6 @@ TEST(ShapeBounds, TheShippedMockupSpansBoxEdgeOnToFaceAndPanels) {
   EXPECT_NEAR(bounds.max_width_m, 0.90, 0.01);  // face-on: panel + face + panel
   EXPECT_NEAR(bounds.min_height_m, 0.24, 1e-9);
   EXPECT_NEAR(bounds.max_height_m, 0.24, 1e-9);
-  EXPECT_GT(bounds.min_fill, 0.6);
-  EXPECT_LT(bounds.min_fill, 0.8);  // face-on: (0.072 + 0.096) / 0.216 = 0.78 at most
 }
 
 TEST(ShapeBounds, ReadFromTheShippedTargetYaml) {
@@ -76,9 +74,6 @@ TEST(ShapeBounds, ReadFromTheShippedTargetYaml) {
 }
 
 TEST(ShapeCheck, ParametersAreValidated) {
-  DetectorParams params = checkingParams();
-  params.min_fill_fraction = 0.95;  // above what the mockup itself shows
-  EXPECT_FALSE(allowed(params));
   TargetShape no_face = shippedShape();
   no_face.face_width_m = 0.0;
   EXPECT_FALSE(allowed(checkingParams(), no_face));
@@ -121,16 +116,6 @@ TEST(ShapeCheck, OnlyAnotherObjectInViewIsInvalidWithTheReason) {
     EXPECT_FALSE(result.reason.empty());
     EXPECT_FALSE(result.mask.empty()) << "the rejected blob is kept for the debug image";
   }
-}
-
-TEST(ShapeCheck, HollowObjectFailsTheFill) {
-  // A table-like bar with one leg, as wide and tall as the mockup face-on: no body between.
-  cv::Mat disparity = invalidImage();
-  paintRect(&disparity, 0.0, -0.10, 2.5, 0.86, 0.08);
-  paintRect(&disparity, -0.39, 0.0, 2.5, 0.08, 0.28);
-  const Detection result = detectorWith(checkingParams()).detect(disparity, ourGeometry());
-  EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, StageOutcome(BandSearchOutcome::kNotTargetShaped)) << result.reason;
 }
 
 TEST(ShapeCheck, NearerObjectsOfOtherSizesAreLookedBehind) {
@@ -361,15 +346,13 @@ TEST(RigLimits, AFloorCutBelowTheFloorIsRefusedUnlessThereIsNoFloor) {
   }
 }
 
-// Issue 11, eval_real_specular_2m: glare left an L of the face at 2 m (fill below min_fill_fraction, the
-// mockup's size); its band was looked behind and a box stack 1.4 m farther, of the mockup's size, was
-// reported valid. A blob that may be the degraded target stops the search.
+// Issue 11, eval_real_specular_2m: glare left part of the face at 2 m (narrower than the mockup can be);
+// its band was looked behind and a box stack 1.4 m farther, of the mockup's size, was reported valid. A
+// blob that may be the degraded target stops the search.
 TEST(DegradedTarget, ABlobOfTheMockupsSizeIsNotLookedBehind) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, -0.6, 0.0, 3.4, 0.30, 0.28);  // the box stack behind, to the left
-  const double strip_m = 18.0 * 2.0 / 550.0;           // 18 px at 2 m
-  paintRect(&disparity, -0.15 + strip_m / 2, 0.0, 2.0, strip_m, 0.24);  // the face's left column
-  paintRect(&disparity, 0.0, 0.12 - strip_m / 2, 2.0, 0.30, strip_m);   // ...and its bottom row
+  paintRect(&disparity, -0.07, 0.0, 2.0, 0.16, 0.24);  // the face's left half, the rest under glare
   DetectorParams params = checkingParams();
   params.stop_behind_target_sized = false;  // before
   const Detection before = detectorWith(params).detect(disparity, ourGeometry());

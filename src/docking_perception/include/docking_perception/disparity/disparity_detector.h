@@ -8,7 +8,7 @@
 //     filtered: enough of them;
 //  3. band search: the closest object (the disparity `closest_min_pixels` pixels reach, so a few noisy
 //     pixels cannot win), a threshold just below it that holds the target's own depth, and the band's blobs,
-//     largest first: too small or thin, not of the mockup's shape (TargetShape: width, height and fill it can
+//     largest first: too small or thin, not of the mockup's shape (TargetShape: width and height it can
 //     show from some yaw), height or isolation (a part split out of a blob merged with its neighbours), or the
 //     target (with a SearchHint: inside the tracked target's gate). A band without it is removed and the
 //     search looks behind it, so a nearer wall, person or box cannot hide the target; a blob that may be the
@@ -62,7 +62,6 @@ TargetShape loadTargetShape(const std::string& target_yaml_path);
 struct ShapeBounds {
   double min_width_m = 0.0, max_width_m = 0.0;
   double min_height_m = 0.0, max_height_m = 0.0;
-  double min_fill = 0.0;  // blob pixels / bounding-box pixels: the lowest the mockup shows
 };
 ShapeBounds shapeBounds(const TargetShape& shape);
 
@@ -117,8 +116,8 @@ constexpr double kMaxAppearanceWorkingWidthPx = 48.0;
 
 // Throws std::invalid_argument (docking_settings::ConfigError) naming the first setting its declaration does not
 // allow, or the rule between settings it breaks (median_kernel_px 0, 1, 3 or 5; max_disparity_px above
-// min_disparity_px; min_fill_fraction at most the mockup's own lowest fill; with level_floor, a floor cut above
-// the floor), or the mockup's size or the rig that is unusable.
+// min_disparity_px; with level_floor, a floor cut above the floor), or the mockup's size or the rig that is
+// unusable.
 void validate(const DetectorParams& params, const TargetShape& shape, const RigGeometry& rig);
 std::vector<std::string> validateGeometry(const StereoGeometry& geometry);
 
