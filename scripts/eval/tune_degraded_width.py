@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Tunes disparity_detector.yaml's degraded_min_width_fraction on far scenes of its own (issue 11).
 
-A blob within the mockup's upper size bounds that fails only a lower bound or the fill stops the far search
+A blob within the mockup's upper size bounds that fails only a lower bound stops the far search
 as a possibly degraded target (stop_behind_target_sized); a strip of mismatched disparity along an occluding
 edge is such a blob, and in eval_far_3m_on it stopped the search in front of the target. The fraction is the
 narrowest such blob, in units of the mockup's edge-on width, that still stops the search.

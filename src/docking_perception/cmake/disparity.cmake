@@ -69,7 +69,8 @@ if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(test_disparity_detector test/disparity/test_disparity_detector.cpp
     test/disparity/test_target_confirmation.cpp test/disparity/test_face_appearance.cpp)
   if(TARGET test_disparity_detector)
-    target_link_libraries(test_disparity_detector docking_perception_disparity_core gtest_main)
+    target_link_libraries(test_disparity_detector docking_perception_disparity_core
+      docking_perception_disparity_synthetic gtest_main)
     target_compile_definitions(test_disparity_detector PRIVATE
       DISPARITY_CONFIG_DIR="${DISPARITY_CONFIG_DIR}")
   endif()

@@ -114,7 +114,7 @@ class Pipeline {
         matcher_settings_(dt::loadMatcherSettings(config + "/stereo_image_proc.yaml")),
         matcher_(dt::createMatcher(matcher_settings_)),
         detector_(dt::shippedDetectorSettings(config).detector,
-                  dp::disparity::loadTargetShape(config + "/target.yaml")) {
+                  dp::disparity::loadTargetShape(config + "/target.yaml"), dt::shippedRig(config)) {
     geometry_.focal_px = left_rect_.intrinsics.fx;
     geometry_.cx_px = left_rect_.intrinsics.cx;
     geometry_.cy_px = left_rect_.intrinsics.cy;

@@ -177,6 +177,7 @@ struct BenchInputs {
   testing::MatcherSettings settings;
   docking_perception::disparity::DetectorParams params;
   docking_perception::disparity::TargetShape target_shape;
+  docking_perception::disparity::RigGeometry rig;
   testing::SyntheticScene scene;
   cv::Mat left_raw, right_raw;
 };
@@ -189,6 +190,7 @@ bool loadInputs(const Options& o, BenchInputs* in) {
   in->settings = testing::loadMatcherSettings(o.config_dir + "/stereo_image_proc.yaml");
   in->params = testing::shippedDetectorSettings(o.config_dir).detector;
   in->target_shape = docking_perception::disparity::loadTargetShape(o.config_dir + "/target.yaml");
+  in->rig = testing::shippedRig(o.config_dir);
   if (o.disparity_range_override > 0) in->settings.disparity_range = o.disparity_range_override;
 
   in->scene = testing::targetScene(kTruthX, kTruthY, kTruthZ, 8.0);
@@ -222,7 +224,7 @@ struct FarStage {
       : left_rectifier(testing::pinholeOf(in.left_calibration)),
         right_rectifier(testing::pinholeOf(in.right_calibration)),
         matcher(testing::createMatcher(in.settings)),
-        detector(in.params, in.target_shape),
+        detector(in.params, in.target_shape, in.rig),
         // The appearance check the node runs on a found blob (face_appearance.h), part of the detection's cost.
         target_model(docking_perception::mono::TargetModel::loadFromYaml(o.config_dir + "/target.yaml")),
         appearance_check(target_model.textureGray(), target_model.faceWidth(), target_model.faceHeight()),

@@ -33,8 +33,6 @@ constexpr int kMaxNearObjectsSkipped = 8;
 constexpr std::size_t kMaxBlobsPerBand = 6;
 // Yaw steps of the mockup's outline in shapeBounds (0 to 90 deg; the outline is symmetric).
 constexpr int kYawSteps = 90;
-// Columns sampled across the mockup's outline for its fill.
-constexpr int kFillSamples = 200;
 // Constants of the method, not tuning (they were settings until issue 55, at these values everywhere):
 // the band's threshold stays at least this far below the closest disparity (the matcher's noise on a flat
 // face is a fraction of a pixel);
@@ -49,6 +47,12 @@ constexpr double kFaceMinBandPx = 0.25;
 // bins), and at most this many (at 2 m the band is 6 px deep: 48 levels cost 50 ms a frame).
 constexpr double kSplitLevelStepPx = 2.0 / kHistogramBinsPerPx;
 constexpr int kMaxSplitLevels = 16;
+// The blob's nearest (face) layer is referred to this percentile of its disparities (0.7-0.98 swept on
+// far_approach.bag, docs/TUNING.md; a setting until issue 55).
+constexpr double kFacePercentile = 0.9;
+// A profile point this near the fitted footprint (plus the depth noise at its range) is on it: the face's and
+// panels' thickness and a column median's noise (a setting until issue 55).
+constexpr double kFootprintInlierDistanceM = 0.05;
 
 std::string joinErrors(const std::vector<std::string>& errors) {
   std::string joined;
@@ -151,14 +155,6 @@ bool touchesBorder(const cv::Rect& box, const cv::Rect& region, int margin) {
          box.y <= region.y + margin || box.y + box.height >= region.y + region.height - margin;
 }
 
-// The area the blob-size limit is a fraction of: the searched region, or for a window about the region the
-// full image would have had (the same blind band and matcher border), so that a window does not shrink it.
-int searchedArea(const cv::Rect& region, cv::Size image_size, const ImageWindow& window) {
-  if (!window.isWindow()) return region.area();
-  return std::max(0, window.full_size.width - region.x) *
-         std::max(0, window.full_size.height - (image_size.height - region.height));
-}
-
 // Whether `box` reaches an edge of `region` that is an edge of the tracking window, not of the full image
 // (`image_size`: the disparity image's size; the region's left edge is the matcher's blind band, a window
 // edge only when the window does not start at the image's left edge).
@@ -178,11 +174,11 @@ bool crossesWindowEdge(const cv::Rect& box, const cv::Rect& region, int margin, 
 // Empty when the blob can be the mockup; otherwise what does not fit, with the numbers. A blob cut by
 // the border (`cut`) is only held to the upper bounds: the target partly out of view must stop the
 // search (and be reported as touching the border), not be looked behind.
-std::string shapeMismatch(const BlobShape& shape, const ShapeBounds& bounds, const DetectorParams& p,
-                          double focal_px, bool cut) {
+std::string shapeMismatch(const BlobShape& shape, const ShapeBounds& bounds,
+                          const RigLimits& limits, double focal_px, bool cut) {
   if (!(shape.range_z_m > 0.0)) return "no valid disparity inside the blob";
-  const double pixel_m = p.shape_tolerance_px * shape.range_z_m / focal_px;
-  const double k = p.shape_tolerance_fraction;
+  const double pixel_m = limits.shape_margin_px * shape.range_z_m / focal_px;
+  const double k = kShapeToleranceFraction;
   auto check = [&](const char* what, double value, double low, double high) -> std::string {
     low = cut ? 0.0 : std::max(0.0, low * (1.0 - k) - pixel_m);
     high = high * (1.0 + k) + pixel_m;
@@ -192,10 +188,6 @@ std::string shapeMismatch(const BlobShape& shape, const ShapeBounds& bounds, con
   };
   std::string misfit = check("width", shape.width_m, bounds.min_width_m, bounds.max_width_m);
   if (misfit.empty()) misfit = check("height", shape.height_m, bounds.min_height_m, bounds.max_height_m);
-  if (misfit.empty() && !cut && shape.fill < p.min_fill_fraction) {
-    misfit = "fill " + formatNumber(shape.fill) + " < min_fill_fraction " +
-             formatNumber(p.min_fill_fraction) + " (not a solid object)";
-  }
   if (misfit.empty()) return "";
   return misfit + " (blob at " + formatNumber(shape.range_z_m) + " m, " +
          formatNumber(shape.width_m) + " x " + formatNumber(shape.height_m) + " m, fill " +
@@ -214,13 +206,14 @@ Eigen::Vector3d candidatePosition(const BlobCandidate& blob, const StereoGeometr
   return {(u - geometry.cx_px) * z / geometry.focal_px, (v - geometry.cy_px) * z / geometry.focal_px, z};
 }
 
-// Empty when the blob's centre (`position`, optical frame: y down) is within max_centre_offset_y_m of
-// the optical axis, where the port of a target on the same floor is; otherwise why not.
-std::string heightMismatch(const Eigen::Vector3d& position, const DetectorParams& p) {
-  if (!(p.max_centre_offset_y_m > 0.0) || std::abs(position.y()) <= p.max_centre_offset_y_m) return "";
-  return "centre " + formatNumber(std::abs(position.y())) + " m " + (position.y() < 0.0 ? "above" : "below") +
-         " the optical axis > max_centre_offset_y_m " + formatNumber(p.max_centre_offset_y_m) +
-         " (blob at " + formatNumber(position.z()) + " m; the port is at camera height)";
+// Empty when the blob's centre (`position`, optical frame: y down) is within kMaxCentreOffsetM of the port's
+// height (level_floor: where the port of a target on the same floor is); otherwise why not.
+std::string heightMismatch(const Eigen::Vector3d& position, const DetectorParams& p, const RigLimits& limits) {
+  const double offset = position.y() - limits.port_y_m;
+  if (!p.level_floor || std::abs(offset) <= kMaxCentreOffsetM) return "";
+  return "centre " + formatNumber(std::abs(offset)) + " m " + (offset < 0.0 ? "above" : "below") +
+         " the port's height > " + formatNumber(kMaxCentreOffsetM) + " m (blob at " + formatNumber(position.z()) +
+         " m; level_floor: the port at its mount's height)";
 }
 
 // Copies the blob into the detection (contour, box, full-size mask, size figures).
@@ -256,7 +249,7 @@ cv::Rect componentAround(const BlobCandidate& blob, const cv::Mat& filtered, dou
 // Invalid candidate when there is none.
 BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filtered,
                               const cv::Mat& clean, const StereoGeometry& geometry,
-                              const ShapeBounds& bounds, const DetectorParams& p,
+                              const ShapeBounds& bounds, const DetectorParams& p, const RigLimits& limits,
                               const cv::Rect& region, double band_threshold_px) {
   double top_px = 0.0;
   cv::minMaxLoc(filtered(merged.box), nullptr, &top_px, nullptr, nullptr, merged.local_mask);
@@ -282,15 +275,15 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
       const cv::Rect outline_box = cv::boundingRect(contour);
       outline.width_m = outline_box.width * outline.range_z_m / geometry.focal_px;
       outline.height_m = outline_box.height * outline.range_z_m / geometry.focal_px;
-      if (!shapeMismatch(outline, bounds, p, geometry.focal_px, /*cut=*/true).empty()) continue;
+      if (!shapeMismatch(outline, bounds, limits, geometry.focal_px, /*cut=*/true).empty()) continue;
       BlobCandidate part = makeCandidate(contour, level_mask);
       if (part.area < p.min_blob_area_px || part.thickness_px < p.min_blob_thickness_px ||
           touchesBorder(part.box, region, kBorderMarginPx)) {
         continue;
       }
       part.shape = measureBlobShape(part, clean, geometry);
-      if (!shapeMismatch(part.shape, bounds, p, geometry.focal_px, /*cut=*/false).empty() ||
-          !heightMismatch(candidatePosition(part, geometry), p).empty()) {
+      if (!shapeMismatch(part.shape, bounds, limits, geometry.focal_px, /*cut=*/false).empty() ||
+          !heightMismatch(candidatePosition(part, geometry), p, limits).empty()) {
         continue;
       }
       const double part_disparity = focal_baseline / part.shape.range_z_m;
@@ -300,7 +293,7 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
       const cv::Rect parent_box = componentAround(merged, filtered, parent_level, contour.front());
       parent.width_m = parent_box.width * parent.range_z_m / geometry.focal_px;
       parent.height_m = parent_box.height * parent.range_z_m / geometry.focal_px;
-      if (shapeMismatch(parent, bounds, p, geometry.focal_px, /*cut=*/true).empty() &&
+      if (shapeMismatch(parent, bounds, limits, geometry.focal_px, /*cut=*/true).empty() &&
           (!best.valid || part.area > best.area)) {
         best = std::move(part);
       }
@@ -312,10 +305,10 @@ BlobCandidate splitMergedBlob(const BlobCandidate& merged, const cv::Mat& filter
 // The port from the mockup's footprint fitted to the blob's column profile (footprint_fit.h): sets the
 // detection's centre (the port's image point; its row the blob's median row, the mockup being as high
 // above the port as below) and disparity, so that reproject() gives the port and its covariance.
-// Not passed: `reason` says why the blob is not the mockup.
+// Not passed: `reason` says why no footprint could be fitted.
 StageOutcome portFromFootprint(const std::vector<cv::Point>& points, const std::vector<float>& disparities,
-                               const StereoGeometry& geometry, const DetectorParams& p, const TargetShape& shape,
-                               Detection* result, std::string* reason) {
+                               const StereoGeometry& geometry, const TargetShape& shape, Detection* result,
+                               std::string* reason) {
   std::vector<int> columns, rows;
   columns.reserve(points.size());
   rows.reserve(points.size());
@@ -324,7 +317,7 @@ StageOutcome portFromFootprint(const std::vector<cv::Point>& points, const std::
     rows.push_back(point.y);
   }
   FootprintFitParams fit_params;
-  fit_params.inlier_distance_m = p.footprint_inlier_distance_m;
+  fit_params.inlier_distance_m = kFootprintInlierDistanceM;
   const FootprintFit fit = fitFootprint(columnProfile(columns, disparities, geometry), shape, geometry, fit_params);
   if (!fit.valid) {
     *reason = "footprint fit: only " + std::to_string(fit.profile_points) + " image columns with depth (need " +
@@ -333,12 +326,6 @@ StageOutcome portFromFootprint(const std::vector<cv::Point>& points, const std::
   }
   result->footprint_yaw_rad = fit.yaw_rad;
   result->footprint_inlier_fraction = fit.inlier_fraction;
-  if (fit.inlier_fraction < p.footprint_min_inlier_fraction) {
-    *reason = "footprint fit: " + formatNumber(fit.inlier_fraction) +
-              " of the blob's depth profile on the mockup's outline < footprint_min_inlier_fraction " +
-              formatNumber(p.footprint_min_inlier_fraction);
-    return PortOutcome::kFootprintMisfit;
-  }
   auto middle = rows.begin() + static_cast<std::ptrdiff_t>(rows.size() / 2);
   std::nth_element(rows.begin(), middle, rows.end());
   const double z = fit.port_xz.y();
@@ -349,8 +336,8 @@ StageOutcome portFromFootprint(const std::vector<cv::Point>& points, const std::
 }
 
 // Extent of the mockup's outline across the line of sight at `yaw` (0: face-on): the box's columns at
-// full height, the panels' at theirs. Returns width and fill (mean column height / box height).
-void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill) {
+// full height, the panels' at theirs.
+double outlineWidthAtYaw(const TargetShape& t, double yaw) {
   const double c = std::cos(yaw), s = std::sin(yaw);
   // Projection of a point (x forward out of the face, y to the side) on the image's horizontal.
   auto across = [&](double x, double y) { return y * c + x * s; };
@@ -362,19 +349,7 @@ void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill)
   const double left_b = std::max(across(mid_x, -half_w - t.panel_span_m), across(mid_x, -half_w));
   const double right_a = std::min(across(mid_x, half_w), across(mid_x, half_w + t.panel_span_m));
   const double right_b = std::max(across(mid_x, half_w), across(mid_x, half_w + t.panel_span_m));
-  const double low = std::min({box_a, left_a, right_a}), high = std::max({box_b, left_b, right_b});
-  *width = high - low;
-  const double box_height = std::max(t.face_height_m, t.panel_height_m);
-  double covered = 0.0;
-  for (int i = 0; i < kFillSamples; ++i) {
-    const double y = low + (i + 0.5) * (*width) / kFillSamples;
-    if (y >= box_a && y <= box_b) {
-      covered += t.face_height_m;
-    } else if ((y >= left_a && y <= left_b) || (y >= right_a && y <= right_b)) {
-      covered += t.panel_height_m;
-    }
-  }
-  *fill = covered / (kFillSamples * box_height);
+  return std::max({box_b, left_b, right_b}) - std::min({box_a, left_a, right_a});
 }
 
 }  // namespace
@@ -382,14 +357,10 @@ void outlineAtYaw(const TargetShape& t, double yaw, double* width, double* fill)
 ShapeBounds shapeBounds(const TargetShape& shape) {
   ShapeBounds bounds;
   bounds.min_width_m = std::numeric_limits<double>::infinity();
-  bounds.min_fill = 1.0;
   for (int step = 0; step <= kYawSteps; ++step) {
-    const double yaw = 0.5 * M_PI * step / kYawSteps;
-    double width = 0.0, fill = 0.0;
-    outlineAtYaw(shape, yaw, &width, &fill);
+    const double width = outlineWidthAtYaw(shape, 0.5 * M_PI * step / kYawSteps);
     bounds.min_width_m = std::min(bounds.min_width_m, width);
     bounds.max_width_m = std::max(bounds.max_width_m, width);
-    bounds.min_fill = std::min(bounds.min_fill, fill);
   }
   // The box is as tall as the face and shows its full height from any yaw.
   bounds.min_height_m = shape.face_height_m;
@@ -397,26 +368,57 @@ ShapeBounds shapeBounds(const TargetShape& shape) {
   return bounds;
 }
 
-TargetShape loadTargetShape(const std::string& path) {
-  YAML::Node root;
+namespace {
+
+YAML::Node loadYamlFile(const std::string& path, const char* what) {
   try {
-    root = YAML::LoadFile(path);
+    return YAML::LoadFile(path);
   } catch (const std::exception& error) {
-    throw std::runtime_error("cannot read target model " + path + ": " + error.what());
+    throw std::runtime_error(std::string("cannot read ") + what + " " + path + ": " + error.what());
   }
-  auto number = [&](const YAML::Node& node, const std::string& field) {
-    if (!node || !node.IsScalar()) throw std::runtime_error(path + ": missing field '" + field + "'");
-    double value = 0.0;
-    try {
-      value = node.as<double>();
-    } catch (const std::exception&) {
-      throw std::runtime_error(path + ": field '" + field + "' is not a number");
-    }
-    if (!(std::isfinite(value) && value >= 0.0)) {
-      throw std::runtime_error(path + ": field '" + field + "' must be >= 0");
-    }
-    return value;
-  };
+}
+
+// The number at `node` (field `field` of file `path`), finite and >= 0; throws std::runtime_error naming both.
+double nonNegativeNumber(const YAML::Node& node, const std::string& path, const std::string& field) {
+  if (!node || !node.IsScalar()) throw std::runtime_error(path + ": missing field '" + field + "'");
+  double value = 0.0;
+  try {
+    value = node.as<double>();
+  } catch (const std::exception&) {
+    throw std::runtime_error(path + ": field '" + field + "' is not a number");
+  }
+  if (!(std::isfinite(value) && value >= 0.0)) {
+    throw std::runtime_error(path + ": field '" + field + "' must be >= 0");
+  }
+  return value;
+}
+
+// The height (z, the third of xyz_m) of a mount: robot.yaml's cameras and target.yaml's port.
+double mountHeight(const YAML::Node& mount, const std::string& path, const std::string& field) {
+  const YAML::Node xyz = mount["xyz_m"];
+  if (!xyz || !xyz.IsSequence() || xyz.size() != 3) {
+    throw std::runtime_error(path + ": field '" + field + ".xyz_m' must be a list of 3 numbers");
+  }
+  return nonNegativeNumber(xyz[2], path, field + ".xyz_m[2]");
+}
+
+}  // namespace
+
+RigGeometry loadRigGeometry(const std::string& robot_yaml_path, const std::string& target_yaml_path,
+                            int matcher_window_px) {
+  RigGeometry rig;
+  const YAML::Node robot = loadYamlFile(robot_yaml_path, "robot description");
+  rig.camera_height_m = mountHeight(robot["chaser"]["cameras"]["stereo_left"], robot_yaml_path,
+                                    "chaser.cameras.stereo_left");
+  const YAML::Node target = loadYamlFile(target_yaml_path, "target model");
+  rig.port_height_m = mountHeight(target["target"]["mount"], target_yaml_path, "target.mount");
+  rig.matcher_window_px = matcher_window_px;
+  return rig;
+}
+
+TargetShape loadTargetShape(const std::string& path) {
+  const YAML::Node root = loadYamlFile(path, "target model");
+  auto number = [&](const YAML::Node& node, const std::string& field) { return nonNegativeNumber(node, path, field); };
   const YAML::Node target = root["target"];
   TargetShape shape;
   shape.face_width_m = number(target["face"]["width_m"], "target.face.width_m");
@@ -458,7 +460,7 @@ void require(bool ok, const char* key, const std::string& rule) {
 
 }  // namespace
 
-void validate(const DetectorParams& p, const TargetShape& t) {
+void validate(const DetectorParams& p, const TargetShape& t, const RigGeometry& rig) {
   docking_settings::validateSettings(p);
   require(p.median_kernel_px != 2 && p.median_kernel_px != 4, "median_kernel_px",
           "must be 0, 1 (off), 3 or 5 (got " + std::to_string(p.median_kernel_px) + ")");
@@ -473,11 +475,25 @@ void validate(const DetectorParams& p, const TargetShape& t) {
   require(std::isfinite(t.panel_offset_behind_face_m) && t.panel_offset_behind_face_m >= 0.0 &&
               t.panel_offset_behind_face_m <= t.body_depth_m,
           "target_yaml", "the mockup's panels must lie within its body depth");
-  // A fill bound above what the mockup itself shows at some yaw would reject the real target.
-  const double mockup_fill = shapeBounds(t).min_fill;
-  require(p.min_fill_fraction <= mockup_fill, "min_fill_fraction",
-          "must be at most " + formatNumber(mockup_fill) + " (the mockup's own lowest fill; got " +
-              formatNumber(p.min_fill_fraction) + ")");
+  require(rig.matcher_window_px > 0, "matcher/correlation_window_size",
+          "must be > 0 (got " + std::to_string(rig.matcher_window_px) + ")");
+  // The floor cut must lie above the floor, or the floor is the closest object.
+  const double floor_cut_m = rigLimits(t, rig).floor_cut_m;
+  require(!p.level_floor || (std::isfinite(rig.camera_height_m) && std::isfinite(rig.port_height_m) &&
+                             floor_cut_m > 0.0 && floor_cut_m < rig.camera_height_m),
+          "level_floor",
+          "the floor cut " + formatNumber(floor_cut_m) + " m below the optical axis (the face's lower edge plus " +
+              formatNumber(kFloorCutMarginM) + " m) must lie between the axis and the floor " +
+              formatNumber(rig.camera_height_m) + " m below it (robot.yaml, target.yaml); false without a floor");
+}
+
+RigLimits rigLimits(const TargetShape& shape, const RigGeometry& rig) {
+  RigLimits limits;
+  limits.port_y_m = rig.camera_height_m - rig.port_height_m;
+  limits.floor_cut_m = limits.port_y_m + 0.5 * shape.face_height_m + kFloorCutMarginM;
+  limits.band_depth_m = shape.body_depth_m + kBandDepthMarginM;
+  limits.shape_margin_px = (rig.matcher_window_px + 1) / 2;
+  return limits;
 }
 
 std::vector<std::string> validateGeometry(const StereoGeometry& g) {
@@ -494,19 +510,21 @@ std::vector<std::string> validateGeometry(const StereoGeometry& g) {
   return errors;
 }
 
-DisparityDetector::DisparityDetector(const DetectorParams& params, const TargetShape& shape) {
-  validate(params, shape);
+DisparityDetector::DisparityDetector(const DetectorParams& params, const TargetShape& shape, const RigGeometry& rig) {
+  validate(params, shape, rig);
   params_ = params;
   shape_ = shape;
+  rig_ = rig;
+  limits_ = rigLimits(shape, rig);
 }
 
 void DisparityDetector::setParams(const DetectorParams& params) {
-  validate(params, shape_);
+  validate(params, shape_, rig_);
   params_ = params;
 }
 
 void reproject(const StereoGeometry& g, const cv::Point2d& centre_px, double disparity_px,
-               double centre_sigma_px, double disparity_sigma_px, Eigen::Vector3d* position_m,
+               double point_sigma_px, double disparity_noise_px, Eigen::Vector3d* position_m,
                Eigen::Matrix3d* covariance_m2) {
   const double z = g.focal_px * g.baseline_m / disparity_px;
   const double x = (centre_px.x - g.cx_px) * z / g.focal_px;
@@ -519,9 +537,9 @@ void reproject(const StereoGeometry& g, const cv::Point2d& centre_px, double dis
   jacobian << z / g.focal_px, 0.0, -x / disparity_px,
               0.0, z / g.focal_px, -y / disparity_px,
               0.0, 0.0, -z / disparity_px;
-  const Eigen::Vector3d input_variance(centre_sigma_px * centre_sigma_px,
-                                       centre_sigma_px * centre_sigma_px,
-                                       disparity_sigma_px * disparity_sigma_px);
+  const Eigen::Vector3d input_variance(point_sigma_px * point_sigma_px,
+                                       point_sigma_px * point_sigma_px,
+                                       disparity_noise_px * disparity_noise_px);
   *covariance_m2 = jacobian * input_variance.asDiagonal() * jacobian.transpose();
 }
 
@@ -539,6 +557,7 @@ struct SearchImages {
 // Everything a blob of a band is judged with.
 struct BandContext {
   const DetectorParams& p;
+  const RigLimits& limits;
   const StereoGeometry& geometry;
   const ShapeBounds& bounds;
   const SearchHint& hint;
@@ -549,9 +568,9 @@ struct BandContext {
 // What the search keeps from band to band: the chosen blob and those that explain a failure.
 struct BandSearchState {
   BlobCandidate chosen, fallback, first_misfit, largest_small;
-  // A blob of a band failed the shape check only on a lower bound or its fill: it may be the target,
-  // degraded (glare, blur, merged holes), so nothing behind it is trusted (issue 11: at 2 m under
-  // glare the face's fill fell to 0.3 and a box stack 1.4 m behind it was taken).
+  // A blob of a band failed the shape check only on a lower bound: it may be the target, degraded (glare,
+  // blur, merged holes), so nothing behind it is trusted (issue 11: at 2 m under glare a box stack 1.4 m
+  // behind the face was taken).
   bool stop_here = false;
   int largest_skipped_area = 0;
 };
@@ -582,22 +601,21 @@ StageOutcome selectRegion(const cv::Mat& disparity, const StereoGeometry& geomet
   return InputOutcome::kPassed;
 }
 
-// The region's valid disparities (finite, > 0, inside the matcher's search range and the floor and ceiling
-// cuts) in a copy, everything else 0; returns how many. Floor cut: a point is lower than floor_cut_y_m below
-// the axis when (v - cy) B / d > floor_cut_y_m, i.e. d < (v - cy) B / cut; the ceiling cut is the same above.
+// The region's valid disparities (finite, > 0, inside the matcher's search range and, with level_floor, the floor
+// cut) in a copy, everything else 0; returns how many. Floor cut: a point is lower than the cut
+// (RigLimits::floor_cut_m) below the axis when (v - cy) B / d > cut, i.e. d < (v - cy) B / cut.
 int keepValidDisparities(const cv::Mat& disparity, const StereoGeometry& geometry, double search_min_px,
-                         double search_max_px, const DetectorParams& p, SearchImages* images) {
+                         double search_max_px, const DetectorParams& p, const RigLimits& limits,
+                         SearchImages* images) {
   const cv::Rect& region = images->region;
   const float search_min = static_cast<float>(std::max(search_min_px, 0.0));
   const float search_max = static_cast<float>(search_max_px);
   images->clean = cv::Mat(disparity.size(), CV_32FC1, cv::Scalar(0.0f));
   int valid_count = 0;
   for (int v = region.y; v < region.y + region.height; ++v) {
-    float floor_min_disparity = 0.0f;  // disparities below this are floor (ceiling) points here
-    if (p.floor_cut_enabled && v > geometry.cy_px) {
-      floor_min_disparity = static_cast<float>((v - geometry.cy_px) * geometry.baseline_m / p.floor_cut_y_m);
-    } else if (p.floor_cut_enabled && p.ceiling_cut_y_m > 0.0 && v < geometry.cy_px) {
-      floor_min_disparity = static_cast<float>((geometry.cy_px - v) * geometry.baseline_m / p.ceiling_cut_y_m);
+    float floor_min_disparity = 0.0f;  // disparities below this are floor points here
+    if (p.level_floor && v > geometry.cy_px) {
+      floor_min_disparity = static_cast<float>((v - geometry.cy_px) * geometry.baseline_m / limits.floor_cut_m);
     }
     const float* in = disparity.ptr<float>(v);
     float* out = images->clean.ptr<float>(v);
@@ -640,9 +658,10 @@ int filterAndCount(const DetectorParams& p, SearchImages* images) {
 
 // Stage 2, valid disparity: enough valid disparities in the region, before and after the filter.
 StageOutcome validDisparity(const cv::Mat& disparity, const StereoGeometry& geometry, double search_min_px,
-                            double search_max_px, const DetectorParams& p, SearchImages* images, Detection* result) {
+                            double search_max_px, const DetectorParams& p, const RigLimits& limits,
+                            SearchImages* images, Detection* result) {
   const int needed = p.closest_min_pixels;
-  result->valid_pixels = keepValidDisparities(disparity, geometry, search_min_px, search_max_px, p, images);
+  result->valid_pixels = keepValidDisparities(disparity, geometry, search_min_px, search_max_px, p, limits, images);
   if (result->valid_pixels < needed) {
     result->reason = "only " + std::to_string(result->valid_pixels) +
                      " valid disparity pixels in the region of interest (need " + std::to_string(needed) + ")";
@@ -687,7 +706,8 @@ bool shapeCheck(const BandContext& c, const SearchImages& images, double thresho
   candidate->shape = measureBlobShape(*candidate, images.clean, g);
   const auto split = [&]() {
     return p.split_depth_step_m > 0.0
-               ? splitMergedBlob(*candidate, images.filtered, images.clean, g, c.bounds, p, images.region, threshold)
+               ? splitMergedBlob(*candidate, images.filtered, images.clean, g, c.bounds, p, c.limits, images.region,
+                                 threshold)
                : BlobCandidate();
   };
   if (crossesWindowEdge(candidate->box, images.region, kBorderMarginPx, c.window, c.image_size)) {
@@ -702,12 +722,14 @@ bool shapeCheck(const BandContext& c, const SearchImages& images, double thresho
     ++result->merged_blobs_split;
   }
   const bool cut = touchesBorder(candidate->box, images.region, kBorderMarginPx);
-  candidate->misfit = shapeMismatch(candidate->shape, c.bounds, p, g.focal_px, cut);
-  const bool within_upper_bounds = shapeMismatch(candidate->shape, c.bounds, p, g.focal_px, /*cut=*/true).empty();
+  candidate->misfit = shapeMismatch(candidate->shape, c.bounds, c.limits, g.focal_px, cut);
+  const bool within_upper_bounds =
+      shapeMismatch(candidate->shape, c.bounds, c.limits, g.focal_px, /*cut=*/true).empty();
+  const std::string height_misfit = heightMismatch(candidatePosition(*candidate, g), p, c.limits);
   const bool degraded = !candidate->misfit.empty() && !cut &&
                         candidate->shape.width_m >= p.degraded_min_width_fraction * c.bounds.min_width_m &&
-                        within_upper_bounds && heightMismatch(candidatePosition(*candidate, g), p).empty();
-  if (candidate->misfit.empty() && !cut) candidate->misfit = heightMismatch(candidatePosition(*candidate, g), p);
+                        within_upper_bounds && height_misfit.empty();
+  if (candidate->misfit.empty() && !cut) candidate->misfit = height_misfit;
   // Larger than the mockup: maybe the target merged with its neighbours; look for it inside.
   if (p.split_depth_step_m > 0.0 && !cut && !candidate->misfit.empty() && !within_upper_bounds) {
     BlobCandidate part = split();
@@ -818,7 +840,7 @@ StageOutcome reportBlob(const DetectorParams& p, BandSearchState* state, BlobCan
 }
 
 // Stage 3, band search: the closest object, a threshold just below it that keeps the target's own depth
-// (target_depth_m behind its nearest point, at least kThresholdMarginPx), and the band's blobs judged;
+// (RigLimits::band_depth_m behind its nearest point, at least kThresholdMarginPx), and the band's blobs judged;
 // without the target in it, the band is removed and the search looks behind it (mismatches at occlusion
 // edges, speckles, a wall, a person, furniture), at most kMaxNearObjectsSkipped times. `blob`: the blob to
 // report (invalid: none).
@@ -831,7 +853,7 @@ StageOutcome searchBands(const BandContext& c, SearchImages* images, BlobCandida
     if (closest < 0.0) break;  // only after skipping: nothing left behind
     result->closest_disparity_px = closest;
     const double threshold = std::max(
-        std::min(closest - kThresholdMarginPx, disparityBehind(c.geometry, closest, p.target_depth_m)),
+        std::min(closest - kThresholdMarginPx, disparityBehind(c.geometry, closest, c.limits.band_depth_m)),
         1.0 / kHistogramBinsPerPx);
     result->threshold_disparity_px = threshold;
     mask.setTo(cv::Scalar(0));
@@ -872,9 +894,9 @@ void blobDisparities(const Detection& result, const cv::Mat& clean, std::vector<
 // The visible face: the blob's nearest depth layer (the panels and body sides lie behind it). Its centroid
 // and median disparity are the centre and robust disparity.
 void nearestLayer(const std::vector<float>& disparities, const std::vector<cv::Point>& points,
-                  const StereoGeometry& geometry, const DetectorParams& p, Detection* result) {
+                  const StereoGeometry& geometry, Detection* result) {
   std::vector<float> sorted = disparities;
-  const double reference = percentile(&sorted, p.face_percentile);
+  const double reference = percentile(&sorted, kFacePercentile);
   const double band =
       std::max(kFaceMinBandPx, reference - disparityBehind(geometry, reference, kFaceDepthBandM));
   const float face_min = static_cast<float>(reference - band);
@@ -894,7 +916,7 @@ void nearestLayer(const std::vector<float>& disparities, const std::vector<cv::P
 }
 
 // Stage 4, port: the port read off the mockup's footprint fitted to the blob (footprint_fit_enabled; else the
-// nearest layer's centre), reprojected with its covariance. `reason`: why the blob is not the mockup.
+// nearest layer's centre), reprojected with its covariance. `reason`: why no port could be placed.
 StageOutcome placePort(const cv::Mat& clean, const StereoGeometry& geometry, const DetectorParams& p,
                        const TargetShape& shape, int blob_area, Detection* result, std::string* reason) {
   std::vector<float> disparities;
@@ -904,10 +926,10 @@ StageOutcome placePort(const cv::Mat& clean, const StereoGeometry& geometry, con
   blobDisparities(*result, clean, &disparities, &points);
   result->blob_pixels = static_cast<int>(disparities.size());
   if (disparities.empty()) return PortOutcome::kPassed;  // plausibility refuses the blob (no pixels)
-  nearestLayer(disparities, points, geometry, p, result);
+  nearestLayer(disparities, points, geometry, result);
   StageOutcome outcome = PortOutcome::kPassed;
-  if (p.footprint_fit_enabled) outcome = portFromFootprint(points, disparities, geometry, p, shape, result, reason);
-  reproject(geometry, result->centre_px, result->disparity_px, p.centre_sigma_px, p.disparity_sigma_px,
+  if (p.footprint_fit_enabled) outcome = portFromFootprint(points, disparities, geometry, shape, result, reason);
+  reproject(geometry, result->centre_px, result->disparity_px, kCentreSigmaPx, kDisparitySigmaPx,
             &result->position_m, &result->covariance_m2);
   // The estimate stands for the port, but the blob's centre is where the visible parts of the mockup are:
   // it moves with the target's yaw (a box side, a panel) by centimetres at any range.
@@ -918,13 +940,12 @@ StageOutcome placePort(const cv::Mat& clean, const StereoGeometry& geometry, con
 
 // Stage 5, plausibility: the blob's size, border and disparity range, with the numbers in the reason so a
 // user can tune live.
-StageOutcome checkPlausibility(const cv::Rect& region, cv::Size image_size, const ImageWindow& window,
-                               const DetectorParams& p, int blob_area, const Detection& result, std::string* reason) {
+StageOutcome checkPlausibility(const cv::Rect& region, const DetectorParams& p, const Detection& result,
+                               std::string* reason) {
   const cv::Rect& box = result.bounding_box;
   const int margin = kBorderMarginPx;
   const bool left = box.x <= region.x + margin, right = box.x + box.width >= region.x + region.width - margin;
   const bool top = box.y <= region.y + margin, bottom = box.y + box.height >= region.y + region.height - margin;
-  const int searched = searchedArea(region, image_size, window);
   if (result.blob_pixels < p.min_blob_area_px) {
     *reason = "blob too small: " + std::to_string(result.blob_pixels) + " px < min_blob_area_px " +
               std::to_string(p.min_blob_area_px);
@@ -939,11 +960,6 @@ StageOutcome checkPlausibility(const cv::Rect& region, cv::Size image_size, cons
     *reason = std::string("blob touches the border of the valid region:") + (left ? " left" : "") +
               (right ? " right" : "") + (top ? " top" : "") + (bottom ? " bottom" : "");
     return PlausibilityOutcome::kBlobTouchesBorder;
-  }
-  if (blob_area > p.max_blob_area_fraction * searched) {
-    *reason = "blob too large: " + std::to_string(blob_area) + " px > max_blob_area_fraction " +
-              formatNumber(p.max_blob_area_fraction) + " of " + std::to_string(searched) + " px";
-    return PlausibilityOutcome::kBlobTooLarge;
   }
   if (result.disparity_px < p.min_disparity_px || result.disparity_px > p.max_disparity_px) {
     *reason = "blob disparity " + formatNumber(result.disparity_px) + " px outside [" +
@@ -962,10 +978,11 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
   SearchImages images;
   result.outcome = selectRegion(disparity, geometry, valid_region, &images.region, &result.reason);
   if (!result.outcome.passed()) return result;
-  result.outcome = validDisparity(disparity, geometry, search_min_px, search_max_px, params_, &images, &result);
+  result.outcome =
+      validDisparity(disparity, geometry, search_min_px, search_max_px, params_, limits_, &images, &result);
   if (!result.outcome.passed()) return result;
   const ShapeBounds bounds = shapeBounds(shape_);
-  const BandContext context{params_, geometry, bounds, hint, window, disparity.size()};
+  const BandContext context{params_, limits_, geometry, bounds, hint, window, disparity.size()};
   BlobCandidate blob;
   result.outcome = searchBands(context, &images, &blob, &result);
   if (blob.valid) adoptBlob(blob, disparity.size(), &result);
@@ -976,8 +993,7 @@ Detection DisparityDetector::detect(const cv::Mat& disparity, const StereoGeomet
   // A blob not target-shaped is still placed (its centre in the debug image); the search's outcome decides.
   std::string port_reason, plausibility_reason;
   const StageOutcome port = placePort(images.clean, geometry, params_, shape_, blob.area, &result, &port_reason);
-  const StageOutcome plausible = checkPlausibility(images.region, disparity.size(), window, params_, blob.area,
-                                                  result, &plausibility_reason);
+  const StageOutcome plausible = checkPlausibility(images.region, params_, result, &plausibility_reason);
   if (!result.outcome.passed()) return result;
   result.outcome = !port.passed() ? port : plausible;
   result.reason = !port.passed() ? "not the target: " + port_reason : plausibility_reason;

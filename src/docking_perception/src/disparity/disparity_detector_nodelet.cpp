@@ -229,7 +229,7 @@ void DisparityDetectorNodelet::onFusedEstimate(const docking_msgs::TargetEstimat
 disparity::DisparityDetectorSettings DisparityDetectorNodelet::loadSettings() {
   disparity::DisparityDetectorSettings settings;
   docking_settings::loadSettings(private_nh_, settings);
-  docking_settings::warnUnknownKeys(private_nh_, settings, {"target_yaml", "matcher"});
+  docking_settings::warnUnknownKeys(private_nh_, settings, {"target_yaml", "robot_yaml", "matcher"});
   // The matcher's blind left band is its largest disparity (in each DisparityImage) plus half its correlation
   // window, rounded up: read from the matcher's own settings (config/stereo_image_proc.yaml, as ~matcher).
   const docking_settings::ParamReader matcher(ros::NodeHandle(private_nh_, "matcher"));
@@ -238,6 +238,14 @@ disparity::DisparityDetectorSettings DisparityDetectorNodelet::loadSettings() {
   // The mockup's size for the shape check and its face print for the appearance check: the same
   // target.yaml the simulator and mono_pose read.
   const auto target_yaml = docking_settings::ParamReader(private_nh_).require<std::string>("target_yaml");
+  // The cameras' and the port's heights (level_floor's floor cut and height gate): robot.yaml and target.yaml.
+  const auto robot_yaml = docking_settings::ParamReader(private_nh_).require<std::string>("robot_yaml");
+  disparity::RigGeometry rig;
+  try {
+    rig = disparity::loadRigGeometry(robot_yaml, target_yaml, correlation_window_px);
+  } catch (const std::exception& error) {
+    docking_settings::ParamReader(private_nh_).invalid("robot_yaml", error.what());
+  }
   disparity::TargetShape shape;
   try {
     shape = disparity::loadTargetShape(target_yaml);
@@ -249,7 +257,7 @@ disparity::DisparityDetectorSettings DisparityDetectorNodelet::loadSettings() {
   }
   docking_settings::ParamReader(private_nh_).validated([&] {
     std::lock_guard<std::mutex> lock(state_mutex_);
-    detector_ = disparity::DisparityDetector(settings.detector, shape);
+    detector_ = disparity::DisparityDetector(settings.detector, shape, rig);
     track_gate_.setParams(settings.track);
     settings_ = settings;
   });
@@ -259,8 +267,8 @@ disparity::DisparityDetectorSettings DisparityDetectorNodelet::loadSettings() {
 duty::FusedRangeConditionParams DisparityDetectorNodelet::toPauseParams(const disparity::PauseParams& pause) {
   duty::FusedRangeConditionParams p;
   p.range_m = pause.inside_range_m;
-  p.hysteresis_m = pause.hysteresis_m;
-  p.max_fused_age_s = pause.max_fused_age_s;
+  p.hysteresis_m = kPauseHysteresisM;
+  p.max_fused_age_s = kPauseMaxFusedAgeS;
   return p;
 }
 
@@ -272,7 +280,7 @@ void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/)
   docking_settings::applyReconfigure(message, settings);
   try {
     docking_settings::validateSettings(settings);
-    disparity::validate(settings.detector, detector_.shape());
+    disparity::validate(settings.detector, detector_.shape(), detector_.rig());
   } catch (const std::invalid_argument& error) {
     // Keep running with the last good values, and show them back to dynamic_reconfigure clients (dynparam get).
     NODELET_ERROR("disparity_detector: reconfigure rejected, keeping the previous values: %s", error.what());
@@ -286,9 +294,6 @@ void DisparityDetectorNodelet::onReconfigure(Config& config, uint32_t /*level*/)
   {
     std::lock_guard<std::mutex> pause_lock(pause_mutex_);
     near_.setParams(toPauseParams(settings.pause));
-  }
-  while (recent_found_.size() > static_cast<std::size_t>(settings_.diagnostic_window_frames)) {
-    recent_found_.pop_front();
   }
 }
 
@@ -569,7 +574,7 @@ void DisparityDetectorNodelet::recordOutcome(disparity::StageOutcome outcome, bo
   }
   last_processing_ms_ = processing_ms;
   recent_found_.push_back(found);
-  while (recent_found_.size() > static_cast<std::size_t>(settings_.diagnostic_window_frames)) {
+  while (recent_found_.size() > kDiagnosticWindowFrames) {
     recent_found_.pop_front();
   }
 }

@@ -32,7 +32,10 @@ constexpr double kWorkingWidthPx = 24.0;
 constexpr int kPrintWorkingWidthPx = static_cast<int>(kMaxAppearanceWorkingWidthPx);
 // Grey at or above this is saturated (8-bit images: the sensor's ceiling less its noise).
 constexpr int kSaturatedLevelDn = 250;
-constexpr double kVerticalSearchFraction = 0.5;  // of search_radius_m, up and down
+// The print is slid this far either side of the detected port: a turned target's footprint fit puts the port
+// up to 0.23 m aside (rendered far scenes; a setting until issue 55);
+constexpr double kSearchRadiusM = 0.25;
+constexpr double kVerticalSearchFraction = 0.5;  // of kSearchRadiusM, up and down
 // The face's depth replaces the footprint fit's when they differ by more than this many of the estimate's
 // depth sigmas (the fit's port jumps ~0.1 m between yaw basins on a turned target, seed 7605 at 2.2 m).
 constexpr double kDepthDisagreementSigmas = 2.0;
@@ -49,13 +52,13 @@ double saturatedFraction(const cv::Mat& grey, int level) {
 
 
 AppearanceSearchLayout layoutOf(const cv::Size& image, const StereoGeometry& g, const Eigen::Vector3d& port,
-                      double face_width_m, double face_height_m, double search_radius_m) {
+                      double face_width_m, double face_height_m, double radius_m) {
   AppearanceSearchLayout layout;
   const double z = port.z();
   layout.centre_px = {g.cx_px + g.focal_px * port.x() / z, g.cy_px + g.focal_px * port.y() / z};
   layout.face_width_px = g.focal_px * face_width_m / z;
   layout.face_height_px = g.focal_px * face_height_m / z;
-  layout.radius_px = g.focal_px * search_radius_m / z;
+  layout.radius_px = g.focal_px * radius_m / z;
   const cv::Rect whole(0, 0, image.width, image.height);
   const auto rectAround = [&](double half_w, double half_h) {
     const int x0 = static_cast<int>(std::floor(layout.centre_px.x - half_w));
@@ -249,7 +252,7 @@ AppearanceResult FaceAppearanceCheck::check(const cv::Mat& left_rect, const Ster
     return result;
   }
   const AppearanceSearchLayout layout =
-      layoutOf(left_rect.size(), geometry, port_m, face_width_m_, face_height_m_, p.search_radius_m);
+      layoutOf(left_rect.size(), geometry, port_m, face_width_m_, face_height_m_, kSearchRadiusM);
   if (judgeable(left_rect, layout, p, &result)) matchPrint(left_rect, layout, p, &result);
   return result;
 }

@@ -107,6 +107,10 @@ sensor_msgs::CameraInfo rectifiedInfo(const sensor_msgs::CameraInfo& raw, const 
   return out;
 }
 
+// No fused estimate this long (the arbiter stalled or gone): the whole image (a setting
+// until issue 55, 0.5 s everywhere).
+constexpr double kMaxFusedAgeS = 0.5;
+
 }  // namespace
 
 class FarStereoRectifyNodelet : public nodelet::Nodelet {
@@ -261,11 +265,11 @@ std::optional<cv::Rect> FarStereoRectifyNodelet::windowFor(const ros::Time& stam
   // Only a fresh, valid estimate in the left camera's own frame (the arbiter's output_frame) places it;
   // anything else, and the port predicted out of view, is matched on the whole image.
   if (!window_params_.enabled || !fused_port_.usable || !side.rectifier || fused_port_.frame_id != frame_id ||
-      ros::Time::now().toSec() - fused_port_.arrival_s > window_params_.max_fused_age_s) {
+      ros::Time::now().toSec() - fused_port_.arrival_s > kMaxFusedAgeS) {
     return std::nullopt;
   }
-  const Eigen::Vector3d port = predictPort(fused_port_.position_m, fused_port_.velocity_mps,
-                                           (stamp - fused_port_.stamp).toSec(), window_params_);
+  const Eigen::Vector3d port =
+      predictPort(fused_port_.position_m, fused_port_.velocity_mps, (stamp - fused_port_.stamp).toSec());
   return trackingWindow(side.rectifier->outputProjection(), port, side.rectifier->outputSize(), matcher_reach_,
                         window_params_);
 }

@@ -57,7 +57,6 @@ const char* portName(PortOutcome code) {
   switch (code) {
     case PortOutcome::kPassed: return "passed";
     case PortOutcome::kTooFewColumns: return "too_few_columns";
-    case PortOutcome::kFootprintMisfit: return "footprint_misfit";
   }
   return "unknown";
 }
@@ -68,7 +67,6 @@ const char* plausibilityName(PlausibilityOutcome code) {
     case PlausibilityOutcome::kBlobTooSmall: return "blob_too_small";
     case PlausibilityOutcome::kBlobTooThin: return "blob_too_thin";
     case PlausibilityOutcome::kBlobTouchesBorder: return "blob_touches_border";
-    case PlausibilityOutcome::kBlobTooLarge: return "blob_too_large";
     case PlausibilityOutcome::kDisparityOutOfRange: return "disparity_out_of_range";
   }
   return "unknown";

@@ -18,6 +18,13 @@ namespace {
 // Velocity smoothing of the track (fraction of the newest frame-to-frame velocity taken each frame):
 // disparity depth noise at 6 m is ~0.16 m per frame, so a single difference is mostly noise.
 constexpr double kVelocityGain = 0.2;
+// Constants of the gate (settings until issue 55, at these values everywhere): its smallest radius, about the
+// mockup's own size (a blob's centre moves that much with the target's yaw); the detection's position noise
+// it adds, in sigmas (3: 99.7 % of a Gaussian's errors in one axis); how long the track lives without a
+// confirmed detection (2 s: 15 frames at 7.5 Hz; the target moves at most 1 m meanwhile).
+constexpr double kMinGateM = 0.3;
+constexpr double kGateSigmas = 3.0;
+constexpr double kTrackTimeoutS = 2.0;
 
 std::string format(double value) { return disparity::formatNumber(value, 3); }
 
@@ -43,19 +50,18 @@ Eigen::Vector3d TargetTrackGate::predict(double stamp_s) const {
 double TargetTrackGate::gateRadius(double dt_s, const Eigen::Matrix3d& covariance_m2) const {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance_m2);
   const double largest_sigma = std::sqrt(std::max(0.0, solver.eigenvalues().maxCoeff()));
-  return params_.min_gate_m + params_.max_speed_mps * std::max(0.0, dt_s) +
-         params_.gate_sigmas * largest_sigma;
+  return kMinGateM + params_.max_speed_mps * std::max(0.0, dt_s) + kGateSigmas * largest_sigma;
 }
 
 SearchHint TargetTrackGate::hint(double stamp_s) const {
   SearchHint hint;
-  if (!params_.gate_enabled || !has_track_ || stamp_s - last_stamp_s_ > params_.timeout_s) return hint;
+  if (!params_.gate_enabled || !has_track_ || stamp_s - last_stamp_s_ > kTrackTimeoutS) return hint;
   hint.valid = true;
   hint.position_m = predict(stamp_s);
   // Without a detection's covariance yet: the gate of a still, noise-free detection; the detector
   // only uses it to prefer one target-shaped blob over another.
   hint.radius_m = gateRadius(stamp_s - last_stamp_s_, Eigen::Matrix3d::Zero()) +
-                  params_.min_gate_m;
+                  kMinGateM;
   return hint;
 }
 
@@ -71,7 +77,7 @@ Detection TargetTrackGate::apply(double stamp_s, const Detection& detection) {
   if (stamp_s < last_seen_stamp_s_) reset();
   last_seen_stamp_s_ = stamp_s;
   if (!params_.gate_enabled) return detection;
-  if (has_track_ && stamp_s - last_stamp_s_ > params_.timeout_s) reset();
+  if (has_track_ && stamp_s - last_stamp_s_ > kTrackTimeoutS) reset();
   if (!detection.found) return detection;
 
   const Eigen::Vector3d& measured = detection.position_m;

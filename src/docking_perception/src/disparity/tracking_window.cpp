@@ -24,8 +24,8 @@ std::vector<std::string> validateMatcherReach(const MatcherReach& reach) {
 }
 
 Eigen::Vector3d predictPort(const Eigen::Vector3d& position_m, const Eigen::Vector3d& velocity_mps,
-                            double elapsed_s, const TrackingWindowParams& params) {
-  const double dt = std::clamp(elapsed_s, 0.0, params.max_prediction_s);
+                            double elapsed_s) {
+  const double dt = std::clamp(elapsed_s, 0.0, kMaxPredictionS);
   return velocity_mps.allFinite() ? Eigen::Vector3d(position_m + velocity_mps * dt) : position_m;
 }
 
@@ -38,9 +38,9 @@ std::optional<cv::Rect> trackingWindow(const cv::Matx34d& projection, const Eige
   const double u = h[0] / h[2], v = h[1] / h[2];
   if (u < 0.0 || v < 0.0 || u >= image_size.width || v >= image_size.height) return std::nullopt;
 
-  const double half_width_px = std::max<double>(params.min_half_size_px,
+  const double half_width_px = std::max<double>(kWindowMinHalfSizePx,
                                                 projection(0, 0) * params.half_width_m / port_m.z());
-  const double half_height_px = std::max<double>(params.min_half_size_px,
+  const double half_height_px = std::max<double>(kWindowMinHalfSizePx,
                                                  projection(1, 1) * params.half_height_m / port_m.z());
   const int half_correlation = reach.correlation_window_px / 2;
   // Left: the search range reaches this far into the right image (the same columns of the window).
@@ -50,7 +50,7 @@ std::optional<cv::Rect> trackingWindow(const cv::Matx34d& projection, const Eige
   const int top = static_cast<int>(std::floor(v - half_height_px)) - half_correlation;
   const int bottom = static_cast<int>(std::ceil(v + half_height_px)) + half_correlation + 1;
   const cv::Rect window = cv::Rect(left, top, right - left, bottom - top) & cv::Rect(cv::Point(0, 0), image_size);
-  if (window.area() <= 0 || window.area() > params.max_area_fraction * image_size.area()) return std::nullopt;
+  if (window.area() <= 0 || window.area() > kMaxWindowAreaFraction * image_size.area()) return std::nullopt;
   return window;
 }
 

@@ -4,7 +4,7 @@
 With the target 0.7 m ahead the arbiter's fused estimate is monocular and inside the detector's
 pause_inside_range_m (0.8 m): the detector's diagnostics must say paused, and its frame count must not
 grow over a few seconds of sim time (no disparity image processed). Then the arbiter is killed (roslaunch
-respawns it): with no fused estimate for pause_max_fused_age_s the detector must resubscribe (its frame
+respawns it): with no fused estimate for 0.3 s (kPauseMaxFusedAgeS) the detector must resubscribe (its frame
 count grows), and once the new arbiter publishes near and monocular again, it must rest again.
 Reads /diagnostics only.
 """

@@ -4,7 +4,7 @@
 For each scene (the target robot at 2-6 m in sim.yaml's cluttered room), renders the stereo pair with
 docking_sim's sim_render, the truth with its --sequence mode, and runs bench_disparity on the raw pair
 (rectify + the matcher of stereo_image_proc.yaml + the detector) twice: with the shape check (this
-config) and as before issue 11 (no shape check, no ceiling cut). Prints per scene and in total: detections
+config) and without it, as before issue 11. Prints per scene and in total: detections
 within 5 % of the range, valid detections of something else (> 0.5 m off: false targets), and the
 detector's CPU ms.
 
@@ -82,10 +82,10 @@ def main():
     shutil.copytree(a.config, cfg_after)
     shutil.copytree(a.config, cfg_before)
     det = os.path.join(cfg_before, "disparity_detector.yaml")
-    # The detector before issue 11: no shape check, no ceiling cut (the track gate is not in
+    # The detector before issue 11: no shape check (the track gate is not in
     # bench_disparity: one frame per scene). The file holds only overrides of the declared defaults.
     overrides = yaml.safe_load(open(det).read()) or {}
-    overrides.update({"shape_check_enabled": False, "ceiling_cut_y_m": 0.0})
+    overrides.update({"shape_check_enabled": False})
     open(det, "w").write(yaml.safe_dump(overrides))
     sim_render = os.path.join(a.devel, "docking_sim", "sim_render")
     totals = {k: {"n": 0, "ok": 0, "false": 0, "ms": []} for k in ("before", "after")}

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "docking_perception/disparity/disparity_detector.h"
+#include "synthetic_stereo.h"
 
 namespace docking_perception {
 namespace disparity {
@@ -34,7 +35,11 @@ inline DisparityDetectorSettings shippedSettings() {
 inline DetectorParams shippedParams() { return shippedSettings().detector; }
 // The mockup of config/target.yaml (the node's ~target_yaml).
 inline TargetShape shippedShape() { return loadTargetShape(std::string(DISPARITY_CONFIG_DIR) + "/target.yaml"); }
-inline DisparityDetector detectorWith(const DetectorParams& params) { return DisparityDetector(params, shippedShape()); }
+// The rig of config/robot.yaml, config/target.yaml and config/stereo_image_proc.yaml (the node's).
+inline RigGeometry shippedRig() { return testing::shippedRig(DISPARITY_CONFIG_DIR); }
+inline DisparityDetector detectorWith(const DetectorParams& params) {
+  return DisparityDetector(params, shippedShape(), shippedRig());
+}
 inline DisparityDetector shippedDetector() { return detectorWith(shippedParams()); }
 
 inline double disparityAt(double z_m) { return ourGeometry().focal_px * ourGeometry().baseline_m / z_m; }

@@ -180,6 +180,11 @@ DisparityDetectorSettings shippedDetectorSettings(const std::string& config_dir)
   return docking_settings::shippedSettings<DisparityDetectorSettings>(config_dir + "/disparity_detector.yaml");
 }
 
+RigGeometry shippedRig(const std::string& config_dir) {
+  return loadRigGeometry(config_dir + "/robot.yaml", config_dir + "/target.yaml",
+                         loadMatcherSettings(config_dir + "/stereo_image_proc.yaml").correlation_window_size);
+}
+
 FarStereoSettings shippedFarStereoSettings(const std::string& config_dir) {
   return docking_settings::shippedSettings<FarStereoSettings>(config_dir + "/far_stereo.yaml");
 }

@@ -85,6 +85,9 @@ cv::Rect matcherValidRegion(const MatcherSettings& settings, cv::Size image_size
 // docking_settings::ConfigError naming a key the declaration does not allow.
 DisparityDetectorSettings shippedDetectorSettings(const std::string& config_dir);
 FarStereoSettings shippedFarStereoSettings(const std::string& config_dir);
+// The rig the detector derives its limits from, as the node reads it: `config_dir`'s robot.yaml and target.yaml,
+// and the matcher's window of its stereo_image_proc.yaml.
+RigGeometry shippedRig(const std::string& config_dir);
 
 // A camera in ROS camera_calibration's YAML format (config/cameras/*.yaml).
 struct CameraCalibration {

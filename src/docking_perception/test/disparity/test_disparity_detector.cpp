@@ -23,6 +23,7 @@ using test::detectorWith;
 using test::shippedDetector;
 using test::shippedParams;
 using test::shippedShape;
+using test::shippedRig;
 
 cv::Mat invalidImage() { return cv::Mat(480, 640, CV_32FC1, cv::Scalar(-1.0f)); }
 
@@ -211,15 +212,6 @@ TEST(DisparityDetector, TinyNearSpeckDoesNotHideTheTarget) {
   EXPECT_NEAR(result.position_m.z(), 3.0, 0.01);
 }
 
-TEST(DisparityDetector, TooLargeBlobIsRejected) {
-  // The face at 0.35 m: the mockup's shape, but 471 x 377 px, more than max_blob_area_fraction of the image.
-  cv::Mat disparity = invalidImage();
-  paintRect(&disparity, 0.0, 0.0, 0.35, 0.30, 0.24);
-  const Detection result = shippedDetector().detect(disparity, ourGeometry());
-  EXPECT_FALSE(result.found);
-  EXPECT_EQ(result.outcome, StageOutcome(PlausibilityOutcome::kBlobTooLarge));
-}
-
 TEST(DisparityDetector, DisparityOutsideThePlausibleRangeIsRejected) {
   cv::Mat disparity = invalidImage();
   paintRect(&disparity, 0.0, 0.0, 0.55, 0.30, 0.24);  // the face at 0.55 m: 100 px > max_disparity_px 92
@@ -246,24 +238,9 @@ TEST(DisparityDetector, FloorIsIgnoredByTheHeightCut) {
   EXPECT_NEAR(with_cut.position_m.z(), 3.0, 0.01);
   EXPECT_NEAR(with_cut.position_m.x(), 0.1, 0.01);
 
-  params.floor_cut_enabled = false;
+  params.level_floor = false;
   const Detection without_cut = detectorWith(params).detect(disparity, g);
   EXPECT_FALSE(without_cut.found) << "without the cut the floor is the closest object";
-}
-
-TEST(DisparityDetector, CeilingIsIgnoredByTheHeightCut) {
-  // A patch 2 m above the cameras at 4.5 m (a ceiling light) is nearer than a target at 6 m.
-  cv::Mat disparity = invalidImage();
-  paintRect(&disparity, 0.0, 0.0, 6.0, 0.30, 0.24);
-  paintRect(&disparity, 1.0, -2.0, 4.5, 0.6, 0.5);
-  DetectorParams params = shippedParams();
-  params.ceiling_cut_y_m = 1.0;
-  const Detection with_cut = detectorWith(params).detect(disparity, ourGeometry());
-  ASSERT_TRUE(with_cut.found) << with_cut.reason;
-  EXPECT_NEAR(with_cut.position_m.z(), 6.0, 0.02);
-  params.ceiling_cut_y_m = 0.0;
-  const Detection without_cut = detectorWith(params).detect(disparity, ourGeometry());
-  EXPECT_LT(without_cut.position_m.z(), 5.0) << "without the cut the ceiling patch wins";
 }
 
 TEST(DisparityDetector, CentreIsTheFaceNotTheWholeBlob) {
@@ -337,7 +314,7 @@ TEST(DisparityDetector, DetectedCovarianceGrowsAsRangeSquared) {
 // top-level).
 std::string refusedKey(const DetectorParams& params) {
   try {
-    validate(params, shippedShape());
+    validate(params, shippedShape(), shippedRig());
   } catch (const docking_settings::ConfigError& e) {
     return e.key();
   }

@@ -30,7 +30,7 @@ Detection detectInScene(const testing::SyntheticScene& scene, const DetectorPara
   const cv::Mat disparity = testing::computeDisparity(*matcher, pair.left, pair.right);
   const cv::Rect valid = testing::matcherValidRegion(settings, disparity.size());
   if (geometry_used) *geometry_used = pair.geometry;
-  return DisparityDetector(params, loadTargetShape(kConfigDir + "/target.yaml"))
+  return DisparityDetector(params, loadTargetShape(kConfigDir + "/target.yaml"), testing::shippedRig(kConfigDir))
       .detect(disparity, pair.geometry, settings.min_disparity, testing::maxDisparity(settings), valid);
 }
 
@@ -110,18 +110,20 @@ INSTANTIATE_TEST_SUITE_P(
 
 // Issue 11, eval_real_clutter_far_6m: the target merged with a box standing against its panel (one
 // blob the mockup cannot be), and a mockup-sized patch high on the far wall, 3.4 m to the side: the
-// patch was reported valid. With config/disparity_detector.yaml it is not; without the height gate
-// (max_centre_offset_y_m 0, as before) it is.
+// patch was reported valid. With config/disparity_detector.yaml it is not; without the height gate (level_floor
+// false, as before but for the floor cut: the scene without its floor) it is.
 TEST(FarRangePipeline, APatchHighBehindTheTargetMergedWithABoxIsNotReported) {
   testing::SyntheticScene scene = testing::targetScene(0.0, 0.0, 6.0, 12.0);
   scene.rects.insert(scene.rects.begin(), testing::boxOnTheFloor(0.65, 6.2, 0.40, 1.0, 37));
   testing::FrontoParallelRect patch = testing::boxOnTheFloor(3.4, 6.8, 0.45, 0.35, 41);
   patch.y_m = -0.85;
   scene.rects.insert(scene.rects.begin(), patch);
+  testing::SyntheticScene floorless = scene;
+  floorless.floor_y_m = 0.0;
   DetectorParams before = configuredParams();
-  before.max_centre_offset_y_m = 0.0;
+  before.level_floor = false;
   before.split_depth_step_m = 0.0;  // the split finds the target in the merged blob
-  const Detection taken = detectInScene(scene, before);
+  const Detection taken = detectInScene(floorless, before);
   ASSERT_TRUE(taken.found && taken.position_m.x() > 3.0)
       << "the scene no longer reproduces the failure: " << taken.reason;
   const Detection d = detectInScene(scene, configuredParams());
@@ -158,7 +160,8 @@ TEST(FarRangePipeline, TheTargetMergedWithBoxesAroundItIsSplitOut) {
 
 TEST(FarRangePipeline, ConfigFilesAreComplete) {
   EXPECT_NO_THROW(testing::loadMatcherSettings(kConfigDir + "/stereo_image_proc.yaml"));
-  EXPECT_NO_THROW(validate(configuredParams(), loadTargetShape(kConfigDir + "/target.yaml")));
+  EXPECT_NO_THROW(validate(configuredParams(), loadTargetShape(kConfigDir + "/target.yaml"),
+                           testing::shippedRig(kConfigDir)));
   EXPECT_THROW(testing::loadMatcherSettings(kConfigDir + "/no_such_file.yaml"), std::runtime_error);
 }
 

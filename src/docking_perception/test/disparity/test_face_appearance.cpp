@@ -278,7 +278,7 @@ TEST(FaceAppearance, AFaceOutsideTheImageOrBadInputIsNotJudged) {
 // The first setting of `params` the detector refuses, by its key.
 std::string refusedKey(const DetectorParams& params) {
   try {
-    validate(params, test::shippedShape());
+    validate(params, test::shippedShape(), test::shippedRig());
   } catch (const docking_settings::ConfigError& e) {
     return e.key();
   }
@@ -290,9 +290,6 @@ TEST(FaceAppearance, InvalidSettingsAreNamed) {
   DetectorParams params = test::shippedParams();
   params.appearance.min_score = 1.5;
   EXPECT_EQ(refusedKey(params), "appearance_min_score");
-  params = test::shippedParams();
-  params.appearance.search_radius_m = 2.0;
-  EXPECT_EQ(refusedKey(params), "appearance_search_radius_m");
   params = test::shippedParams();
   params.appearance.max_saturated_fraction = 1.5;
   EXPECT_EQ(refusedKey(params), "appearance_max_saturated_fraction");

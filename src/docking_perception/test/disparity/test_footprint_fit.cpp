@@ -171,38 +171,17 @@ TEST(FootprintFit, TheDetectorReportsThePortOfATurnedMockup) {
   const cv::Mat disparity = renderMockupDisparity(shape, port, c.yaw_deg * kPi / 180.0, 0.05, 5);
   const Eigen::Vector3d truth(port.x(), 0.0, port.y());
 
-  const Detection fitted = DisparityDetector(params, shape).detect(disparity, geometry640(), 0.0, 96.0);
+  const RigGeometry rig = testing::shippedRig(kConfigDir);
+  const Detection fitted = DisparityDetector(params, shape, rig).detect(disparity, geometry640(), 0.0, 96.0);
   ASSERT_TRUE(fitted.found) << fitted.reason;
   EXPECT_TRUE(fitted.footprint_fitted);
   EXPECT_LT((fitted.position_m - truth).norm(), 0.02 * c.range_m) << fitted.position_m.transpose();
 
   params.footprint_fit_enabled = false;  // the nearest layer's centroid instead, for comparison
-  const Detection nearest = DisparityDetector(params, shape).detect(disparity, geometry640(), 0.0, 96.0);
+  const Detection nearest = DisparityDetector(params, shape, rig).detect(disparity, geometry640(), 0.0, 96.0);
   ASSERT_TRUE(nearest.found) << nearest.reason;
   EXPECT_FALSE(nearest.footprint_fitted);
   EXPECT_GT((nearest.position_m - truth).norm(), 0.05) << nearest.position_m.transpose();
-}
-
-TEST(FootprintFit, TheDetectorRefusesABlobOffTheOutline) {
-  DetectorParams params = testing::shippedDetectorSettings(kConfigDir).detector;
-  params.shape_check_enabled = false;  // the shape check would refuse this wall first
-  // A wall strip 3 m wide and 0.24 m high at 4 m, turned 6 degrees (all of it inside the detector's depth
-  // band): not the mockup.
-  const StereoGeometry g = geometry640();
-  cv::Mat disparity(480, 640, CV_32F, cv::Scalar(0.0f));
-  for (int u = 0; u < disparity.cols; ++u) {
-    const double t = (u - g.cx_px) / g.focal_px;
-    // Ray (t z, z) meets the line z = 4 + tan(0.1) x.
-    const double z = 4.0 / (1.0 - std::tan(0.1) * t);
-    if (std::abs(t * z) > 1.5 * std::cos(0.1)) continue;
-    const double half_px = 0.12 * g.focal_px / z;
-    for (int v = static_cast<int>(std::ceil(g.cy_px - half_px)); v <= static_cast<int>(g.cy_px + half_px); ++v) {
-      disparity.at<float>(v, u) = static_cast<float>(g.focal_px * g.baseline_m / z);
-    }
-  }
-  const Detection d = DisparityDetector(params, loadTargetShape(kConfigDir + "/target.yaml")).detect(disparity, g, 0.0, 96.0);
-  EXPECT_FALSE(d.found);
-  EXPECT_EQ(d.outcome, StageOutcome(PortOutcome::kFootprintMisfit)) << d.reason;
 }
 
 }  // namespace

@@ -55,7 +55,8 @@ Detection detectOn(const testing::FarStagePair& pair, const std::optional<cv::Re
     image_window.offset = area.tl();
     image_window.full_size = pair.left.size();
   }
-  return DisparityDetector(configuredParams(), loadTargetShape(kConfigDir + "/target.yaml"))
+  return DisparityDetector(configuredParams(), loadTargetShape(kConfigDir + "/target.yaml"),
+                           testing::shippedRig(kConfigDir))
       .detect(disparity, geometry, settings.min_disparity, testing::maxDisparity(settings),
               nodeletRegion(settings, disparity.size()), SearchHint(), image_window);
 }
@@ -102,7 +103,7 @@ TEST(TrackingWindow, ShrinksWithRangeDownToItsMinimum) {
   // Very far: the minimum half size holds.
   const auto far = trackingWindow(p, Eigen::Vector3d(0.0, 0.0, 50.0), cv::Size(640, 480), MatcherReach(), params);
   ASSERT_TRUE(far.has_value());
-  EXPECT_GE(far->height, 2 * params.min_half_size_px);
+  EXPECT_GE(far->height, 2 * kWindowMinHalfSizePx);
 }
 
 TEST(TrackingWindow, WholeImageWhenThePortCannotPlaceOne) {
@@ -116,13 +117,12 @@ TEST(TrackingWindow, WholeImageWhenThePortCannotPlaceOne) {
 }
 
 TEST(TrackingWindow, PredictionFollowsTheVelocityForALimitedTime) {
-  TrackingWindowParams params;
-  params.max_prediction_s = 0.5;
+  ASSERT_EQ(kMaxPredictionS, 0.5);  // the figures below
   const Eigen::Vector3d position(0.0, 0.0, 3.0), velocity(0.2, 0.0, -0.1);
-  EXPECT_NEAR((predictPort(position, velocity, 0.25, params) - Eigen::Vector3d(0.05, 0.0, 2.975)).norm(), 0.0, 1e-12);
-  EXPECT_NEAR((predictPort(position, velocity, 5.0, params) - Eigen::Vector3d(0.1, 0.0, 2.95)).norm(), 0.0, 1e-12);
-  EXPECT_NEAR((predictPort(position, velocity, -1.0, params) - position).norm(), 0.0, 1e-12);
-  EXPECT_NEAR((predictPort(position, Eigen::Vector3d(NAN, 0.0, 0.0), 0.2, params) - position).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((predictPort(position, velocity, 0.25) - Eigen::Vector3d(0.05, 0.0, 2.975)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((predictPort(position, velocity, 5.0) - Eigen::Vector3d(0.1, 0.0, 2.95)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((predictPort(position, velocity, -1.0) - position).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((predictPort(position, Eigen::Vector3d(NAN, 0.0, 0.0), 0.2) - position).norm(), 0.0, 1e-12);
 }
 
 TEST(TrackingWindow, InvalidSettingsAreNamed) {

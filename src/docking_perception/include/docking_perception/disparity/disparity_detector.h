@@ -4,11 +4,11 @@
 //
 // detect() runs the detector's stages (stages.h; the package README, section disparity_detector, draws them):
 //  1. input: the image and geometry usable; the searched region: the matcher's valid window;
-//  2. valid disparity: the region's valid disparities above the floor cut (and below the ceiling cut), median
+//  2. valid disparity: the region's valid disparities above the floor cut (level_floor), median
 //     filtered: enough of them;
 //  3. band search: the closest object (the disparity `closest_min_pixels` pixels reach, so a few noisy
 //     pixels cannot win), a threshold just below it that holds the target's own depth, and the band's blobs,
-//     largest first: too small or thin, not of the mockup's shape (TargetShape: width, height and fill it can
+//     largest first: too small or thin, not of the mockup's shape (TargetShape: width and height it can
 //     show from some yaw), height or isolation (a part split out of a blob merged with its neighbours), or the
 //     target (with a SearchHint: inside the tracked target's gate). A band without it is removed and the
 //     search looks behind it, so a nearer wall, person or box cannot hide the target; a blob that may be the
@@ -62,9 +62,51 @@ TargetShape loadTargetShape(const std::string& target_yaml_path);
 struct ShapeBounds {
   double min_width_m = 0.0, max_width_m = 0.0;
   double min_height_m = 0.0, max_height_m = 0.0;
-  double min_fill = 0.0;  // blob pixels / bounding-box pixels: the lowest the mockup shows
 };
 ShapeBounds shapeBounds(const TargetShape& shape);
+
+// Where the rig puts the stereo pair and the target's port, and how the matcher matches: the detector's
+// rig-dependent limits (RigLimits) are derived from these, not set.
+struct RigGeometry {
+  double camera_height_m = 0.0;  // the left stereo camera above the floor (robot.yaml chaser.cameras.stereo_left z)
+  double port_height_m = 0.0;    // the target's port above its floor (target.yaml target.mount z)
+  int matcher_window_px = 0;     // block matching's window (stereo_image_proc.yaml correlation_window_size)
+};
+
+// Reads the two heights from robot.yaml and target.yaml; the matcher's window is the caller's (the node's
+// ~matcher/correlation_window_size, the file's for tools). Throws std::runtime_error naming the file and field.
+RigGeometry loadRigGeometry(const std::string& robot_yaml_path, const std::string& target_yaml_path,
+                            int matcher_window_px);
+
+// The limits that follow from the rig and the mockup (rigLimits()).
+struct RigLimits {
+  // level_floor: points lower than this below the optical axis are the floor; a blob's centre is expected
+  // port_y_m below the axis (optical frame, y down), within kMaxCentreOffsetM.
+  double floor_cut_m = 0.0;
+  double port_y_m = 0.0;
+  // The band keeps this depth behind the closest point.
+  double band_depth_m = 0.0;
+  // The mockup's shape bounds are widened by this many px at the blob's range.
+  double shape_margin_px = 0.0;
+};
+
+// Constants of the method (settings until issue 55, at these values everywhere):
+// the floor cut lies this far below the face's lower edge, so the face's edge rows stay (0.15 m below the axis
+// on the test bed, whose floor is 0.25 m below);
+constexpr double kFloorCutMarginM = 0.03;
+// a blob's centre may lie this far above or below the port's height: the mockup's half height (0.12 m) and
+// the height error at 8 m; patches 0.7-0.9 m off were taken at 6-8 m (eval_real_clutter_far_*);
+constexpr double kMaxCentreOffsetM = 0.3;
+// the band reaches this far behind the mockup's own depth: about the depth noise at 6 m (sigma_Z 0.16 m);
+constexpr double kBandDepthMarginM = 0.2;
+// the mockup's shape bounds are widened by this fraction of themselves (blur, glare and partial matches).
+constexpr double kShapeToleranceFraction = 0.25;
+
+// floor_cut_m: the face's lower edge below the axis (camera height - port height + half the face) plus
+// kFloorCutMarginM; port_y_m: camera height - port height; band_depth_m: the mockup's body depth plus
+// kBandDepthMarginM; shape_margin_px: half the matcher's window, rounded up (block matching fattens or trims
+// edges by up to that).
+RigLimits rigLimits(const TargetShape& shape, const RigGeometry& rig);
 
 // The face print is stored reduced to this width once (face_appearance.cpp works at a narrower width).
 constexpr double kMaxAppearanceWorkingWidthPx = 48.0;
@@ -74,16 +116,16 @@ constexpr double kMaxAppearanceWorkingWidthPx = 48.0;
 
 // Throws std::invalid_argument (docking_settings::ConfigError) naming the first setting its declaration does not
 // allow, or the rule between settings it breaks (median_kernel_px 0, 1, 3 or 5; max_disparity_px above
-// min_disparity_px; min_fill_fraction at most the mockup's own lowest fill), or the mockup's size that is
+// min_disparity_px; with level_floor, a floor cut above the floor), or the mockup's size or the rig that is
 // unusable.
-void validate(const DetectorParams& params, const TargetShape& shape);
+void validate(const DetectorParams& params, const TargetShape& shape, const RigGeometry& rig);
 std::vector<std::string> validateGeometry(const StereoGeometry& geometry);
 
 // The metric shape of a blob, measured at its median raw disparity.
 struct BlobShape {
   double width_m = 0.0, height_m = 0.0;  // bounding box at the blob's range
   double depth_extent_m = 0.0;           // 10th to 90th percentile of the depth (reported only: the
-                                         // band target_depth_m already bounds it)
+                                         // band's depth already bounds it)
   double fill = 0.0;                     // blob pixels / bounding-box pixels
   double range_z_m = 0.0;                // Z at the median disparity
 };
@@ -99,8 +141,7 @@ struct SearchHint {
 // Where the disparity image lies in the camera's full image, when it is a window of it (the far stage's
 // tracking window, far_stereo_rectify: camera_info roi). Edges of the window that are not the full
 // image's are not the target's edge: a blob crossing one is a neighbour of the tracked target (or the
-// target merged with one), never reported as the target cut by the border; the blob-size limit stays the
-// full image's. Default: not a window.
+// target merged with one), never reported as the target cut by the border. Default: not a window.
 struct ImageWindow {
   cv::Point offset{0, 0};  // the window's top-left pixel in the full image
   cv::Size full_size;      // the full image; empty: the disparity image is the full image
@@ -150,13 +191,15 @@ struct Detection {
 class DisparityDetector {
  public:
   DisparityDetector() = default;
-  // `shape`: the mockup of config/target.yaml (loadTargetShape). Throws std::invalid_argument (validate()).
-  DisparityDetector(const DetectorParams& params, const TargetShape& shape);
+  // `shape`: the mockup of config/target.yaml (loadTargetShape); `rig`: loadRigGeometry. Throws
+  // std::invalid_argument (validate()).
+  DisparityDetector(const DetectorParams& params, const TargetShape& shape, const RigGeometry& rig);
 
   // Throws std::invalid_argument (validate()); keeps the old settings then.
   void setParams(const DetectorParams& params);
   const DetectorParams& params() const { return params_; }
   const TargetShape& shape() const { return shape_; }
+  const RigGeometry& rig() const { return rig_; }
 
   // `disparity`: CV_32FC1, pixels; values that are not finite, <= 0 or outside
   // [search_min_px, search_max_px] (the matcher's search range) are invalid.
@@ -174,14 +217,22 @@ class DisparityDetector {
  private:
   DetectorParams params_;
   TargetShape shape_;
+  RigGeometry rig_;
+  RigLimits limits_;
 };
+
+// The noise model of a detection (constants of the method, settings until issue 55): 1-sigma error of the
+// robust disparity (block matching's sub-pixel fit on a textured face; sigma_Z = Z^2 sigma_d / (f B)) and of
+// the port's image point.
+constexpr double kDisparitySigmaPx = 0.25;
+constexpr double kCentreSigmaPx = 1.0;
 
 // Position and its covariance from an image point and a disparity with the rectified model:
 // Z = f B / d, X = (u - cx) Z / f, Y = (v - cy) Z / f; first-order propagation of independent pixel
 // noise (u, v) and disparity noise d, so the depth error lies along the line of sight and grows as Z^2.
 // Requires disparity_px > 0 and a valid geometry.
 void reproject(const StereoGeometry& geometry, const cv::Point2d& centre_px, double disparity_px,
-               double centre_sigma_px, double disparity_sigma_px, Eigen::Vector3d* position_m,
+               double point_sigma_px, double disparity_noise_px, Eigen::Vector3d* position_m,
                Eigen::Matrix3d* covariance_m2);
 
 // A bgr8 picture of a detection for rviz: the disparity in grey (near = bright, invalid = black), the

@@ -14,8 +14,9 @@
 //   perception/disparity/debug_image  sensor_msgs/Image bgr8 (image_transport)
 //   /diagnostics                      detection rate, frames per deciding stage and code, last rejection
 // Settings: settings/disparity_detector.yaml declares them (defaults, ranges, meaning); config/disparity_detector.yaml
-// holds what differs from the defaults. All are live through dynamic_reconfigure. ~target_yaml: the mockup;
-// ~matcher/correlation_window_size: the block matcher's window (config/stereo_image_proc.yaml), its blind band.
+// holds what differs from the defaults. All are live through dynamic_reconfigure. ~target_yaml: the mockup and
+// its port's height; ~robot_yaml: the cameras' height (config/robot.yaml); ~matcher/correlation_window_size: the
+// block matcher's window (config/stereo_image_proc.yaml), its blind band and the shape check's pixel tolerance.
 #pragma once
 
 #include <deque>
@@ -57,7 +58,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   void advertise();
 
   // The declared defaults with the private namespace's values; the mockup of ~target_yaml (its size and its
-  // face print). Throws docking_settings::ConfigError naming the key.
+  // face print) and the rig of ~robot_yaml. Throws docking_settings::ConfigError naming the key.
   disparity::DisparityDetectorSettings loadSettings();
   static duty::FusedRangeConditionParams toPauseParams(const disparity::PauseParams& pause);
   void onReconfigure(Config& config, uint32_t level);
@@ -119,6 +120,12 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   // Resting near the target (issue 15): the arbiter's output, and a timer that resumes the stage when
   // that output stops arriving.
   static constexpr double kPauseCheckPeriodS = 0.1;
+  // Resumed once the fused estimate is this far beyond the pause range, so the range's noise does not toggle
+  // the stage (a setting until issue 55, 0.1 m everywhere).
+  static constexpr double kPauseHysteresisM = 0.1;
+  // Resumed when no fused estimate arrived for this long (the arbiter stalled or gone; a setting
+  // until issue 55, 0.3 s everywhere).
+  static constexpr double kPauseMaxFusedAgeS = 0.3;
   ros::Subscriber fused_subscriber_;
   ros::Timer pause_timer_;
   std::mutex pause_mutex_;
@@ -154,7 +161,9 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   double last_window_info_arrival_s_ = 0.0;  // of the last of recent_window_infos_
   unsigned long window_frames_ = 0;
   bool warned_no_camera_info_ = false;
-  std::deque<bool> recent_found_;  // detection outcome of the last diagnostic_window_frames frames
+  // The diagnostics' detection rate is over this many frames (4 s at 7.5 Hz; a setting until issue 55).
+  static constexpr std::size_t kDiagnosticWindowFrames = 30;
+  std::deque<bool> recent_found_;  // detection outcome of the last kDiagnosticWindowFrames frames
   std::map<std::pair<disparity::Stage, std::uint8_t>, unsigned long> outcome_counts_;  // frames per deciding stage
   std::string last_rejection_;
   std::string last_input_error_;

@@ -5,8 +5,8 @@
 // 7515: boxes 6 m away passed the shape, footprint and gate checks and were approached to 1.3 m). The
 // print can: at 2-6 m it is 27-80 px wide, and its five white rings and the port ring survive blur.
 //
-// Method: the left image around the detected port (the detector's position error, search_radius_m,
-// either side) and the print are both reduced so that the face is at most 24 px wide;
+// Method: the left image around the detected port (the detector's position error, 0.25 m either side)
+// and the print are both reduced so that the face is at most 24 px wide;
 // the print, squeezed horizontally for each of a few yaws (the face turned up to 60 deg), is slid over
 // that region (normalised cross-correlation, so gain and exposure do not matter). The best score is
 // the match. Where the face cannot be judged (too much of it saturated by glare, too dark, outside the

@@ -15,7 +15,7 @@ namespace disparity {
 
 enum class Stage : std::uint8_t {
   kInput = 1,          // the disparity image, its camera model and the searched region are usable
-  kValidDisparity = 2, // enough valid disparities in the region, inside the floor and ceiling cuts, filtered
+  kValidDisparity = 2, // enough valid disparities in the region, above the floor cut, filtered
   kBandSearch = 3,     // the nearest depth band holding a target-shaped blob (nearer bands looked behind)
   kPort = 4,           // the port from the mockup's footprint fitted to the blob's depth profile
   kPlausibility = 5,   // the blob's size, border and disparity range
@@ -51,14 +51,13 @@ enum class BandSearchOutcome : std::uint8_t {
 enum class PortOutcome : std::uint8_t {
   kPassed = 0,
   kTooFewColumns = 1,       // too few image columns with depth to fit the footprint
-  kFootprintMisfit = 2,     // too little of the blob's depth profile on the fitted footprint
 };
 enum class PlausibilityOutcome : std::uint8_t {
   kPassed = 0,
   kBlobTooSmall = 1,        // fewer valid pixels than min_blob_area_px
   kBlobTooThin = 2,         // thinner than min_blob_thickness_px
   kBlobTouchesBorder = 3,   // cut by the valid region's edge: its centre is not the target's
-  kBlobTooLarge = 4,        // more than max_blob_area_fraction of the searched region
+  // 4: a blob too large for the searched region, until issue 55 (its number is not reused)
   kDisparityOutOfRange = 5, // robust disparity outside [min_disparity_px, max_disparity_px]
 };
 enum class AppearanceOutcome : std::uint8_t {

@@ -6,7 +6,7 @@
 // the relative speed the target can reach and by the detection's own depth noise). A detection outside
 // the gate is reported invalid (TrackOutcome::kOffTrack) until the same new position has been seen
 // `confirm_frames` frames in a row: then the track moves there (the target was really moved, or the
-// first lock was wrong). Without a confirmed detection for `timeout_s` the track is dropped and the
+// first lock was wrong). Without a confirmed detection for 2 s the track is dropped and the
 // next target-shaped detection starts a new one at once (the shape check alone guards acquisition).
 #pragma once
 

@@ -6,7 +6,7 @@
 // the search.
 //
 // The window covers the mockup's extent around the predicted port (half_width_m, half_height_m, at least
-// min_half_size_px), plus what the matcher needs to give those pixels a disparity: on the left the search
+// kWindowMinHalfSizePx), plus what the matcher needs to give those pixels a disparity: on the left the search
 // range (a left pixel at column u matches right pixels down to u - min_disparity - disparity_range + 1)
 // and half the correlation window on every side. Both images are cut to the same window, so the pair
 // stays rectified (the principal points shift together: image_geometry's region of interest).
@@ -26,6 +26,14 @@ namespace disparity {
 
 // TrackingWindowParams (window_* settings) are declared in settings/far_stereo_rectify.yaml (generated header).
 
+// Constants of the window (settings until issue 55, at these values everywhere): never narrower than this
+// either side of the port (the mockup's 0.9 m span is 45 px wide at 11 m); the fused velocity is extrapolated
+// at most this long (about four pairs at 7.5 Hz); a window larger than this share of the image is the whole
+// image instead (nearer than ~2 m, where a window saves little).
+constexpr int kWindowMinHalfSizePx = 48;
+constexpr double kMaxPredictionS = 0.5;
+constexpr double kMaxWindowAreaFraction = 0.7;
+
 // What the block matcher needs around a pixel to give it a disparity (config/stereo_image_proc.yaml).
 struct MatcherReach {
   int min_disparity = 0;
@@ -37,9 +45,9 @@ struct MatcherReach {
 std::vector<std::string> validateMatcherReach(const MatcherReach& reach);
 
 // Where the port is expected at the image's time: `position_m` (rectified camera frame, at the estimate's
-// time) moved by `velocity_mps` for `elapsed_s`, clamped to [0, max_prediction_s].
+// time) moved by `velocity_mps` for `elapsed_s`, clamped to [0, kMaxPredictionS].
 Eigen::Vector3d predictPort(const Eigen::Vector3d& position_m, const Eigen::Vector3d& velocity_mps,
-                            double elapsed_s, const TrackingWindowParams& params);
+                            double elapsed_s);
 
 // The window of the rectified image (size `image_size`, projection `projection`: the rectified camera's P)
 // to block-match for a port at `port_m` (rectified camera frame); nullopt when the whole image should be
