@@ -33,7 +33,7 @@ constexpr int kMaxNearObjectsSkipped = 8;
 constexpr std::size_t kMaxBlobsPerBand = 6;
 // Yaw steps of the mockup's outline in shapeBounds (0 to 90 deg; the outline is symmetric).
 constexpr int kYawSteps = 90;
-// Constants of the method, not tuning (they were settings until issue 55, at these values everywhere):
+// Constants of the method, not tuning:
 // the band's threshold stays at least this far below the closest disparity (the matcher's noise on a flat
 // face is a fraction of a pixel);
 constexpr double kThresholdMarginPx = 1.0;
@@ -48,10 +48,10 @@ constexpr double kFaceMinBandPx = 0.25;
 constexpr double kSplitLevelStepPx = 2.0 / kHistogramBinsPerPx;
 constexpr int kMaxSplitLevels = 16;
 // The blob's nearest (face) layer is referred to this percentile of its disparities (0.7-0.98 swept on
-// far_approach.bag, docs/TUNING.md; a setting until issue 55).
+// far_approach.bag, docs/TUNING.md).
 constexpr double kFacePercentile = 0.9;
 // A profile point this near the fitted footprint (plus the depth noise at its range) is on it: the face's and
-// panels' thickness and a column median's noise (a setting until issue 55).
+// panels' thickness and a column median's noise.
 constexpr double kFootprintInlierDistanceM = 0.05;
 
 std::string joinErrors(const std::vector<std::string>& errors) {

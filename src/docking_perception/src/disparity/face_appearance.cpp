@@ -25,7 +25,7 @@ struct AppearanceSearchLayout {
 namespace {
 
 // Image and print are reduced so the face is at most this wide: its five rings and the port ring still
-// resolve, and the search stays cheap (a constant of the method; a setting until issue 55, 24 everywhere).
+// resolve, and the search stays cheap (a constant of the method).
 constexpr double kWorkingWidthPx = 24.0;
 // The print is kept at this width (area-averaged once), wider than the working width, so reducing from
 // here stays an average.
@@ -33,7 +33,7 @@ constexpr int kPrintWorkingWidthPx = static_cast<int>(kMaxAppearanceWorkingWidth
 // Grey at or above this is saturated (8-bit images: the sensor's ceiling less its noise).
 constexpr int kSaturatedLevelDn = 250;
 // The print is slid this far either side of the detected port: a turned target's footprint fit puts the port
-// up to 0.23 m aside (rendered far scenes; a setting until issue 55);
+// up to 0.23 m aside (rendered far scenes);
 constexpr double kSearchRadiusM = 0.25;
 constexpr double kVerticalSearchFraction = 0.5;  // of kSearchRadiusM, up and down
 // The face's depth replaces the footprint fit's when they differ by more than this many of the estimate's

@@ -107,8 +107,7 @@ sensor_msgs::CameraInfo rectifiedInfo(const sensor_msgs::CameraInfo& raw, const 
   return out;
 }
 
-// No fused estimate this long (the arbiter stalled or gone): the whole image (a setting
-// until issue 55, 0.5 s everywhere).
+// No fused estimate this long (the arbiter stalled or gone): the whole image.
 constexpr double kMaxFusedAgeS = 0.5;
 
 }  // namespace

@@ -18,7 +18,7 @@ namespace {
 // Velocity smoothing of the track (fraction of the newest frame-to-frame velocity taken each frame):
 // disparity depth noise at 6 m is ~0.16 m per frame, so a single difference is mostly noise.
 constexpr double kVelocityGain = 0.2;
-// Constants of the gate (settings until issue 55, at these values everywhere): its smallest radius, about the
+// Constants of the gate: its smallest radius, about the
 // mockup's own size (a blob's centre moves that much with the target's yaw); the detection's position noise
 // it adds, in sigmas (3: 99.7 % of a Gaussian's errors in one axis); how long the track lives without a
 // confirmed detection (2 s: 15 frames at 7.5 Hz; the target moves at most 1 m meanwhile).

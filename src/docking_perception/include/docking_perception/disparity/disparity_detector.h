@@ -90,7 +90,7 @@ struct RigLimits {
   double shape_margin_px = 0.0;
 };
 
-// Constants of the method (settings until issue 55, at these values everywhere):
+// Constants of the method:
 // the floor cut lies this far below the face's lower edge, so the face's edge rows stay (0.15 m below the axis
 // on the test bed, whose floor is 0.25 m below);
 constexpr double kFloorCutMarginM = 0.03;
@@ -221,7 +221,7 @@ class DisparityDetector {
   RigLimits limits_;
 };
 
-// The noise model of a detection (constants of the method, settings until issue 55): 1-sigma error of the
+// The noise model of a detection (constants of the method): 1-sigma error of the
 // robust disparity (block matching's sub-pixel fit on a textured face; sigma_Z = Z^2 sigma_d / (f B)) and of
 // the port's image point.
 constexpr double kDisparitySigmaPx = 0.25;

@@ -121,10 +121,9 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   // that output stops arriving.
   static constexpr double kPauseCheckPeriodS = 0.1;
   // Resumed once the fused estimate is this far beyond the pause range, so the range's noise does not toggle
-  // the stage (a setting until issue 55, 0.1 m everywhere).
+  // the stage.
   static constexpr double kPauseHysteresisM = 0.1;
-  // Resumed when no fused estimate arrived for this long (the arbiter stalled or gone; a setting
-  // until issue 55, 0.3 s everywhere).
+  // Resumed when no fused estimate arrived for this long (the arbiter stalled or gone).
   static constexpr double kPauseMaxFusedAgeS = 0.3;
   ros::Subscriber fused_subscriber_;
   ros::Timer pause_timer_;
@@ -161,7 +160,7 @@ class DisparityDetectorNodelet : public nodelet::Nodelet {
   double last_window_info_arrival_s_ = 0.0;  // of the last of recent_window_infos_
   unsigned long window_frames_ = 0;
   bool warned_no_camera_info_ = false;
-  // The diagnostics' detection rate is over this many frames (4 s at 7.5 Hz; a setting until issue 55).
+  // The diagnostics' detection rate is over this many frames (4 s at 7.5 Hz).
   static constexpr std::size_t kDiagnosticWindowFrames = 30;
   std::deque<bool> recent_found_;  // detection outcome of the last kDiagnosticWindowFrames frames
   std::map<std::pair<disparity::Stage, std::uint8_t>, unsigned long> outcome_counts_;  // frames per deciding stage

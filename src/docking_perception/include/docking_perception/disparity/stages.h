@@ -57,7 +57,7 @@ enum class PlausibilityOutcome : std::uint8_t {
   kBlobTooSmall = 1,        // fewer valid pixels than min_blob_area_px
   kBlobTooThin = 2,         // thinner than min_blob_thickness_px
   kBlobTouchesBorder = 3,   // cut by the valid region's edge: its centre is not the target's
-  // 4: a blob too large for the searched region, until issue 55 (its number is not reused)
+  // 4: retired (a blob too large for the searched region; numbers on the wire are never reused)
   kDisparityOutOfRange = 5, // robust disparity outside [min_disparity_px, max_disparity_px]
 };
 enum class AppearanceOutcome : std::uint8_t {

@@ -26,7 +26,7 @@ namespace disparity {
 
 // TrackingWindowParams (window_* settings) are declared in settings/far_stereo_rectify.yaml (generated header).
 
-// Constants of the window (settings until issue 55, at these values everywhere): never narrower than this
+// Constants of the window: never narrower than this
 // either side of the port (the mockup's 0.9 m span is 45 px wide at 11 m); the fused velocity is extrapolated
 // at most this long (about four pairs at 7.5 Hz); a window larger than this share of the image is the whole
 // image instead (nearer than ~2 m, where a window saves little).
