@@ -546,8 +546,8 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   if (params_.refine_again_move_px > 0.0 &&
       largestCornerMove(drawn_at, match->homography) > params_.refine_again_move_px) {
     // Kept only when its points still span most of what the first pass's did: on a small blurred face (2 m)
-    // a pass more may keep a bunch in one corner, and the pose then loses the face's spread
-    // (min_inlier_spread refused twice as many frames on the tuning scene). Its points may be fewer: at
+    // a pass more may keep a bunch in one corner, and the pose then loses the face's spread (the tilt
+    // from points in one corner is poorly observed). Its points may be fewer: at
     // 1 m it often drops a third of them and is still better.
     constexpr double kMinKeptSpreadFraction = 0.8;
     if (refineKeptAgain(gray, kMinKeptSpreadFraction, match)) match->refined_again = true;
@@ -657,7 +657,6 @@ FeatureMatcher::RefinedPoints FeatureMatcher::refineAgainst(const cv::Mat& gray,
     double best = 0.0;
     cv::Point peak;
     cv::minMaxLoc(response, nullptr, &best, nullptr, &peak);
-    if (!(best >= params_.min_correlation)) continue;
     if (peak.x == 0 || peak.y == 0 || peak.x == response.cols - 1 || peak.y == response.rows - 1) continue;
     auto parabola = [](float left, float middle, float right) {
       const float denominator = left - 2.0f * middle + right;
@@ -880,7 +879,6 @@ std::string FeatureMatcher::outlineProblem(const std::vector<cv::Point2f>& outli
   const double area = signedArea(outline);
   if (!cv::isContourConvex(outline)) return "matched face outline is not convex";
   if (area * signedArea(textureCorners()) <= 0.0) return "matched face is mirrored";
-  if (std::abs(area) < params_.min_face_area_px) return "matched face too small";
   return "";
 }
 

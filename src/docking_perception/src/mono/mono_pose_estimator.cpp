@@ -110,7 +110,6 @@ void validate(const MonoPoseParams& p) {
   using docking_settings::ConfigError;
   using docking_settings::ConfigProblem;
   docking_settings::validateSettings(p);
-  if (!(p.max_range_m > p.min_range_m)) throw ConfigError("max_range_m", ConfigProblem::kInvalid, "must exceed min_range_m");
   if (p.features.model_widths_px.empty()) throw ConfigError("model_widths_px", ConfigProblem::kInvalid, "is empty");
   if (!(p.leds.max_area_px > p.leds.min_area_px)) {
     throw ConfigError("led_max_area_px", ConfigProblem::kInvalid, "must exceed led_min_area_px");
@@ -189,7 +188,7 @@ void MonoPoseEstimator::setRegionHint(const cv::Rect& region, double stamp_s) {
 
 void MonoPoseEstimator::setPositionHint(const Eigen::Vector3d& position_camera, double stamp_s) {
   const double z = position_camera.z();
-  if (!position_camera.allFinite() || !(z > params_.min_range_m)) {
+  if (!position_camera.allFinite() || !(z > 0.0)) {
     setRegionHint(cv::Rect(), stamp_s);
     return;
   }
@@ -285,8 +284,8 @@ cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_p
 bool MonoPoseEstimator::checkPose(const PoseWithCovariance& pose, std::string* reason) const {
   // Every failure here is an implausible pose (RejectReason::kImplausiblePose).
   const double range = pose.translation.norm();
-  if (!std::isfinite(range) || range < params_.min_range_m || range > params_.max_range_m) {
-    *reason = "range " + std::to_string(range) + " m outside [min_range_m, max_range_m]";
+  if (!std::isfinite(range)) {
+    *reason = "range not finite";
     return false;
   }
   // The face normal (+x of `target`) must point back at the camera, else we would be looking at the
@@ -966,10 +965,6 @@ StageOutcome MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMa
                                                double pixel_sigma_px, MonoPoseResult* result) const {
   const ConsistencyParams& c = params_.consistency;
   result->inlier_spread = inlierSpread(match.inlier_texture_points, model_.textureGray().size());
-  if (result->inlier_spread < c.min_inlier_spread) {
-    return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kInlierSpread), RejectReason::kInlierSpread,
-                  "pose points cover only " + std::to_string(result->inlier_spread) + " of the face (min_inlier_spread)");
-  }
   const AppearanceScore appearance = appearance_.score(gray, camera_, result->pose);
   result->appearance_ncc = appearance.median_ncc;
   result->blur_sigma_px = appearance.blur_sigma_px;

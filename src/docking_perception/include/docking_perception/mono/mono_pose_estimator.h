@@ -5,7 +5,7 @@
 // tracking, else, or when that fails, the full frame); the `pnp` solver uses every homography inlier,
 // the `paper_5point` solver locates the 5 printed dots where the homography predicts them.
 // IR mode: LedPatternDetector finds the LED blobs and the pattern; both solvers then use the 5 LEDs
-// (`pnp` as IPPE + LM over 5 points). Every pose passes the same checks: reprojection error, range,
+// (`pnp` as IPPE + LM over 5 points). Every pose passes the same checks: reprojection error, a finite range,
 // and the face turned towards the camera.
 #pragma once
 
