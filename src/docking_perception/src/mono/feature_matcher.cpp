@@ -22,6 +22,18 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
+// Constants of the method (issue 55: not settings; nobody retunes them for a new rig):
+// Lowe's ratio test at his 0.8 (SIFT paper: rejects ~90 % of false matches, ~5 % of correct ones).
+constexpr double kLoweRatio = 0.8;
+// RANSAC homography inliers within 3 px at full resolution (6 px at half; the value since the first matcher,
+// 2c971ce): only the match's inliers are refined by NCC to ~0.1 px afterwards.
+constexpr double kRansacThresholdPx = 3.0;
+// Model keypoints per pyramid level: bounds the matching time (7 levels x up to 3 pyramids; since c2da51d,
+// full-frame search ~10 ms CPU).
+constexpr int kMaxModelKeypointsPerLevel = 400;
+// Inliers + unmatched model corners refined by NCC (150 -> 220: 0.79 -> 0.55 deg at 1 m on axis).
+constexpr int kMaxRefinedPoints = 220;
+
 // One BRISK object per (threshold, octaves) in the process: each one precomputes its sampling
 // pattern for 64 scales x 1024 rotations, 46 MB (measured), and the visible and IR mono_pose nodelets
 // in one perception process would otherwise hold one each. Sharing is safe: OpenCV's BRISK detect and
@@ -407,7 +419,6 @@ FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(par
 void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
   const bool rebuild = params.upright_descriptors != params_.upright_descriptors ||
                        params.fast_threshold != params_.fast_threshold ||
-                       params.max_model_keypoints_per_level != params_.max_model_keypoints_per_level ||
                        params.model_widths_px != params_.model_widths_px ||
                        params.blurred_model_sigma_px != params_.blurred_model_sigma_px ||
                        params.search_row_smear_px != params_.search_row_smear_px ||
@@ -493,7 +504,7 @@ void FeatureMatcher::addModelLevel(const cv::Mat& texture_gray, ModelSet set, in
   }
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
-  detect(level.image, &keypoints, params_.max_model_keypoints_per_level);
+  detect(level.image, &keypoints, kMaxModelKeypointsPerLevel);
   describe(level.image, &keypoints, &descriptors, level.set != ModelSet::kSharp);
   level.first_row = model_descriptors_.rows;
   level.row_count = descriptors.rows;
@@ -532,7 +543,7 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
                                        cv::norm(match->face_outline[2] - match->face_outline[3]));
   const ModelLevel* nearest = &refinementLevel(apparent_width, ModelSet::kSharp);
   std::vector<cv::Point2f> candidates = match->inlier_texture_points;
-  const int extra_budget = std::max(0, params_.max_refined_points - static_cast<int>(candidates.size()));
+  const int extra_budget = std::max(0, kMaxRefinedPoints - static_cast<int>(candidates.size()));
   if (extra_budget > 0 && nearest->row_count > 0) {
     const int stride = std::max(1, nearest->row_count / extra_budget);
     for (int row = nearest->first_row; row < nearest->first_row + nearest->row_count; row += stride) {
@@ -836,7 +847,7 @@ void FeatureMatcher::ratioTestMatches(const cv::Mat& descriptors, const std::vec
   for (size_t q = 0; q < pairs.size(); ++q) {
     const HammingPair& pair = pairs[q];
     if (pair.best_index < 0 || pair.second_distance >= (1 << 30)) continue;
-    if (pair.best_distance >= params_.feature_ratio * pair.second_distance) continue;
+    if (pair.best_distance >= kLoweRatio * pair.second_distance) continue;
     // Half resolution: pyrDown's pixel x is its 5-tap kernel centred on full-resolution pixel 2x.
     const cv::Point2f p = half ? 2.0f * keypoints[q].pt : keypoints[q].pt;
     texture_points->push_back(model_points_[static_cast<size_t>(pair.best_index)]);
@@ -848,7 +859,7 @@ bool FeatureMatcher::fitHomography(const std::vector<cv::Point2f>& texture_point
                                    const std::vector<cv::Point2f>& image_points, bool half, FaceMatch* result) const {
   std::vector<unsigned char> inlier_mask;
   const cv::Mat homography = cv::findHomography(texture_points, image_points, cv::RANSAC,
-                                                params_.ransac_threshold_px * (half ? 2.0 : 1.0), inlier_mask, 2000,
+                                                kRansacThresholdPx * (half ? 2.0 : 1.0), inlier_mask, 2000,
                                                 0.995);
   if (homography.empty()) {
     result->status = "no homography";

@@ -130,7 +130,6 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
       velocity_(velocityOf(params)),
       matcher_(params.features),
       led_detector_(model.markers(), params.leds),
-      dot_locator_(params.dots),
       five_point_solver_(model.markers()),
       pnp_solver_(params.pnp, params.min_pixel_sigma),
       filter_(params.filter),
@@ -166,7 +165,6 @@ void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
   if (model_.hasTexture()) direct_aligner_ = DirectFaceAligner(model_, params.direct);
   matcher_.setParams(params.features);
   led_detector_.setParams(params.leds);
-  dot_locator_.setParams(params.dots);
   pnp_solver_.setParams(params.pnp, params.min_pixel_sigma);
   filter_.setParams(params.filter);
   frame_difference_.setMaxGap(params.filter.max_gap_s);
@@ -455,7 +453,8 @@ DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool trackin
   facing.col(0) = Eigen::Vector3d(0, 0, -1);  // face normal (target x) towards the camera
   facing.col(1) = Eigen::Vector3d(1, 0, 0);   // target y (viewer's right) -> image right
   facing.col(2) = Eigen::Vector3d(0, -1, 0);  // target z (up) -> image up
-  const int count = params_.direct_yaw_hypotheses;
+  // 5 yaws, 15 deg apart over the shipped +-30 deg (the count since cb502a0; the coarse levels score each).
+  constexpr int count = 5;
   for (int i = 0; i < count; ++i) {
     const double yaw_deg = count == 1 ? 0.0 : params_.direct_max_yaw_deg * (2.0 * i / (count - 1) - 1.0);
     hypothesis.rotation = facing * Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();

@@ -591,8 +591,8 @@ TEST(MonoPoseEstimator, AnUncertainPositionIsWithheldButStillTracked) {
 
 TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
   MonoPoseParams params;
-  params.features.feature_ratio = 1.5;
-  EXPECT_EQ(refusedKey(params), "feature_ratio");
+  params.features.fast_threshold = 0;
+  EXPECT_EQ(refusedKey(params), "fast_threshold");
   params = MonoPoseParams();
   params.leds.max_area_px = params.leds.min_area_px;  // two settings that contradict
   EXPECT_EQ(refusedKey(params), "led_max_area_px");

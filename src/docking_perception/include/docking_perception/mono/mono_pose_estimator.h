@@ -69,7 +69,7 @@ VelocityMethod velocityOf(const MonoPoseParams& params);
 constexpr const char* kInnerPatternSolverName = "inner_pattern";
 
 // Throws docking_settings::ConfigError (a std::invalid_argument) naming the first setting its declaration
-// does not allow (its key in config/mono_pose_<mode>.yaml, e.g. "feature_ratio"), or two that contradict.
+// does not allow (its key in config/mono_pose_<mode>.yaml, e.g. "fast_threshold"), or two that contradict.
 void validate(const MonoPoseParams& params);
 
 struct MonoPoseResult {
