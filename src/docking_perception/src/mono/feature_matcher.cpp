@@ -28,6 +28,9 @@ constexpr double kLoweRatio = 0.8;
 // RANSAC homography inliers within 3 px at full resolution (6 px at half; the value since the first matcher,
 // 2c971ce): only the match's inliers are refined by NCC to ~0.1 px afterwards.
 constexpr double kRansacThresholdPx = 3.0;
+// Image keypoints kept (the strongest) before descriptors: bounds the CPU time (400 -> 300 in c2da51d,
+// full-frame search ~10 ms CPU).
+constexpr int kMaxImageKeypoints = 300;
 // Model keypoints per pyramid level: bounds the matching time (7 levels x up to 3 pyramids; since c2da51d,
 // full-frame search ~10 ms CPU).
 constexpr int kMaxModelKeypointsPerLevel = 400;
@@ -790,10 +793,8 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
   cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
   result.status = outlineProblem(result.face_outline);
   if (!result.status.empty()) return result;
-  if (params_.refine_matches) {
-    refine(gray, &result);
-    cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
-  }
+  refine(gray, &result);
+  cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
   result.found = true;
   return result;
 }
@@ -819,7 +820,7 @@ void FeatureMatcher::describeRegion(const cv::Mat& gray, const cv::Rect& roi, bo
   const bool full = roi == cv::Rect(0, 0, gray.cols, gray.rows);
   cv::Mat view = full || (params_.upright_descriptors && !blurred_set) ? gray(roi) : gray(roi).clone();
   if (half) cv::pyrDown(view, view);
-  detect(view, keypoints, params_.max_image_keypoints);
+  detect(view, keypoints, kMaxImageKeypoints);
   describe(view, keypoints, descriptors, blurred_set);
 }
 
