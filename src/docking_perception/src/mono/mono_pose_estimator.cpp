@@ -111,9 +111,6 @@ void validate(const MonoPoseParams& p) {
   using docking_settings::ConfigProblem;
   docking_settings::validateSettings(p);
   if (p.features.model_widths_px.empty()) throw ConfigError("model_widths_px", ConfigProblem::kInvalid, "is empty");
-  if (!(p.leds.max_area_px > p.leds.min_area_px)) {
-    throw ConfigError("led_max_area_px", ConfigProblem::kInvalid, "must exceed led_min_area_px");
-  }
   const ConsistencyParams& c = p.consistency;
   if (c.max_hint_disagreement_fraction > 0.0 && c.hint_recovery_fraction > c.max_hint_disagreement_fraction) {
     throw ConfigError("hint_recovery_fraction", ConfigProblem::kInvalid, "must be at most max_hint_disagreement_fraction");

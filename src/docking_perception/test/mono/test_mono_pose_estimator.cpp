@@ -594,8 +594,8 @@ TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
   params.features.fast_threshold = 0;
   EXPECT_EQ(refusedKey(params), "fast_threshold");
   params = MonoPoseParams();
-  params.leds.max_area_px = params.leds.min_area_px;  // two settings that contradict
-  EXPECT_EQ(refusedKey(params), "led_max_area_px");
+  params.consistency.hint_recovery_fraction = 2.0 * params.consistency.max_hint_disagreement_fraction;  // contradict
+  EXPECT_EQ(refusedKey(params), "hint_recovery_fraction");
   EXPECT_THROW(MonoPoseEstimator(synthetic::makeModel(1), synthetic::defaultCamera(), params), std::invalid_argument);
   EXPECT_EQ(refusedKey(MonoPoseParams()), "");
   MonoMode mode;

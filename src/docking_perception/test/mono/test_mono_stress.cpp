@@ -44,7 +44,6 @@ std::vector<mono::LedBlob> ledBlobsOf(cv::Mat image) {
   cv::GaussianBlur(image, image, cv::Size(0, 0), 1.0);
   mono::LedDetectorParams p;
   p.threshold = 140;
-  p.max_aspect_ratio = 5.0;
   const mono::LedPatternDetector detector(model().markers(), p);
   return detector.detectBlobs(image);
 }
