@@ -12,9 +12,6 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
-// The longest gap over which the last pose's image position still gives the face's image speed.
-constexpr double kMotionSmearMaxGapS = 0.25;
-
 // Marks the result refused at outcome's stage: the code for programs (stage, reject_reason), the reason for
 // people (status). Returns the outcome.
 StageOutcome refuse(MonoPoseResult* result, StageOutcome outcome, RejectReason reason, const std::string& status) {
@@ -992,19 +989,7 @@ StageOutcome MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMa
     }
   }
   addFaceScaleBias(camera_, model_.faceCorners(), c.face_scale_bias_px, &result->pose);
-  const double shape_bias_px = smearShapeBiasPx(c, result->used_direct_alignment, match.refined_with_row_smear_px,
-                                                motionSmearPx(result->pose.translation, result->stamp_s));
-  addFaceShapeBias(camera_, model_.faceCorners(), shape_bias_px, &result->pose);
   return {};
-}
-
-double MonoPoseEstimator::motionSmearPx(const Eigen::Vector3d& translation, double stamp_s) const {
-  const double exposure_s = params_.consistency.motion_smear_exposure_s;
-  const double since_s = stamp_s - last_stamp_s_;
-  // The last valid pose, tracked or not: a face re-found after a short gap moved as much.
-  if (!(exposure_s > 0.0) || !(since_s > 0.0) || since_s > kMotionSmearMaxGapS) return 0.0;
-  if (!(translation.z() > 0.0) || !(last_pose_.translation.z() > 0.0)) return 0.0;
-  return (camera_.project(translation) - camera_.project(last_pose_.translation)).norm() / since_s * exposure_s;
 }
 
 StageOutcome MonoPoseEstimator::vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,

@@ -238,9 +238,6 @@ class MonoPoseEstimator {
   void updateFaceRetry(bool face_skipped, const MonoPoseResult& result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
   cv::Rect predictedInnerPatternRegion(double stamp_s) const;
-  // The smear the face's image motion since the last pose gives over motion_smear_exposure_s (px; 0 without
-  // a pose at most kMotionSmearMaxGapS before).
-  double motionSmearPx(const Eigen::Vector3d& translation, double stamp_s) const;
   // The consistency checks and honest covariance of a visible pose (pose_consistency.h); refused with the
   // reason in result when the pose cannot be trusted.
   // pixel_sigma_px: the noise of the pose points (the PnP residual for features, the fit's own for the
