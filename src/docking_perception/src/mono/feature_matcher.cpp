@@ -671,6 +671,7 @@ FeatureMatcher::RefinedPoints FeatureMatcher::refineAgainst(const cv::Mat& gray,
     double best = 0.0;
     cv::Point peak;
     cv::minMaxLoc(response, nullptr, &best, nullptr, &peak);
+    if (!(best >= params_.min_correlation)) continue;
     if (peak.x == 0 || peak.y == 0 || peak.x == response.cols - 1 || peak.y == response.rows - 1) continue;
     auto parabola = [](float left, float middle, float right) {
       const float denominator = left - 2.0f * middle + right;

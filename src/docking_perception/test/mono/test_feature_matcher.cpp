@@ -227,7 +227,7 @@ TEST(FeatureMatcher, RefinesAtAPredictedHomographyAndRefusesAWrongOne) {
   EXPECT_GE(match.inliers, match.refine_candidates / 2);
   EXPECT_LT(refinedPointsRmsPx(match, model, camera, r, t), 0.3);
   // The kept fraction is enforced: asking for every point tried (some always fall off the face's edge or
-  // peak at the search window's border) refuses even this prediction.
+  // below min_correlation) refuses even this prediction.
   ASSERT_LT(match.inliers, match.refine_candidates);
   EXPECT_FALSE(matcher.matchAtPrediction(image, shift_small * truth_homography, 1.0).found);
 
