@@ -501,7 +501,7 @@ TEST(Renderer, FarIrLedIsASaturatedSpotAtItsDistortedProjection) {
   double lo, hi;
   cv::minMaxLoc(ir(window), &lo, &hi);
   EXPECT_EQ(hi, 255.0) << "a far LED must saturate the sensor";
-  EXPECT_GE(cv::countNonZero(ir(window) > 140), 4) << "too small for the IR detector (led_min_area_px 2)";
+  EXPECT_GE(cv::countNonZero(ir(window) > 140), 4) << "too few pixels for the IR detector";
   const double background = ir.at<uchar>(cvRound(p.y) + 12, cvRound(p.x));  // the face
   EXPECT_LT(background, 40.0);
   const cv::Point2d found = contrastCentroid(ir, p, 5, background);

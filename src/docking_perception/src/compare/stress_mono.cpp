@@ -55,7 +55,6 @@ bool selected(const std::string& only, const std::string& name) {
 void applyBaseline(mono::MonoPoseParams* p) {
   p->use_half_resolution = false;
   p->features.blurred_model_sigma_px = 0.0;
-  p->consistency.min_inlier_spread = 0.0;
   p->consistency.min_appearance_ncc = -1.0;
   p->consistency.max_ambiguity_deg = 360.0;
   p->consistency.ambiguity_chi2 = 0.0;

@@ -12,6 +12,11 @@ namespace {
 // most one dot radius (+1 px) from the prediction: farther, it is something else.
 constexpr double kMinSearchRadiusPx = 3.0;
 constexpr double kMaxShiftInRadii = 1.0;
+// The search disc is 1.5 dot radii: it stays inside the white ring target_print draws around each dot
+// (ring_outer_factor >= 1.6). A dot is at least 25 levels (8-bit) darker than that background (the
+// value since the 5-point solver's first version, 2c971ce; paper_5point only, not shipped).
+constexpr double kSearchRadiusInDotRadii = 1.5;
+constexpr double kMinDotContrast = 25.0;
 
 // The pixels of the disc of `radius` around `centre` (in the image: checked by the caller).
 template <typename Visit>
@@ -72,10 +77,10 @@ bool DarkDotLocator::locate(const cv::Mat& gray, const Eigen::Vector2d& predicte
     if (reason) *reason = "image is not 8-bit gray";
     return false;
   }
-  const double search_radius = std::max(kMinSearchRadiusPx, params_.search_radius_factor * radius_px);
+  const double search_radius = std::max(kMinSearchRadiusPx, kSearchRadiusInDotRadii * radius_px);
   Eigen::Vector2d current = predicted;
   for (int iteration = 0; iteration < 2; ++iteration) {
-    const char* problem = recentre(gray, search_radius, params_.min_contrast, &current);
+    const char* problem = recentre(gray, search_radius, kMinDotContrast, &current);
     if (problem != nullptr) {
       if (reason) *reason = problem;
       return false;

@@ -22,6 +22,21 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
+// Constants of the method (issue 55: not settings; nobody retunes them for a new rig):
+// Lowe's ratio test at his 0.8 (SIFT paper: rejects ~90 % of false matches, ~5 % of correct ones).
+constexpr double kLoweRatio = 0.8;
+// RANSAC homography inliers within 3 px at full resolution (6 px at half; the value since the first matcher,
+// 2c971ce): only the match's inliers are refined by NCC to ~0.1 px afterwards.
+constexpr double kRansacThresholdPx = 3.0;
+// Image keypoints kept (the strongest) before descriptors: bounds the CPU time (400 -> 300 in c2da51d,
+// full-frame search ~10 ms CPU).
+constexpr int kMaxImageKeypoints = 300;
+// Model keypoints per pyramid level: bounds the matching time (7 levels x up to 3 pyramids; since c2da51d,
+// full-frame search ~10 ms CPU).
+constexpr int kMaxModelKeypointsPerLevel = 400;
+// Inliers + unmatched model corners refined by NCC (150 -> 220: 0.79 -> 0.55 deg at 1 m on axis).
+constexpr int kMaxRefinedPoints = 220;
+
 // One BRISK object per (threshold, octaves) in the process: each one precomputes its sampling
 // pattern for 64 scales x 1024 rotations, 46 MB (measured), and the visible and IR mono_pose nodelets
 // in one perception process would otherwise hold one each. Sharing is safe: OpenCV's BRISK detect and
@@ -407,7 +422,6 @@ FeatureMatcher::FeatureMatcher(const FeatureMatcherParams& params) : params_(par
 void FeatureMatcher::setParams(const FeatureMatcherParams& params) {
   const bool rebuild = params.upright_descriptors != params_.upright_descriptors ||
                        params.fast_threshold != params_.fast_threshold ||
-                       params.max_model_keypoints_per_level != params_.max_model_keypoints_per_level ||
                        params.model_widths_px != params_.model_widths_px ||
                        params.blurred_model_sigma_px != params_.blurred_model_sigma_px ||
                        params.search_row_smear_px != params_.search_row_smear_px ||
@@ -493,7 +507,7 @@ void FeatureMatcher::addModelLevel(const cv::Mat& texture_gray, ModelSet set, in
   }
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
-  detect(level.image, &keypoints, params_.max_model_keypoints_per_level);
+  detect(level.image, &keypoints, kMaxModelKeypointsPerLevel);
   describe(level.image, &keypoints, &descriptors, level.set != ModelSet::kSharp);
   level.first_row = model_descriptors_.rows;
   level.row_count = descriptors.rows;
@@ -532,7 +546,7 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
                                        cv::norm(match->face_outline[2] - match->face_outline[3]));
   const ModelLevel* nearest = &refinementLevel(apparent_width, ModelSet::kSharp);
   std::vector<cv::Point2f> candidates = match->inlier_texture_points;
-  const int extra_budget = std::max(0, params_.max_refined_points - static_cast<int>(candidates.size()));
+  const int extra_budget = std::max(0, kMaxRefinedPoints - static_cast<int>(candidates.size()));
   if (extra_budget > 0 && nearest->row_count > 0) {
     const int stride = std::max(1, nearest->row_count / extra_budget);
     for (int row = nearest->first_row; row < nearest->first_row + nearest->row_count; row += stride) {
@@ -546,8 +560,8 @@ void FeatureMatcher::refine(const cv::Mat& gray, FaceMatch* match) const {
   if (params_.refine_again_move_px > 0.0 &&
       largestCornerMove(drawn_at, match->homography) > params_.refine_again_move_px) {
     // Kept only when its points still span most of what the first pass's did: on a small blurred face (2 m)
-    // a pass more may keep a bunch in one corner, and the pose then loses the face's spread
-    // (min_inlier_spread refused twice as many frames on the tuning scene). Its points may be fewer: at
+    // a pass more may keep a bunch in one corner, and the pose then loses the face's spread (the tilt
+    // from points in one corner is poorly observed). Its points may be fewer: at
     // 1 m it often drops a third of them and is still better.
     constexpr double kMinKeptSpreadFraction = 0.8;
     if (refineKeptAgain(gray, kMinKeptSpreadFraction, match)) match->refined_again = true;
@@ -780,10 +794,8 @@ FaceMatch FeatureMatcher::match(const cv::Mat& gray, const cv::Rect& roi_in, dou
   cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
   result.status = outlineProblem(result.face_outline);
   if (!result.status.empty()) return result;
-  if (params_.refine_matches) {
-    refine(gray, &result);
-    cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
-  }
+  refine(gray, &result);
+  cv::perspectiveTransform(corners, result.face_outline, cv::Mat(result.homography));
   result.found = true;
   return result;
 }
@@ -809,7 +821,7 @@ void FeatureMatcher::describeRegion(const cv::Mat& gray, const cv::Rect& roi, bo
   const bool full = roi == cv::Rect(0, 0, gray.cols, gray.rows);
   cv::Mat view = full || (params_.upright_descriptors && !blurred_set) ? gray(roi) : gray(roi).clone();
   if (half) cv::pyrDown(view, view);
-  detect(view, keypoints, params_.max_image_keypoints);
+  detect(view, keypoints, kMaxImageKeypoints);
   describe(view, keypoints, descriptors, blurred_set);
 }
 
@@ -837,7 +849,7 @@ void FeatureMatcher::ratioTestMatches(const cv::Mat& descriptors, const std::vec
   for (size_t q = 0; q < pairs.size(); ++q) {
     const HammingPair& pair = pairs[q];
     if (pair.best_index < 0 || pair.second_distance >= (1 << 30)) continue;
-    if (pair.best_distance >= params_.feature_ratio * pair.second_distance) continue;
+    if (pair.best_distance >= kLoweRatio * pair.second_distance) continue;
     // Half resolution: pyrDown's pixel x is its 5-tap kernel centred on full-resolution pixel 2x.
     const cv::Point2f p = half ? 2.0f * keypoints[q].pt : keypoints[q].pt;
     texture_points->push_back(model_points_[static_cast<size_t>(pair.best_index)]);
@@ -849,7 +861,7 @@ bool FeatureMatcher::fitHomography(const std::vector<cv::Point2f>& texture_point
                                    const std::vector<cv::Point2f>& image_points, bool half, FaceMatch* result) const {
   std::vector<unsigned char> inlier_mask;
   const cv::Mat homography = cv::findHomography(texture_points, image_points, cv::RANSAC,
-                                                params_.ransac_threshold_px * (half ? 2.0 : 1.0), inlier_mask, 2000,
+                                                kRansacThresholdPx * (half ? 2.0 : 1.0), inlier_mask, 2000,
                                                 0.995);
   if (homography.empty()) {
     result->status = "no homography";
@@ -880,7 +892,6 @@ std::string FeatureMatcher::outlineProblem(const std::vector<cv::Point2f>& outli
   const double area = signedArea(outline);
   if (!cv::isContourConvex(outline)) return "matched face outline is not convex";
   if (area * signedArea(textureCorners()) <= 0.0) return "matched face is mirrored";
-  if (std::abs(area) < params_.min_face_area_px) return "matched face too small";
   return "";
 }
 

@@ -136,10 +136,9 @@ ComponentShape componentShape(const cv::Mat& labels, int label, const cv::Rect& 
 // The blob of component `label` of `view` (the search region, at `roi_corner` in the image): its sub-pixel
 // centre, intensity-weighted over its box grown by 2 px above the level of that box's border (the skirt
 // below the threshold keeps the precision a saturated, flat-topped core alone would lose), its peak and its
-// shape. False when it is no brighter than its border, or not min_contrast brighter: a patch of bright
-// texture or wall that merely crosses the threshold is no LED.
+// shape. False when it is no brighter than its border.
 bool measureBlob(const cv::Mat& view, const cv::Mat& labels, const cv::Mat& stats, int label, cv::Point roi_corner,
-                 double min_contrast, LedBlob* blob) {
+                 LedBlob* blob) {
   const int w = stats.at<int>(label, cv::CC_STAT_WIDTH);
   const int h = stats.at<int>(label, cv::CC_STAT_HEIGHT);
   const cv::Rect component(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP), w, h);
@@ -167,7 +166,7 @@ bool measureBlob(const cv::Mat& view, const cv::Mat& labels, const cv::Mat& stat
       peak = std::max(peak, static_cast<double>(row[x]));
     }
   }
-  if (sum_w <= 0.0 || peak - background < min_contrast) return false;
+  if (sum_w <= 0.0) return false;
   const ComponentShape shape = componentShape(labels, label, component);
   blob->elongation = shape.elongation;
   blob->streak_sigma_px = shape.streak_sigma_px;
@@ -205,14 +204,8 @@ std::vector<LedBlob> LedPatternDetector::detectBlobs(const cv::Mat& gray, const 
   cv::Mat centroids;
   const int count = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
   for (int label = 1; label < count; ++label) {
-    const int area = stats.at<int>(label, cv::CC_STAT_AREA);
-    const int w = stats.at<int>(label, cv::CC_STAT_WIDTH);
-    const int h = stats.at<int>(label, cv::CC_STAT_HEIGHT);
-    if (area < params_.min_area_px || area > params_.max_area_px) continue;
-    if (static_cast<double>(area) / (w * h) < params_.min_fill_ratio) continue;
-    if (static_cast<double>(std::max(w, h)) / std::min(w, h) > params_.max_aspect_ratio) continue;
     LedBlob blob;
-    if (measureBlob(view, labels, stats, label, roi.tl(), params_.min_contrast, &blob)) blobs.push_back(blob);
+    if (measureBlob(view, labels, stats, label, roi.tl(), &blob)) blobs.push_back(blob);
   }
   // Keep the largest blobs: LEDs are among the brightest, biggest spots, and the search is O(n^3).
   constexpr size_t kMaxBlobs = 16;

@@ -12,9 +12,6 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
-// The longest gap over which the last pose's image position still gives the face's image speed.
-constexpr double kMotionSmearMaxGapS = 0.25;
-
 // Marks the result refused at outcome's stage: the code for programs (stage, reject_reason), the reason for
 // people (status). Returns the outcome.
 StageOutcome refuse(MonoPoseResult* result, StageOutcome outcome, RejectReason reason, const std::string& status) {
@@ -110,11 +107,7 @@ void validate(const MonoPoseParams& p) {
   using docking_settings::ConfigError;
   using docking_settings::ConfigProblem;
   docking_settings::validateSettings(p);
-  if (!(p.max_range_m > p.min_range_m)) throw ConfigError("max_range_m", ConfigProblem::kInvalid, "must exceed min_range_m");
   if (p.features.model_widths_px.empty()) throw ConfigError("model_widths_px", ConfigProblem::kInvalid, "is empty");
-  if (!(p.leds.max_area_px > p.leds.min_area_px)) {
-    throw ConfigError("led_max_area_px", ConfigProblem::kInvalid, "must exceed led_min_area_px");
-  }
   const ConsistencyParams& c = p.consistency;
   if (c.max_hint_disagreement_fraction > 0.0 && c.hint_recovery_fraction > c.max_hint_disagreement_fraction) {
     throw ConfigError("hint_recovery_fraction", ConfigProblem::kInvalid, "must be at most max_hint_disagreement_fraction");
@@ -131,7 +124,6 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
       velocity_(velocityOf(params)),
       matcher_(params.features),
       led_detector_(model.markers(), params.leds),
-      dot_locator_(params.dots),
       five_point_solver_(model.markers()),
       pnp_solver_(params.pnp, params.min_pixel_sigma),
       filter_(params.filter),
@@ -167,7 +159,6 @@ void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
   if (model_.hasTexture()) direct_aligner_ = DirectFaceAligner(model_, params.direct);
   matcher_.setParams(params.features);
   led_detector_.setParams(params.leds);
-  dot_locator_.setParams(params.dots);
   pnp_solver_.setParams(params.pnp, params.min_pixel_sigma);
   filter_.setParams(params.filter);
   frame_difference_.setMaxGap(params.filter.max_gap_s);
@@ -189,7 +180,7 @@ void MonoPoseEstimator::setRegionHint(const cv::Rect& region, double stamp_s) {
 
 void MonoPoseEstimator::setPositionHint(const Eigen::Vector3d& position_camera, double stamp_s) {
   const double z = position_camera.z();
-  if (!position_camera.allFinite() || !(z > params_.min_range_m)) {
+  if (!position_camera.allFinite() || !(z > 0.0)) {
     setRegionHint(cv::Rect(), stamp_s);
     return;
   }
@@ -285,8 +276,8 @@ cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_p
 bool MonoPoseEstimator::checkPose(const PoseWithCovariance& pose, std::string* reason) const {
   // Every failure here is an implausible pose (RejectReason::kImplausiblePose).
   const double range = pose.translation.norm();
-  if (!std::isfinite(range) || range < params_.min_range_m || range > params_.max_range_m) {
-    *reason = "range " + std::to_string(range) + " m outside [min_range_m, max_range_m]";
+  if (!std::isfinite(range)) {
+    *reason = "range not finite";
     return false;
   }
   // The face normal (+x of `target`) must point back at the camera, else we would be looking at the
@@ -456,7 +447,8 @@ DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool trackin
   facing.col(0) = Eigen::Vector3d(0, 0, -1);  // face normal (target x) towards the camera
   facing.col(1) = Eigen::Vector3d(1, 0, 0);   // target y (viewer's right) -> image right
   facing.col(2) = Eigen::Vector3d(0, -1, 0);  // target z (up) -> image up
-  const int count = params_.direct_yaw_hypotheses;
+  // 5 yaws, 15 deg apart over the shipped +-30 deg (the count since cb502a0; the coarse levels score each).
+  constexpr int count = 5;
   for (int i = 0; i < count; ++i) {
     const double yaw_deg = count == 1 ? 0.0 : params_.direct_max_yaw_deg * (2.0 * i / (count - 1) - 1.0);
     hypothesis.rotation = facing * Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -966,10 +958,6 @@ StageOutcome MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMa
                                                double pixel_sigma_px, MonoPoseResult* result) const {
   const ConsistencyParams& c = params_.consistency;
   result->inlier_spread = inlierSpread(match.inlier_texture_points, model_.textureGray().size());
-  if (result->inlier_spread < c.min_inlier_spread) {
-    return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kInlierSpread), RejectReason::kInlierSpread,
-                  "pose points cover only " + std::to_string(result->inlier_spread) + " of the face (min_inlier_spread)");
-  }
   const AppearanceScore appearance = appearance_.score(gray, camera_, result->pose);
   result->appearance_ncc = appearance.median_ncc;
   result->blur_sigma_px = appearance.blur_sigma_px;
@@ -1001,19 +989,7 @@ StageOutcome MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMa
     }
   }
   addFaceScaleBias(camera_, model_.faceCorners(), c.face_scale_bias_px, &result->pose);
-  const double shape_bias_px = smearShapeBiasPx(c, result->used_direct_alignment, match.refined_with_row_smear_px,
-                                                motionSmearPx(result->pose.translation, result->stamp_s));
-  addFaceShapeBias(camera_, model_.faceCorners(), shape_bias_px, &result->pose);
   return {};
-}
-
-double MonoPoseEstimator::motionSmearPx(const Eigen::Vector3d& translation, double stamp_s) const {
-  const double exposure_s = params_.consistency.motion_smear_exposure_s;
-  const double since_s = stamp_s - last_stamp_s_;
-  // The last valid pose, tracked or not: a face re-found after a short gap moved as much.
-  if (!(exposure_s > 0.0) || !(since_s > 0.0) || since_s > kMotionSmearMaxGapS) return 0.0;
-  if (!(translation.z() > 0.0) || !(last_pose_.translation.z() > 0.0)) return 0.0;
-  return (camera_.project(translation) - camera_.project(last_pose_.translation)).norm() / since_s * exposure_s;
 }
 
 StageOutcome MonoPoseEstimator::vetFivePointPose(const MarkerPixels& predicted, const MarkerPixels& located, double radius_px,

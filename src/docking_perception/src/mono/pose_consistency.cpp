@@ -363,12 +363,6 @@ bool projectFace(const CameraIntrinsics& camera, const std::vector<Eigen::Vector
   return true;
 }
 
-// The two keystones of a projected quadrilateral: the difference between the lengths of each pair of
-// opposite edges.
-Eigen::Vector2d keystones(const std::vector<Eigen::Vector2d>& q) {
-  return {(q[1] - q[0]).norm() - (q[2] - q[3]).norm(), (q[3] - q[0]).norm() - (q[2] - q[1]).norm()};
-}
-
 }  // namespace
 
 void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
@@ -385,29 +379,6 @@ void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::V
   const double sigma = scale_bias_px / std::sqrt(area_px) * range;
   const Eigen::Vector3d line_of_sight = pose->translation / range;
   pose->covariance.topLeftCorner<3, 3>() += sigma * sigma * line_of_sight * line_of_sight.transpose();
-}
-
-void addFaceShapeBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
-                      double shape_bias_px, PoseWithCovariance* pose) {
-  if (!(shape_bias_px > 0.0) || face_corners.size() != 4) return;
-  std::vector<Eigen::Vector2d> at_pose;
-  if (!projectFace(camera, face_corners, pose->rotation, pose->translation, &at_pose)) return;
-  constexpr double kStepRad = 1e-3;
-  for (int axis = 0; axis < 2; ++axis) {  // the tilts: about the camera's x and y axes
-    const Eigen::Matrix3d turned = Eigen::AngleAxisd(kStepRad, Eigen::Vector3d::Unit(axis)).toRotationMatrix() * pose->rotation;
-    std::vector<Eigen::Vector2d> at_turned;
-    if (!projectFace(camera, face_corners, turned, pose->translation, &at_turned)) return;
-    const double keystone_per_rad = (keystones(at_turned) - keystones(at_pose)).cwiseAbs().maxCoeff() / kStepRad;
-    if (!(keystone_per_rad > 0.0)) continue;
-    const double sigma = shape_bias_px / keystone_per_rad;
-    pose->covariance(3 + axis, 3 + axis) += sigma * sigma;
-  }
-}
-
-double smearShapeBiasPx(const ConsistencyParams& params, bool direct_alignment, double refined_row_smear_px,
-                        double motion_smear_px) {
-  const double fraction = direct_alignment ? params.direct_smear_shape_bias_fraction : params.smear_shape_bias_fraction;
-  return fraction * std::max(refined_row_smear_px, motion_smear_px);
 }
 
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,

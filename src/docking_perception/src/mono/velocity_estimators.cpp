@@ -125,9 +125,9 @@ bool ConstantVelocityFilter::update(double stamp_s, const PoseWithCovariance& po
   const Eigen::LDLT<Matrix6d> solver(innovation_covariance);
   const double chi2 = innovation.dot(solver.solve(innovation));
   if (params_.gate_chi2 > 0.0 && !(chi2 <= params_.gate_chi2)) {
-    if (++consecutive_rejections_ >= params_.max_rejections) {
+    if (++consecutive_rejections_ >= kMaxConsecutiveRejections) {
       restart(stamp_s, pose);
-      if (reason) *reason = "pose rejected " + std::to_string(params_.max_rejections) + " times: filter restarted";
+      if (reason) *reason = "pose rejected " + std::to_string(kMaxConsecutiveRejections) + " times: filter restarted";
       return true;
     }
     if (reason) *reason = "pose rejected by the filter gate (chi2 " + std::to_string(chi2) + ")";

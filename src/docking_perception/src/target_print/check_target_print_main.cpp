@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
     const mono::MonoPoseParams mono_params =
         docking_settings::shippedSettings<mono::MonoPoseNodeSettings>(mono_params_path).core;
     const target_print::PrintReport report =
-        target_print::checkPrint(model, mono_params.features, mono_params.dots, params);
+        target_print::checkPrint(model, mono_params.features, params);
     std::cout << "check_target_print: " << (print_path.empty() ? target_path : print_path) << "\n"
               << target_print::formatReport(report, params);
     return report.passed ? 0 : 1;

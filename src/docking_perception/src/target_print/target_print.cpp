@@ -392,7 +392,7 @@ std::vector<std::string> validateCheckParams(const CheckParams& p) {
 }
 
 PrintReport checkPrint(const mono::TargetModel& model, const mono::FeatureMatcherParams& matcher_params,
-                       const mono::DarkDotParams& dot_params, const CheckParams& params) {
+                       const CheckParams& params) {
   const auto errors = validateCheckParams(params);
   if (!errors.empty()) {
     std::string joined;
@@ -412,7 +412,7 @@ PrintReport checkPrint(const mono::TargetModel& model, const mono::FeatureMatche
   std::string reason;
   const bool model_ok = matcher.buildModel(model.textureGray(), &reason);
   report.model_keypoints = matcher.modelKeypointCount();
-  const mono::DarkDotLocator locator(dot_params);
+  const mono::DarkDotLocator locator;
   std::mt19937 rng(params.seed);
   for (const auto& view : params.cases) {
     CaseResult result;

@@ -44,7 +44,6 @@ std::vector<mono::LedBlob> ledBlobsOf(cv::Mat image) {
   cv::GaussianBlur(image, image, cv::Size(0, 0), 1.0);
   mono::LedDetectorParams p;
   p.threshold = 140;
-  p.max_aspect_ratio = 5.0;
   const mono::LedPatternDetector detector(model().markers(), p);
   return detector.detectBlobs(image);
 }
@@ -456,59 +455,6 @@ TEST(PoseConsistency, FaceScaleBiasWidensTheRangeAlongTheLineOfSight) {
   off.translation.z() = -4.0;
   mono::addFaceScaleBias(camera, corners, 0.3, &off);
   EXPECT_TRUE(off.covariance.isZero());
-}
-
-// A shape bias all points share (a row smear's) tilts the pose: the tilt sigmas about the camera's x and y
-// grow as the bias over the keystone a radian makes, f W H / Z^2 px for a face facing the camera, so four
-// times twice as far; the position and the roll are untouched.
-TEST(PoseConsistency, FaceShapeBiasWidensTheTiltsAsTheKeystoneShrinks) {
-  const mono::CameraIntrinsics& camera = renderer().camera();
-  mono::PoseWithCovariance pose;
-  pose.rotation << 0, -1, 0, 0, 0, -1, -1, 0, 0;  // target x -> camera -z, y -> -x, z -> -y: facing the camera
-  pose.translation = Eigen::Vector3d(0.0, 0.0, 1.0);
-  pose.covariance = mono::Matrix6d::Zero();
-  const std::vector<Eigen::Vector3d> corners = model().faceCorners();
-  const double bias_px = 0.36;  // 0.04 x a 9 px smear
-  mono::addFaceShapeBias(camera, corners, bias_px, &pose);
-  const double expected_x = bias_px / (camera.fx * 0.30 * 0.24);  // Z = 1 m
-  const double expected_y = bias_px / (camera.fy * 0.24 * 0.30);
-  EXPECT_NEAR(std::sqrt(pose.covariance(3, 3)), expected_x, 0.05 * expected_x);
-  EXPECT_NEAR(std::sqrt(pose.covariance(4, 4)), expected_y, 0.05 * expected_y);
-  EXPECT_TRUE((pose.covariance.topLeftCorner<3, 3>().isZero()));
-  EXPECT_EQ(pose.covariance(5, 5), 0.0);
-  mono::PoseWithCovariance far = pose;
-  far.translation *= 2.0;
-  far.covariance = mono::Matrix6d::Zero();
-  mono::addFaceShapeBias(camera, corners, bias_px, &far);
-  EXPECT_NEAR(std::sqrt(far.covariance(3, 3)), 4.0 * expected_x, 0.2 * expected_x);
-  // Off, or a face behind the camera: nothing added.
-  mono::PoseWithCovariance off = pose;
-  off.covariance = mono::Matrix6d::Zero();
-  mono::addFaceShapeBias(camera, corners, 0.0, &off);
-  EXPECT_TRUE(off.covariance.isZero());
-  off.translation.z() = -1.0;
-  mono::addFaceShapeBias(camera, corners, bias_px, &off);
-  EXPECT_TRUE(off.covariance.isZero());
-}
-
-// The smear a shape bias is drawn from is the longer of the refinement's row smear and the face's motion
-// over the exposure; a direct-alignment pose (the sharp texture aligned with the smeared face) takes its
-// own, larger fraction of it.
-TEST(PoseConsistency, TheSmearShapeBiasTakesTheLongerSmearAndTheDirectFraction) {
-  mono::ConsistencyParams params;
-  params.smear_shape_bias_fraction = 0.04;
-  params.direct_smear_shape_bias_fraction = 0.08;
-  EXPECT_NEAR(mono::smearShapeBiasPx(params, false, 9.0, 0.0), 0.36, 1e-12);
-  EXPECT_NEAR(mono::smearShapeBiasPx(params, false, 5.0, 8.0), 0.32, 1e-12);  // it moved farther than refined
-  EXPECT_NEAR(mono::smearShapeBiasPx(params, true, 0.0, 8.0), 0.64, 1e-12);
-  EXPECT_EQ(mono::smearShapeBiasPx(params, true, 0.0, 0.0), 0.0);  // a still face
-  params.direct_smear_shape_bias_fraction = 0.0;
-  EXPECT_EQ(mono::smearShapeBiasPx(params, true, 0.0, 8.0), 0.0);  // off
-  params.direct_smear_shape_bias_fraction = -0.1;
-  EXPECT_EQ(refusedKey(params), "direct_smear_shape_bias_fraction");
-  params.direct_smear_shape_bias_fraction = 0.08;
-  params.motion_smear_exposure_s = -0.01;
-  EXPECT_EQ(refusedKey(params), "motion_smear_exposure_s");
 }
 
 // The node's hint: the disparity detector's 3D estimate (the blob's centre, a few cm off the port),

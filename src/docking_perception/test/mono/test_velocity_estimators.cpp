@@ -134,9 +134,7 @@ TEST(ConstantVelocityFilter, RejectsOutOfOrderAndRepeatedStamps) {
 
 TEST(ConstantVelocityFilter, GateRejectsAnOutlierThenRestartsOnPersistentJump) {
   const Trajectory trajectory;
-  ConstantVelocityFilterParams params;
-  params.max_rejections = 3;
-  ConstantVelocityFilter filter(params);
+  ConstantVelocityFilter filter{ConstantVelocityFilterParams()};
   cv::RNG rng(11);
   std::string reason;
   double t = 0.0;

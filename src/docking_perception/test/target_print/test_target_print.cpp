@@ -39,7 +39,7 @@ mono::TargetModel withPrint(const cv::Mat& print) {
 // The check, its table printed for the test log (the figures the README quotes).
 PrintReport check(const mono::TargetModel& model) {
   const mono::MonoPoseParams params = visibleParams();
-  const PrintReport report = checkPrint(model, params.features, params.dots, CheckParams());
+  const PrintReport report = checkPrint(model, params.features, CheckParams());
   std::cout << formatReport(report, CheckParams());
   return report;
 }
@@ -201,12 +201,12 @@ TEST(CheckPrint, BadParametersAndAModelWithoutTextureAreRefused) {
   params.min_views_passed = params.views_per_case + 1;
   EXPECT_FALSE(validateCheckParams(params).empty());
   const mono::MonoPoseParams mono_params = visibleParams();
-  EXPECT_THROW(checkPrint(shippedModel(), mono_params.features, mono_params.dots, params),
+  EXPECT_THROW(checkPrint(shippedModel(), mono_params.features, params),
                std::invalid_argument);
   const mono::TargetModel& m = shippedModel();
   const mono::TargetModel no_texture = mono::TargetModel::fromParts(
       m.faceWidth(), m.faceHeight(), m.markers(), m.markerRadius(), m.ledRadius(), cv::Mat());
-  EXPECT_THROW(checkPrint(no_texture, mono_params.features, mono_params.dots), std::invalid_argument);
+  EXPECT_THROW(checkPrint(no_texture, mono_params.features), std::invalid_argument);
 }
 
 }  // namespace

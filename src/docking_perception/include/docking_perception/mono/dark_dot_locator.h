@@ -8,25 +8,17 @@
 #include <opencv2/core.hpp>
 #include <string>
 
-#include "docking_perception/mono/mono_pose_settings.h"
 
 namespace docking_perception {
 namespace mono {
 
-// DarkDotParams is declared in settings/mono_pose.yaml (generated header).
-
 class DarkDotLocator {
  public:
-  explicit DarkDotLocator(const DarkDotParams& params = DarkDotParams()) : params_(params) {}
-  void setParams(const DarkDotParams& params) { params_ = params; }
 
   // gray: 8-bit; predicted: pixel; radius_px: the dot's apparent radius. False with the reason when the
   // disc leaves the image, has too little contrast, or the centre runs away.
   bool locate(const cv::Mat& gray, const Eigen::Vector2d& predicted, double radius_px, Eigen::Vector2d* centre,
               std::string* reason) const;
-
- private:
-  DarkDotParams params_;
 };
 
 }  // namespace mono

@@ -12,7 +12,7 @@
 // level nearest the face's apparent size is warped into the image with the homography, and around each
 // inlier the image is correlated (normalised cross-correlation, 11x11 patch, +-3 px, parabolic peak)
 // with that rendering: this gives the image position of the exact model point to ~0.1 px. The model
-// corners of that level that were not matched are refined the same way (up to max_refined_points),
+// corners of that level that were not matched are refined the same way (up to 220 in all),
 // which multiplies the constraints on the pose at a distance, where few features match.
 #pragma once
 
@@ -94,7 +94,7 @@ class FeatureMatcher {
 
   // Tracking without features (issue 15): the face where a predicted homography (texture pixel -> image
   // pixel, from the tracked pose) puts it; the model corners of the level nearest its apparent size are
-  // refined by NCC as after a feature match (up to max_refined_points). No FAST, BRISK or
+  // refined by NCC as after a feature match (up to the same 220 points). No FAST, BRISK or
   // Hamming matching: a third of a feature search's instructions. found when the predicted outline is a
   // plausible view and at least max(min_inliers, min_kept_fraction x the points tried) survive the
   // correlation and the refinement's RANSAC; a prediction off by more than the NCC search (+-3 px) keeps

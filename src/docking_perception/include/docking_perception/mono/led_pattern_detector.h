@@ -1,8 +1,8 @@
 // IR LED blobs and the 5-point pattern among them.
 //
-// Blobs: a fixed threshold, 8-connected components, size and shape filters (area, fill ratio of the
-// bounding box, aspect ratio) against glare patches and streaks, and an intensity-weighted centroid
-// over the blob and its skirt (weights I - the local background level) for sub-pixel precision.
+// Blobs: a fixed threshold, 8-connected components, and an intensity-weighted centroid over the blob and
+// its skirt (weights I - the local background level) for sub-pixel precision. (Area, fill, aspect and
+// contrast filters on the components measured no help on the stress report seeds: removed.)
 //
 // Pattern: the markers form two collinear triples sharing an end (A = 0-1-2, B = 2-3-4, each middle at
 // the midpoint). Perspective keeps lines straight but moves the projected midpoint, so a candidate

@@ -5,7 +5,7 @@
 // tracking, else, or when that fails, the full frame); the `pnp` solver uses every homography inlier,
 // the `paper_5point` solver locates the 5 printed dots where the homography predicts them.
 // IR mode: LedPatternDetector finds the LED blobs and the pattern; both solvers then use the 5 LEDs
-// (`pnp` as IPPE + LM over 5 points). Every pose passes the same checks: reprojection error, range,
+// (`pnp` as IPPE + LM over 5 points). Every pose passes the same checks: reprojection error, a finite range,
 // and the face turned towards the camera.
 #pragma once
 
@@ -69,7 +69,7 @@ VelocityMethod velocityOf(const MonoPoseParams& params);
 constexpr const char* kInnerPatternSolverName = "inner_pattern";
 
 // Throws docking_settings::ConfigError (a std::invalid_argument) naming the first setting its declaration
-// does not allow (its key in config/mono_pose_<mode>.yaml, e.g. "feature_ratio"), or two that contradict.
+// does not allow (its key in config/mono_pose_<mode>.yaml, e.g. "fast_threshold"), or two that contradict.
 void validate(const MonoPoseParams& params);
 
 struct MonoPoseResult {
@@ -238,9 +238,6 @@ class MonoPoseEstimator {
   void updateFaceRetry(bool face_skipped, const MonoPoseResult& result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
   cv::Rect predictedInnerPatternRegion(double stamp_s) const;
-  // The smear the face's image motion since the last pose gives over motion_smear_exposure_s (px; 0 without
-  // a pose at most kMotionSmearMaxGapS before).
-  double motionSmearPx(const Eigen::Vector3d& translation, double stamp_s) const;
   // The consistency checks and honest covariance of a visible pose (pose_consistency.h); refused with the
   // reason in result when the pose cannot be trusted.
   // pixel_sigma_px: the noise of the pose points (the PnP residual for features, the fit's own for the

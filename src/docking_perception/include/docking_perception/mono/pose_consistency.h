@@ -139,17 +139,6 @@ double modelPnpCovariance(const CameraIntrinsics& camera, const PlanarPnpSolutio
 void addFaceScaleBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
                       double scale_bias_px, PoseWithCovariance* pose);
 
-// Adds (shape_bias_px / keystone per radian)^2 to the pose's rotation variance about the camera's x and y
-// axes, where the keystone is the change in the difference between opposite face edges' projected lengths
-// (ConsistencyParams::smear_shape_bias_fraction). face_corners in the target frame, in order around it.
-void addFaceShapeBias(const CameraIntrinsics& camera, const std::vector<Eigen::Vector3d>& face_corners,
-                      double shape_bias_px, PoseWithCovariance* pose);
-// The shape bias (px) addFaceShapeBias takes for a face smeared by the larger of the row smear its points
-// were refined against and its image motion over motion_smear_exposure_s: smear_shape_bias_fraction of
-// it, or direct_smear_shape_bias_fraction for a pose from the direct alignment (the sharp texture).
-double smearShapeBiasPx(const ConsistencyParams& params, bool direct_alignment, double refined_row_smear_px,
-                        double motion_smear_px);
-
 // Adds the outer product of the difference to another pose (IPPE's other solution) to a covariance.
 void addAlternative(const PoseWithCovariance& chosen, const Eigen::Matrix3d& other_rotation,
                     const Eigen::Vector3d& other_translation, Matrix6d* covariance);

@@ -50,13 +50,12 @@ enum class SolveOutcome : std::uint8_t {
   kPassed = 0,
   kSolverFailed,   ///< no pose from the points (degenerate, IPPE failed; IR: no candidate gave one)
   kReprojection,   ///< RMS reprojection error above max_reprojection_px
-  kImplausible,    ///< range outside [min_range_m, max_range_m], the back of the face, a covariance not finite
+  kImplausible,    ///< a range not finite, the back of the face, a covariance not finite
   kDotNotLocated,  ///< paper_5point: a printed dot not found where the face's homography puts it
 };
 
 enum class VetOutcome : std::uint8_t {
   kPassed = 0,
-  kInlierSpread,        ///< the pose points cover less than min_inlier_spread of the face
   kAppearance,          ///< the model at the pose does not look like the image (min_appearance_ncc)
   kDotOffset,           ///< paper_5point: a located dot too far from the homography's prediction
   kSolverDisagreement,  ///< paper_5point: the 5-point pose and the face's PnP pose differ

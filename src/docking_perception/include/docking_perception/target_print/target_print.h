@@ -115,7 +115,7 @@ std::vector<std::string> validateCheckParams(const CheckParams& params);
 // `model` must hold its texture (the print). Throws std::invalid_argument for bad params or a model
 // without texture; otherwise never throws.
 PrintReport checkPrint(const mono::TargetModel& model, const mono::FeatureMatcherParams& matcher_params,
-                       const mono::DarkDotParams& dot_params, const CheckParams& params = CheckParams());
+                       const CheckParams& params = CheckParams());
 
 // A table of the cases, the verdict and the advice, for a terminal.
 std::string formatReport(const PrintReport& report, const CheckParams& params);
