@@ -429,7 +429,7 @@ TEST(MonoPoseEstimator, EachResultCarriesTheStageThatDecided) {
 // Every stage and outcome of stages.h has its name; a code a stage does not have is "unknown".
 TEST(MonoStages, EveryOutcomeIsNamed) {
   const std::vector<std::pair<Stage, int>> outcome_counts = {
-      {Stage::kInput, 7}, {Stage::kFind, 5},        {Stage::kSolve, 5}, {Stage::kVet, 4},      {Stage::kInnerPattern, 2},
+      {Stage::kInput, 7}, {Stage::kFind, 5},        {Stage::kSolve, 5}, {Stage::kVet, 5},      {Stage::kInnerPattern, 2},
       {Stage::kHint, 4},  {Stage::kOrientation, 5}, {Stage::kTrack, 1}, {Stage::kPosition, 2}};
   std::set<std::string> stage_names;
   for (const auto& [stage, count] : outcome_counts) {

@@ -19,7 +19,7 @@ enum class Stage : std::uint8_t {
   kFind = 2,          ///< the target in the image: visible, the face (at its predicted place, by features, by
                       ///< direct alignment); IR, the pattern of five LED-like blobs
   kSolve = 3,         ///< the pose from those points: PnP (pnp) or the 5-point solver (paper_5point)
-  kVet = 4,           ///< the pose against the image: the points' spread, the face's look, the dots
+  kVet = 4,           ///< the pose against the image: the face's look, the dots
   kInnerPattern = 5,  ///< near contact, visible: the inner tag's pose when the face gave none, a cross-check when it did
   kHint = 6,          ///< visible: the range against the disparity detector's estimate of the same target
   kOrientation = 7,   ///< the orientation claimed or withheld (the position stays valid)
@@ -56,7 +56,8 @@ enum class SolveOutcome : std::uint8_t {
 
 enum class VetOutcome : std::uint8_t {
   kPassed = 0,
-  kAppearance,          ///< the model at the pose does not look like the image (min_appearance_ncc)
+  // 1: retired (the pose points' spread over the face; numbers on the wire are never reused)
+  kAppearance = 2,      ///< the model at the pose does not look like the image (min_appearance_ncc)
   kDotOffset,           ///< paper_5point: a located dot too far from the homography's prediction
   kSolverDisagreement,  ///< paper_5point: the 5-point pose and the face's PnP pose differ
 };
