@@ -49,12 +49,16 @@ def load_rules():
     return rules
 
 
-def node_files(node):
-    """The shipped YAML files of `node` (its settings declaration's `config`)."""
+def node_files(rule):
+    """The shipped YAML files the rule edits (its node's settings declaration's `config`, or the rule's
+    `files`) and that declaration (None for a node of another package, e.g. stereo_image_proc, whose file's
+    existing keys are edited as they are)."""
     for declaration in find_declarations(ROOT):
-        if declaration.node == node:
-            return [pathlib.Path(c).name for c in declaration.config], declaration
-    raise SystemExit("ablate: no settings declaration for node %s" % node)
+        if declaration.node == rule["node"]:
+            return rule.get("files", [pathlib.Path(c).name for c in declaration.config]), declaration
+    if "files" not in rule:
+        raise SystemExit("ablate: %s: no settings declaration for node %s, and no `files`" % (rule["rule"], rule["node"]))
+    return rule["files"], None
 
 
 def make_config(rule, folder):
@@ -63,14 +67,14 @@ def make_config(rule, folder):
     shutil.copytree(ROOT / "config", folder)
     if rule is None:
         return folder
-    files, declaration = node_files(rule["node"])
+    files, declaration = node_files(rule)
     for key, value in rule["off_by"].items():
-        if key not in declaration.settings:
+        if declaration is not None and key not in declaration.settings:
             raise SystemExit("ablate: %s: %s is not a setting of %s" % (rule["rule"], key, rule["node"]))
-        problem = declaration.settings[key].problem(value)
+        problem = declaration.settings[key].problem(value) if declaration is not None else None
         if problem:
             raise SystemExit("ablate: %s: %s: %s" % (rule["rule"], key, problem))
-        for name in rule.get("files", files):
+        for name in files:
             set_key(str(folder / name), key, json.dumps(value))
     return folder
 
