@@ -31,11 +31,13 @@ enum class StampProblem : std::uint8_t {
 };
 const char* stampProblemName(StampProblem problem);
 
-/// The arbiter and the planner use the defaults (constants, not settings: never shipped otherwise).
 struct StampLimits {
   double max_future_s{0.5};  ///< clock skew between computers and the stamping latency of a camera
   double max_age_s{5.0};     ///< older than this: nothing a pipeline of ~100 ms latency produces
 };
+/// The limits every node that takes estimates from another process uses (the arbiter, the planner):
+/// constants, not settings.
+inline constexpr StampLimits kStampLimits{};
 
 StampProblem checkStamp(double stamp_s, double now_s, const StampLimits& limits);
 

@@ -198,7 +198,7 @@ class ArbiterNode {
     const double now_s = ros::Time::now().toSec();
     // The stamp against now before the tf look-up, which would wait kMountTransformWaitS for a future one.
     const auto stamp_problem =
-        docking_msgs::checks::checkStamp(msg->header.stamp.toSec(), now_s, arbiter::kStampLimits);
+        docking_msgs::checks::checkStamp(msg->header.stamp.toSec(), now_s, docking_msgs::checks::kStampLimits);
     if (stamp_problem != docking_msgs::checks::StampProblem::kNone) {
       const OfferResult refused = arbiter_.offer(summarize(*msg, source), now_s);  // counted, state untouched
       recordRejection(publisher, source, offerProblemName(refused.problem), refused.reason);

@@ -124,7 +124,7 @@ void SourceArbiter::resetOrdering() {
 OfferResult SourceArbiter::offer(const EstimateSummary& estimate, double now_s) {
   followClock(now_s);
   using docking_msgs::checks::StampProblem;
-  const StampProblem stamp = docking_msgs::checks::checkStamp(estimate.stamp_s, now_s, kStampLimits);
+  const StampProblem stamp = docking_msgs::checks::checkStamp(estimate.stamp_s, now_s, docking_msgs::checks::kStampLimits);
   if (stamp == StampProblem::kNone) return offer(estimate);
   OfferResult result;
   ++rejected_;
@@ -138,11 +138,11 @@ OfferResult SourceArbiter::offer(const EstimateSummary& estimate, double now_s) 
   } else if (stamp == StampProblem::kFuture) {
     result.problem = OfferProblem::kStampInFuture;
     result.reason = std::string(sourceName(estimate.source)) + ": stamped " + formatDouble("%.3f", ahead) +
-                    " s in the future (limit " + formatDouble("%.3f", kStampLimits.max_future_s) + " s)";
+                    " s in the future (limit " + formatDouble("%.3f", docking_msgs::checks::kStampLimits.max_future_s) + " s)";
   } else {
     result.problem = OfferProblem::kStampTooOld;
     result.reason = std::string(sourceName(estimate.source)) + ": stamped " + formatDouble("%.3f", -ahead) +
-                    " s in the past (limit " + formatDouble("%.3f", kStampLimits.max_age_s) + " s)";
+                    " s in the past (limit " + formatDouble("%.3f", docking_msgs::checks::kStampLimits.max_age_s) + " s)";
   }
   return result;
 }

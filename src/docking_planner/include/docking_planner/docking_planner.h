@@ -85,9 +85,6 @@ std::string checkLimits(const DockingLimits& limits);
 /// range cannot say (two settings that contradict); throws naming the bad field.
 void validate(const PlannerConfig& config);
 
-/// Estimates and odometry stamped further ahead of now or older are dropped on arrival by the node: the
-/// limits every node that takes estimates from another process uses (docking_msgs/estimate_check.h).
-constexpr docking_msgs::checks::StampLimits kStampLimits{};
 
 /// The chaser's odometry: pose of base_link in odom, body-frame twist.
 struct ChaserOdometry {

@@ -261,7 +261,7 @@ class PlannerNode {
 
   void restampIfFuture(actionlib_msgs::GoalID* id, const char* what, const std::string& publisher) {
     const double ahead_s = id->stamp.toSec() - ros::Time::now().toSec();
-    if (id->stamp.isZero() || ahead_s <= kStampLimits.max_future_s) return;
+    if (id->stamp.isZero() || ahead_s <= docking_msgs::checks::kStampLimits.max_future_s) return;
     ++restamped_ids_;
     last_restamped_ = std::string(what) + " '" + id->id + "' from " + publisher + ", stamped " +
                       std::to_string(ahead_s) + " s ahead";
@@ -387,7 +387,7 @@ class PlannerNode {
   /// A stamp outside [now - 5 s, now + 0.5 s] (kStampLimits; or not finite): the message is
   /// recorded as dropped and true is returned.
   bool stampRefused(const char* what, const std::string& publisher, double stamp_s, double now_s) {
-    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, kStampLimits);
+    const auto stamp = docking_msgs::checks::checkStamp(stamp_s, now_s, docking_msgs::checks::kStampLimits);
     if (stamp == docking_msgs::checks::StampProblem::kNone) return false;
     recordDrop(what, publisher, docking_msgs::checks::stampProblemName(stamp),
                "stamp " + std::to_string(stamp_s - now_s) + " s from now");

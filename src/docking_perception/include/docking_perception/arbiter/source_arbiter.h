@@ -50,10 +50,6 @@ struct EstimateSummary {
 /// the hysteresis not below the switch range.
 void validate(const ArbiterConfig& config);
 
-/// The stamp limits of offer(e, now): stamps further ahead or older are refused and leave no trace. The
-/// limits every node that takes estimates from another process uses (docking_msgs/estimate_check.h: 0.5 s
-/// ahead, 5 s old).
-constexpr docking_msgs::checks::StampLimits kStampLimits{};
 
 enum class RangeRegime : std::uint8_t { kUnknown, kFar, kNear };
 const char* regimeName(RangeRegime regime);
