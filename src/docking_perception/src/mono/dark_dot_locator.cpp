@@ -13,8 +13,8 @@ namespace {
 constexpr double kMinSearchRadiusPx = 3.0;
 constexpr double kMaxShiftInRadii = 1.0;
 // The search disc is 1.5 dot radii: it stays inside the white ring target_print draws around each dot
-// (ring_outer_factor >= 1.6). A dot is at least 25 levels (8-bit) darker than that background (the
-// value since the 5-point solver's first version, 2c971ce; paper_5point only, not shipped).
+// (ring_outer_factor >= 1.6). A dot is at least 25 levels (8-bit) darker than that background
+// (paper_5point only, not shipped).
 constexpr double kSearchRadiusInDotRadii = 1.5;
 constexpr double kMinDotContrast = 25.0;
 

@@ -22,16 +22,16 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
-// Constants of the method (issue 55: not settings; nobody retunes them for a new rig):
+// Constants of the method (not settings: nothing about a new rig changes them):
 // Lowe's ratio test at his 0.8 (SIFT paper: rejects ~90 % of false matches, ~5 % of correct ones).
 constexpr double kLoweRatio = 0.8;
-// RANSAC homography inliers within 3 px at full resolution (6 px at half; the value since the first matcher,
-// 2c971ce): only the match's inliers are refined by NCC to ~0.1 px afterwards.
+// RANSAC homography inliers within 3 px at full resolution (6 px at half): only the match's inliers are
+// refined by NCC to ~0.1 px afterwards.
 constexpr double kRansacThresholdPx = 3.0;
-// Image keypoints kept (the strongest) before descriptors: bounds the CPU time (400 -> 300 in c2da51d,
-// full-frame search ~10 ms CPU).
+// Image keypoints kept (the strongest) before descriptors: bounds the CPU time (full-frame
+// search ~10 ms CPU).
 constexpr int kMaxImageKeypoints = 300;
-// Model keypoints per pyramid level: bounds the matching time (7 levels x up to 3 pyramids; since c2da51d,
+// Model keypoints per pyramid level: bounds the matching time (7 levels x up to 3 pyramids;
 // full-frame search ~10 ms CPU).
 constexpr int kMaxModelKeypointsPerLevel = 400;
 // Inliers + unmatched model corners refined by NCC (150 -> 220: 0.79 -> 0.55 deg at 1 m on axis).

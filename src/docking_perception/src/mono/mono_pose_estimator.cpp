@@ -447,7 +447,7 @@ DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool trackin
   facing.col(0) = Eigen::Vector3d(0, 0, -1);  // face normal (target x) towards the camera
   facing.col(1) = Eigen::Vector3d(1, 0, 0);   // target y (viewer's right) -> image right
   facing.col(2) = Eigen::Vector3d(0, -1, 0);  // target z (up) -> image up
-  // 5 yaws, 15 deg apart over the shipped +-30 deg (the count since cb502a0; the coarse levels score each).
+  // 5 yaws, 15 deg apart over the shipped +-30 deg (the coarse levels score each).
   constexpr int count = 5;
   for (int i = 0; i < count; ++i) {
     const double yaw_deg = count == 1 ? 0.0 : params_.direct_max_yaw_deg * (2.0 * i / (count - 1) - 1.0);

@@ -138,7 +138,7 @@ void MonoPoseNodelet::loadSettings() {
   const mono::FarThrottleSettings& far = settings_.far_throttle;
   duty::FusedRangeConditionParams far_params;
   far_params.range_m = far.beyond_range_m;
-  // Constants of the throttle (since df42bb8): full rate again 0.1 m inside beyond_range_m (no chatter on a
+  // Constants of the throttle: full rate again 0.1 m inside beyond_range_m (no chatter on a
   // range at the limit), and when no fused estimate came for 0.3 s (4-9 images at the cameras' 15-30 Hz).
   far_params.hysteresis_m = 0.1;
   far_params.max_fused_age_s = 0.3;

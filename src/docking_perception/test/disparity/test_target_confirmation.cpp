@@ -317,7 +317,7 @@ TEST(HeightGate, FollowsTheCamerasAndThePortsHeights) {
 }
 
 // The limits level_floor, the band and the shape check derive from config/robot.yaml, config/target.yaml and
-// config/stereo_image_proc.yaml: the values they had as settings before issue 55.
+// config/stereo_image_proc.yaml: on the shipped rig, the values the detector was tuned with.
 TEST(RigLimits, DerivedFromTheShippedRig) {
   const RigGeometry rig = shippedRig();
   EXPECT_DOUBLE_EQ(rig.camera_height_m, 0.25);
