@@ -7,11 +7,21 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
-#include "docking_settings/setting_info.h"
 
 namespace docking_perception {
 namespace mono {
 namespace {
+
+// A tag pose is trusted only from a clear detection of a tag big enough to give a pose: apriltag's decision
+// margin at least 30, the shortest edge at least 24 px, at least 10 grid corners refined, their RMS
+// residual within 2 px.
+constexpr double kMinDecisionMargin = 30.0;
+constexpr double kMinTagEdgePx = 24.0;
+constexpr int kMinGridPoints = 10;
+constexpr double kMaxReprojectionPx = 2.0;
+// apriltag's quad_decimate: where the tag is looked for (inner_pattern_use_range_m) it is >= 50 px wide,
+// which half resolution finds.
+constexpr double kQuadDecimate = 2.0;
 
 std::string fmt(const char* format, double a, double b) {
   char buffer[160];
@@ -21,7 +31,7 @@ std::string fmt(const char* format, double a, double b) {
 
 }  // namespace
 
-InnerPatternDetector::InnerPatternDetector(const TagSpec& tag, const InnerPatternParams& params) : tag_(tag) {
+InnerPatternDetector::InnerPatternDetector(const TagSpec& tag) : tag_(tag) {
   if (!(tag.size_m > 0.0)) throw TagError("inner pattern: size_m must be positive");
   // Grid points between cells, inside the white ring: (gx, gy) = 1..n-1 in cell units from the print's
   // top-left. A point is a corner when its 4 cells are neither one colour nor split by a straight edge.
@@ -41,7 +51,13 @@ InnerPatternDetector::InnerPatternDetector(const TagSpec& tag, const InnerPatter
       grid_target_m_.push_back(target_T_tag * Eigen::Vector3d(xy.x(), xy.y(), 0.0));
     }
   }
-  setParams(params);
+  detector_ = std::make_unique<TagDetector>(tag_, 1, kQuadDecimate);
+  PlanarPnpParams pnp;
+  // 30-40 grid corners: let the residuals choose between IPPE's two poses unless they really are
+  // alike; the previous pose (itself from a coarse tag pose at 0.2-0.3 m) decided wrongly by degrees
+  // when both fitted within the face's 0.5 px floor.
+  pnp.ambiguity_floor_px = 0.05;
+  pnp_.setParams(pnp, kMinPixelSigmaPx);
 }
 
 void InnerPatternDetector::refineGrid(const cv::Mat& gray, const std::array<Eigen::Vector2d, 4>& corners,
@@ -84,21 +100,6 @@ void InnerPatternDetector::refineGrid(const cv::Mat& gray, const std::array<Eige
   }
 }
 
-void InnerPatternDetector::setParams(const InnerPatternParams& params) {
-  docking_settings::validateSettings(params);  // ConfigError (a std::invalid_argument) naming the setting
-  // apriltag's quad_decimate: where the tag is looked for (inner_pattern.use_range_m) it is >= 50 px wide,
-  // which half resolution finds.
-  constexpr double kQuadDecimate = 2.0;
-  if (!detector_) detector_ = std::make_unique<TagDetector>(tag_, 1, kQuadDecimate);
-  params_ = params;
-  PlanarPnpParams pnp;
-  // 30-40 grid corners: let the residuals choose between IPPE's two poses unless they really are
-  // alike; the previous pose (itself from a coarse tag pose at 0.2-0.3 m) decided wrongly by degrees
-  // when both fitted within the face's 0.5 px floor.
-  pnp.ambiguity_floor_px = 0.05;
-  pnp_.setParams(pnp, params.min_pixel_sigma);
-}
-
 InnerPatternResult InnerPatternDetector::detect(const cv::Mat& gray, const CameraIntrinsics& camera,
                                                 const Eigen::Matrix3d* previous_rotation, const cv::Rect& roi) {
   InnerPatternResult result;
@@ -114,11 +115,10 @@ InnerPatternResult InnerPatternDetector::detect(const cv::Mat& gray, const Camer
     for (int k = 0; k < 4; ++k) {
       shortest_edge = std::min(shortest_edge, (tag.corners_px[(k + 1) % 4] - tag.corners_px[k]).norm());
     }
-    if (tag.decision_margin < params_.min_decision_margin) {
-      result.status = fmt("inner pattern: decision margin %.1f below %.1f", tag.decision_margin,
-                          params_.min_decision_margin);
-    } else if (shortest_edge < params_.min_tag_edge_px) {
-      result.status = fmt("inner pattern: tag edge %.1f px below %.1f px", shortest_edge, params_.min_tag_edge_px);
+    if (tag.decision_margin < kMinDecisionMargin) {
+      result.status = fmt("inner pattern: decision margin %.1f below %.1f", tag.decision_margin, kMinDecisionMargin);
+    } else if (shortest_edge < kMinTagEdgePx) {
+      result.status = fmt("inner pattern: tag edge %.1f px below %.1f px", shortest_edge, kMinTagEdgePx);
     } else {
       std::vector<Eigen::Vector3d> model;
       std::vector<Eigen::Vector2d> image;
@@ -129,14 +129,14 @@ InnerPatternResult InnerPatternDetector::detect(const cv::Mat& gray, const Camer
       result.pose_points = static_cast<int>(model.size());
       PlanarPnpSolution solution;
       std::string reason;
-      if (static_cast<int>(model.size()) < params_.min_points) {
+      if (static_cast<int>(model.size()) < kMinGridPoints) {
         result.status = fmt("inner pattern: %.0f grid corners refined, fewer than %.0f", double(model.size()),
-                            double(params_.min_points));
+                            double(kMinGridPoints));
       } else if (!pnp_.solve(camera, model, image, previous_rotation, &solution, &reason)) {
         result.status = "inner pattern: " + reason;
-      } else if (solution.reprojection_rms_px > params_.max_reprojection_px) {
+      } else if (solution.reprojection_rms_px > kMaxReprojectionPx) {
         result.status = fmt("inner pattern: reprojection %.2f px above %.2f px", solution.reprojection_rms_px,
-                            params_.max_reprojection_px);
+                            kMaxReprojectionPx);
       } else if (solution.pose.rotation.col(0).dot(solution.pose.translation) >= 0.0) {
         result.status = "inner pattern: pose shows the back of the face";
       } else {

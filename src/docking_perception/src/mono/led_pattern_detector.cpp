@@ -11,6 +11,12 @@ namespace {
 
 // The two arms of a pattern must not look parallel: a degenerate view, or two triples of one line.
 constexpr double kMinArmAngleDeg = 15.0;
+// A triple's middle blob: off the line by at most 4 % of the triple's length, and at most 0.2 from its
+// midpoint along it (perspective moves the projected midpoint). Without
+// them (both 1.0) five blobs that were not the pattern gave one confidently wrong IR pose on the stress
+// report seeds 640:40 (make ablate, rule led_pattern_tolerances).
+constexpr double kCollinearityTolerance = 0.04;
+constexpr double kMidpointTolerance = 0.2;
 
 double cross2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
@@ -22,7 +28,7 @@ struct Triple {
 };
 
 // All collinear triples with the middle blob near the midpoint (ends stored unordered: a < b).
-std::vector<Triple> collinearTriples(const std::vector<LedBlob>& blobs, const LedDetectorParams& params) {
+std::vector<Triple> collinearTriples(const std::vector<LedBlob>& blobs) {
   const int n = static_cast<int>(blobs.size());
   std::vector<Triple> triples;
   for (int a = 0; a < n; ++a) {
@@ -38,8 +44,8 @@ std::vector<Triple> collinearTriples(const std::vector<LedBlob>& blobs, const Le
         const double along = am.dot(ab) / (length * length);
         const double off_line = std::abs(cross2d(ab, am)) / length / length;
         const double midpoint_error = std::abs(along - 0.5);
-        if (off_line > params.collinearity_tolerance || midpoint_error > params.midpoint_tolerance) continue;
-        triples.push_back({a, m, b, off_line / params.collinearity_tolerance + midpoint_error / params.midpoint_tolerance});
+        if (off_line > kCollinearityTolerance || midpoint_error > kMidpointTolerance) continue;
+        triples.push_back({a, m, b, off_line / kCollinearityTolerance + midpoint_error / kMidpointTolerance});
       }
     }
   }
@@ -221,7 +227,7 @@ std::vector<LedPatternCandidate> LedPatternDetector::identifyPattern(const std::
     if (reason) *reason = "found " + std::to_string(n) + " LED blobs, the pattern needs 5";
     return candidates;
   }
-  const std::vector<Triple> triples = collinearTriples(blobs, params_);
+  const std::vector<Triple> triples = collinearTriples(blobs);
   for (size_t i = 0; i < triples.size(); ++i) {
     for (size_t j = i + 1; j < triples.size(); ++j) {
       addPatterns(blobs, triples[i], triples[j], expected_handedness_, &candidates);

@@ -12,6 +12,33 @@ namespace docking_perception {
 namespace mono {
 namespace {
 
+// ---- Constants of the method: not settings, since no rig changes them; each says what it guards.
+// A prediction is kept when at least half of the refined points tried hold (else: the feature search).
+constexpr double kPredictedFaceMinKeptFraction = 0.5;
+// Of an image's orientation error (1 sigma), the part that persists from image to image (a tilt bias that
+// moves with the blur) and so does not average out in the filter: it stays in the published covariance.
+constexpr double kPersistentOrientationFraction = 0.5;
+// IR: the streak sigma of a still LED spot; streaks beyond it are motion blur (covariance_blur_gain).
+constexpr double kStillLedStreakPx = 0.8;
+// IR: a pattern blob larger than 2.5 x the median of the five, or elongated beyond 1.8 (principal axes),
+// is merged with a reflection, its centroid pulled off the LED. Without the two (make ablate, rule
+// led_merged_blob, stress report seeds 640:40): one confidently wrong IR pose.
+constexpr double kMaxLedAreaRatio = 2.5;
+constexpr double kMaxLedElongation = 1.8;
+// Near contact, face and tag poses farther apart than 2 cm or 5 deg (+ 3 sigma of the tag's pose): one
+// of the two is wrong and nothing says which, so the image gives no pose.
+constexpr double kInnerCrossCheckPositionM = 0.02;
+constexpr double kInnerCrossCheckAngleRad = 0.0873;
+// A far pose refused against stereo's range keeps far poses without a fresh hint refused this long (the
+// scale bias lasts seconds), and one with a fresh hint must come within half the first refusal's limit to
+// be trusted again (stereo's own range is ~2 % off).
+constexpr double kHintDisagreementHoldS = 1.0;
+constexpr double kHintRecoveryShareOfLimit = 0.5;
+// paper_5point (the paper's method, kept for comparison): a dot farther than 0.6 dot radii from where the
+// face's homography puts it is not the dot; a 5-point pose 5 deg from the face's PnP pose is refused.
+constexpr double kMaxDotOffsetRadii = 0.6;
+constexpr double kMaxSolverDisagreementDeg = 5.0;
+
 // Marks the result refused at outcome's stage: the code for programs (stage, reject_reason), the reason for
 // people (status). Returns the outcome.
 StageOutcome refuse(MonoPoseResult* result, StageOutcome outcome, RejectReason reason, const std::string& status) {
@@ -108,10 +135,6 @@ void validate(const MonoPoseParams& p) {
   using docking_settings::ConfigProblem;
   docking_settings::validateSettings(p);
   if (p.features.model_widths_px.empty()) throw ConfigError("model_widths_px", ConfigProblem::kInvalid, "is empty");
-  const ConsistencyParams& c = p.consistency;
-  if (c.max_hint_disagreement_fraction > 0.0 && c.hint_recovery_fraction > c.max_hint_disagreement_fraction) {
-    throw ConfigError("hint_recovery_fraction", ConfigProblem::kInvalid, "must be at most max_hint_disagreement_fraction");
-  }
 }
 
 MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntrinsics& camera,
@@ -125,7 +148,7 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
       matcher_(params.features),
       led_detector_(model.markers(), params.leds),
       five_point_solver_(model.markers()),
-      pnp_solver_(params.pnp, params.min_pixel_sigma),
+      pnp_solver_(PlanarPnpParams(), params.min_pixel_sigma),
       filter_(params.filter),
       innovation_scale_(params.consistency.innovation_window_frames),
       frame_difference_(params.filter.max_gap_s) {
@@ -135,7 +158,7 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
   if (mode_ == MonoMode::kVisible) {
     if (!model.hasTexture()) throw std::invalid_argument("visible mode needs the target texture");
     if (!matcher_.buildModel(model.textureGray(), &reason)) throw std::invalid_argument(reason);
-    if (model.hasInnerPattern()) inner_pattern_ = std::make_unique<InnerPatternDetector>(model.innerPattern(), params.inner_pattern);
+    if (model.hasInnerPattern()) inner_pattern_ = std::make_unique<InnerPatternDetector>(model.innerPattern());
   }
   appearance_ = FaceAppearance(model);
   if (model.hasTexture()) direct_aligner_ = DirectFaceAligner(model, params.direct);
@@ -159,11 +182,10 @@ void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
   if (model_.hasTexture()) direct_aligner_ = DirectFaceAligner(model_, params.direct);
   matcher_.setParams(params.features);
   led_detector_.setParams(params.leds);
-  pnp_solver_.setParams(params.pnp, params.min_pixel_sigma);
+  pnp_solver_.setParams(PlanarPnpParams(), params.min_pixel_sigma);
   filter_.setParams(params.filter);
   frame_difference_.setMaxGap(params.filter.max_gap_s);
   innovation_scale_.setWindow(params.consistency.innovation_window_frames);
-  if (inner_pattern_) inner_pattern_->setParams(params.inner_pattern);
 }
 
 void MonoPoseEstimator::setCamera(const CameraIntrinsics& camera) {
@@ -235,7 +257,7 @@ PoseWithCovariance MonoPoseEstimator::predictedPose(double stamp_s) const {
 FaceMatch MonoPoseEstimator::matchPredictedFace(const cv::Mat& gray, double stamp_s) const {
   const cv::Matx33d homography = faceHomography(model_, camera_, predictedPose(stamp_s));
   return matcher_.matchAtPrediction(gray, homography * (1.0 / homography(2, 2)),
-                                    params_.predicted_face_min_kept_fraction);
+                                    kPredictedFaceMinKeptFraction);
 }
 
 cv::Rect MonoPoseEstimator::predictedRegion(double stamp_s, double* face_width_px) const {
@@ -597,7 +619,7 @@ bool MonoPoseEstimator::refineIrPose(const MarkerPixels& pixels, double median_s
                                      std::string* reason) const {
   // Motion smears each LED into a streak whose centroid the blur moves by a fraction of a pixel that the
   // residual of five points cannot show: the covariance grows with the streaks beyond a still spot's.
-  const double still = params_.consistency.led_still_streak_px;
+  const double still = kStillLedStreakPx;
   trial->blur_sigma_px = std::sqrt(std::max(0.0, median_streak_px * median_streak_px - still * still));
   if (solver_ != PoseSolverType::kPnp) {
     const double blur_factor = 1.0 + params_.consistency.covariance_blur_gain * trial->blur_sigma_px;
@@ -698,7 +720,7 @@ void MonoPoseEstimator::publishFilteredOrientation(bool fused, MonoPoseResult* r
   // The filter averages what it takes for independent errors; the part of an image's error that persists
   // from image to image (a tilt bias that moves with the blur) does not average out, so it stays in. The
   // position keeps its own block; its correlation with the (now filtered) rotation is not known: dropped.
-  const double persistent = params_.filtered_orientation_correlated_fraction;
+  const double persistent = kPersistentOrientationFraction;
   const PoseWithCovariance posterior = filter_.pose();
   const Matrix6d& measured = result->measured_pose.covariance;
   result->pose.rotation = posterior.rotation;
@@ -757,8 +779,8 @@ InnerPatternOutcome MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, Mo
     const double apart_rad = rotationAngleBetween(tag.pose.rotation, result->pose.rotation);
     const double tag_position_sigma = std::sqrt(tag.pose.covariance.block<3, 3>(0, 0).trace());
     const double tag_angle_sigma = std::sqrt(tag.pose.covariance.block<3, 3>(3, 3).trace());
-    if (!(apart_m <= params_.inner_pattern.cross_check_position_m + 3.0 * tag_position_sigma) ||
-        !(apart_rad <= params_.inner_pattern.cross_check_angle_rad + 3.0 * tag_angle_sigma)) {
+    if (!(apart_m <= kInnerCrossCheckPositionM + 3.0 * tag_position_sigma) ||
+        !(apart_rad <= kInnerCrossCheckAngleRad + 3.0 * tag_angle_sigma)) {
       result->valid = false;
       refuse(result, outcomeOf(Stage::kInnerPattern, InnerPatternOutcome::kDisagreesWithFace),
              RejectReason::kSolverDisagreement,
@@ -804,14 +826,14 @@ InnerPatternResult MonoPoseEstimator::findInnerTag(const cv::Mat& gray, double* 
   if (trackedPose(result->stamp_s, &tracked)) history.tracked = &tracked;
   *ambiguity_deg =
       modelPnpCovariance(camera_, tag.pnp, history, tag.model_points, tag.reprojection_rms_px, tag.reprojection_rms_px,
-                         params_.inner_pattern.min_pixel_sigma, 0.0, params_.consistency, &tag.pose);
+                         InnerPatternDetector::kMinPixelSigmaPx, 0.0, params_.consistency, &tag.pose);
   return tag;
 }
 void MonoPoseEstimator::updateFaceRetry(bool face_skipped, const MonoPoseResult& result) {
   if (!result.valid) {
     face_searches_skipped_left_ = 0;  // nothing to stand on: the next image searches the face again
   } else if (!face_skipped && result.solver == kInnerPatternSolverName) {
-    face_searches_skipped_left_ = params_.inner_pattern.face_retry_every - 1;  // the face failed, the tag did not
+    face_searches_skipped_left_ = kFaceRetryEvery - 1;  // the face failed, the tag did not
   }
 }
 
@@ -924,12 +946,12 @@ HintOutcome MonoPoseEstimator::hintOutcome(MonoPoseResult* result) {
   if (limit <= 0.0) return HintOutcome::kPassed;
   const double range = result->pose.translation.norm();
   const double since_s = result->stamp_s - last_hint_disagreement_s_;
-  const bool holding = since_s >= 0.0 && since_s <= c.hint_disagreement_hold_s;
+  const bool holding = since_s >= 0.0 && since_s <= kHintDisagreementHoldS;
   if (!hint_has_position_ || !hintFresh(result->stamp_s)) {
     if (range < c.hint_check_min_range_m || !holding) return HintOutcome::kPassed;
     result->reject_reason = RejectReason::kHintDisagreement;
     result->status = "no fresh disparity estimate to check the position against, and one " + std::to_string(since_s) +
-                     " s ago disagreed (hint_disagreement_hold_s)";
+                     " s ago disagreed (held " + std::to_string(kHintDisagreementHoldS) + " s)";
     return HintOutcome::kHeldWithoutHint;
   }
   const double hint_range = hint_position_.norm();
@@ -940,7 +962,7 @@ HintOutcome MonoPoseEstimator::hintOutcome(MonoPoseResult* result) {
   // truth (eval_real_motion9px_2m refused 43 such poses when positions were compared).
   const double apart = std::abs(range - hint_range);
   // Hysteresis: a pose shown biased must come closer than the first refusal's limit to be trusted again.
-  const double fraction = holding ? c.hint_recovery_fraction : limit;
+  const double fraction = holding ? kHintRecoveryShareOfLimit * limit : limit;
   if (apart <= fraction * range) {
     last_hint_disagreement_s_ = kNoHintDisagreement;
     return HintOutcome::kPassed;
@@ -949,7 +971,7 @@ HintOutcome MonoPoseEstimator::hintOutcome(MonoPoseResult* result) {
   result->reject_reason = RejectReason::kHintDisagreement;
   result->status = "range " + std::to_string(range) + " m differs from the disparity estimate's " +
                    std::to_string(hint_range) + " m by more than " +
-                   (holding ? "hint_recovery_fraction" : "max_hint_disagreement_fraction") + " of it";
+                   (holding ? "half of max_hint_disagreement_fraction (recovering)" : "max_hint_disagreement_fraction") + " of it";
   return holding ? HintOutcome::kNotRecovered : HintOutcome::kRangeDisagrees;
 }
 
@@ -981,8 +1003,8 @@ StageOutcome MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMa
     // The 5-point covariance (its own Jacobian) scaled for blur, plus the floor.
     const double blur_factor = 1.0 + c.covariance_blur_gain * appearance.blur_sigma_px;
     result->pose.covariance *= blur_factor * blur_factor;
-    const double position_floor = c.position_floor_fraction * result->pose.translation.norm();
-    const double rotation_floor = c.rotation_floor_deg * M_PI / 180.0;
+    const double position_floor = kPositionFloorFraction * result->pose.translation.norm();
+    const double rotation_floor = kRotationFloorDeg * M_PI / 180.0;
     for (int i = 0; i < 3; ++i) {
       result->pose.covariance(i, i) += position_floor * position_floor;
       result->pose.covariance(3 + i, 3 + i) += rotation_floor * rotation_floor;
@@ -996,25 +1018,24 @@ StageOutcome MonoPoseEstimator::vetFivePointPose(const MarkerPixels& predicted, 
                                          const std::vector<Eigen::Vector3d>& model_points,
                                          const std::vector<Eigen::Vector2d>& image_points,
                                          MonoPoseResult* result) const {
-  const ConsistencyParams& c = params_.consistency;
   // A dot that is not where the face's homography puts it is something else (a card edge, a shadow).
-  const double max_offset = std::max(1.5, c.max_dot_offset_factor * radius_px);
+  const double max_offset = std::max(1.5, kMaxDotOffsetRadii * radius_px);
   for (int i = 0; i < kMarkerCount; ++i) {
     const double offset = (located[static_cast<size_t>(i)] - predicted[static_cast<size_t>(i)]).norm();
     if (offset > max_offset) {
       return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kDotOffset), RejectReason::kDotAppearance,
                     "marker " + std::to_string(i) + " found " + std::to_string(offset) +
-                        " px from where the face puts it (max_dot_offset_factor)");
+                        " px from where the face puts it");
     }
   }
   PlanarPnpSolution pnp;
   std::string reason;
   if (!pnp_solver_.solve(camera_, model_points, image_points, &result->pose.rotation, &pnp, &reason)) return {};
   const double disagreement_deg = rotationAngleBetween(pnp.pose.rotation, result->pose.rotation) * 180.0 / M_PI;
-  if (disagreement_deg > c.max_solver_disagreement_deg) {
+  if (disagreement_deg > kMaxSolverDisagreementDeg) {
     return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kSolverDisagreement), RejectReason::kSolverDisagreement,
                   "the 5-point pose and the face's PnP pose differ by " + std::to_string(disagreement_deg) +
-                      " deg (max_solver_disagreement_deg)");
+                      " deg");
   }
   return {};
 }
@@ -1028,14 +1049,14 @@ bool MonoPoseEstimator::vetLedBlobs(const std::vector<LedBlob>& blobs, const Led
   const double median_area = sorted[sorted.size() / 2];
   for (size_t i = 0; i < candidate.blob_indices.size(); ++i) {
     const LedBlob& blob = blobs[static_cast<size_t>(candidate.blob_indices[i])];
-    if (blob.area_px > params_.consistency.max_led_area_ratio * median_area) {
+    if (blob.area_px > kMaxLedAreaRatio * median_area) {
       *reason = "LED " + std::to_string(i) + " blob is " + std::to_string(blob.area_px / median_area) +
-                " times the others' area: merged with a reflection (max_led_area_ratio)";
+                " times the others' area: merged with a reflection";
       return false;
     }
-    if (blob.elongation > params_.consistency.max_led_elongation) {
+    if (blob.elongation > kMaxLedElongation) {
       *reason = "LED " + std::to_string(i) + " blob is elongated (" + std::to_string(blob.elongation) +
-                "): merged with a reflection (max_led_elongation)";
+                "): merged with a reflection";
       return false;
     }
   }

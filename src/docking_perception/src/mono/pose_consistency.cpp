@@ -228,8 +228,8 @@ Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovarian
   leastSquaresPoseCovariance(camera, pose.rotation, pose.translation, model_points, pixel_sigma * pixel_sigma,
                              &covariance);
   const double range = pose.translation.norm();
-  const double position_floor = params.position_floor_fraction * range;
-  const double rotation_floor = params.rotation_floor_deg * M_PI / 180.0;
+  const double position_floor = kPositionFloorFraction * range;
+  const double rotation_floor = kRotationFloorDeg * M_PI / 180.0;
   for (int i = 0; i < 3; ++i) {
     covariance(i, i) += position_floor * position_floor;
     covariance(3 + i, 3 + i) += rotation_floor * rotation_floor;

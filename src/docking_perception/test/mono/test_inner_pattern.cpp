@@ -107,7 +107,7 @@ TEST(InnerPatternYaml, OptionalAndValidated) {
 }
 
 TEST(InnerPatternDetector, GridCornersLieOnTheTag) {
-  const mono::InnerPatternDetector detector(innerTag(), mono::InnerPatternParams());
+  const mono::InnerPatternDetector detector(innerTag());
   ASSERT_GE(detector.gridPoints().size(), 20u);
   for (const auto& p : detector.gridPoints()) {
     EXPECT_DOUBLE_EQ(p.x(), 0.0);
@@ -117,7 +117,7 @@ TEST(InnerPatternDetector, GridCornersLieOnTheTag) {
 }
 
 TEST(InnerPatternDetector, PoseFromAnExactViewAtCloseRange) {
-  mono::InnerPatternDetector detector(innerTag(), mono::InnerPatternParams());
+  mono::InnerPatternDetector detector(innerTag());
   int seed = 1;
   for (const double d : {0.08, 0.12, 0.2, 0.3, 0.4}) {
     for (const double yaw : {-0.15, 0.0, 0.2}) {
@@ -142,7 +142,7 @@ TEST(InnerPatternDetector, PoseFromAnExactViewAtCloseRange) {
 }
 
 TEST(InnerPatternDetector, NothingToSeeIsInvalidWithAReason) {
-  mono::InnerPatternDetector detector(innerTag(), mono::InnerPatternParams());
+  mono::InnerPatternDetector detector(innerTag());
   const cv::Mat blank(480, 640, CV_8UC1, cv::Scalar(128));
   const mono::InnerPatternResult r = detector.detect(blank, camera(), nullptr);
   EXPECT_FALSE(r.valid);
@@ -158,13 +158,4 @@ TEST(InnerPatternDetector, NothingToSeeIsInvalidWithAReason) {
   const mono::InnerPatternResult far = detector.detect(drawTag(innerTag(), cameraTTarget(3.0, -0.05, 0.0), 0.0, 4),
                                                         camera(), nullptr);
   EXPECT_FALSE(far.valid);
-}
-
-TEST(InnerPatternDetector, RejectsBadParameters) {
-  mono::InnerPatternParams p;
-  p.use_range_m = 0.0;
-  EXPECT_THROW(mono::InnerPatternDetector(innerTag(), p), std::invalid_argument);
-  p = mono::InnerPatternParams();
-  p.min_points = 3;
-  EXPECT_THROW(mono::InnerPatternDetector(innerTag(), p), docking_settings::ConfigError);
 }

@@ -126,7 +126,7 @@ Errors errorsOf(const mono::PoseWithCovariance& pose, const Eigen::Isometry3d& t
 // Tip 0 (contact, camera 8 cm from the face) to 0.32 m (camera 0.4 m), on the axis and off it, sharp
 // (0.6 px) and defocused (2.5 px: the C270's fixed focus at 8-15 cm), noise from the nominal scenario.
 TEST_F(InnerPatternSim, PoseAgainstTruthToContact) {
-  mono::InnerPatternDetector detector(model_.innerPattern(), mono::InnerPatternParams());
+  mono::InnerPatternDetector detector(model_.innerPattern());
   const std::vector<double> tips = {0.0, 0.01, 0.03, 0.06, 0.1, 0.15, 0.22, 0.32};
   const std::vector<std::array<double, 2>> offsets = {{0.0, 0.0}, {0.012, 0.03}, {-0.015, -0.04}};
   int views = 0, within_3_sigma = 0, axes = 0;
@@ -194,42 +194,35 @@ TEST_F(InnerPatternSim, EstimatorKeepsThePoseToContact) {
 }
 
 // Near contact the face no longer fits the image: once its search fails while the tag gives the pose, it
-// is searched again only every face_retry_every-th image, and the tag's pose stands in between (issue 15:
-// the failing face search was the chain's worst latency).
+// is searched again only every kFaceRetryEvery-th image, and the tag's pose stands in between (the failing
+// face search was the chain's worst latency).
 TEST_F(InnerPatternSim, FaceSearchedEveryNthImageOnceTheTagCarriesThePose) {
-  for (const int every : {1, 5}) {
-    mono::MonoPoseParams params;
-    params.inner_pattern.enabled = true;
-    params.inner_pattern.face_retry_every = every;
-    mono::MonoPoseEstimator estimator(model_, intrinsics(), params);
-    int skipped = 0, from_tag = 0, frames = 0;
-    double stamp = 0.0;
-    // From 0.3 m of tip (the face's pose) to contact at 5 mm a frame (15 Hz): inside ~0.17 m of camera
-    // range the face fails.
-    double cpu_ms = 0.0;
-    for (double tip = 0.30; tip >= -1e-9; tip -= 0.005, stamp += 1.0 / 15.0) {
-      const Rendered r = render(tip, 0.004, 0.01, 1.0, 300 + frames);
-      const mono::MonoPoseResult result = estimator.process(r.gray, stamp);
-      ++frames;
-      ASSERT_TRUE(result.valid) << "every " << every << ", tip " << tip << ": " << result.status << " / "
-                                << result.inner_pattern_status;
-      EXPECT_LT(errorsOf(result.pose, r.camera_T_target).position_m, 0.03 * (0.08 + tip)) << "tip " << tip;
-      skipped += result.face_search_skipped ? 1 : 0;
-      from_tag += result.solver == mono::kInnerPatternSolverName ? 1 : 0;
-      cpu_ms += result.processing_time_ms;
-    }
-    std::printf("face_retry_every %d: %d frames, %d from the tag, %d face searches skipped, %.1f ms CPU a frame\n",
-                every, frames, from_tag, skipped, cpu_ms / frames);
-    if (every == 1) {
-      EXPECT_EQ(skipped, 0);
-    } else {
-      // Once the face fails for good, four of every five images skip it.
-      EXPECT_GE(skipped, (from_tag - every) * (every - 1) / every);
-      EXPECT_LT(skipped, from_tag);
-    }
-    // 17 of 61 with the shipped configuration (the older struct defaults lost the face sooner: over 20).
-    EXPECT_GT(from_tag, 10) << "the approach must reach where the face fails";
+  constexpr int every = mono::MonoPoseEstimator::kFaceRetryEvery;
+  mono::MonoPoseParams params;
+  params.inner_pattern.enabled = true;
+  mono::MonoPoseEstimator estimator(model_, intrinsics(), params);
+  int skipped = 0, from_tag = 0, frames = 0;
+  double stamp = 0.0;
+  // From 0.3 m of tip (the face's pose) to contact at 5 mm a frame (15 Hz): inside ~0.17 m of camera
+  // range the face fails.
+  double cpu_ms = 0.0;
+  for (double tip = 0.30; tip >= -1e-9; tip -= 0.005, stamp += 1.0 / 15.0) {
+    const Rendered r = render(tip, 0.004, 0.01, 1.0, 300 + frames);
+    const mono::MonoPoseResult result = estimator.process(r.gray, stamp);
+    ++frames;
+    ASSERT_TRUE(result.valid) << "tip " << tip << ": " << result.status << " / " << result.inner_pattern_status;
+    EXPECT_LT(errorsOf(result.pose, r.camera_T_target).position_m, 0.03 * (0.08 + tip)) << "tip " << tip;
+    skipped += result.face_search_skipped ? 1 : 0;
+    from_tag += result.solver == mono::kInnerPatternSolverName ? 1 : 0;
+    cpu_ms += result.processing_time_ms;
   }
+  std::printf("face searched every %d images: %d frames, %d from the tag, %d face searches skipped, %.1f ms CPU a frame\n",
+              every, frames, from_tag, skipped, cpu_ms / frames);
+  // Once the face fails for good, four of every five images skip it.
+  EXPECT_GE(skipped, (from_tag - every) * (every - 1) / every);
+  EXPECT_LT(skipped, from_tag);
+  // 17 of 61 with the shipped configuration.
+  EXPECT_GT(from_tag, 10) << "the approach must reach where the face fails";
 }
 
 // Without the hook (inner_pattern_enabled false) the face alone loses the target near contact: the
@@ -254,7 +247,7 @@ TEST_F(InnerPatternSim, FaceAloneIsLostAtContact) {
 // stay within 3 sigma. No history here: every view is a first pose (the worst case). With the fit's
 // covariance alone, these 60 views gave 21 claimed orientations, two of them 12 deg off.
 TEST_F(InnerPatternSim, AnUndecidedTagPoseClaimsNoOrientationItCannotBack) {
-  mono::InnerPatternDetector detector(model_.innerPattern(), mono::InnerPatternParams());
+  mono::InnerPatternDetector detector(model_.innerPattern());
   mono::ConsistencyParams consistency;
   consistency.max_ambiguity_deg = 8.0;  // config/mono_pose_visible.yaml
   int views = 0, claimed = 0, claimed_far_off = 0, axes = 0, within_3_sigma = 0;
@@ -267,7 +260,7 @@ TEST_F(InnerPatternSim, AnUndecidedTagPoseClaimsNoOrientationItCannotBack) {
         ASSERT_TRUE(result.valid) << "tip " << tip << " yaw " << yaw << ": " << result.status;
         const double ambiguity_deg = mono::modelPnpCovariance(
             intrinsics(), result.pnp, mono::OrientationHistory(), result.model_points, result.reprojection_rms_px,
-            result.reprojection_rms_px, mono::InnerPatternParams().min_pixel_sigma, 0.0, consistency, &result.pose);
+            result.reprojection_rms_px, mono::InnerPatternDetector::kMinPixelSigmaPx, 0.0, consistency, &result.pose);
         std::string note;
         const bool claim = ambiguity_deg <= consistency.max_ambiguity_deg &&
                            mono::orientationClaimed(result.pose, consistency, &note);

@@ -319,15 +319,14 @@ TEST(MonoPoseEstimator, APoseThatDisagreesWithAFreshPositionHintIsNotValid) {
   EXPECT_EQ(refusedKey(params), "max_hint_disagreement_fraction");
 }
 
-// After a pose disagreed with a fresh hint, a pose with no fresh hint to check it is refused for
-// hint_disagreement_hold_s (a late disparity estimate let one through, campaign seed 10506), and one
-// with a fresh hint must agree within hint_recovery_fraction; a hint that agrees so ends the hold.
+// After a pose disagreed with a fresh hint, a pose with no fresh hint to check it is refused for 1 s (a late
+// disparity estimate let one through, campaign seed 10506), and one with a fresh hint must agree within half
+// of max_hint_disagreement_fraction; a hint that agrees so ends the hold.
 TEST(MonoPoseEstimator, ADisagreementHoldsUntilAHintAgreesOrTheHoldEnds) {
   const TargetModel model = synthetic::makeModel(4);
   const CameraIntrinsics camera = synthetic::defaultCamera();
   MonoPoseParams params = paramsFor(MonoMode::kVisible, PoseSolverType::kPnp);
   params.consistency.max_hint_disagreement_fraction = 0.04;
-  params.consistency.hint_disagreement_hold_s = 1.0;
   params.consistency.hint_check_min_range_m = 1.0;
   params.region_hint_max_age_s = 0.2;
   const Eigen::Vector3d t(0.05, -0.02, 1.2);
@@ -342,7 +341,6 @@ TEST(MonoPoseEstimator, ADisagreementHoldsUntilAHintAgreesOrTheHoldEnds) {
   const MonoPoseResult unchecked = held.process(image, 2.5);  // the hint is 0.57 s old: not fresh
   EXPECT_FALSE(unchecked.valid);
   EXPECT_EQ(unchecked.reject_reason, RejectReason::kHintDisagreement);
-  EXPECT_NE(unchecked.status.find("hint_disagreement_hold_s"), std::string::npos) << unchecked.status;
   EXPECT_EQ(unchecked.stage_outcome, static_cast<std::uint8_t>(HintOutcome::kHeldWithoutHint));
   const MonoPoseResult after_hold = held.process(image, 3.2);  // 1.2 s after the disagreement
   EXPECT_TRUE(after_hold.valid) << after_hold.status;
@@ -355,7 +353,6 @@ TEST(MonoPoseEstimator, ADisagreementHoldsUntilAHintAgreesOrTheHoldEnds) {
   hysteresis.setPositionHint(1.03 * t, 2.35);
   const MonoPoseResult near_miss = hysteresis.process(image, 2.4);
   EXPECT_FALSE(near_miss.valid);
-  EXPECT_NE(near_miss.status.find("hint_recovery_fraction"), std::string::npos) << near_miss.status;
   EXPECT_EQ(near_miss.stage_outcome, static_cast<std::uint8_t>(HintOutcome::kNotRecovered));
   hysteresis.setPositionHint(1.03 * t, 3.55);  // 1.2 s after the last refusal (2.4 s)
   EXPECT_TRUE(hysteresis.process(image, 3.6).valid);
@@ -367,17 +364,6 @@ TEST(MonoPoseEstimator, ADisagreementHoldsUntilAHintAgreesOrTheHoldEnds) {
   EXPECT_TRUE(cleared.process(image, 2.4).valid);  // a fresh hint that agrees ...
   const MonoPoseResult after_agreement = cleared.process(image, 2.9);
   EXPECT_TRUE(after_agreement.valid) << after_agreement.status;  // ... ends the hold
-
-  params.consistency.hint_disagreement_hold_s = 0.0;  // off: only fresh hints count
-  MonoPoseEstimator unheld(model, camera, params);
-  unheld.setPositionHint(1.08 * t, 1.93);
-  EXPECT_FALSE(unheld.process(image, 2.0).valid);
-  EXPECT_TRUE(unheld.process(image, 2.5).valid);
-  params.consistency.hint_disagreement_hold_s = -1.0;
-  EXPECT_EQ(refusedKey(params), "hint_disagreement_hold_s");
-  params.consistency.hint_disagreement_hold_s = 1.0;
-  params.consistency.hint_recovery_fraction = 0.05;  // looser than the first refusal's limit
-  EXPECT_EQ(refusedKey(params), "hint_recovery_fraction");
 }
 
 TEST(MonoPoseEstimator, ReportsWhyNothingWasFound) {
@@ -553,9 +539,6 @@ TEST(MonoPoseEstimator, InvalidParametersAreNamed) {
   MonoPoseParams params;
   params.features.fast_threshold = 0;
   EXPECT_EQ(refusedKey(params), "fast_threshold");
-  params = MonoPoseParams();
-  params.consistency.hint_recovery_fraction = 2.0 * params.consistency.max_hint_disagreement_fraction;  // contradict
-  EXPECT_EQ(refusedKey(params), "hint_recovery_fraction");
   EXPECT_THROW(MonoPoseEstimator(synthetic::makeModel(1), synthetic::defaultCamera(), params), std::invalid_argument);
   EXPECT_EQ(refusedKey(MonoPoseParams()), "");
   MonoMode mode;

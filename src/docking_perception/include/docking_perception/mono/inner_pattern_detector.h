@@ -20,7 +20,8 @@
 namespace docking_perception {
 namespace mono {
 
-// InnerPatternParams (keys inner_pattern_*) is declared in settings/mono_pose.yaml (generated header).
+// Whether and where it is used (inner_pattern_enabled, inner_pattern_use_range_m) is the estimator's choice
+// (settings/mono_pose.yaml); the gates of a tag pose here are constants of the method (the .cpp says why).
 
 struct InnerPatternResult {
   bool valid = false;
@@ -41,10 +42,12 @@ struct InnerPatternResult {
 
 class InnerPatternDetector {
  public:
-  // Throws TagError for an unsupported tag, std::invalid_argument for invalid parameters.
-  InnerPatternDetector(const TagSpec& tag, const InnerPatternParams& params);
-  void setParams(const InnerPatternParams& params);
-  const InnerPatternParams& params() const { return params_; }
+  // The floor of the corner noise that scales a tag pose's covariance (a fit of 30-40 corners within
+  // 0.1 px must not claim a tenth of a millimetre).
+  static constexpr double kMinPixelSigmaPx = 0.5;
+
+  // Throws TagError for an unsupported tag.
+  explicit InnerPatternDetector(const TagSpec& tag);
   const TagSpec& tag() const { return tag_; }
   // The grid corners the pose uses, in frame `target`.
   const std::vector<Eigen::Vector3d>& gridPoints() const { return grid_target_m_; }
@@ -60,7 +63,6 @@ class InnerPatternDetector {
                   std::vector<Eigen::Vector3d>* model, std::vector<Eigen::Vector2d>* image) const;
 
   TagSpec tag_;
-  InnerPatternParams params_;
   // Grid corners as (x, y) in apriltag's tag frame (m; x right, y down as printed) and in `target`.
   std::vector<Eigen::Vector2d> grid_tag_m_;
   std::vector<Eigen::Vector3d> grid_target_m_;

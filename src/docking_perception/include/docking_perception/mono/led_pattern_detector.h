@@ -6,8 +6,8 @@
 //
 // Pattern: the markers form two collinear triples sharing an end (A = 0-1-2, B = 2-3-4, each middle at
 // the midpoint). Perspective keeps lines straight but moves the projected midpoint, so a candidate
-// triple (a, m, b) is accepted when m lies within collinearity_tolerance * |ab| of the line ab and its
-// position along ab is within midpoint_tolerance of 0.5. Two triples sharing one end and no other blob
+// triple (a, m, b) is accepted when m lies within kCollinearityTolerance * |ab| of the line ab and its
+// position along ab is within kMidpointTolerance of 0.5. Two triples sharing one end and no other blob
 // make a candidate pattern. Which triple is A follows from the face's handedness: a face seen from the
 // front keeps the sign of the 2D cross product of the arms (2->0, 2->4) that the model has, whatever
 // the arm lengths look like under foreshortening. Candidates are ranked by their geometric residuals;

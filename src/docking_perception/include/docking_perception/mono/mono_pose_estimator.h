@@ -55,7 +55,7 @@ std::string toString(VelocityMethod method);
 // moves the target on a curve in its frame, which a constant-velocity filter follows with a lag.
 // predict_face_when_tracking (visible): the face refined where the filter's predicted pose puts it
 // (FeatureMatcher::matchAtPrediction), without the feature search, when the last image claimed its
-// orientation; the search runs when fewer than predicted_face_min_kept_fraction of the refined points hold,
+// orientation; the search runs when fewer than half of the refined points hold,
 // or the pose fails a check. use_direct_alignment (visible): when the features find no face and a prior
 // exists (the tracked pose, or a region/position hint), the texture is aligned with the image directly
 // (face_alignment.h).
@@ -98,7 +98,7 @@ struct MonoPoseResult {
   double processing_time_ms = 0.0;     // CPU time of process()
   bool used_tracking_region = false;   // the predicted region gave the result (no full-frame search)
   bool used_predicted_face = false;    // ... and the face was refined at its predicted place, without features
-  bool face_search_skipped = false;    // near contact, the face's search skipped (inner_pattern.face_retry_every)
+  bool face_search_skipped = false;    // near contact, the face's search skipped (kFaceRetryEvery)
   cv::Rect search_region;              // where detection ran last (full frame after a fallback)
   bool pnp_ambiguous = false;          // IPPE's two poses were close
   double ambiguity_deg = 0.0;          // the undecided IPPE alternative's angle (0: decided)
@@ -153,6 +153,10 @@ class MonoPoseEstimator {
   // pose: see ConsistencyParams::max_hint_disagreement_fraction.
   void setPositionHint(const Eigen::Vector3d& position_camera, double stamp_s);
 
+  // Near contact, once the face's search failed while the inner pattern gave the pose, the face is searched
+  // on every kFaceRetryEvery-th image only: its failing search (20-40 ms) was the chain's worst latency.
+  static constexpr int kFaceRetryEvery = 5;
+
  private:
   // What an IR search over the LED patterns learned, for the reason when none gave a pose.
   struct LedSearch {
@@ -163,14 +167,14 @@ class MonoPoseEstimator {
 
   // The stages of process() (stages.h), in order.
   InputOutcome readImage(const cv::Mat& image, cv::Mat* gray, MonoPoseResult* result) const;
-  // Near contact (inner_pattern.face_retry_every): this image's face search is skipped.
+  // Near contact (kFaceRetryEvery): this image's face search is skipped.
   FindOutcome skipFaceSearch(MonoPoseResult* result);
   // Find, solve and vet: the face's pose (visible) or the LEDs' (IR); result->valid when it passed them.
   StageOutcome measurePose(const cv::Mat& gray, MonoPoseResult* result);
   // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
   InnerPatternOutcome applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
   // A fresh position hint's range against the pose's (consistency.max_hint_disagreement_fraction); without a
-  // fresh hint, a pose at least hint_check_min_range_m away is refused for hint_disagreement_hold_s after a
+  // fresh hint, a pose at least hint_check_min_range_m away is refused for 1 s after a
   // pose that disagreed.
   HintOutcome checkPositionHint(MonoPoseResult* result);
   // The pose is valid: its covariance scaled by the innovation, and whether its orientation is claimed.
@@ -234,7 +238,7 @@ class MonoPoseEstimator {
   bool directSearchDue();
   void noteDirectSearch(bool from_hint, bool found);
   // After an image whose face was not found while the inner pattern gave the pose: skip the face's search
-  // for the next inner_pattern.face_retry_every - 1 images; any invalid image ends the skipping.
+  // for the next kFaceRetryEvery - 1 images; any invalid image ends the skipping.
   void updateFaceRetry(bool face_skipped, const MonoPoseResult& result);
   // Where the inner pattern should appear (empty: not tracking, search the whole image).
   cv::Rect predictedInnerPatternRegion(double stamp_s) const;
@@ -282,7 +286,7 @@ class MonoPoseEstimator {
   PoseWithCovariance last_pose_;
   std::unique_ptr<InnerPatternDetector> inner_pattern_;  // null without an inner pattern or in IR mode
   double last_valid_range_m_ = INFINITY;                 // of the last valid pose (any solver)
-  int face_searches_skipped_left_ = 0;  // images whose face search is skipped (inner_pattern.face_retry_every)
+  int face_searches_skipped_left_ = 0;  // images whose face search is skipped (kFaceRetryEvery)
   double last_stamp_s_ = 0.0;
   FaceAppearance appearance_;
   int preferred_level_ = 0;  // the pyramid level that found the face last

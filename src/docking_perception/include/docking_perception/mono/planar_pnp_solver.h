@@ -15,8 +15,14 @@
 namespace docking_perception {
 namespace mono {
 
-// PlanarPnpParams (when IPPE's two poses count as close) is declared in settings/mono_pose.yaml (generated
-// header).
+// When IPPE's two poses count as close, so that the previous pose decides between them: the larger RMS
+// residual within ambiguity_ratio x the smaller, or both within ambiguity_floor_px (the face's pixel noise
+// floor). Constants of the method, not settings: they compare residuals with each other and with the
+// refinement's noise, which no rig changes. The inner pattern's 30-40 grid corners use a lower floor.
+struct PlanarPnpParams {
+  double ambiguity_ratio = 1.5;
+  double ambiguity_floor_px = 0.5;
+};
 
 struct PlanarPnpSolution {
   PoseWithCovariance pose;

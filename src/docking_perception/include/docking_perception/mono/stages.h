@@ -70,8 +70,8 @@ enum class InnerPatternOutcome : std::uint8_t {
 enum class HintOutcome : std::uint8_t {
   kPassed = 0,
   kRangeDisagrees,        ///< the range differs from a fresh disparity estimate's by max_hint_disagreement_fraction
-  kHeldWithoutHint,       ///< within hint_disagreement_hold_s of a disagreement, no fresh estimate to check
-  kNotRecovered,          ///< within that hold, not yet within hint_recovery_fraction of a fresh estimate
+  kHeldWithoutHint,       ///< within the hold (1 s) after a disagreement, no fresh estimate to check
+  kNotRecovered,          ///< within that hold, not yet within half of max_hint_disagreement_fraction of a fresh estimate
 };
 
 enum class OrientationOutcome : std::uint8_t {
