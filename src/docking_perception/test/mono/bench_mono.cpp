@@ -165,8 +165,7 @@ int main(int argc, char** argv) {
   }
 
   // 90 frames at 30 Hz near contact, the planner's final approach: 0.6 m to 0.2 m, the same yaw swing, less drift.
-  // In the closed loop the visible pose costs most here (the face fills more of the image; docs/PERFORMANCE.md,
-  // "5 Dec 2026, sixth part"). The inner tag is drawn on the face (both approaches), as on the real one.
+  // In the closed loop the visible pose costs most here (the face fills more of the image). The inner tag is drawn on the face (both approaches), as on the real one.
   const std::vector<Frame> near_contact = visibleApproach(model, camera, Approach{0.6, 0.2, 0.02, -0.01}, 3000);
 
   // The shipped visible configuration: the declared defaults (config/mono_pose_visible.yaml changes none).

@@ -333,8 +333,7 @@ TEST(FeatureMatcher, ARowSmearedFaceIsRefinedAgainstTheSmearedModel) {
             << " px, round blurred patches " << scene.rms(round_matched) << " px\n";
   EXPECT_LT(scene.rms(smear_matched), scene.rms(round_matched));
   // At the exact homography too: the sharp patches keep only the few points that still correlate, and
-  // correlate well; averaged over every point tried they lose (until 6 Dec 2026 they won here: half the
-  // points, 0.52 px from the truth).
+  // correlate well; averaged over every point tried they lose.
   const FaceMatch exact = with_smears.matchAtPrediction(smeared, scene.prediction(0.0, 0.0), 0.3);
   ASSERT_TRUE(exact.found) << exact.status;
   EXPECT_EQ(exact.refined_with_row_smear_px, 9);

@@ -106,8 +106,7 @@ TEST(MonoStress, StaleRegionHintIsIgnored) {
 // Blurred faces: 2 px defocus and 9 px motion blur, 3 images per trial from a cold start (no tracking, no
 // hint; the full frame tries one search configuration per image). The old search (full resolution,
 // sharp model, BRISK descriptors) found 1 % and 12 % of these on the tuning seeds. (The sharp model with
-// the upright descriptor alone finds more of the 9 px motion frames than before: PERFORMANCE.md, 5 Dec
-// 2026 fourth part.)
+// the upright descriptor alone finds more of the 9 px motion frames than the old search.)
 TEST(MonoStress, BlurredTargetIsDetected) {
   mono::MonoPoseParams old_params = params("visible");
   old_params.use_half_resolution = false;
