@@ -25,10 +25,6 @@ constexpr double kStillLedStreakPx = 0.8;
 // led_merged_blob, stress report seeds 640:40): one confidently wrong IR pose.
 constexpr double kMaxLedAreaRatio = 2.5;
 constexpr double kMaxLedElongation = 1.8;
-// Near contact, face and tag poses farther apart than 2 cm or 5 deg (+ 3 sigma of the tag's pose): one
-// of the two is wrong and nothing says which, so the image gives no pose.
-constexpr double kInnerCrossCheckPositionM = 0.02;
-constexpr double kInnerCrossCheckAngleRad = 0.0873;
 // A far pose refused against stereo's range keeps far poses without a fresh hint refused this long (the
 // scale bias lasts seconds), and one with a fresh hint must come within half the first refusal's limit to
 // be trusted again (stereo's own range is ~2 % off).
@@ -763,33 +759,16 @@ cv::Rect MonoPoseEstimator::predictedInnerPatternRegion(double stamp_s) const {
 
 InnerPatternOutcome MonoPoseEstimator::applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result) {
   if (!inner_pattern_ || !params_.inner_pattern.enabled || mode_ != MonoMode::kVisible) return {};
-  const double near = params_.inner_pattern.use_range_m;
-  const bool face_near = result->valid && result->pose.translation.norm() < near;
-  // Only near the target (the last pose, from any solver, or this image's face pose): the tag is too
-  // small to help farther, and the search costs CPU.
-  if (!face_near && !(last_valid_range_m_ < near)) return {};
+  // The face's pose (hundreds of points) stands where there is one: the tag is for where the face fails.
+  // (A cross-check of the two, refusing the image when they disagreed, changed no estimate of the held-out
+  // replay: removed, and with it the tag's search on images the face gave a pose.)
+  if (result->valid) return {};
+  // Only near the target (the last pose, from any solver): the tag is too small to help farther, and the
+  // search costs CPU.
+  if (!(last_valid_range_m_ < params_.inner_pattern.use_range_m)) return {};
   double tag_ambiguity_deg = 0.0;
   InnerPatternResult tag = findInnerTag(gray, &tag_ambiguity_deg, result);
-  if (!tag.valid) return {};  // the face's result stands, valid or not
-  if (result->valid) {
-    // Both valid: they must agree, else one of them is wrong and nothing here says which.
-    // The tolerances widen by 3 sigma of the tag's own pose: 4 cm of tag at 0.3-0.45 m gives the
-    // orientation to a few degrees only, and says so.
-    const double apart_m = (tag.pose.translation - result->pose.translation).norm();
-    const double apart_rad = rotationAngleBetween(tag.pose.rotation, result->pose.rotation);
-    const double tag_position_sigma = std::sqrt(tag.pose.covariance.block<3, 3>(0, 0).trace());
-    const double tag_angle_sigma = std::sqrt(tag.pose.covariance.block<3, 3>(3, 3).trace());
-    if (!(apart_m <= kInnerCrossCheckPositionM + 3.0 * tag_position_sigma) ||
-        !(apart_rad <= kInnerCrossCheckAngleRad + 3.0 * tag_angle_sigma)) {
-      result->valid = false;
-      refuse(result, outcomeOf(Stage::kInnerPattern, InnerPatternOutcome::kDisagreesWithFace),
-             RejectReason::kSolverDisagreement,
-             "face pose and inner pattern disagree by " + std::to_string(apart_m * 1000.0) + " mm, " +
-                 std::to_string(apart_rad * 180.0 / M_PI) + " deg");
-      return InnerPatternOutcome::kDisagreesWithFace;
-    }
-    return {};  // the face's pose (hundreds of points) stands, confirmed
-  }
+  if (!tag.valid) return {};  // the face's result stands
   result->valid = true;
   result->status.clear();
   result->solver = kInnerPatternSolverName;

@@ -171,7 +171,7 @@ class MonoPoseEstimator {
   FindOutcome skipFaceSearch(MonoPoseResult* result);
   // Find, solve and vet: the face's pose (visible) or the LEDs' (IR); result->valid when it passed them.
   StageOutcome measurePose(const cv::Mat& gray, MonoPoseResult* result);
-  // Close range: the inner pattern's pose when the face gave none, a cross-check when it did.
+  // Close range: the inner pattern's pose when the face gave none.
   InnerPatternOutcome applyInnerPattern(const cv::Mat& gray, MonoPoseResult* result);
   // A fresh position hint's range against the pose's (consistency.max_hint_disagreement_fraction); without a
   // fresh hint, a pose at least hint_check_min_range_m away is refused for 1 s after a

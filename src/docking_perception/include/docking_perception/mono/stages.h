@@ -20,7 +20,7 @@ enum class Stage : std::uint8_t {
                       ///< direct alignment); IR, the pattern of five LED-like blobs
   kSolve = 3,         ///< the pose from those points: PnP (pnp) or the 5-point solver (paper_5point)
   kVet = 4,           ///< the pose against the image: the face's look, the dots
-  kInnerPattern = 5,  ///< near contact, visible: the inner tag's pose when the face gave none, a cross-check when it did
+  kInnerPattern = 5,  ///< near contact, visible: the inner tag's pose when the face gave none
   kHint = 6,          ///< visible: the range against the disparity detector's estimate of the same target
   kOrientation = 7,   ///< the orientation claimed or withheld (the position stays valid)
   kTrack = 8,         ///< velocities, tracking state and the published (filtered) orientation: always passes
@@ -64,7 +64,7 @@ enum class VetOutcome : std::uint8_t {
 
 enum class InnerPatternOutcome : std::uint8_t {
   kPassed = 0,
-  kDisagreesWithFace,  ///< the face's and the inner tag's poses of one image disagree
+  kRetiredDisagreesWithFace,  ///< retired (the face/tag cross-check; numbers on the wire are never reused)
 };
 
 enum class HintOutcome : std::uint8_t {
