@@ -41,10 +41,11 @@ def scenario_yaml(comment, description, duration_s, seed, lighting, x, y, yaw_de
     """A scenario file's text (docking_sim's format): the chaser at the origin facing +x, the target
     robot at (x, y, yaw_deg) turning at yaw_rate_deg_s. `comment`: the header lines, without '#'.
     extra: the realistic camera's optional keys (chaser_motion, light_direction, extra_clutter,
-    camera_overrides), see RealisticExtras."""
+    camera_overrides), see RealisticExtras, and target_roll_deg (the target turned about its port's axis)."""
     header = "".join(f"# {line}\n" for line in comment.splitlines())
     extra = extra or {}
     chaser_motion = ""
+    roll = f"    roll_deg: {extra['target_roll_deg']:.1f}\n" if extra.get("target_roll_deg") else ""
     if extra.get("chaser_motion"):
         rate, reverse = extra["chaser_motion"]
         chaser_motion = f", motion: {{yaw_rate_deg_s: {rate:.3f}, reverse_every_s: {reverse:.3f}}}"
@@ -58,7 +59,7 @@ def scenario_yaml(comment, description, duration_s, seed, lighting, x, y, yaw_de
     x_m: {x:.4f}
     y_m: {y:.4f}
     yaw_deg: {yaw_deg:.3f}
-    motion: {{yaw_rate_deg_s: {yaw_rate_deg_s:.3f}, velocity_m_s: [0.0, 0.0]}}
+{roll}    motion: {{yaw_rate_deg_s: {yaw_rate_deg_s:.3f}, velocity_m_s: [0.0, 0.0]}}
 """
     if extra.get("light_direction"):
         d = extra["light_direction"]
@@ -238,6 +239,9 @@ def main():
                        lighting="dark"))
     names.append(write("eval_glare_1m", "port 1 m ahead with glare on the visible cameras", 1.0, 0.0, 10.0,
                        lighting="glare"))
+    # Issue 57: a target not upright (a print glued at an angle, a ramp, orbit): rolled 20 deg, sharp, clean.
+    names.append(write("eval_roll20_1m", "port 1 m ahead, the target rolled 20 deg about the port's axis",
+                       1.0, 0.0, 10.0, seed=41, extra={"target_roll_deg": 20.0}))
     names += realistic()
     print("\n".join(names))
 

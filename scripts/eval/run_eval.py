@@ -22,7 +22,8 @@ from launch_runner import free_port  # noqa: E402  (one copy: masters outside th
 # (scenario, lighting). The far set is issue 4's; the near, rotating, dark and glare ones issue 5's.
 FAR = [(f"eval_far_{r}m_{p}", "nominal") for r in ("2", "3", "4", "6") for p in ("on", "off")]
 NEAR = [(f"eval_near_{r}m_{p}", "nominal") for r in ("0p4", "0p7", "1", "1p4", "2") for p in ("on", "off")]
-SPECIAL = [("eval_rotating_1m", "nominal"), ("eval_dark_1m", "dark"), ("eval_glare_1m", "glare")]
+SPECIAL = [("eval_rotating_1m", "nominal"), ("eval_dark_1m", "dark"), ("eval_glare_1m", "glare"),
+           ("eval_roll20_1m", "nominal")]
 
 
 def realistic_scenarios():

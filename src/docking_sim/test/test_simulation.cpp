@@ -35,6 +35,27 @@ TEST(Simulation, TruthVelocityIsTheDerivativeOfTheTruthPose) {
   }
 }
 
+// A rolled target (scenario target.roll_deg) turns about its port's axis: the port stays where the upright
+// target has it, pointing the same way, and the face's up axis turns by the roll; the truth says so.
+TEST(Simulation, ARolledTargetTurnsAboutItsPortAxis) {
+  const std::string upright_text = docking_sim_test::scenarioText(1.5, 0.1, 170.0);
+  std::string rolled_text = upright_text;
+  rolled_text.replace(rolled_text.find("    motion:"), 0, "    roll_deg: 30.0\n");
+  docking_sim::Simulation upright(docking_sim_test::files(docking_sim_test::writeTempFile("upright", upright_text)));
+  docking_sim::Simulation rolled(docking_sim_test::files(docking_sim_test::writeTempFile("rolled", rolled_text)));
+  const Eigen::Isometry3d a = upright.worldTPort(), b = rolled.worldTPort();
+  EXPECT_LT((a.translation() - b.translation()).norm(), 1e-12);
+  EXPECT_LT((a.linear().col(0) - b.linear().col(0)).norm(), 1e-12);
+  EXPECT_NEAR(std::acos(a.linear().col(2).dot(b.linear().col(2))), 30.0 * M_PI / 180.0, 1e-9);
+  const auto camera = docking_sim::RobotModel::kStereoLeft;
+  const Eigen::AngleAxisd relative(upright.truthInCamera(camera).camera_T_port.linear().transpose() *
+                                   rolled.truthInCamera(camera).camera_T_port.linear());
+  EXPECT_NEAR(relative.angle(), 30.0 * M_PI / 180.0, 1e-9);
+  EXPECT_NEAR(std::abs(relative.axis().x()), 1.0, 1e-9);  // about the port's x
+  const std::string too_far = upright_text.substr(0, upright_text.find("    motion:")) + "    roll_deg: 200.0\n";
+  EXPECT_THROW(docking_sim::loadScenario(docking_sim_test::writeTempFile("roll200", too_far)), std::exception);
+}
+
 TEST(Simulation, TargetFollowsItsScriptedMotion) {
   const auto path = docking_sim_test::writeTempFile(
       "motion", "scenario:\n  duration_s: 10\n  seed: 1\n  lighting: nominal\n"

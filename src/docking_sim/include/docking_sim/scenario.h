@@ -38,6 +38,9 @@ struct Scenario {
   std::string lighting;           ///< a key of sim.yaml `lighting`
   omni_base::Pose2D chaser_start;
   omni_base::Pose2D target_start;
+  /// scenario.target.roll_deg: the target turned about its port's axis (a print glued at an angle, a ramp, a
+  /// target not kept upright as in orbit); drawn and in the truth. 0: upright, as on the level floor.
+  double target_roll_rad{0.0};
   TargetMotionSpec target_motion;
   ChaserMotionSpec chaser_motion;          ///< scenario.chaser.motion (optional)
   std::vector<ClutterBox> extra_clutter;   ///< scenario.extra_clutter: boxes added to sim.yaml's room

@@ -52,6 +52,7 @@ Scenario loadScenario(const std::string& path) {
   out.lighting = s["lighting"].asString();
   out.chaser_start = readPose(s["chaser"]);
   out.target_start = readPose(s["target"]);
+  if (s["target"].has("roll_deg")) out.target_roll_rad = s["target"]["roll_deg"].asDouble(-180.0, 180.0) * kDegToRad;
   if (s["target"].has("motion")) {
     const YamlField m = s["target"]["motion"];
     out.target_motion.yaw_rate_rad_s = m["yaw_rate_deg_s"].asDouble(-360.0, 360.0) * kDegToRad;

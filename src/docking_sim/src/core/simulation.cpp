@@ -106,7 +106,15 @@ Eigen::Isometry3d Simulation::worldTChaser() const {
 Eigen::Isometry3d Simulation::worldTTargetRobotAt(double t_s) const {
   const auto& s = scenario_.target_start;
   const auto& m = scenario_.target_motion;
-  return planarPose(s.x + m.velocity_x_m_s * t_s, s.y + m.velocity_y_m_s * t_s, s.yaw + m.yaw_rate_rad_s * t_s);
+  const Eigen::Isometry3d on_floor =
+      planarPose(s.x + m.velocity_x_m_s * t_s, s.y + m.velocity_y_m_s * t_s, s.yaw + m.yaw_rate_rad_s * t_s);
+  if (scenario_.target_roll_rad == 0.0) return on_floor;
+  // Rolled about the port's own axis (its x, out of the face): the port stays where it was, the face and
+  // everything on it turn in the chaser's images.
+  const Eigen::Isometry3d& robot_T_port = target_.robot_T_port;
+  Eigen::Isometry3d roll = Eigen::Isometry3d::Identity();
+  roll.linear() = Eigen::AngleAxisd(scenario_.target_roll_rad, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  return on_floor * robot_T_port * roll * robot_T_port.inverse();
 }
 
 Eigen::Isometry3d Simulation::worldTCameraAt(int camera, double dt_s) const {
