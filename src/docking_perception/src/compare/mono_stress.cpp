@@ -126,7 +126,7 @@ TrialPose StressRenderer::drawPose(const StressCondition& condition, uint64_t se
     const double range = uniform(rng, condition.min_range_m, condition.max_range_m);
     const double yaw = uniform(rng, -35.0, 35.0) * M_PI / 180.0;
     const double pitch = uniform(rng, -10.0, 10.0) * M_PI / 180.0;
-    const double roll = uniform(rng, -10.0, 10.0) * M_PI / 180.0;
+    const double roll = uniform(rng, -condition.max_roll_deg, condition.max_roll_deg) * M_PI / 180.0;
     // Off-axis: a direction up to the image border (halved on later attempts until the face fits).
     const double shrink = std::pow(0.8, attempt);
     const double nx = uniform(rng, -1.0, 1.0) * shrink * 0.5 * kWidth / kFocalPx;
@@ -426,6 +426,7 @@ std::vector<StressCondition> standardConditions() {
   { auto c = visible("occlusion"); c.occlusion = true; out.push_back(c); }
   { auto c = visible("clutter_specular_occlusion_defocus1"); c.clutter = true; c.specular = true; c.occlusion = true;
     c.defocus_sigma_px = 1.0; out.push_back(c); }
+  { auto c = visible("roll_any"); c.max_roll_deg = 180.0; out.push_back(c); }  // issue 57: any in-plane rotation
   auto ir = [](const std::string& name) {
     StressCondition c;
     c.name = name;
@@ -439,6 +440,7 @@ std::vector<StressCondition> standardConditions() {
   { auto c = ir("ir_reflection"); c.reflection = true; out.push_back(c); }
   { auto c = ir("ir_reflection_far"); c.reflection = true; c.min_range_m = 1.6; out.push_back(c); }
   { auto c = ir("ir_occlusion"); c.occlusion = true; out.push_back(c); }
+  { auto c = ir("ir_roll_any"); c.max_roll_deg = 180.0; out.push_back(c); }
   return out;
 }
 

@@ -37,6 +37,8 @@ struct StressCondition {
                                  // up to 15 % of its size and grown by 30 %: a disparity detector's guess)
   double min_range_m = 0.4;
   double max_range_m = 2.0;
+  double max_roll_deg = 10.0;    // the face turned in the image plane up to +-this (a level floor: a few deg;
+                                 // a tilted mount, a print glued at an angle or orbit: any, 180)
 };
 
 // The harness's conditions (visible and IR), in report order.
@@ -64,7 +66,7 @@ class StressRenderer {
   const mono::TargetModel& model() const { return model_; }
 
   // A pose inside the condition's range with the whole face in view (margin 8 px), yaw up to 35 deg,
-  // pitch and roll up to 10 deg, off-axis up to the image border.
+  // pitch up to 10 deg, roll up to the condition's max_roll_deg, off-axis up to the image border.
   TrialPose drawPose(const StressCondition& condition, uint64_t seed) const;
   // One degraded frame; frame_seed varies noise, blur direction, blob and card placement.
   StressFrame render(const StressCondition& condition, const TrialPose& pose, uint64_t scene_seed,
