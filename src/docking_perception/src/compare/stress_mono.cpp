@@ -61,7 +61,6 @@ void applyBaseline(mono::MonoPoseParams* p) {
   p->consistency.covariance_blur_gain = 0.0;
   p->consistency.max_rotation_sigma_deg = 1e6;
   p->consistency.innovation_window_frames = 0.0;
-  p->consistency.max_rotation_innovation_chi2 = 0.0;
   p->consistency.confirm_new_orientation = false;
 }
 

@@ -661,12 +661,6 @@ OrientationOutcome MonoPoseEstimator::orientationOutcome(MonoPoseResult* result)
                      std::to_string(result->ambiguity_deg) + " deg (max_ambiguity_deg)";
     return OrientationOutcome::kAmbiguous;
   }
-  const double gate = params_.consistency.max_rotation_innovation_chi2;
-  if (gate > 0.0 && result->rotation_innovation_chi2 > gate) {
-    result->status = "orientation withheld: it jumps from the tracked orientation (chi2 " +
-                     std::to_string(result->rotation_innovation_chi2) + " > max_rotation_innovation_chi2)";
-    return OrientationOutcome::kJumps;
-  }
   if (params_.consistency.confirm_new_orientation && !result->rotation_innovation_checked) {
     result->status = "orientation withheld: a first pose, nothing to confirm it yet (confirm_new_orientation)";
     return OrientationOutcome::kUnconfirmed;
@@ -679,7 +673,7 @@ void MonoPoseEstimator::scaleByInnovation(MonoPoseResult* result) {
   PoseWithCovariance predicted;
   if (filter_.initialized() && result->stamp_s > filter_.lastStamp() &&
       result->stamp_s - filter_.lastStamp() <= params_.filter.max_gap_s && filter_.predict(result->stamp_s, &predicted)) {
-    result->rotation_innovation_chi2 = innovation_scale_.update(result->pose, predicted);
+    innovation_scale_.update(result->pose, predicted);
     result->rotation_innovation_checked = true;
   }
   innovation_scale_.apply(&result->pose.covariance);

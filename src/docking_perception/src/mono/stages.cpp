@@ -30,7 +30,7 @@ const char* outcomeName(Stage stage, std::uint8_t code) {
                                                   "solver_disagreement"};
   static const std::array<const char*, 2> kInnerPattern = {"passed", "retired"};
   static const std::array<const char*, 4> kHint = {"passed", "range_disagrees", "held_without_hint", "not_recovered"};
-  static const std::array<const char*, 5> kOrientation = {"claimed", "ambiguous", "jumps", "unconfirmed", "uncertain"};
+  static const std::array<const char*, 5> kOrientation = {"claimed", "ambiguous", "retired", "unconfirmed", "uncertain"};
   static const std::array<const char*, 2> kPosition = {"claimed", "uncertain"};
   static const std::array<const char*, 1> kPassedOnly = {"passed"};
   switch (stage) {

@@ -109,8 +109,7 @@ struct MonoPoseResult {
   double blur_sigma_px = 0.0;          // visible: the image blur that matched the model best; IR: the LED streaks
   // The covariance's scale (variance) from the poses' scatter about the filter (InnovationCovarianceScale).
   double covariance_scale_position = 1.0;
-  double rotation_innovation_chi2 = 0.0;  // this frame's orientation vs the filter's prediction (3 dof)
-  bool rotation_innovation_checked = false;  // ... computed: the filter had a recent pose to predict from
+  bool rotation_innovation_checked = false;  // the filter had a recent pose to predict this one from
   double covariance_scale_rotation = 1.0;
   bool used_direct_alignment = false;  // visible: the pose rests on the direct (ECC) alignment, not features
   double direct_correlation = -1.0;    // visible: the direct alignment's final correlation (-1: not tried)

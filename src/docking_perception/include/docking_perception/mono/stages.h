@@ -77,7 +77,7 @@ enum class HintOutcome : std::uint8_t {
 enum class OrientationOutcome : std::uint8_t {
   kClaimed = 0,
   kAmbiguous,    ///< IPPE's two poses fit alike and differ by more than max_ambiguity_deg
-  kJumps,        ///< it jumps from the tracked orientation (max_rotation_innovation_chi2)
+  kRetiredJumps, ///< retired (a jump from the tracked orientation; numbers on the wire are never reused)
   kUnconfirmed,  ///< a first orientation, nothing to confirm it yet (confirm_new_orientation)
   kUncertain,    ///< its largest sigma is above max_rotation_sigma_deg
 };
