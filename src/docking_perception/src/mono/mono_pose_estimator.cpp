@@ -468,7 +468,7 @@ DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool trackin
   // 5 yaws, 15 deg apart over the shipped +-30 deg (the coarse levels score each).
   constexpr int count = 5;
   for (int i = 0; i < count; ++i) {
-    const double yaw_deg = count == 1 ? 0.0 : params_.direct_max_yaw_deg * (2.0 * i / (count - 1) - 1.0);
+    const double yaw_deg = params_.direct_max_yaw_deg * (2.0 * i / (count - 1) - 1.0);
     hypothesis.rotation = facing * Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const DirectAlignment coarse =
         direct_aligner_.align(gray, faceHomography(model_, camera_, hypothesis), /*coarse_only=*/true);
@@ -787,7 +787,6 @@ InnerPatternResult MonoPoseEstimator::findInnerTag(const cv::Mat& gray, double* 
   if (!tag.valid && region.area() > 0) tag = inner_pattern_->detect(gray, camera_, previous);
   result->inner_pattern_status = tag.valid ? "" : tag.status;
   if (!tag.valid) return tag;
-  result->inner_pattern_corners.assign(tag.corners_px.begin(), tag.corners_px.end());
   // The tag's pose takes the covariance model of every PnP pose. Its fit's covariance alone claimed
   // ~3 deg at 0.3-0.45 m when IPPE's other solution, 10-13 deg away, fitted as well and no claimed
   // orientation decided: one of those was the pose, and it was 11 deg off. The tag's own poses often
@@ -976,12 +975,7 @@ StageOutcome MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMa
     // The 5-point covariance (its own Jacobian) scaled for blur, plus the floor.
     const double blur_factor = 1.0 + c.covariance_blur_gain * appearance.blur_sigma_px;
     result->pose.covariance *= blur_factor * blur_factor;
-    const double position_floor = kPositionFloorFraction * result->pose.translation.norm();
-    const double rotation_floor = kRotationFloorDeg * M_PI / 180.0;
-    for (int i = 0; i < 3; ++i) {
-      result->pose.covariance(i, i) += position_floor * position_floor;
-      result->pose.covariance(3 + i, 3 + i) += rotation_floor * rotation_floor;
-    }
+    addCovarianceFloor(result->pose.translation.norm(), &result->pose.covariance);
   }
   addFaceScaleBias(camera_, model_.faceCorners(), c.face_scale_bias_px, &result->pose);
   return {};

@@ -227,14 +227,17 @@ Matrix6d honestCovariance(const CameraIntrinsics& camera, const PoseWithCovarian
   Matrix6d covariance;
   leastSquaresPoseCovariance(camera, pose.rotation, pose.translation, model_points, pixel_sigma * pixel_sigma,
                              &covariance);
-  const double range = pose.translation.norm();
-  const double position_floor = kPositionFloorFraction * range;
+  addCovarianceFloor(pose.translation.norm(), &covariance);
+  return covariance;
+}
+
+void addCovarianceFloor(double range_m, Matrix6d* covariance) {
+  const double position_floor = kPositionFloorFraction * range_m;
   const double rotation_floor = kRotationFloorDeg * M_PI / 180.0;
   for (int i = 0; i < 3; ++i) {
-    covariance(i, i) += position_floor * position_floor;
-    covariance(3 + i, 3 + i) += rotation_floor * rotation_floor;
+    (*covariance)(i, i) += position_floor * position_floor;
+    (*covariance)(3 + i, 3 + i) += rotation_floor * rotation_floor;
   }
-  return covariance;
 }
 
 namespace {

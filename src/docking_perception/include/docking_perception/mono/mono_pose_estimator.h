@@ -119,9 +119,8 @@ struct MonoPoseResult {
   std::vector<cv::Point2f> face_outline;
   std::vector<Eigen::Vector2d> marker_pixels;  // markers / LEDs in model order, when located
   std::vector<Eigen::Vector2d> blob_pixels;    // IR: every LED blob
-  // The inner pattern, when it was looked for: why it gave no pose (empty when it did), its corners.
+  // The inner pattern, when it was looked for: why it gave no pose (empty when it did).
   std::string inner_pattern_status;
-  std::vector<Eigen::Vector2d> inner_pattern_corners;
 };
 
 class MonoPoseEstimator {

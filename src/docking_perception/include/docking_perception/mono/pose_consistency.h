@@ -41,6 +41,8 @@ namespace mono {
 // position axis' sigma at least 0.2 % of the range, each rotation axis' 0.3 deg.
 constexpr double kPositionFloorFraction = 0.002;
 constexpr double kRotationFloorDeg = 0.3;
+// Adds that floor to a pose covariance (position block at `range_m`).
+void addCovarianceFloor(double range_m, Matrix6d* covariance);
 
 // Area of the convex hull of texture points / texture area (0 for fewer than 3 points).
 double inlierSpread(const std::vector<cv::Point2f>& texture_points, const cv::Size& texture_size);
