@@ -54,6 +54,7 @@ if(CATKIN_ENABLE_TESTING)
     test/mono/test_planar_pnp_solver.cpp
     test/mono/test_velocity_estimators.cpp
     test/mono/test_led_pattern_detector.cpp
+    test/mono/test_dark_dot_finder.cpp
     test/mono/test_mono_pose_estimator.cpp
     test/mono/test_inner_pattern.cpp)
   if(TARGET test_mono_core)

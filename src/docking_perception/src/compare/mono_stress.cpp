@@ -426,7 +426,14 @@ std::vector<StressCondition> standardConditions() {
   { auto c = visible("occlusion"); c.occlusion = true; out.push_back(c); }
   { auto c = visible("clutter_specular_occlusion_defocus1"); c.clutter = true; c.specular = true; c.occlusion = true;
     c.defocus_sigma_px = 1.0; out.push_back(c); }
-  { auto c = visible("roll_any"); c.max_roll_deg = 180.0; out.push_back(c); }  // issue 57: any in-plane rotation
+  // Any in-plane rotation (a tilted mount, a print glued at an angle, orbit), sharp and under each blur: the
+  // cold column of these is the single image with no prior.
+  { auto c = visible("roll_any"); c.max_roll_deg = 180.0; out.push_back(c); }
+  { auto c = visible("roll_any_defocus2"); c.max_roll_deg = 180.0; c.defocus_sigma_px = 2.0; out.push_back(c); }
+  { auto c = visible("roll_any_motion9"); c.max_roll_deg = 180.0; c.motion_length_px = 9.0; out.push_back(c); }
+  { auto c = visible("roll_any_noise8"); c.max_roll_deg = 180.0; c.noise_sigma = 8.0; out.push_back(c); }
+  { auto c = visible("roll_any_defocus2_motion9_noise8"); c.max_roll_deg = 180.0; c.defocus_sigma_px = 2.0;
+    c.motion_length_px = 9.0; c.noise_sigma = 8.0; out.push_back(c); }
   auto ir = [](const std::string& name) {
     StressCondition c;
     c.name = name;

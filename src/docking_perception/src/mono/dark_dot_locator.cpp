@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
+
+#include <opencv2/imgproc.hpp>
 
 namespace docking_perception {
 namespace mono {
@@ -93,6 +96,126 @@ bool DarkDotLocator::locate(const cv::Mat& gray, const Eigen::Vector2d& predicte
   *centre = current;
   return true;
 }
+
+namespace {
+
+// A radius is looked for on the pyramid level where it is at least this many pixels (and under twice it).
+constexpr double kMinLevelRadiusPx = 2.0;
+// The circle sampled around a candidate: between the dot's edge (1 radius) and the white ring's outer edge
+// (>= 1.6 radii, target_print's ring_outer_factor).
+constexpr double kRingRadiusInDotRadii = 1.4;
+// A candidate's third-darkest circle sample is at least this much brighter than its centre (8-bit levels:
+// several times the noise left after the level's smoothing).
+constexpr int kMinStrength = 10;
+
+// The third smallest of 8 values.
+int thirdSmallest(const int* v) {
+  int a = 256, b = 256, c = 256;  // a <= b <= c: the three smallest so far
+  for (int k = 0; k < 8; ++k) {
+    const int x = v[k];
+    if (x < c) {
+      if (x < b) {
+        c = b;
+        if (x < a) {
+          b = a;
+          a = x;
+        } else {
+          b = x;
+        }
+      } else {
+        c = x;
+      }
+    }
+  }
+  return c;
+}
+
+// True when p[0] is the darkest of its 3x3 neighbourhood in an image of row `step`: strictly darker than the
+// neighbours after it (right, below), at most as dark as those before it, so a flat patch gives no minimum
+// and a two-pixel minimum one.
+bool localMinimum(const uint8_t* p, size_t step) {
+  const uint8_t c = p[0];
+  const uint8_t* up = p - step;
+  const uint8_t* down = p + step;
+  return c < p[1] && c < down[0] && c <= p[-1] && c <= up[0] && c < down[1] && c < down[-1] && c <= up[-1] &&
+         c <= up[1];
+}
+
+}  // namespace
+
+DarkDotFinder::DarkDotFinder(std::vector<double> radii_px) : radii_px_(std::move(radii_px)) {}
+
+void DarkDotFinder::findAtRadius(const cv::Mat& level, int level_index, double radius_px,
+                                 std::vector<Candidate>* found) const {
+  const double scale = static_cast<double>(1 << level_index);
+  const double ring = kRingRadiusInDotRadii * radius_px / scale;
+  int dx[8], dy[8];
+  for (int k = 0; k < 8; ++k) {
+    dx[k] = static_cast<int>(std::lround(ring * std::cos(k * M_PI / 4.0)));
+    dy[k] = static_cast<int>(std::lround(ring * std::sin(k * M_PI / 4.0)));
+  }
+  const int border = static_cast<int>(std::ceil(ring)) + 1;
+  const size_t step = level.step[0];
+  int samples[8];
+  for (int y = border; y < level.rows - border; ++y) {
+    const uint8_t* row = level.ptr<uint8_t>(y);
+    for (int x = border; x < level.cols - border; ++x) {
+      const uint8_t* p = row + x;
+      if (!localMinimum(p, step)) continue;
+      for (int k = 0; k < 8; ++k) samples[k] = p[dy[k] * static_cast<long>(step) + dx[k]];
+      const int strength = thirdSmallest(samples) - p[0];
+      if (strength < kMinStrength) continue;
+      // A level pixel covers scale x scale image pixels: its centre in the image.
+      const Eigen::Vector2d centre((x + 0.5) * scale - 0.5, (y + 0.5) * scale - 0.5);
+      found->push_back({centre, radius_px, static_cast<double>(strength)});
+    }
+  }
+}
+
+std::vector<std::vector<LedBlob>> DarkDotFinder::find(const cv::Mat& gray, size_t max_per_radius) const {
+  std::vector<std::vector<LedBlob>> found;
+  if (gray.empty() || gray.type() != CV_8UC1) return found;
+  // The levels: the image smoothed 3x3 (the noise), then halved as often as the largest radius needs.
+  std::vector<cv::Mat> levels(1);
+  cv::blur(gray, levels[0], cv::Size(3, 3));
+  for (const double radius : radii_px_) {
+    int level = 0;
+    while (radius / (1 << (level + 1)) >= kMinLevelRadiusPx) ++level;
+    while (static_cast<int>(levels.size()) <= level) {
+      levels.emplace_back();
+      cv::pyrDown(levels[levels.size() - 2], levels.back());
+    }
+    std::vector<Candidate> candidates;
+    findAtRadius(levels[static_cast<size_t>(level)], level, radius, &candidates);
+    found.push_back(strongestDots(gray, candidates, max_per_radius));
+  }
+  return found;
+}
+
+std::vector<LedBlob> DarkDotFinder::strongestDots(const cv::Mat& gray, std::vector<Candidate> candidates,
+                                                  size_t max_dots) const {
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.strength > b.strength; });
+  // One per place: a candidate within the radius of a stronger one is the same dot.
+  std::vector<Candidate> kept;
+  for (const Candidate& c : candidates) {
+    if (kept.size() >= max_dots) break;
+    const bool taken = std::any_of(kept.begin(), kept.end(),
+                                   [&](const Candidate& k) { return (k.centre - c.centre).norm() < c.radius_px; });
+    if (!taken) kept.push_back(c);
+  }
+  std::vector<LedBlob> dots;
+  for (const Candidate& c : kept) {
+    LedBlob dot;
+    // The centre to a fraction of a pixel where the locator can; else the level's pixel.
+    if (!locator_.locate(gray, c.centre, c.radius_px, &dot.centroid, nullptr)) dot.centroid = c.centre;
+    dot.area_px = M_PI * c.radius_px * c.radius_px;
+    dot.peak = c.strength;
+    dots.push_back(dot);
+  }
+  return dots;
+}
+
 
 }  // namespace mono
 }  // namespace docking_perception

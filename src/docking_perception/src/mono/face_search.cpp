@@ -15,7 +15,7 @@ ModelSet modelSet(int configuration) {
 }  // namespace
 
 FaceSearchOutcome searchFace(const FeatureMatcher& matcher, const cv::Mat& gray, const std::vector<SearchRegion>& priors,
-                             bool use_blur_search, int* preferred) {
+                             bool use_blur_search, int* preferred, bool full_frame) {
   FaceSearchOutcome outcome;
   // The configurations this matcher has (its model sets), in order.
   std::vector<int> available = {0};
@@ -52,6 +52,7 @@ FaceSearchOutcome searchFace(const FeatureMatcher& matcher, const cv::Mat& gray,
   // The full frame costs a whole keypoint budget per configuration: one configuration per image, the
   // next one on the next image (a cold start under blur takes up to kSearchConfigurations images, and
   // no image costs more than one full-frame search).
+  if (!full_frame) return outcome;
   order.resize(1);
   if (!attempt(cv::Rect(), 0.0, -1)) {
     const auto current = std::find(available.begin(), available.end(), order.front());

@@ -108,6 +108,14 @@ std::string toString(VelocityMethod method) {
   return method == VelocityMethod::kFilter ? "kalman" : "frame_difference";
 }
 
+// The printed dots' apparent radii where the face is as wide as each model level (the range band the
+// pyramid covers).
+std::vector<double> dotRadii(const TargetModel& model, const FeatureMatcherParams& features) {
+  std::vector<double> radii;
+  for (const int width : features.model_widths_px) radii.push_back(width * model.markerRadius() / model.faceWidth());
+  return radii;
+}
+
 MonoMode modeOf(const MonoPoseParams& params) {
   MonoMode mode = MonoMode::kVisible;
   parseMonoMode(params.mode, &mode);
@@ -143,6 +151,7 @@ MonoPoseEstimator::MonoPoseEstimator(const TargetModel& model, const CameraIntri
       velocity_(velocityOf(params)),
       matcher_(params.features),
       led_detector_(model.markers(), params.leds),
+      dot_finder_(dotRadii(model, params.features)),
       five_point_solver_(model.markers()),
       pnp_solver_(PlanarPnpParams(), params.min_pixel_sigma),
       filter_(params.filter),
@@ -177,6 +186,7 @@ void MonoPoseEstimator::setParams(const MonoPoseParams& params) {
   velocity_ = velocityOf(params);
   if (model_.hasTexture()) direct_aligner_ = DirectFaceAligner(model_, params.direct);
   matcher_.setParams(params.features);
+  dot_finder_ = DarkDotFinder(dotRadii(model_, params.features));
   led_detector_.setParams(params.leds);
   pnp_solver_.setParams(PlanarPnpParams(), params.min_pixel_sigma);
   filter_.setParams(params.filter);
@@ -347,11 +357,10 @@ StageOutcome MonoPoseEstimator::measureVisible(const cv::Mat& gray, const cv::Re
 }
 
 bool MonoPoseEstimator::posedAtPredictedFace(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result) {
-  // Tracking with a claimed orientation (the face's place and perspective are known): refine it there.
-  // A prediction that does not hold, or a pose failing a check, falls back to the feature search from a
-  // clean result.
-  if (!params_.predict_face_when_tracking || solver_ != PoseSolverType::kPnp || region.area() <= 0 ||
-      !last_orientation_claimed_) {
+  // Tracking (the face's place and perspective are predicted, also from a pose whose orientation was
+  // withheld: the refinement keeps only the points the image confirms): refine it there. A prediction that
+  // does not hold, or a pose failing a check, falls back to the search from a clean result.
+  if (!params_.predict_face_when_tracking || solver_ != PoseSolverType::kPnp || region.area() <= 0) {
     return false;
   }
   const MonoPoseResult before = *result;
@@ -373,7 +382,28 @@ StageOutcome MonoPoseEstimator::findFace(const cv::Mat& gray, const cv::Rect& re
   std::vector<SearchRegion> priors = {{region, face_width_px}};
   const bool hint_fresh = hintFresh(result->stamp_s);
   if (hint_fresh && region.area() <= 0) priors.push_back({hint_region_, 0.0});
-  const FaceSearchOutcome search = searchFace(matcher_, gray, priors, params_.use_half_resolution, &preferred_level_);
+  // Features where a prior puts the face (cheap: small regions), then its five dots anywhere (any roll, under
+  // blur), then features over the full frame (dots hidden by glare or an occluder), then the direct alignment.
+  std::string dots_status;
+  std::optional<cv::Matx33d> dots_homography;  // the face where the first solved dot pattern puts it
+  if (!findFaceByFeatures(gray, priors, /*full_frame=*/false, match, result) &&
+      !findFaceByDots(gray, match, &dots_status, &dots_homography, result)) {
+    findFaceByFeatures(gray, {}, /*full_frame=*/true, match, result);
+    if (!match->found) match->status += "; dots: " + dots_status;
+  }
+  if (!match->found && params_.use_direct_alignment && (dots_homography || directSearchDue())) {
+    alignFaceDirectly(gray, hint_fresh, dots_homography ? &*dots_homography : nullptr, match, direct_sigma_px, result);
+  }
+  if (!match->found) {
+    return refuse(result, outcomeOf(Stage::kFind, FindOutcome::kFaceNotFound), RejectReason::kNotFound, match->status);
+  }
+  return {};
+}
+
+bool MonoPoseEstimator::findFaceByFeatures(const cv::Mat& gray, const std::vector<SearchRegion>& regions,
+                                           bool full_frame, FaceMatch* match, MonoPoseResult* result) {
+  const FaceSearchOutcome search =
+      searchFace(matcher_, gray, regions, params_.use_half_resolution, &preferred_level_, full_frame);
   *match = search.match;
   result->used_tracking_region = match->found && search.prior_index == 0;
   result->used_region_hint = match->found && search.prior_index == 1;
@@ -384,19 +414,76 @@ StageOutcome MonoPoseEstimator::findFace(const cv::Mat& gray, const cv::Rect& re
   result->matched_points = match->matched_image_points;
   result->inlier_points = match->inlier_image_points;
   result->face_outline = match->face_outline;
-  if (!match->found && params_.use_direct_alignment && directSearchDue()) {
-    alignFaceDirectly(gray, hint_fresh, match, direct_sigma_px, result);
-  }
-  if (!match->found) {
-    return refuse(result, outcomeOf(Stage::kFind, FindOutcome::kFaceNotFound), RejectReason::kNotFound, match->status);
-  }
-  return {};
+  return match->found;
 }
 
-void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, FaceMatch* match, double* direct_sigma_px,
-                                          MonoPoseResult* result) {
-  const DirectAlignment direct = alignDirect(gray, tracking_, hint_fresh, result->stamp_s);
-  noteDirectSearch(!tracking_ && hint_fresh, direct.found);
+bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
+                                       std::optional<cv::Matx33d>* first_solved, MonoPoseResult* result) const {
+  std::vector<LedPatternCandidate> patterns = dotPatterns(gray, status);
+  // Patterns tried per image, best first: each costs a solve and a refinement.
+  constexpr size_t kMaxDotPatterns = 4;
+  if (patterns.size() > kMaxDotPatterns) patterns.resize(kMaxDotPatterns);
+  for (const LedPatternCandidate& pattern : patterns) {
+    MonoPoseResult trial;
+    if (solveFivePoint(pattern.pixels, &trial, status) != SolveOutcome::kPassed) continue;
+    cv::Matx33d homography = faceHomography(model_, camera_, trial.pose);
+    homography *= 1.0 / homography(2, 2);
+    if (!*first_solved) *first_solved = homography;
+    FaceMatch at = matcher_.matchAtPrediction(gray, homography, kPredictedFaceMinKeptFraction);
+    if (!at.found) {
+      *status = "the face at the dots' pose: " + at.status;
+      continue;
+    }
+    *match = at;
+    result->found_by_dots = true;
+    result->search_region = cv::Rect(0, 0, gray.cols, gray.rows);
+    // The model points correlated where the dots' pose put them play the feature matches' part.
+    result->feature_matches = std::max(match->refine_candidates, match->inliers);
+    result->feature_inliers = match->inliers;
+    result->inlier_points = match->inlier_image_points;
+    result->face_outline = match->face_outline;
+    return true;
+  }
+  return false;
+}
+
+std::vector<LedPatternCandidate> MonoPoseEstimator::dotPatterns(const cv::Mat& gray, std::string* reason) const {
+  // Dots per radius: the target's five among the print's other dark details and the clutter's.
+  constexpr size_t kMaxDotsPerRadius = 16;
+  // The longer arm (marker 0 to 2) is this many dot radii on the face; seen turned, in perspective and at the
+  // neighbouring radius, between these fractions of it.
+  const double arm_in_radii = (model_.markers()[0] - model_.markers()[2]).norm() / model_.markerRadius();
+  constexpr double kMinArmFraction = 0.4;
+  constexpr double kMaxArmFraction = 1.6;
+  const std::vector<std::vector<LedBlob>> by_radius = dot_finder_.find(gray, kMaxDotsPerRadius);
+  std::vector<LedPatternCandidate> patterns;
+  for (size_t i = 0; i < by_radius.size(); ++i) {
+    const double radius = dot_finder_.radii()[i];
+    for (const LedPatternCandidate& pattern : led_detector_.identifyPattern(by_radius[i], reason)) {
+      const double arm = (pattern.pixels[0] - pattern.pixels[2]).norm() / (arm_in_radii * radius);
+      if (arm >= kMinArmFraction && arm <= kMaxArmFraction) patterns.push_back(pattern);
+    }
+  }
+  std::sort(patterns.begin(), patterns.end(),
+            [](const LedPatternCandidate& a, const LedPatternCandidate& b) { return a.score < b.score; });
+  if (patterns.empty()) *reason = "no 5-dot pattern of one dot size";
+  return patterns;
+}
+
+void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const cv::Matx33d* dots_homography,
+                                          FaceMatch* match, double* direct_sigma_px, MonoPoseResult* result) {
+  // The prior: the track; else the dots' pose; else (the dots may be another object's dark spots) the hint.
+  DirectAlignment direct;
+  bool from_dots = false;
+  if (!tracking_ && dots_homography != nullptr) {
+    direct = direct_aligner_.align(gray, *dots_homography);
+    from_dots = direct.found;
+  }
+  const bool from_hint = !tracking_ && !from_dots && hint_fresh;
+  if (!from_dots) {
+    direct = alignDirect(gray, tracking_, hint_fresh, result->stamp_s);
+    noteDirectSearch(from_hint, direct.found);
+  }
   result->direct_correlation = direct.correlation;
   if (!direct.found) {
     if (!direct.status.empty()) match->status += "; direct alignment: " + direct.status;
@@ -410,7 +497,8 @@ void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, 
   match->inliers = static_cast<int>(direct.image_points.size());
   result->used_direct_alignment = true;
   result->used_tracking_region = tracking_;
-  result->used_region_hint = !tracking_;
+  result->used_region_hint = from_hint;
+  result->found_by_dots = from_dots;
   result->inlier_points = direct.image_points;
   result->face_outline = direct.face_outline;
   *direct_sigma_px = direct.pixel_sigma_px;
@@ -454,7 +542,7 @@ DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool trackin
   }
   DirectAlignment best;
   if (!hint_fresh) {
-    best.status = "no prior (tracking or hint)";
+    best.status = "no prior (tracking, dots or hint)";
     return best;
   }
   // The hint gives a position only: the face looking along the optical axis (the upright texture), turned

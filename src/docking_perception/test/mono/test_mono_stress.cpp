@@ -104,42 +104,32 @@ TEST(MonoStress, StaleRegionHintIsIgnored) {
 }
 
 // Blurred faces: 2 px defocus and 9 px motion blur, 3 images per trial from a cold start (no tracking, no
-// hint; the full frame tries one search configuration per image). The old search (full resolution,
-// sharp model, BRISK descriptors) found 1 % and 12 % of these on the tuning seeds. (The sharp model with
-// the upright descriptor alone finds more of the 9 px motion frames than the old search.)
+// hint). The printed dots survive the blur the face's corners do not: with them the search finds nearly all
+// (features alone, before the dots: 0.54 and 0.53 of stress_mono's report seeds 640:40).
 TEST(MonoStress, BlurredTargetIsDetected) {
-  mono::MonoPoseParams old_params = params("visible");
-  old_params.use_half_resolution = false;
-  old_params.features.blurred_model_sigma_px = 0.0;
-  old_params.features.upright_descriptors = false;
   for (const std::string name : {"defocus2", "motion9"}) {
     const stress::ConditionSummary now = stress::runCondition(renderer(), condition(name), params("visible"), kFirstSeed, 12, 3);
-    const stress::ConditionSummary before = stress::runCondition(renderer(), condition(name), old_params, kFirstSeed, 12, 3);
-    std::printf("%s: %d of %d valid (old search: %d)\n", name.c_str(), now.valid, now.frames, before.valid);
-    EXPECT_GT(now.valid, before.valid) << name;
-    EXPECT_GE(now.valid, now.frames / 5) << name;
+    std::printf("%s: %d of %d valid\n", name.c_str(), now.valid, now.frames);
+    EXPECT_GE(now.valid, now.frames * 9 / 10) << name;
     EXPECT_EQ(now.confident_wrong, 0) << name;
   }
 }
 
-// A target at any in-plane rotation (issue 57: a tilted mount, a print glued at an angle, orbit), sharp, from
-// a cold start: the LED pattern is found at any roll; the face with the shipped upright descriptors only
-// within a few tens of degrees, with BRISK's rotation-invariant ones (upright_descriptors false) at any roll.
-// On the report seeds 640:40 (stress_mono --only roll_any,ir_roll_any): visible 0.475 (cold 0.075), with
-// BRISK 1.000, IR 1.000.
-TEST(MonoStress, ARolledTargetIsFoundByTheLedsAndByRotationInvariantDescriptors) {
+// A target at any in-plane rotation (a tilted mount, a print glued at an angle, orbit), one image each with
+// no prior: the IR instance finds its LED pattern, the visible one the pattern of its printed dots (the
+// shipped upright descriptors alone found 0.475 of the sharp images of stress_mono's report seeds 640:40).
+// Sharp, and under 2 px of defocus, 9 px of motion blur and 8 levels of noise together.
+TEST(MonoStress, ARolledTargetIsFoundInASingleImageByItsLedsAndItsDots) {
   const stress::ConditionSummary ir = stress::runCondition(renderer(), condition("ir_roll_any"), params("ir"), kFirstSeed, 12, 1);
-  mono::MonoPoseParams brisk = params("visible");
-  brisk.features.upright_descriptors = false;
-  const stress::StressCondition rolled = condition("roll_any");
-  const stress::ConditionSummary invariant = stress::runCondition(renderer(), rolled, brisk, kFirstSeed, 12, 1);
-  const stress::ConditionSummary upright = stress::runCondition(renderer(), rolled, params("visible"), kFirstSeed, 12, 1);
-  std::printf("roll -180..180 deg, one image each: IR %d of %d, visible %d (BRISK descriptors) and %d (upright)\n",
-              ir.valid, ir.frames, invariant.valid, upright.valid);
+  const stress::ConditionSummary sharp = stress::runCondition(renderer(), condition("roll_any"), params("visible"), kFirstSeed, 12, 1);
+  const stress::ConditionSummary blurred =
+      stress::runCondition(renderer(), condition("roll_any_defocus2_motion9_noise8"), params("visible"), kFirstSeed, 12, 1);
+  std::printf("roll -180..180 deg, one image each: IR %d of %d, visible %d of %d, visible blurred %d of %d\n", ir.valid,
+              ir.frames, sharp.valid, sharp.frames, blurred.valid, blurred.frames);
   EXPECT_EQ(ir.valid, ir.frames);
-  EXPECT_GE(invariant.valid, invariant.frames - 1);
-  EXPECT_LT(upright.valid, invariant.valid) << "the upright descriptor assumes an upright face";
-  EXPECT_EQ(ir.confident_wrong + invariant.confident_wrong + upright.confident_wrong, 0);
+  EXPECT_GE(sharp.valid, sharp.frames - 1);
+  EXPECT_GE(blurred.valid, blurred.frames / 2);
+  EXPECT_EQ(ir.confident_wrong + sharp.confident_wrong + blurred.confident_wrong, 0);
 }
 
 // A far face smeared along the rows (a robot yawing during the exposure, 1.6-2 m, with a region hint):

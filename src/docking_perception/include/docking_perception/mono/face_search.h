@@ -2,7 +2,8 @@
 // blur and clutter within the CPU budget).
 //
 // Order: the regions a prior gives (the pose predicted from the last frame; an external hint, e.g. the
-// disparity detector's target projected into this image), then the full frame. In each region the
+// disparity detector's target projected into this image), then the full frame (MonoPoseEstimator looks for
+// the printed dots in between: full_frame false). In each region the
 // configuration that found the face last is tried first (blur persists from frame to frame), then the
 // others: full resolution keeps fine corners (far, sharp faces), half resolution finds the coarse corners
 // that remain in a blurred image, and a blurred model pyramid gives the descriptors blurred corners have. A region spends the whole keypoint budget on itself, which is what
@@ -38,9 +39,9 @@ constexpr int kSearchConfigurations = 4;
 // Prior regions try every configuration (small regions are cheap); the full frame tries one per image
 // and moves *preferred on to the next after a failure (round robin over images).
 // preferred: in/out, the configuration that found the face last. use_blur_search: false searches
-// configuration 0 only (the old behaviour); configurations with the blurred model need it built.
+// configuration 0 only; configurations with the blurred model need it built. full_frame false: the priors only.
 FaceSearchOutcome searchFace(const FeatureMatcher& matcher, const cv::Mat& gray, const std::vector<SearchRegion>& priors,
-                             bool use_blur_search, int* preferred);
+                             bool use_blur_search, int* preferred, bool full_frame = true);
 
 }  // namespace mono
 }  // namespace docking_perception

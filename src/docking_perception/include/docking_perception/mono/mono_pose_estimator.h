@@ -11,6 +11,7 @@
 
 #include <limits>
 #include <memory>
+#include <optional>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -103,6 +104,7 @@ struct MonoPoseResult {
   bool pnp_ambiguous = false;          // IPPE's two poses were close
   double ambiguity_deg = 0.0;          // the undecided IPPE alternative's angle (0: decided)
   bool used_region_hint = false;       // the external region hint gave the result
+  bool found_by_dots = false;          // visible: the face was found from its five printed dots
   int pyramid_level = 0;               // visible: image level of the keypoints (0 full, 1 half resolution)
   double inlier_spread = 0.0;          // visible: hull of the pose points / face area
   double appearance_ncc = -1.0;        // visible: the model at the pose vs the image (median cell NCC)
@@ -189,11 +191,25 @@ class MonoPoseEstimator {
   // Tracking with a claimed orientation (predict_face_when_tracking): true when the face refined at its
   // predicted place gave a pose that passed; else the result is as it was.
   bool posedAtPredictedFace(const cv::Mat& gray, const cv::Rect& region, MonoPoseResult* result);
-  // The face by features in the predicted region, the hint's region, the full frame, then by direct alignment.
+  // The face by features in the predicted region and the hint's region, by its five dots, by features in
+  // the full frame, then by direct alignment.
   StageOutcome findFace(const cv::Mat& gray, const cv::Rect& region, double face_width_px, FaceMatch* match,
                         double* direct_sigma_px, MonoPoseResult* result);
-  void alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, FaceMatch* match, double* direct_sigma_px,
-                         MonoPoseResult* result);
+  // The direct alignment from the tracked pose, else the dots' pose (dots_homography, may be null), else
+  // the hint's position; its face into match.
+  void alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const cv::Matx33d* dots_homography, FaceMatch* match,
+                         double* direct_sigma_px, MonoPoseResult* result);
+  // searchFace over the regions (and the full frame), its match and what it tells into result.
+  bool findFaceByFeatures(const cv::Mat& gray, const std::vector<SearchRegion>& regions, bool full_frame,
+                          FaceMatch* match, MonoPoseResult* result);
+  // The face from its five printed dots anywhere in the image, no prior needed: the dots' 5-point pattern,
+  // its pose, and the face refined where that pose puts it (as a tracked face is). False (why in *status)
+  // when no pattern gives a face; *first_solved is then the face of the best pattern that gave a pose (the
+  // direct alignment's prior), if any.
+  bool findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
+                      std::optional<cv::Matx33d>* first_solved, MonoPoseResult* result) const;
+  // The 5-dot patterns among the dark dots found at each radius whose size fits that radius, best first.
+  std::vector<LedPatternCandidate> dotPatterns(const cv::Mat& gray, std::string* reason) const;
   // The pose from a face match (features or direct alignment): PnP or the 5 dots, then the checks.
   StageOutcome poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px, MonoPoseResult* result);
   StageOutcome pnpPoseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px,
@@ -272,6 +288,7 @@ class MonoPoseEstimator {
   FeatureMatcher matcher_;
   LedPatternDetector led_detector_;
   DarkDotLocator dot_locator_;
+  DarkDotFinder dot_finder_;  // visible: the printed dots' radii at the model pyramid's face widths
   CollinearFivePointSolver five_point_solver_;
   PlanarPnpSolver pnp_solver_;
   ConstantVelocityFilter filter_;

@@ -17,7 +17,7 @@ enum class Stage : std::uint8_t {
   kNone = 0,          ///< not decided yet (never on the wire from this node)
   kInput = 1,         ///< the image (and, in the node, its camera_info) can be used
   kFind = 2,          ///< the target in the image: visible, the face (at its predicted place, by features, by
-                      ///< direct alignment); IR, the pattern of five LED-like blobs
+                      ///< its five printed dots, by direct alignment); IR, the pattern of five LED-like blobs
   kSolve = 3,         ///< the pose from those points: PnP (pnp) or the 5-point solver (paper_5point)
   kVet = 4,           ///< the pose against the image: the face's look, the dots
   kInnerPattern = 5,  ///< near contact, visible: the inner tag's pose when the face gave none
@@ -41,7 +41,7 @@ enum class InputOutcome : std::uint8_t {
 enum class FindOutcome : std::uint8_t {
   kPassed = 0,
   kFaceSearchSkipped,  ///< visible, near contact: the face's search skipped while the inner tag gives the pose
-  kFaceNotFound,       ///< visible: no face at its predicted place, by features or by direct alignment
+  kFaceNotFound,       ///< visible: no face at its predicted place, by features, by its dots or by direct alignment
   kNoLedPattern,       ///< IR: no five blobs form the pattern
   kLedBlobShape,       ///< IR: the patterns found have a blob merged with a reflection (size, elongation)
 };
