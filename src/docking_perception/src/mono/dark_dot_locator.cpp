@@ -1,6 +1,7 @@
 #include "docking_perception/mono/dark_dot_locator.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -108,28 +109,6 @@ constexpr double kRingRadiusInDotRadii = 1.4;
 // several times the noise left after the level's smoothing).
 constexpr int kMinStrength = 10;
 
-// The third smallest of 8 values.
-int thirdSmallest(const int* v) {
-  int a = 256, b = 256, c = 256;  // a <= b <= c: the three smallest so far
-  for (int k = 0; k < 8; ++k) {
-    const int x = v[k];
-    if (x < c) {
-      if (x < b) {
-        c = b;
-        if (x < a) {
-          b = a;
-          a = x;
-        } else {
-          b = x;
-        }
-      } else {
-        c = x;
-      }
-    }
-  }
-  return c;
-}
-
 // True when p[0] is the darkest of its 3x3 neighbourhood in an image of row `step`: strictly darker than the
 // neighbours after it (right, below), at most as dark as those before it, so a flat patch gives no minimum
 // and a two-pixel minimum one.
@@ -145,29 +124,64 @@ bool localMinimum(const uint8_t* p, size_t step) {
 
 DarkDotFinder::DarkDotFinder(std::vector<double> radii_px) : radii_px_(std::move(radii_px)) {}
 
-void DarkDotFinder::findAtRadius(const cv::Mat& level, int level_index, double radius_px,
-                                 std::vector<Candidate>* found) const {
-  const double scale = static_cast<double>(1 << level_index);
-  const double ring = kRingRadiusInDotRadii * radius_px / scale;
-  int dx[8], dy[8];
+namespace {
+
+// The 8 samples of the circle around a candidate, as offsets in a level image of row `step`.
+std::array<long, 8> ringOffsets(double ring_px, size_t step) {
+  std::array<long, 8> offsets{};
   for (int k = 0; k < 8; ++k) {
-    dx[k] = static_cast<int>(std::lround(ring * std::cos(k * M_PI / 4.0)));
-    dy[k] = static_cast<int>(std::lround(ring * std::sin(k * M_PI / 4.0)));
+    const long dx = std::lround(ring_px * std::cos(k * M_PI / 4.0));
+    const long dy = std::lround(ring_px * std::sin(k * M_PI / 4.0));
+    offsets[static_cast<size_t>(k)] = dy * static_cast<long>(step) + dx;
   }
-  const int border = static_cast<int>(std::ceil(ring)) + 1;
+  return offsets;
+}
+
+// How much brighter than the centre p[0] the third-darkest circle sample is; 0 as soon as three samples are
+// less than kMinStrength brighter (most local minima of the noise are refused after three or four samples).
+int ringStrength(const uint8_t* p, const std::array<long, 8>& offsets) {
+  const int centre = p[0];
+  int dark = 0;
+  int a = 256, b = 256, c = 256;  // the three smallest samples so far, a <= b <= c
+  for (const long offset : offsets) {
+    const int x = p[offset];
+    if (x < centre + kMinStrength && ++dark > 2) return 0;
+    if (x < c) {
+      c = x < b ? b : x;
+      if (x < b) {
+        b = x < a ? a : x;
+        if (x < a) a = x;
+      }
+    }
+  }
+  return c - centre;
+}
+
+}  // namespace
+
+void DarkDotFinder::findOnLevel(const cv::Mat& level, int level_index, const std::vector<size_t>& radii,
+                                std::vector<std::vector<Candidate>>* found) const {
+  const double scale = static_cast<double>(1 << level_index);
   const size_t step = level.step[0];
-  int samples[8];
+  std::vector<std::array<long, 8>> offsets;
+  int border = 1;
+  for (const size_t r : radii) {
+    const double ring = kRingRadiusInDotRadii * radii_px_[r] / scale;
+    offsets.push_back(ringOffsets(ring, step));
+    border = std::max(border, static_cast<int>(std::ceil(ring)) + 1);
+  }
   for (int y = border; y < level.rows - border; ++y) {
     const uint8_t* row = level.ptr<uint8_t>(y);
     for (int x = border; x < level.cols - border; ++x) {
       const uint8_t* p = row + x;
       if (!localMinimum(p, step)) continue;
-      for (int k = 0; k < 8; ++k) samples[k] = p[dy[k] * static_cast<long>(step) + dx[k]];
-      const int strength = thirdSmallest(samples) - p[0];
-      if (strength < kMinStrength) continue;
-      // A level pixel covers scale x scale image pixels: its centre in the image.
-      const Eigen::Vector2d centre((x + 0.5) * scale - 0.5, (y + 0.5) * scale - 0.5);
-      found->push_back({centre, radius_px, static_cast<double>(strength)});
+      for (size_t i = 0; i < radii.size(); ++i) {
+        const int strength = ringStrength(p, offsets[i]);
+        if (strength < kMinStrength) continue;
+        // A level pixel covers scale x scale image pixels: its centre in the image.
+        const Eigen::Vector2d centre((x + 0.5) * scale - 0.5, (y + 0.5) * scale - 0.5);
+        (*found)[radii[i]].push_back({centre, radii_px_[radii[i]], static_cast<double>(strength)});
+      }
     }
   }
 }
@@ -175,19 +189,23 @@ void DarkDotFinder::findAtRadius(const cv::Mat& level, int level_index, double r
 std::vector<std::vector<LedBlob>> DarkDotFinder::find(const cv::Mat& gray, size_t max_per_radius) const {
   std::vector<std::vector<LedBlob>> found;
   if (gray.empty() || gray.type() != CV_8UC1) return found;
-  // The levels: the image smoothed 3x3 (the noise), then halved as often as the largest radius needs.
-  std::vector<cv::Mat> levels(1);
-  cv::blur(gray, levels[0], cv::Size(3, 3));
-  for (const double radius : radii_px_) {
-    int level = 0;
-    while (radius / (1 << (level + 1)) >= kMinLevelRadiusPx) ++level;
-    while (static_cast<int>(levels.size()) <= level) {
-      levels.emplace_back();
-      cv::pyrDown(levels[levels.size() - 2], levels.back());
-    }
-    std::vector<Candidate> candidates;
-    findAtRadius(levels[static_cast<size_t>(level)], level, radius, &candidates);
-    found.push_back(strongestDots(gray, candidates, max_per_radius));
+  // Each radius on the level where it is 2-4 px: the image smoothed 3x3 (the noise), then halved.
+  std::vector<std::vector<size_t>> radii_of_level;
+  for (size_t r = 0; r < radii_px_.size(); ++r) {
+    size_t level = 0;
+    while (radii_px_[r] / (1 << (level + 1)) >= kMinLevelRadiusPx) ++level;
+    if (radii_of_level.size() <= level) radii_of_level.resize(level + 1);
+    radii_of_level[level].push_back(r);
+  }
+  std::vector<std::vector<Candidate>> candidates(radii_px_.size());
+  cv::Mat level;
+  cv::blur(gray, level, cv::Size(3, 3));
+  for (size_t l = 0; l < radii_of_level.size(); ++l) {
+    if (l > 0) cv::pyrDown(level, level);
+    if (!radii_of_level[l].empty()) findOnLevel(level, static_cast<int>(l), radii_of_level[l], &candidates);
+  }
+  for (std::vector<Candidate>& at_radius : candidates) {
+    found.push_back(strongestDots(gray, std::move(at_radius), max_per_radius));
   }
   return found;
 }
@@ -197,17 +215,15 @@ std::vector<LedBlob> DarkDotFinder::strongestDots(const cv::Mat& gray, std::vect
   std::sort(candidates.begin(), candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.strength > b.strength; });
   // One per place: a candidate within the radius of a stronger one is the same dot.
-  std::vector<Candidate> kept;
-  for (const Candidate& c : candidates) {
-    if (kept.size() >= max_dots) break;
-    const bool taken = std::any_of(kept.begin(), kept.end(),
-                                   [&](const Candidate& k) { return (k.centre - c.centre).norm() < c.radius_px; });
-    if (!taken) kept.push_back(c);
-  }
   std::vector<LedBlob> dots;
-  for (const Candidate& c : kept) {
+  for (const Candidate& c : candidates) {
+    if (dots.size() >= max_dots) break;
+    const bool taken = std::any_of(dots.begin(), dots.end(),
+                                   [&](const LedBlob& d) { return (d.centroid - c.centre).norm() < c.radius_px; });
+    if (taken) continue;
     LedBlob dot;
-    // The centre to a fraction of a pixel where the locator can; else the level's pixel.
+    // The centre to a fraction of a pixel where the locator can (the pattern's tolerances need it at the
+    // coarse levels); else the level's pixel.
     if (!locator_.locate(gray, c.centre, c.radius_px, &dot.centroid, nullptr)) dot.centroid = c.centre;
     dot.area_px = M_PI * c.radius_px * c.radius_px;
     dot.peak = c.strength;
@@ -215,7 +231,6 @@ std::vector<LedBlob> DarkDotFinder::strongestDots(const cv::Mat& gray, std::vect
   }
   return dots;
 }
-
 
 }  // namespace mono
 }  // namespace docking_perception

@@ -419,11 +419,9 @@ bool MonoPoseEstimator::findFaceByFeatures(const cv::Mat& gray, const std::vecto
 
 bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
                                        std::optional<cv::Matx33d>* first_solved, MonoPoseResult* result) const {
-  std::vector<LedPatternCandidate> patterns = dotPatterns(gray, status);
   // Patterns tried per image, best first: each costs a solve and a refinement.
   constexpr size_t kMaxDotPatterns = 4;
-  if (patterns.size() > kMaxDotPatterns) patterns.resize(kMaxDotPatterns);
-  for (const LedPatternCandidate& pattern : patterns) {
+  for (const LedPatternCandidate& pattern : dotPatterns(gray, kMaxDotPatterns, status)) {
     MonoPoseResult trial;
     if (solveFivePoint(pattern.pixels, &trial, status) != SolveOutcome::kPassed) continue;
     cv::Matx33d homography = faceHomography(model_, camera_, trial.pose);
@@ -447,7 +445,8 @@ bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, st
   return false;
 }
 
-std::vector<LedPatternCandidate> MonoPoseEstimator::dotPatterns(const cv::Mat& gray, std::string* reason) const {
+std::vector<LedPatternCandidate> MonoPoseEstimator::dotPatterns(const cv::Mat& gray, size_t max_patterns,
+                                                               std::string* reason) const {
   // Dots per radius: the target's five among the print's other dark details and the clutter's.
   constexpr size_t kMaxDotsPerRadius = 16;
   // The longer arm (marker 0 to 2) is this many dot radii on the face; seen turned, in perspective and at the
@@ -456,18 +455,19 @@ std::vector<LedPatternCandidate> MonoPoseEstimator::dotPatterns(const cv::Mat& g
   constexpr double kMinArmFraction = 0.4;
   constexpr double kMaxArmFraction = 1.6;
   const std::vector<std::vector<LedBlob>> by_radius = dot_finder_.find(gray, kMaxDotsPerRadius);
-  std::vector<LedPatternCandidate> patterns;
+  std::vector<std::pair<LedPatternCandidate, double>> patterns;  // with the dot radius it was found at
   for (size_t i = 0; i < by_radius.size(); ++i) {
     const double radius = dot_finder_.radii()[i];
     for (const LedPatternCandidate& pattern : led_detector_.identifyPattern(by_radius[i], reason)) {
       const double arm = (pattern.pixels[0] - pattern.pixels[2]).norm() / (arm_in_radii * radius);
-      if (arm >= kMinArmFraction && arm <= kMaxArmFraction) patterns.push_back(pattern);
+      if (arm >= kMinArmFraction && arm <= kMaxArmFraction) patterns.emplace_back(pattern, radius);
     }
   }
-  std::sort(patterns.begin(), patterns.end(),
-            [](const LedPatternCandidate& a, const LedPatternCandidate& b) { return a.score < b.score; });
   if (patterns.empty()) *reason = "no 5-dot pattern of one dot size";
-  return patterns;
+  std::sort(patterns.begin(), patterns.end(), [](const auto& a, const auto& b) { return a.first.score < b.first.score; });
+  std::vector<LedPatternCandidate> best;
+  for (size_t i = 0; i < std::min(max_patterns, patterns.size()); ++i) best.push_back(patterns[i].first);
+  return best;
 }
 
 void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const cv::Matx33d* dots_homography,

@@ -47,7 +47,9 @@ class DarkDotFinder {
     double strength;
   };
   std::vector<LedBlob> strongestDots(const cv::Mat& gray, std::vector<Candidate> candidates, size_t max_dots) const;
-  void findAtRadius(const cv::Mat& level, int level_index, double radius_px, std::vector<Candidate>* found) const;
+  // The candidates of the radii (indices into radii_px_) that share this pyramid level, into (*found)[index].
+  void findOnLevel(const cv::Mat& level, int level_index, const std::vector<size_t>& radii,
+                   std::vector<std::vector<Candidate>>* found) const;
   std::vector<double> radii_px_;
   DarkDotLocator locator_;
 };

@@ -208,8 +208,9 @@ class MonoPoseEstimator {
   // direct alignment's prior), if any.
   bool findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
                       std::optional<cv::Matx33d>* first_solved, MonoPoseResult* result) const;
-  // The 5-dot patterns among the dark dots found at each radius whose size fits that radius, best first.
-  std::vector<LedPatternCandidate> dotPatterns(const cv::Mat& gray, std::string* reason) const;
+  // The best max_patterns 5-dot patterns among the dark dots found at each radius whose size fits that
+  // radius.
+  std::vector<LedPatternCandidate> dotPatterns(const cv::Mat& gray, size_t max_patterns, std::string* reason) const;
   // The pose from a face match (features or direct alignment): PnP or the 5 dots, then the checks.
   StageOutcome poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px, MonoPoseResult* result);
   StageOutcome pnpPoseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px,
