@@ -382,12 +382,14 @@ StageOutcome MonoPoseEstimator::findFace(const cv::Mat& gray, const cv::Rect& re
   std::vector<SearchRegion> priors = {{region, face_width_px}};
   const bool hint_fresh = hintFresh(result->stamp_s);
   if (hint_fresh && region.area() <= 0) priors.push_back({hint_region_, 0.0});
-  // Features where a prior puts the face (cheap: small regions), then its five dots anywhere (any roll, under
-  // blur), then features over the full frame (dots hidden by glare or an occluder), then the direct alignment.
-  std::string dots_status;
+  // Features where a prior puts the face (cheap: small regions); without a track, its five dots anywhere (any
+  // roll, under blur); then features over the full frame (dots hidden by glare or an occluder); then the
+  // direct alignment. (While tracking, the track is the better prior: near contact the dots leave the
+  // model pyramid's sizes and the search would only cost.)
+  std::string dots_status = "not searched while tracking";
   std::optional<cv::Matx33d> dots_homography;  // the face where the first solved dot pattern puts it
   if (!findFaceByFeatures(gray, priors, /*full_frame=*/false, match, result) &&
-      !findFaceByDots(gray, match, &dots_status, &dots_homography, result)) {
+      (tracking_ || !findFaceByDots(gray, match, &dots_status, &dots_homography, result))) {
     findFaceByFeatures(gray, {}, /*full_frame=*/true, match, result);
     if (!match->found) match->status += "; dots: " + dots_status;
   }
