@@ -1,7 +1,7 @@
 // gtests of issue 11's pieces on the stress harness (docking_sim's renderer + degradations), fixed seeds
-// 200-229 (neither the tuning range 100-139 nor the report range 500-539 of stress_mono):
-// region-first search over clutter, detection under blur, invalid-or-honest estimates under glare,
-// occlusion and merged LEDs, covariance coverage; and unit tests of the new checks.
+// 200-229 (neither the tuning range 100-139 nor the report range 640-679 of stress_mono):
+// region-first search over clutter, detection under blur and at any roll from one image, invalid-or-honest
+// estimates under glare, occlusion and merged LEDs, covariance coverage; and unit tests of the new checks.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
