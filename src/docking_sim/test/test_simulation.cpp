@@ -1,6 +1,8 @@
 // Ground truth: the relative velocities published with each image agree with the poses' derivatives.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "docking_sim/simulation.h"
 #include "omni_base/kinematics.h"
 #include "test_helpers.h"
@@ -54,6 +56,31 @@ TEST(Simulation, ARolledTargetTurnsAboutItsPortAxis) {
   EXPECT_NEAR(std::abs(relative.axis().x()), 1.0, 1e-9);  // about the port's x
   const std::string too_far = upright_text.substr(0, upright_text.find("    motion:")) + "    roll_deg: 200.0\n";
   EXPECT_THROW(docking_sim::loadScenario(docking_sim_test::writeTempFile("roll200", too_far)), std::exception);
+}
+
+// A tilted camera head (scenario chaser.camera_tilt) turns every camera rigidly about the reference camera's
+// centre: that camera sees the port at the same distance, rolled about its optical axis by the head's roll;
+// the stereo pair keeps its relative pose (its calibration still holds).
+TEST(Simulation, ATiltedCameraHeadRollsTheViewAndKeepsTheStereoPair) {
+  const std::string level_text = docking_sim_test::scenarioText(1.5, 0.1, 170.0);
+  std::string tilted_text = level_text;
+  const std::string chaser = "  chaser: {x_m: 0.0, y_m: 0.0, yaw_deg: 0.0}\n";
+  tilted_text.replace(tilted_text.find(chaser), chaser.size(),
+                      "  chaser:\n    x_m: 0.0\n    y_m: 0.0\n    yaw_deg: 0.0\n"
+                      "    camera_tilt: {roll_deg: 20.0, pitch_deg: 0.0}\n");
+  docking_sim::Simulation level(docking_sim_test::files(docking_sim_test::writeTempFile("level", level_text)));
+  docking_sim::Simulation tilted(docking_sim_test::files(docking_sim_test::writeTempFile("tilted", tilted_text)));
+  const auto left = docking_sim::RobotModel::kStereoLeft;
+  const Eigen::Vector3d a = level.truthInCamera(left).camera_T_port.translation();
+  const Eigen::Vector3d b = tilted.truthInCamera(left).camera_T_port.translation();
+  EXPECT_NEAR(a.norm(), b.norm(), 1e-9);
+  EXPECT_NEAR(a.z(), b.z(), 1e-9);  // the optical axis is the robot's forward axis: roll keeps the depth
+  const Eigen::Vector2d a_image = a.head<2>().normalized(), b_image = b.head<2>().normalized();
+  EXPECT_NEAR(std::acos(a_image.dot(b_image)), 20.0 * M_PI / 180.0, 1e-9);
+  const auto right = docking_sim::RobotModel::kStereoRight;
+  const Eigen::Isometry3d pair_level = level.baseTCamera(left).inverse() * level.baseTCamera(right);
+  const Eigen::Isometry3d pair_tilted = tilted.baseTCamera(left).inverse() * tilted.baseTCamera(right);
+  EXPECT_LT((pair_level.matrix() - pair_tilted.matrix()).norm(), 1e-12);
 }
 
 TEST(Simulation, TargetFollowsItsScriptedMotion) {

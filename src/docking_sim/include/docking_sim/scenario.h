@@ -41,6 +41,11 @@ struct Scenario {
   /// scenario.target.roll_deg: the target turned about its port's axis (a print glued at an angle, a ramp, a
   /// target not kept upright as in orbit); drawn and in the truth. 0: upright, as on the level floor.
   double target_roll_rad{0.0};
+  /// scenario.chaser.camera_tilt {roll_deg, pitch_deg}: the camera head (every camera, rigidly) turned about
+  /// the reference camera's centre, roll about the robot's forward axis and pitch about its left axis, unknown
+  /// to the stack (robot.yaml keeps the nominal mounts): a camera mounted with a tilt. Drawn and in the truth.
+  double camera_tilt_roll_rad{0.0};
+  double camera_tilt_pitch_rad{0.0};
   TargetMotionSpec target_motion;
   ChaserMotionSpec chaser_motion;          ///< scenario.chaser.motion (optional)
   std::vector<ClutterBox> extra_clutter;   ///< scenario.extra_clutter: boxes added to sim.yaml's room

@@ -58,6 +58,8 @@ class Simulation {
   /// A camera's pose dt_s from now: the chaser moved by its current body twist (exact arc), as over an
   /// exposure (tens of ms, against the motors' 20 ms lag: the twist barely changes).
   Eigen::Isometry3d worldTCameraAt(int camera, double dt_s) const;
+  /// The camera on the chaser: its robot.yaml mount, turned with the head by scenario.chaser.camera_tilt.
+  Eigen::Isometry3d baseTCamera(int camera) const;
   Eigen::Isometry3d worldTPort() const;            ///< target_truth
   Eigen::Isometry3d worldTCamera(int camera) const;
   /// Chaser velocity in world: linear (m/s) of base_link's origin and angular (rad/s).

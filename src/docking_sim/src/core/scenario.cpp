@@ -61,6 +61,11 @@ Scenario loadScenario(const std::string& path) {
     out.target_motion.velocity_x_m_s = v[0];
     out.target_motion.velocity_y_m_s = v[1];
   }
+  if (s["chaser"].has("camera_tilt")) {
+    const YamlField tilt = s["chaser"]["camera_tilt"];
+    out.camera_tilt_roll_rad = tilt["roll_deg"].asDouble(-180.0, 180.0) * kDegToRad;
+    out.camera_tilt_pitch_rad = tilt["pitch_deg"].asDouble(-30.0, 30.0) * kDegToRad;
+  }
   if (s["chaser"].has("motion")) {
     const YamlField m = s["chaser"]["motion"];
     out.chaser_motion.yaw_rate_rad_s = m["yaw_rate_deg_s"].asDouble(-180.0, 180.0) * kDegToRad;

@@ -119,14 +119,26 @@ Eigen::Isometry3d Simulation::worldTTargetRobotAt(double t_s) const {
 
 Eigen::Isometry3d Simulation::worldTCameraAt(int camera, double dt_s) const {
   const omni_base::Pose2D p = integrateTwist(chaser_.pose(), chaser_.twist(), dt_s);
-  return planarPose(p.x, p.y, p.yaw) * robot_.cameras.at(static_cast<std::size_t>(camera)).base_T_camera;
+  return planarPose(p.x, p.y, p.yaw) * baseTCamera(camera);
+}
+
+Eigen::Isometry3d Simulation::baseTCamera(int camera) const {
+  const Eigen::Isometry3d& mount = robot_.cameras.at(static_cast<std::size_t>(camera)).base_T_camera;
+  if (scenario_.camera_tilt_roll_rad == 0.0 && scenario_.camera_tilt_pitch_rad == 0.0) return mount;
+  // The head turns rigidly about the reference camera's centre (camera 0), so the stereo pair keeps its
+  // calibration and only its pose on the robot is off.
+  const Eigen::Vector3d pivot = robot_.cameras.front().base_T_camera.translation();
+  Eigen::Isometry3d tilt = Eigen::Isometry3d::Identity();
+  tilt.linear() = (Eigen::AngleAxisd(scenario_.camera_tilt_roll_rad, Eigen::Vector3d::UnitX()) *
+                   Eigen::AngleAxisd(scenario_.camera_tilt_pitch_rad, Eigen::Vector3d::UnitY()))
+                      .toRotationMatrix();
+  tilt.translation() = pivot - tilt.linear() * pivot;
+  return tilt * mount;
 }
 
 Eigen::Isometry3d Simulation::worldTPort() const { return worldTTargetRobot() * target_.robot_T_port; }
 
-Eigen::Isometry3d Simulation::worldTCamera(int camera) const {
-  return worldTChaser() * robot_.cameras.at(static_cast<std::size_t>(camera)).base_T_camera;
-}
+Eigen::Isometry3d Simulation::worldTCamera(int camera) const { return worldTChaser() * baseTCamera(camera); }
 
 void Simulation::chaserVelocityWorld(Eigen::Vector3d* linear, Eigen::Vector3d* angular) const {
   const auto twist = chaser_.twist();
