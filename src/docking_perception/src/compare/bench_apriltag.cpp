@@ -2,7 +2,7 @@
 // frame of the tagged target, repeated; prints and writes the median (make bench, stage `apriltag`).
 // With --mono-params, our monocular pose (MonoPoseEstimator, PnP) runs on the same frame too, with the
 // tagged target's own texture as its model: the peer comparison on identical pixels (issue 15), stages
-// `mono_full_same_frame` (full-frame search each time) and `mono_tracking_same_frame` (the region
+// `mono_full_same_frame` (each time a cold start: no track, the search without a prior) and `mono_tracking_same_frame` (the region
 // predicted from the last pose).
 //
 //   bench_apriltag OUT.json [--sequence DIR --target config/target_tagged.yaml]
@@ -169,6 +169,7 @@ StageFigures benchMono(const std::string& name, const mono::TargetModel& model, 
   std::string failure;
   int found = 0;
   for (int k = 1; k <= frames; ++k) {
+    if (!tracking) estimator.reset();
     const mono::MonoPoseResult r = estimator.process(frame.image, k / 30.0);
     ms.push_back(r.processing_time_ms);
     if (!r.valid) {
