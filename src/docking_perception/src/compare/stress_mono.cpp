@@ -192,12 +192,13 @@ void printFrames(const stress::StressRenderer& renderer, const mono::TargetModel
       const mono::MonoPoseResult r = estimator.process(frame.gray, f / 30.0);
       const stress::EstimateScore e = stress::scoreEstimate(r, frame.truth);
       std::printf("  %s seed %llu frame %d range %.2f: %s matches %d inliers %d level %d ncc %.2f blur %.1f spread %.2f "
-                  "pos %.2f %% ang %.2f deg z [%.1f %.1f %.1f %.1f %.1f %.1f] direct %d ecc %.3f %s\n",
+                  "pos %.2f %% ang %.2f deg z [%.1f %.1f %.1f %.1f %.1f %.1f] dots %d direct %d ecc %.3f %s\n",
                   condition.name.c_str(), static_cast<unsigned long long>(seed), f, e.range_m,
                   r.valid ? "valid" : mono::toString(r.reject_reason), r.feature_matches, r.feature_inliers,
                   r.pyramid_level, r.appearance_ncc, r.blur_sigma_px, r.inlier_spread, e.position_error_pct,
                   e.orientation_error_deg, e.normalized[0], e.normalized[1], e.normalized[2], e.normalized[3],
-                  e.normalized[4], e.normalized[5], r.used_direct_alignment ? 1 : 0, r.direct_correlation,
+                  e.normalized[4], e.normalized[5], r.found_by_dots ? 1 : 0, r.used_direct_alignment ? 1 : 0,
+                  r.direct_correlation,
                   r.status.c_str());
     }
   }

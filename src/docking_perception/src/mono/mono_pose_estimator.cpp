@@ -457,19 +457,19 @@ std::vector<LedPatternCandidate> MonoPoseEstimator::dotPatterns(const cv::Mat& g
   constexpr double kMinArmFraction = 0.4;
   constexpr double kMaxArmFraction = 1.6;
   const std::vector<std::vector<LedBlob>> by_radius = dot_finder_.find(gray, kMaxDotsPerRadius);
-  std::vector<std::pair<LedPatternCandidate, double>> patterns;  // with the dot radius it was found at
+  std::vector<LedPatternCandidate> patterns;
   for (size_t i = 0; i < by_radius.size(); ++i) {
     const double radius = dot_finder_.radii()[i];
     for (const LedPatternCandidate& pattern : led_detector_.identifyPattern(by_radius[i], reason)) {
       const double arm = (pattern.pixels[0] - pattern.pixels[2]).norm() / (arm_in_radii * radius);
-      if (arm >= kMinArmFraction && arm <= kMaxArmFraction) patterns.emplace_back(pattern, radius);
+      if (arm >= kMinArmFraction && arm <= kMaxArmFraction) patterns.push_back(pattern);
     }
   }
   if (patterns.empty()) *reason = "no 5-dot pattern of one dot size";
-  std::sort(patterns.begin(), patterns.end(), [](const auto& a, const auto& b) { return a.first.score < b.first.score; });
-  std::vector<LedPatternCandidate> best;
-  for (size_t i = 0; i < std::min(max_patterns, patterns.size()); ++i) best.push_back(patterns[i].first);
-  return best;
+  std::sort(patterns.begin(), patterns.end(),
+            [](const LedPatternCandidate& a, const LedPatternCandidate& b) { return a.score < b.score; });
+  if (patterns.size() > max_patterns) patterns.resize(max_patterns);
+  return patterns;
 }
 
 void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const cv::Matx33d* dots_homography,
