@@ -120,12 +120,6 @@ bool localMinimum(const uint8_t* p, size_t step) {
          c <= up[1];
 }
 
-}  // namespace
-
-DarkDotFinder::DarkDotFinder(std::vector<double> radii_px) : radii_px_(std::move(radii_px)) {}
-
-namespace {
-
 // The 8 samples of the circle around a candidate, as offsets in a level image of row `step`.
 std::array<long, 8> ringOffsets(double ring_px, size_t step) {
   std::array<long, 8> offsets{};
@@ -159,6 +153,16 @@ int ringStrength(const uint8_t* p, const std::array<long, 8>& offsets) {
 
 }  // namespace
 
+DarkDotFinder::DarkDotFinder(std::vector<double> radii_px) : radii_px_(std::move(radii_px)) {
+  // Each radius on the pyramid level where it is 2-4 px.
+  for (size_t r = 0; r < radii_px_.size(); ++r) {
+    size_t level = 0;
+    while (radii_px_[r] / (1 << (level + 1)) >= kMinLevelRadiusPx) ++level;
+    if (radii_of_level_.size() <= level) radii_of_level_.resize(level + 1);
+    radii_of_level_[level].push_back(r);
+  }
+}
+
 void DarkDotFinder::findOnLevel(const cv::Mat& level, int level_index, const std::vector<size_t>& radii,
                                 std::vector<std::vector<Candidate>>* found) const {
   const double scale = static_cast<double>(1 << level_index);
@@ -189,20 +193,13 @@ void DarkDotFinder::findOnLevel(const cv::Mat& level, int level_index, const std
 std::vector<std::vector<LedBlob>> DarkDotFinder::find(const cv::Mat& gray, size_t max_per_radius) const {
   std::vector<std::vector<LedBlob>> found;
   if (gray.empty() || gray.type() != CV_8UC1) return found;
-  // Each radius on the level where it is 2-4 px: the image smoothed 3x3 (the noise), then halved.
-  std::vector<std::vector<size_t>> radii_of_level;
-  for (size_t r = 0; r < radii_px_.size(); ++r) {
-    size_t level = 0;
-    while (radii_px_[r] / (1 << (level + 1)) >= kMinLevelRadiusPx) ++level;
-    if (radii_of_level.size() <= level) radii_of_level.resize(level + 1);
-    radii_of_level[level].push_back(r);
-  }
+  // The levels: the image smoothed 3x3 (the noise), then halved.
   std::vector<std::vector<Candidate>> candidates(radii_px_.size());
   cv::Mat level;
   cv::blur(gray, level, cv::Size(3, 3));
-  for (size_t l = 0; l < radii_of_level.size(); ++l) {
+  for (size_t l = 0; l < radii_of_level_.size(); ++l) {
     if (l > 0) cv::pyrDown(level, level);
-    if (!radii_of_level[l].empty()) findOnLevel(level, static_cast<int>(l), radii_of_level[l], &candidates);
+    if (!radii_of_level_[l].empty()) findOnLevel(level, static_cast<int>(l), radii_of_level_[l], &candidates);
   }
   for (std::vector<Candidate>& at_radius : candidates) {
     found.push_back(strongestDots(gray, std::move(at_radius), max_per_radius));

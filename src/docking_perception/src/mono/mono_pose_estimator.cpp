@@ -260,9 +260,13 @@ PoseWithCovariance MonoPoseEstimator::predictedPose(double stamp_s) const {
   return predicted;
 }
 
+cv::Matx33d MonoPoseEstimator::normalisedFaceHomography(const PoseWithCovariance& pose) const {
+  const cv::Matx33d homography = faceHomography(model_, camera_, pose);
+  return homography * (1.0 / homography(2, 2));
+}
+
 FaceMatch MonoPoseEstimator::matchPredictedFace(const cv::Mat& gray, double stamp_s) const {
-  const cv::Matx33d homography = faceHomography(model_, camera_, predictedPose(stamp_s));
-  return matcher_.matchAtPrediction(gray, homography * (1.0 / homography(2, 2)),
+  return matcher_.matchAtPrediction(gray, normalisedFaceHomography(predictedPose(stamp_s)),
                                     kPredictedFaceMinKeptFraction);
 }
 
@@ -426,8 +430,7 @@ bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, st
   for (const LedPatternCandidate& pattern : dotPatterns(gray, kMaxDotPatterns, status)) {
     MonoPoseResult trial;
     if (solveFivePoint(pattern.pixels, &trial, status) != SolveOutcome::kPassed) continue;
-    cv::Matx33d homography = faceHomography(model_, camera_, trial.pose);
-    homography *= 1.0 / homography(2, 2);
+    const cv::Matx33d homography = normalisedFaceHomography(trial.pose);
     if (!*first_solved) *first_solved = homography;
     FaceMatch at = matcher_.matchAtPrediction(gray, homography, kPredictedFaceMinKeptFraction);
     if (!at.found) {
@@ -477,7 +480,7 @@ void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, 
   // The prior: the track; else the dots' pose; else (the dots may be another object's dark spots) the hint.
   DirectAlignment direct;
   bool from_dots = false;
-  if (!tracking_ && dots_homography != nullptr) {
+  if (dots_homography != nullptr) {  // only searched without a track
     direct = direct_aligner_.align(gray, *dots_homography);
     from_dots = direct.found;
   }

@@ -51,6 +51,7 @@ class DarkDotFinder {
   void findOnLevel(const cv::Mat& level, int level_index, const std::vector<size_t>& radii,
                    std::vector<std::vector<Candidate>>* found) const;
   std::vector<double> radii_px_;
+  std::vector<std::vector<size_t>> radii_of_level_;  // indices into radii_px_, per pyramid level
   DarkDotLocator locator_;
 };
 

@@ -243,6 +243,8 @@ class MonoPoseEstimator {
   // Tracking: the face at its predicted place (predict_face_when_tracking); found == false when the
   // prediction does not hold.
   FaceMatch matchPredictedFace(const cv::Mat& gray, double stamp_s) const;
+  // The face's homography (texture pixel -> image pixel) at a pose, scaled to h(2, 2) = 1.
+  cv::Matx33d normalisedFaceHomography(const PoseWithCovariance& pose) const;
   const Eigen::Matrix3d* previousRotation(double stamp_s, Eigen::Matrix3d* storage) const;
   // Feeds the pose to the velocity estimators; true when the filter fused it (or restarted on it).
   bool updateVelocities(MonoPoseResult* result);
