@@ -429,7 +429,7 @@ bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, st
   constexpr size_t kMaxDotPatterns = 4;
   for (const LedPatternCandidate& pattern : dotPatterns(gray, kMaxDotPatterns, status)) {
     PoseWithCovariance pose;
-    if (!dotPatternPose(pattern.pixels, &pose, status)) continue;
+    if (!patternPose(pattern.pixels, &pose, status)) continue;
     const cv::Matx33d homography = normalisedFaceHomography(pose);
     if (!*first_solved) *first_solved = homography;
     FaceMatch at = matcher_.matchAtPrediction(gray, homography, kPredictedFaceMinKeptFraction);
@@ -451,11 +451,11 @@ bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, st
   return false;
 }
 
-bool MonoPoseEstimator::dotPatternPose(const MarkerPixels& pixels, PoseWithCovariance* pose,
+bool MonoPoseEstimator::patternPose(const MarkerPixels& pixels, PoseWithCovariance* pose,
                                        std::string* reason) const {
   // The closed form identifies (its depths and arms must agree with the model); the least-squares pose it
   // starts judges: the closed form's own residual grows with small centre errors (4-7 px from dots within
-  // 1 px of the truth, blurred at 1.7 m), the pattern's fit does not.
+  // 1 px of the truth, blurred at 1.7 m), the pattern's fit does not. For the dots and the LEDs alike.
   FivePointSolution closed_form;
   if (!five_point_solver_.solve(camera_, pixels, &closed_form, reason)) return false;
   const std::vector<Eigen::Vector3d> model(model_.markers().begin(), model_.markers().end());
@@ -732,7 +732,11 @@ bool MonoPoseEstimator::poseFromLeds(const cv::Mat& gray, const cv::Rect& roi, L
     // The 5-point solve also validates the identification (scale consistency, face orientation).
     MonoPoseResult trial = *result;
     search->candidate_unsolved = true;
-    if (solveFivePoint(candidate.pixels, &trial, &search->reason) != SolveOutcome::kPassed) continue;
+    // pnp: the least-squares pose judges the pattern (patternPose); paper_5point publishes the closed form's.
+    const bool solved = solver_ == PoseSolverType::kPnp
+                            ? patternPose(candidate.pixels, &trial.pose, &search->reason)
+                            : solveFivePoint(candidate.pixels, &trial, &search->reason) == SolveOutcome::kPassed;
+    if (!solved) continue;
     if (!refineIrPose(candidate.pixels, medianStreakSigma(blobs, candidate), &trial, &search->reason)) continue;
     *result = trial;
     result->feature_inliers = kMarkerCount;
