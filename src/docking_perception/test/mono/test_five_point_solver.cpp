@@ -35,6 +35,20 @@ MarkerPixels project(const CameraIntrinsics& camera, const Eigen::Matrix3d& r, c
   return pixels;
 }
 
+// Gaussian pixel noise of sigma_px on each coordinate.
+MarkerPixels withNoise(const MarkerPixels& exact, double sigma_px, cv::RNG* rng) {
+  MarkerPixels noisy = exact;
+  for (auto& p : noisy) {
+    // The two draws in a fixed order: as constructor arguments their order is unspecified (x86-64 GCC takes
+    // y first, arm64 GCC x first), so the noise differed between the two. y first keeps the samples the
+    // bounds below were set with on x86.
+    const double dy = rng->gaussian(sigma_px);
+    const double dx = rng->gaussian(sigma_px);
+    p += Eigen::Vector2d(dx, dy);
+  }
+  return noisy;
+}
+
 }  // namespace
 
 TEST(CollinearFivePointSolver, ExactProjectionsGiveTheExactPose) {
@@ -77,15 +91,7 @@ TEST(CollinearFivePointSolver, HalfPixelNoiseKeepsTheErrorBounded) {
   std::vector<double> position_errors;
   std::vector<double> angle_errors;
   for (int trial = 0; trial < 500; ++trial) {
-    MarkerPixels noisy = exact;
-    for (auto& p : noisy) {
-      // The two draws in a fixed order: as constructor arguments their order is unspecified (x86-64
-      // GCC takes y first, arm64 GCC x first), so the noise differed between the two. y first keeps
-      // the samples these bounds were set with on x86.
-      const double dy = rng.gaussian(0.5);
-      const double dx = rng.gaussian(0.5);
-      p += Eigen::Vector2d(dx, dy);
-    }
+    const MarkerPixels noisy = withNoise(exact, 0.5, &rng);
     FivePointSolution solution;
     std::string reason;
     ASSERT_TRUE(solver.solve(camera, noisy, &solution, &reason)) << reason;
@@ -118,12 +124,7 @@ TEST(CollinearFivePointSolver, ItsResidualIsNotTheFitOfThePoseItStarts) {
   double worst_fit_px = 0.0;
   constexpr int kTrials = 200;
   for (int trial = 0; trial < kTrials; ++trial) {
-    MarkerPixels noisy = exact;
-    for (auto& p : noisy) {
-      const double dy = rng.gaussian(0.5);
-      const double dx = rng.gaussian(0.5);
-      p += Eigen::Vector2d(dx, dy);
-    }
+    const MarkerPixels noisy = withNoise(exact, 0.5, &rng);
     FivePointSolution closed_form;
     std::string reason;
     ASSERT_TRUE(solver.solve(camera, noisy, &closed_form, &reason)) << reason;
@@ -156,15 +157,7 @@ TEST(CollinearFivePointSolver, CovarianceMatchesTheMonteCarloScatter) {
   const int trials = 2000;
   Matrix6d empirical = Matrix6d::Zero();
   for (int trial = 0; trial < trials; ++trial) {
-    MarkerPixels noisy = exact;
-    for (auto& p : noisy) {
-      // The two draws in a fixed order: as constructor arguments their order is unspecified (x86-64
-      // GCC takes y first, arm64 GCC x first), so the noise differed between the two. y first keeps
-      // the samples these bounds were set with on x86.
-      const double dy = rng.gaussian(sigma);
-      const double dx = rng.gaussian(sigma);
-      p += Eigen::Vector2d(dx, dy);
-    }
+    const MarkerPixels noisy = withNoise(exact, sigma, &rng);
     FivePointSolution s;
     ASSERT_TRUE(solver.solve(camera, noisy, &s, &reason));
     Vector6d e;
