@@ -451,8 +451,7 @@ bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, st
   return false;
 }
 
-bool MonoPoseEstimator::patternPose(const MarkerPixels& pixels, PoseWithCovariance* pose,
-                                       std::string* reason) const {
+bool MonoPoseEstimator::patternPose(const MarkerPixels& pixels, PoseWithCovariance* pose, std::string* reason) const {
   // The closed form identifies (its depths and arms must agree with the model); the least-squares pose it
   // starts judges: the closed form's own residual grows with small centre errors (4-7 px from dots within
   // 1 px of the truth, blurred at 1.7 m), the pattern's fit does not. For the dots and the LEDs alike.
@@ -463,7 +462,7 @@ bool MonoPoseEstimator::patternPose(const MarkerPixels& pixels, PoseWithCovarian
   PlanarPnpSolution solution;
   if (!pnp_solver_.solve(camera_, model, image, &closed_form.rotation, &solution, reason)) return false;
   if (solution.reprojection_rms_px > params_.max_reprojection_px) {
-    *reason = "5-dot reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large";
+    *reason = "5-point reprojection error " + std::to_string(solution.reprojection_rms_px) + " px too large";
     return false;
   }
   if (!checkPose(solution.pose, reason)) return false;
@@ -729,10 +728,10 @@ bool MonoPoseEstimator::poseFromLeds(const cv::Mat& gray, const cv::Rect& roi, L
       search->blob_rejected = true;
       continue;
     }
-    // The 5-point solve also validates the identification (scale consistency, face orientation).
+    // The 5-point solve also validates the identification (scale consistency, face orientation); with pnp
+    // the least-squares pose it starts judges the pattern (patternPose), paper_5point publishes the closed form's.
     MonoPoseResult trial = *result;
     search->candidate_unsolved = true;
-    // pnp: the least-squares pose judges the pattern (patternPose); paper_5point publishes the closed form's.
     const bool solved = solver_ == PoseSolverType::kPnp
                             ? patternPose(candidate.pixels, &trial.pose, &search->reason)
                             : solveFivePoint(candidate.pixels, &trial, &search->reason) == SolveOutcome::kPassed;

@@ -208,13 +208,13 @@ class MonoPoseEstimator {
   // direct alignment's prior), if any.
   bool findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
                       std::optional<cv::Matx33d>* first_solved, MonoPoseResult* result) const;
-  // The best max_patterns 5-dot patterns among the dark dots found at each radius whose size fits that
-  // radius.
   // The face's pose from a 5-point pattern (dots or LEDs): the closed form, then the least-squares pose it
   // starts; false (with the reason) when either fails or the fit's residual is over max_reprojection_px.
   bool patternPose(const MarkerPixels& pixels, PoseWithCovariance* pose, std::string* reason) const;
   // True when the face's homography puts every dot within its radius of the pixel it was found at.
   bool faceKeepsDots(const cv::Matx33d& face, const MarkerPixels& dots, std::string* reason) const;
+  // The best max_patterns 5-dot patterns among the dark dots found at each radius whose size fits that
+  // radius.
   std::vector<LedPatternCandidate> dotPatterns(const cv::Mat& gray, size_t max_patterns, std::string* reason) const;
   // The pose from a face match (features or direct alignment): PnP or the 5 dots, then the checks.
   StageOutcome poseFromMatch(const cv::Mat& gray, const FaceMatch& match, double direct_sigma_px, MonoPoseResult* result);
