@@ -38,6 +38,8 @@ class FakeMotorBoard {
   /// A STATE frame in the board's format carrying the given board time and counts, as a glitching
   /// firmware, a second writer on the port or a replayed log would send it; the board itself is unchanged.
   std::vector<uint8_t> forgedState(uint32_t board_time_ms, const std::vector<int32_t>& counts) const;
+  /// The board's own STATE frame as of now, repeating the last answered sequence.
+  std::vector<uint8_t> currentState() { return stateReply(last_reply_sequence_); }
 
   const std::vector<double>& wheelSpeeds() const { return speed_rad_s_; }
   const std::vector<double>& wheelAngles() const { return angle_rad_; }  ///< true angles (a reboot keeps them)

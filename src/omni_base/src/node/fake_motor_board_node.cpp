@@ -8,8 +8,9 @@
 //   "garbage"         random bytes and false start sequences between replies
 //   "disconnect S"    close the pty (an unplugged cable) for S seconds, then come back
 //   "reboot"          counters, set-points and the board clock back to zero, motors disabled
-//   "forge T C0 C1 .." one extra STATE frame now, with board time T ms and counts C0 C1 ..; the board
-//                     itself carries on (a glitching firmware, a second writer on the port, a replayed log)
+//   "forge T C0 C1 .." one extra STATE frame now, with board time T ms and counts C0 C1 .., and the
+//                     board's own frame right behind it in the same write (a glitching firmware, a second
+//                     writer on the port, a replayed log); the board itself carries on
 // The true wheel speeds and angles (never reset, not even by a reboot) are published on ~wheels
 // (sensor_msgs/JointState) at 200 Hz.
 #include <docking_settings/param_reader.h>
@@ -146,7 +147,11 @@ class FakeMotorBoardNode {
       ROS_ERROR("fake_motor_board: cannot forge '%s' (forge T C0 C1 ..., with the link up)", command.c_str());
       return false;
     }
-    pty_.write(board_.forgedState(static_cast<uint32_t>(board_time_ms), counts));
+    // The board's own frame in the same write: the host reads both at once, as it would a burst.
+    auto frames = board_.forgedState(static_cast<uint32_t>(board_time_ms), counts);
+    const auto own = board_.currentState();
+    frames.insert(frames.end(), own.begin(), own.end());
+    pty_.write(frames);
     return true;
   }
 

@@ -6,7 +6,6 @@
 #include <ros/ros.h>
 
 #include <cstdint>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,8 +24,9 @@ class MotorBackend {
   virtual ~MotorBackend() = default;
   /// Sends set-points (rad/s per wheel); also where a disconnected backend tries to reconnect.
   virtual void send(const std::vector<double>& wheel_rad_s, bool enable, const ros::Time& now) = 0;
-  /// The newest encoder reading since the last call, if any.
-  virtual std::optional<EncoderReading> poll(const ros::Time& now) = 0;
+  /// Every encoder reading since the last call, oldest first: each one is judged (a forged or reboot
+  /// frame in a burst must reach the encoder tracker, not only the newest).
+  virtual std::vector<EncoderReading> poll(const ros::Time& now) = 0;
   /// The board restarted (the encoder tracker saw it): send ENABLE again on the next cycle.
   virtual void forceEnable() {}
   /// The backend is answering.

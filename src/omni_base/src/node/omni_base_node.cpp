@@ -163,8 +163,7 @@ class OmniBaseNode {
   void onControlCycle(const ros::TimerEvent&) {
     const ros::Time now = ros::Time::now();
     // No reset on reconnect: the tracker tells a board that kept counting from one that rebooted.
-    const auto reading = backend_->poll(now);
-    if (reading) processEncoders(*reading, now);
+    processEncoders(backend_->poll(now), now);
 
     const auto out = controller_.update(now.toSec(), backend_->linkUp());
     if (out.stop_reason != last_stop_reason_) {
@@ -178,24 +177,41 @@ class OmniBaseNode {
     diagnostics_.update();
   }
 
-  void processEncoders(const EncoderReading& reading, const ros::Time& now) {
+  /// Every reading of the cycle goes through the tracker (a forged or reboot frame must be judged even
+  /// when the next frame arrived in the same read); the odometry is published once, after the last
+  /// reading that moved it.
+  void processEncoders(const std::vector<EncoderReading>& readings, const ros::Time& now) {
+    const EncoderReading* counted = nullptr;
+    std::vector<double> wheel_velocity;
+    Twist2D body_velocity;
+    for (const auto& reading : readings) {
+      if (!countEncoders(reading, now, &wheel_velocity, &body_velocity)) continue;
+      counted = &reading;
+    }
+    if (!counted) return;
+    publishOdometry(*counted, body_velocity);
+    publishWheelState(*counted, wheel_velocity);
+  }
+
+  /// One reading through the encoder tracker and the odometry; false when it moves nothing.
+  bool countEncoders(const EncoderReading& reading, const ros::Time& now, std::vector<double>* wheel_velocity,
+                     Twist2D* body_velocity) {
     if (reading.fault) {
       ROS_ERROR_THROTTLE(2.0, "omni_base: motor fault reported: %s", reading.fault_text.c_str());
     }
     const auto sample = encoders_.update(EncoderFrame{reading.counts, reading.source_time_ms, now.toSec()});
     link_doubt_.onSample(sample.event, sample.reason);
     if (!sample.reason.empty()) last_encoder_problem_ = sample.reason;
-    if (!reportEncoderEvent(sample)) return;
+    if (!reportEncoderEvent(sample)) return false;
     // Motion is measured on the board's clock between accepted samples, so it is exact through bursts.
-    std::vector<double> wheel_velocity(sample.delta_rad.size(), 0.0);
-    Twist2D body_velocity;
+    wheel_velocity->assign(sample.delta_rad.size(), 0.0);
+    *body_velocity = Twist2D{};
     odometry_.integrateDisplacement(kinematics_.forward(sample.delta_rad));
     if (sample.dt_s > 0.0) {
-      for (std::size_t i = 0; i < wheel_velocity.size(); ++i) wheel_velocity[i] = sample.delta_rad[i] / sample.dt_s;
-      body_velocity = kinematics_.forward(wheel_velocity);
+      for (std::size_t i = 0; i < wheel_velocity->size(); ++i) (*wheel_velocity)[i] = sample.delta_rad[i] / sample.dt_s;
+      *body_velocity = kinematics_.forward(*wheel_velocity);
     }
-    publishOdometry(reading, body_velocity);
-    publishWheelState(reading, wheel_velocity);
+    return true;
   }
 
   /// Logs the sample's event and acts on it; false when the sample moves nothing (held or rejected).

@@ -69,14 +69,14 @@ void SerialMotorBackend::send(const std::vector<double>& wheel_rad_s, bool enabl
   writeFrame(protocol::makeDutyFrame(cmd), now);
 }
 
-std::optional<EncoderReading> SerialMotorBackend::poll(const ros::Time& now) {
-  if (!port_.isOpen()) return std::nullopt;
+std::vector<EncoderReading> SerialMotorBackend::poll(const ros::Time& now) {
+  std::vector<EncoderReading> readings;
+  if (!port_.isOpen()) return readings;
   rx_.clear();
   if (!port_.readAvailable(rx_)) {
     dropConnection(now, port_.lastError());
-    return std::nullopt;
+    return readings;
   }
-  std::optional<EncoderReading> newest;
   for (const auto& frame : decoder_.feed(rx_.data(), rx_.size())) {
     const auto state = protocol::parseStateFrame(frame);
     if (!state) continue;
@@ -108,7 +108,7 @@ std::optional<EncoderReading> SerialMotorBackend::poll(const ros::Time& now) {
     }
     last_status_ = state->status;
     last_faults_ = state->faults;
-    newest = reading;
+    readings.push_back(reading);
   }
   if ((now - last_frame_at_).toSec() > config_.link_timeout_s) {
     dropConnection(now, wrongWheelCount() ? "the board answers with " + std::to_string(board_wheel_count_) +
@@ -117,7 +117,7 @@ std::optional<EncoderReading> SerialMotorBackend::poll(const ros::Time& now) {
                                     : "no valid frame from the board for " +
                                           std::to_string((now - last_frame_at_).toSec()) + " s");
   }
-  return newest;
+  return readings;
 }
 
 void SerialMotorBackend::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) const {

@@ -29,7 +29,7 @@ class SerialMotorBackend : public MotorBackend {
  public:
   explicit SerialMotorBackend(const SerialBackendConfig& config);
   void send(const std::vector<double>& wheel_rad_s, bool enable, const ros::Time& now) override;
-  std::optional<EncoderReading> poll(const ros::Time& now) override;
+  std::vector<EncoderReading> poll(const ros::Time& now) override;
   void forceEnable() override { enable_.forceResend(); }
   bool linkUp() const override { return link_up_; }
   std::string describe() const override { return "serial " + config_.device; }

@@ -33,8 +33,8 @@ void SimMotorBackend::send(const std::vector<double>& wheel_rad_s, bool enable, 
   command_pub_.publish(cmd);
 }
 
-std::optional<EncoderReading> SimMotorBackend::poll(const ros::Time& now) {
-  std::optional<EncoderReading> reading;
+std::vector<EncoderReading> SimMotorBackend::poll(const ros::Time& now) {
+  std::vector<EncoderReading> readings;  // the newest message only: the simulator's counts are exact
   if (pending_) {
     const auto msg = pending_;
     pending_.reset();
@@ -48,7 +48,7 @@ std::optional<EncoderReading> SimMotorBackend::poll(const ros::Time& now) {
     r.source_time_ms = static_cast<uint32_t>(static_cast<uint64_t>(r.stamp.toNSec() / 1000000u) & 0xFFFFFFFFu);
     r.fault = msg->fault;
     if (msg->fault) r.fault_text = "simulator reports a motor fault";
-    reading = r;
+    readings.push_back(r);
   } else if (link_up_ && (now - last_received_).toSec() > link_timeout_s_) {
     link_up_ = false;
     ++link_losses_;
@@ -57,7 +57,7 @@ std::optional<EncoderReading> SimMotorBackend::poll(const ros::Time& now) {
   } else if (now < last_received_) {
     last_received_ = now;  // sim time restarted
   }
-  return reading;
+  return readings;
 }
 
 void SimMotorBackend::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) const {

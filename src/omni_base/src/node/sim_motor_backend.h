@@ -15,7 +15,7 @@ class SimMotorBackend : public MotorBackend {
  public:
   SimMotorBackend(ros::NodeHandle& nh, std::size_t wheel_count, double link_timeout_s, const std::string& frame_id);
   void send(const std::vector<double>& wheel_rad_s, bool enable, const ros::Time& now) override;
-  std::optional<EncoderReading> poll(const ros::Time& now) override;
+  std::vector<EncoderReading> poll(const ros::Time& now) override;
   bool linkUp() const override { return link_up_; }
   std::string describe() const override { return "simulator topics"; }
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) const override;
