@@ -98,7 +98,7 @@ FUZZ_CORRUPTIONS ?= 2000000
 FUZZ_SEED ?= 12
 # Randomized message campaign against the running closed loop (docs/design/reliability.md): FUZZ_PER_TOPIC
 # malformed messages on each of 15 input topics, then a docking (2000 took 2 min 45 s). `make test` runs it
-# with 1000 per topic (every random choice of the generator occurs by message 261 of its topic).
+# with 400 per topic (every random choice of the generator occurs by message 261 of its topic).
 FUZZ_PER_TOPIC ?= 5000
 fuzz-messages: build
 	@$(SETUP) && rostest docking_planner message_fuzz.test per_topic:=$(FUZZ_PER_TOPIC)
