@@ -210,8 +210,8 @@ struct DirectFaceAligner::Frames {
   double scale = 1.0;            // image px per working px
 };
 
-bool DirectFaceAligner::makeFrames(const cv::Mat& gray, const cv::Matx33d& initial, Frames* frames,
-                                   std::string* why) const {
+bool DirectFaceAligner::makeFrames(const cv::Mat& gray, const cv::Matx33d& initial, double template_blur_px,
+                                   Frames* frames, std::string* why) const {
   const std::vector<cv::Point2d> quad = mapCorners(initial, texture_.size());
   if (quad.empty()) {
     *why = "prior puts the face behind the camera";
@@ -246,14 +246,17 @@ bool DirectFaceAligner::makeFrames(const cv::Mat& gray, const cv::Matx33d& initi
   cv::Mat templ;
   cv::resize(texture_, templ, templ_size, 0.0, 0.0, cv::INTER_AREA);
   templ.convertTo(frames->templ, CV_32F);
+  const double blur_work_px = template_blur_px / frames->scale;
+  if (blur_work_px > 0.0) cv::GaussianBlur(frames->templ, frames->templ, cv::Size(0, 0), blur_work_px);
   frames->texture_to_templ = resizeMap(double(templ_size.width) / texture_.cols, double(templ_size.height) / texture_.rows);
   return true;
 }
 
-DirectAlignment DirectFaceAligner::align(const cv::Mat& gray, const cv::Matx33d& initial, bool coarse_only) const {
+DirectAlignment DirectFaceAligner::align(const cv::Mat& gray, const cv::Matx33d& initial, bool coarse_only,
+                                         double template_blur_px) const {
   DirectAlignment result;
   Frames frames;
-  if (!makeFrames(gray, initial, &frames, &result.status)) return result;
+  if (!makeFrames(gray, initial, template_blur_px, &frames, &result.status)) return result;
   result.image_scale = frames.scale;
   // Levels: as many as asked while the template stays wide enough to align on.
   int levels = kPyramidLevels;

@@ -391,14 +391,14 @@ StageOutcome MonoPoseEstimator::findFace(const cv::Mat& gray, const cv::Rect& re
   // direct alignment. (While tracking, the track is the better prior: near contact the dots leave the
   // model pyramid's sizes and the search would only cost.)
   std::string dots_status = "not searched while tracking";
-  std::optional<cv::Matx33d> dots_homography;  // the face where the first solved dot pattern puts it
+  std::optional<PoseWithCovariance> dots_pose;  // where the first solved dot pattern puts the face
   if (!findFaceByFeatures(gray, priors, /*full_frame=*/false, match, result) &&
-      (tracking_ || !findFaceByDots(gray, match, &dots_status, &dots_homography, result))) {
+      (tracking_ || !findFaceByDots(gray, match, &dots_status, &dots_pose, result))) {
     findFaceByFeatures(gray, {}, /*full_frame=*/true, match, result);
     if (!match->found) match->status += "; dots: " + dots_status;
   }
-  if (!match->found && params_.use_direct_alignment && (dots_homography || directSearchDue())) {
-    alignFaceDirectly(gray, hint_fresh, dots_homography ? &*dots_homography : nullptr, match, direct_sigma_px, result);
+  if (!match->found && params_.use_direct_alignment && (dots_pose || directSearchDue())) {
+    alignFaceDirectly(gray, hint_fresh, dots_pose ? &*dots_pose : nullptr, match, direct_sigma_px, result);
   }
   if (!match->found) {
     return refuse(result, outcomeOf(Stage::kFind, FindOutcome::kFaceNotFound), RejectReason::kNotFound, match->status);
@@ -424,15 +424,14 @@ bool MonoPoseEstimator::findFaceByFeatures(const cv::Mat& gray, const std::vecto
 }
 
 bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
-                                       std::optional<cv::Matx33d>* first_solved, MonoPoseResult* result) const {
+                                       std::optional<PoseWithCovariance>* first_solved, MonoPoseResult* result) const {
   // Patterns tried per image, best first: each costs a solve and a refinement.
   constexpr size_t kMaxDotPatterns = 4;
   for (const LedPatternCandidate& pattern : dotPatterns(gray, kMaxDotPatterns, status)) {
     PoseWithCovariance pose;
     if (!patternPose(pattern.pixels, &pose, status)) continue;
-    const cv::Matx33d homography = normalisedFaceHomography(pose);
-    if (!*first_solved) *first_solved = homography;
-    FaceMatch at = matcher_.matchAtPrediction(gray, homography, kPredictedFaceMinKeptFraction);
+    if (!*first_solved) *first_solved = pose;
+    FaceMatch at = matcher_.matchAtPrediction(gray, normalisedFaceHomography(pose), kPredictedFaceMinKeptFraction);
     if (!at.found) {
       *status = "the face at the dots' pose: " + at.status;
       continue;
@@ -511,13 +510,16 @@ std::vector<LedPatternCandidate> MonoPoseEstimator::dotPatterns(const cv::Mat& g
   return patterns;
 }
 
-void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const cv::Matx33d* dots_homography,
+void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const PoseWithCovariance* dots_pose,
                                           FaceMatch* match, double* direct_sigma_px, MonoPoseResult* result) {
   // The prior: the track; else the dots' pose; else (the dots may be another object's dark spots) the hint.
   DirectAlignment direct;
   bool from_dots = false;
-  if (dots_homography != nullptr) {  // only searched without a track
-    direct = direct_aligner_.align(gray, *dots_homography);
+  if (dots_pose != nullptr) {  // only searched without a track
+    // The dots' pose is exact enough to measure the image's blur there (the appearance score's best
+    // template blur): the face is aligned blurred alike.
+    const double blur_px = appearance_.score(gray, camera_, *dots_pose).blur_sigma_px;
+    direct = direct_aligner_.align(gray, normalisedFaceHomography(*dots_pose), /*coarse_only=*/false, blur_px);
     from_dots = direct.found;
     if (!from_dots) match->status += "; direct alignment at the dots' pose: " + direct.status;
   }
@@ -1086,6 +1088,10 @@ StageOutcome MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMa
                                                double pixel_sigma_px, MonoPoseResult* result) const {
   const ConsistencyParams& c = params_.consistency;
   result->inlier_spread = inlierSpread(match.inlier_texture_points, model_.textureGray().size());
+  if (result->inlier_spread < c.min_inlier_spread) {
+    return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kInlierSpread), RejectReason::kInlierSpread,
+                  "pose points cover only " + std::to_string(result->inlier_spread) + " of the face (min_inlier_spread)");
+  }
   const AppearanceScore appearance = appearance_.score(gray, camera_, result->pose);
   result->appearance_ncc = appearance.median_ncc;
   result->blur_sigma_px = appearance.blur_sigma_px;

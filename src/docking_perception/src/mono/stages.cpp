@@ -26,7 +26,7 @@ const char* outcomeName(Stage stage, std::uint8_t code) {
                                                    "led_blob_shape"};
   static const std::array<const char*, 5> kSolve = {"passed", "solver_failed", "reprojection", "implausible",
                                                     "dot_not_located"};
-  static const std::array<const char*, 5> kVet = {"passed", "retired", "appearance", "dot_offset",
+  static const std::array<const char*, 5> kVet = {"passed", "inlier_spread", "appearance", "dot_offset",
                                                   "solver_disagreement"};
   static const std::array<const char*, 2> kInnerPattern = {"passed", "retired"};
   static const std::array<const char*, 4> kHint = {"passed", "range_disagrees", "held_without_hint", "not_recovered"};

@@ -57,14 +57,18 @@ class DirectFaceAligner {
   bool ready() const { return !texture_.empty(); }
 
   // Aligns from an initial homography (texture pixel -> image pixel). coarse_only: stop one level above
-  // the finest (cheap scoring of hypotheses; the correlation is that level's).
-  DirectAlignment align(const cv::Mat& gray, const cv::Matx33d& initial, bool coarse_only = false) const;
+  // the finest (cheap scoring of hypotheses; the correlation is that level's). template_blur_px: the
+  // image's blur (Gaussian sigma, image px) where it has been measured; the template is blurred alike,
+  // so that the correlation compares like with like.
+  DirectAlignment align(const cv::Mat& gray, const cv::Matx33d& initial, bool coarse_only = false,
+                        double template_blur_px = 0.0) const;
   // The same from a pose (camera <- target).
   DirectAlignment align(const cv::Mat& gray, const CameraIntrinsics& camera, const PoseWithCovariance& initial) const;
 
  private:
   struct Frames;
-  bool makeFrames(const cv::Mat& gray, const cv::Matx33d& initial, Frames* frames, std::string* why) const;
+  bool makeFrames(const cv::Mat& gray, const cv::Matx33d& initial, double template_blur_px, Frames* frames,
+                  std::string* why) const;
   // Checks the aligned face (in view, convex, size, correlation) and adds the grid and its pixel sigma.
   DirectAlignment finish(const cv::Matx33d& initial, const Frames& frames, const cv::Mat& templ, const cv::Mat& image,
                          const cv::Matx33f& warp, DirectAlignment result) const;

@@ -197,17 +197,17 @@ class MonoPoseEstimator {
                         double* direct_sigma_px, MonoPoseResult* result);
   // The direct alignment from the tracked pose, else the dots' pose (dots_homography, may be null), else
   // the hint's position; its face into match.
-  void alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const cv::Matx33d* dots_homography, FaceMatch* match,
+  void alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const PoseWithCovariance* dots_pose, FaceMatch* match,
                          double* direct_sigma_px, MonoPoseResult* result);
   // searchFace over the regions (and the full frame), its match and what it tells into result.
   bool findFaceByFeatures(const cv::Mat& gray, const std::vector<SearchRegion>& regions, bool full_frame,
                           FaceMatch* match, MonoPoseResult* result);
   // The face from its five printed dots anywhere in the image, no prior needed: the dots' 5-point pattern,
   // its pose, and the face refined where that pose puts it (as a tracked face is). False (why in *status)
-  // when no pattern gives a face; *first_solved is then the face of the best pattern that gave a pose (the
+  // when no pattern gives a face; *first_solved is then the pose of the best pattern that gave one (the
   // direct alignment's prior), if any.
   bool findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
-                      std::optional<cv::Matx33d>* first_solved, MonoPoseResult* result) const;
+                      std::optional<PoseWithCovariance>* first_solved, MonoPoseResult* result) const;
   // The face's pose from a 5-point pattern (dots or LEDs): the closed form, then the least-squares pose it
   // starts; false (with the reason) when either fails or the fit's residual is over max_reprojection_px.
   bool patternPose(const MarkerPixels& pixels, PoseWithCovariance* pose, std::string* reason) const;

@@ -14,7 +14,7 @@ enum class RejectReason {
   kSolverFailed,           // the solver found no pose (degenerate points)
   kReprojection,           // residuals above max_reprojection_px
   kImplausiblePose,        // range not finite, back of the face, non-finite covariance
-  kInlierSpread,           // (no longer given: the inlier-spread gate measured no help on the stress report seeds)
+  kInlierSpread,           // the pose points bunched in a small part of the face (a wrong homography)
   kAppearance,             // the face does not look like the model at the estimated pose (NCC)
   kSolverDisagreement,     // two poses of one image disagree beyond their sigmas: the 5-point pose and the
                            // homography / PnP pose, or the face's pose and the inner pattern's

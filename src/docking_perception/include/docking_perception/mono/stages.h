@@ -56,8 +56,8 @@ enum class SolveOutcome : std::uint8_t {
 
 enum class VetOutcome : std::uint8_t {
   kPassed = 0,
-  // 1: retired (the pose points' spread over the face; numbers on the wire are never reused)
-  kAppearance = 2,      ///< the model at the pose does not look like the image (min_appearance_ncc)
+  kInlierSpread,        ///< the pose points cover less than min_inlier_spread of the face
+  kAppearance,          ///< the model at the pose does not look like the image (min_appearance_ncc)
   kDotOffset,           ///< paper_5point: a located dot too far from the homography's prediction
   kSolverDisagreement,  ///< paper_5point: the 5-point pose and the face's PnP pose differ
 };
