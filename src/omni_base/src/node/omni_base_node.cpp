@@ -179,39 +179,39 @@ class OmniBaseNode {
 
   /// Every reading of the cycle goes through the tracker (a forged or reboot frame must be judged even
   /// when the next frame arrived in the same read); the odometry is published once, after the last
-  /// reading that moved it.
+  /// reading that moved it, with that sample's velocities.
   void processEncoders(const std::vector<EncoderReading>& readings, const ros::Time& now) {
     const EncoderReading* counted = nullptr;
-    std::vector<double> wheel_velocity;
-    Twist2D body_velocity;
+    EncoderTracker::Sample last_counted;
     for (const auto& reading : readings) {
-      if (!countEncoders(reading, now, &wheel_velocity, &body_velocity)) continue;
+      EncoderTracker::Sample sample = countEncoders(reading, now);
+      if (!reportEncoderEvent(sample)) continue;
+      // Motion is measured on the board's clock between accepted samples, so it is exact through bursts.
+      odometry_.integrateDisplacement(kinematics_.forward(sample.delta_rad));
       counted = &reading;
+      last_counted = std::move(sample);
     }
     if (!counted) return;
+    const double dt_s = last_counted.dt_s;
+    std::vector<double> wheel_velocity(last_counted.delta_rad.size(), 0.0);
+    Twist2D body_velocity;
+    if (dt_s > 0.0) {
+      for (std::size_t i = 0; i < wheel_velocity.size(); ++i) wheel_velocity[i] = last_counted.delta_rad[i] / dt_s;
+      body_velocity = kinematics_.forward(wheel_velocity);
+    }
     publishOdometry(*counted, body_velocity);
     publishWheelState(*counted, wheel_velocity);
   }
 
-  /// One reading through the encoder tracker and the odometry; false when it moves nothing.
-  bool countEncoders(const EncoderReading& reading, const ros::Time& now, std::vector<double>* wheel_velocity,
-                     Twist2D* body_velocity) {
+  /// One reading through the encoder tracker and the link doubt.
+  EncoderTracker::Sample countEncoders(const EncoderReading& reading, const ros::Time& now) {
     if (reading.fault) {
       ROS_ERROR_THROTTLE(2.0, "omni_base: motor fault reported: %s", reading.fault_text.c_str());
     }
-    const auto sample = encoders_.update(EncoderFrame{reading.counts, reading.source_time_ms, now.toSec()});
+    EncoderTracker::Sample sample = encoders_.update(EncoderFrame{reading.counts, reading.source_time_ms, now.toSec()});
     link_doubt_.onSample(sample.event, sample.reason);
     if (!sample.reason.empty()) last_encoder_problem_ = sample.reason;
-    if (!reportEncoderEvent(sample)) return false;
-    // Motion is measured on the board's clock between accepted samples, so it is exact through bursts.
-    wheel_velocity->assign(sample.delta_rad.size(), 0.0);
-    *body_velocity = Twist2D{};
-    odometry_.integrateDisplacement(kinematics_.forward(sample.delta_rad));
-    if (sample.dt_s > 0.0) {
-      for (std::size_t i = 0; i < wheel_velocity->size(); ++i) (*wheel_velocity)[i] = sample.delta_rad[i] / sample.dt_s;
-      *body_velocity = kinematics_.forward(*wheel_velocity);
-    }
-    return true;
+    return sample;
   }
 
   /// Logs the sample's event and acts on it; false when the sample moves nothing (held or rejected).

@@ -195,7 +195,7 @@ class MonoPoseEstimator {
   // the full frame, then by direct alignment.
   StageOutcome findFace(const cv::Mat& gray, const cv::Rect& region, double face_width_px, FaceMatch* match,
                         double* direct_sigma_px, MonoPoseResult* result);
-  // The direct alignment from the tracked pose, else the dots' pose (dots_homography, may be null), else
+  // The direct alignment from the tracked pose, else the dots' pose (dots_pose, may be null), else
   // the hint's position; its face into match.
   void alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const PoseWithCovariance* dots_pose, FaceMatch* match,
                          double* direct_sigma_px, MonoPoseResult* result);
