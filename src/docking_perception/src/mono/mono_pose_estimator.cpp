@@ -391,14 +391,14 @@ StageOutcome MonoPoseEstimator::findFace(const cv::Mat& gray, const cv::Rect& re
   // direct alignment. (While tracking, the track is the better prior: near contact the dots leave the
   // model pyramid's sizes and the search would only cost.)
   std::string dots_status = "not searched while tracking";
-  std::optional<PoseWithCovariance> dots_pose;  // where the first solved dot pattern puts the face
+  std::optional<DotsPrior> dots;  // the dots' pose that looked most like the face
   if (!findFaceByFeatures(gray, priors, /*full_frame=*/false, match, result) &&
-      (tracking_ || !findFaceByDots(gray, match, &dots_status, &dots_pose, result))) {
+      (tracking_ || !findFaceByDots(gray, match, &dots_status, &dots, result))) {
     findFaceByFeatures(gray, {}, /*full_frame=*/true, match, result);
     if (!match->found) match->status += "; dots: " + dots_status;
   }
-  if (!match->found && params_.use_direct_alignment && (dots_pose || directSearchDue())) {
-    alignFaceDirectly(gray, hint_fresh, dots_pose ? &*dots_pose : nullptr, match, direct_sigma_px, result);
+  if (!match->found && params_.use_direct_alignment && (dots || directSearchDue())) {
+    alignFaceDirectly(gray, hint_fresh, dots ? &*dots : nullptr, match, direct_sigma_px, result);
   }
   if (!match->found) {
     return refuse(result, outcomeOf(Stage::kFind, FindOutcome::kFaceNotFound), RejectReason::kNotFound, match->status);
@@ -411,6 +411,11 @@ bool MonoPoseEstimator::findFaceByFeatures(const cv::Mat& gray, const std::vecto
   const FaceSearchOutcome search =
       searchFace(matcher_, gray, regions, params_.use_half_resolution, &preferred_level_, full_frame);
   *match = search.match;
+  double spread = 0.0;
+  if (match->found && !spansFace(*match, &spread)) {
+    match->found = false;
+    match->status = "the features' inliers span only " + std::to_string(spread) + " of the face (min_inlier_spread)";
+  }
   result->used_tracking_region = match->found && search.prior_index == 0;
   result->used_region_hint = match->found && search.prior_index == 1;
   result->search_region = search.region;
@@ -424,13 +429,28 @@ bool MonoPoseEstimator::findFaceByFeatures(const cv::Mat& gray, const std::vecto
 }
 
 bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
-                                       std::optional<PoseWithCovariance>* first_solved, MonoPoseResult* result) const {
-  // Patterns tried per image, best first: each costs a solve and a refinement.
-  constexpr size_t kMaxDotPatterns = 4;
+                                       std::optional<DotsPrior>* best_looking, MonoPoseResult* result) const {
+  // Patterns solved per image, best geometry first (each costs a solve and an appearance score). The print's
+  // own dark details and the clutter's form patterns too, under blur often with better geometry than the
+  // dots': the face's appearance at each pattern's pose decides (the target's ~0.9, others' < 0.4).
+  constexpr size_t kMaxDotPatterns = 8;
+  struct Solved {
+    LedPatternCandidate pattern;
+    PoseWithCovariance pose;
+    AppearanceScore appearance;
+  };
+  std::vector<Solved> solved;
   for (const LedPatternCandidate& pattern : dotPatterns(gray, kMaxDotPatterns, status)) {
     PoseWithCovariance pose;
-    if (!patternPose(pattern.pixels, &pose, status)) continue;
-    if (!*first_solved) *first_solved = pose;
+    if (patternPose(pattern.pixels, &pose, status)) solved.push_back({pattern, pose, appearance_.score(gray, camera_, pose)});
+  }
+  std::stable_sort(solved.begin(), solved.end(), [](const Solved& a, const Solved& b) {
+    return a.appearance.median_ncc > b.appearance.median_ncc;
+  });
+  if (!solved.empty()) *best_looking = DotsPrior{solved.front().pose, solved.front().pattern.pixels, solved.front().appearance.blur_sigma_px};
+  for (const Solved& candidate : solved) {
+    const LedPatternCandidate& pattern = candidate.pattern;
+    const PoseWithCovariance& pose = candidate.pose;
     FaceMatch at = matcher_.matchAtPrediction(gray, normalisedFaceHomography(pose), kPredictedFaceMinKeptFraction);
     if (!at.found) {
       *status = "the face at the dots' pose: " + at.status;
@@ -510,16 +530,20 @@ std::vector<LedPatternCandidate> MonoPoseEstimator::dotPatterns(const cv::Mat& g
   return patterns;
 }
 
-void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const PoseWithCovariance* dots_pose,
+void MonoPoseEstimator::alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const DotsPrior* dots,
                                           FaceMatch* match, double* direct_sigma_px, MonoPoseResult* result) {
   // The prior: the track; else the dots' pose; else (the dots may be another object's dark spots) the hint.
   DirectAlignment direct;
   bool from_dots = false;
-  if (dots_pose != nullptr) {  // only searched without a track
+  if (dots != nullptr) {  // only searched without a track
     // The dots' pose is exact enough to measure the image's blur there (the appearance score's best
     // template blur): the face is aligned blurred alike.
-    const double blur_px = appearance_.score(gray, camera_, *dots_pose).blur_sigma_px;
-    direct = direct_aligner_.align(gray, normalisedFaceHomography(*dots_pose), /*coarse_only=*/false, blur_px);
+    direct = direct_aligner_.align(gray, normalisedFaceHomography(dots->pose), /*coarse_only=*/false, dots->blur_px);
+    std::string moved;
+    if (direct.found && !faceKeepsDots(direct.homography, dots->dots, &moved)) {
+      direct.found = false;
+      direct.status = moved;
+    }
     from_dots = direct.found;
     if (!from_dots) match->status += "; direct alignment at the dots' pose: " + direct.status;
   }
@@ -582,7 +606,9 @@ DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool trackin
   if (tracking_prior) {
     PoseWithCovariance predicted = last_pose_;
     if (stamp_s > last_stamp_s_ && stamp_s - last_stamp_s_ <= params_.filter.max_gap_s) filter_.predict(stamp_s, &predicted);
-    return direct_aligner_.align(gray, camera_, predicted);
+    // As from the dots: the template blurred as the image is at the prediction.
+    const double blur_px = appearance_.score(gray, camera_, predicted).blur_sigma_px;
+    return direct_aligner_.align(gray, normalisedFaceHomography(predicted), /*coarse_only=*/false, blur_px);
   }
   DirectAlignment best;
   if (!hint_fresh) {
@@ -1083,12 +1109,16 @@ HintOutcome MonoPoseEstimator::hintOutcome(MonoPoseResult* result) {
   return holding ? HintOutcome::kNotRecovered : HintOutcome::kRangeDisagrees;
 }
 
+bool MonoPoseEstimator::spansFace(const FaceMatch& match, double* spread) const {
+  *spread = inlierSpread(match.inlier_texture_points, model_.textureGray().size());
+  return *spread >= params_.consistency.min_inlier_spread;
+}
+
 StageOutcome MonoPoseEstimator::vetVisiblePose(const cv::Mat& gray, const FaceMatch& match,
                                        const std::vector<Eigen::Vector3d>& model_points, const PlanarPnpSolution* pnp,
                                                double pixel_sigma_px, MonoPoseResult* result) const {
   const ConsistencyParams& c = params_.consistency;
-  result->inlier_spread = inlierSpread(match.inlier_texture_points, model_.textureGray().size());
-  if (result->inlier_spread < c.min_inlier_spread) {
+  if (!spansFace(match, &result->inlier_spread)) {
     return refuse(result, outcomeOf(Stage::kVet, VetOutcome::kInlierSpread), RejectReason::kInlierSpread,
                   "pose points cover only " + std::to_string(result->inlier_spread) + " of the face (min_inlier_spread)");
   }

@@ -118,18 +118,31 @@ TEST(MonoStress, BlurredTargetIsDetected) {
 // A target at any in-plane rotation (a tilted mount, a print glued at an angle, orbit), one image each with
 // no prior: the IR instance finds its LED pattern, the visible one the pattern of its printed dots (the
 // shipped upright descriptors alone found 0.475 of the sharp images of stress_mono's report seeds 640:40).
-// Sharp, and under 2 px of defocus, 9 px of motion blur and 8 levels of noise together.
+// (Under all three blurs: the next test.)
 TEST(MonoStress, ARolledTargetIsFoundInASingleImageByItsLedsAndItsDots) {
   const stress::ConditionSummary ir = stress::runCondition(renderer(), condition("ir_roll_any"), params("ir"), kFirstSeed, 12, 1);
   const stress::ConditionSummary sharp = stress::runCondition(renderer(), condition("roll_any"), params("visible"), kFirstSeed, 12, 1);
-  const stress::ConditionSummary blurred =
-      stress::runCondition(renderer(), condition("roll_any_defocus2_motion9_noise8"), params("visible"), kFirstSeed, 12, 1);
-  std::printf("roll -180..180 deg, one image each: IR %d of %d, visible %d of %d, visible blurred %d of %d\n", ir.valid,
-              ir.frames, sharp.valid, sharp.frames, blurred.valid, blurred.frames);
+  std::printf("roll -180..180 deg, one image each: IR %d of %d, visible %d of %d\n", ir.valid, ir.frames, sharp.valid,
+              sharp.frames);
   EXPECT_EQ(ir.valid, ir.frames);
   EXPECT_GE(sharp.valid, sharp.frames - 1);
-  EXPECT_GE(blurred.valid, blurred.frames / 2);
-  EXPECT_EQ(ir.confident_wrong + sharp.confident_wrong + blurred.confident_wrong, 0);
+  EXPECT_EQ(ir.confident_wrong + sharp.confident_wrong, 0);
+}
+
+// Under all three blurs at 1.5-2 m the print's own dark details and the clutter's form 5-dot patterns with
+// better geometry than the dots', and a tracked face's features bunch: the patterns are tried in the order
+// of how much the face looks like the model at their pose, the direct alignment starts from the best-looking
+// one with its template blurred as the image is there (and from the track likewise), it must keep the dots
+// where they were found, and bunched features do not end the search. Seeds 200-239, three frames each
+// (before: 29 of 40 first images, 94 of 120 images).
+TEST(MonoStress, UnderAllThreeBlursTheBestLookingDotPatternLeadsTheSearch) {
+  const stress::ConditionSummary blurred = stress::runCondition(
+      renderer(), condition("roll_any_defocus2_motion9_noise8"), params("visible"), kFirstSeed, 40, 3);
+  std::printf("all three blurs, any roll: first images %d of %d, all %d of %d, confidently wrong %d\n",
+              blurred.cold_valid, blurred.cold_frames, blurred.valid, blurred.frames, blurred.confident_wrong);
+  EXPECT_GE(blurred.cold_valid, blurred.cold_frames * 85 / 100);
+  EXPECT_GE(blurred.valid, blurred.frames * 9 / 10);
+  EXPECT_EQ(blurred.confident_wrong, 0);
 }
 
 // A far face smeared along the rows (a robot yawing during the exposure, 1.6-2 m, with a region hint):

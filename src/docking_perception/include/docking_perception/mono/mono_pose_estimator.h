@@ -195,19 +195,28 @@ class MonoPoseEstimator {
   // the full frame, then by direct alignment.
   StageOutcome findFace(const cv::Mat& gray, const cv::Rect& region, double face_width_px, FaceMatch* match,
                         double* direct_sigma_px, MonoPoseResult* result);
-  // The direct alignment from the tracked pose, else the dots' pose (dots_pose, may be null), else
-  // the hint's position; its face into match.
-  void alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const PoseWithCovariance* dots_pose, FaceMatch* match,
+  // A pose the five dots give and the image's blur measured there: the direct alignment's prior.
+  struct DotsPrior {
+    PoseWithCovariance pose;
+    MarkerPixels dots{};  // where the five dots were found
+    double blur_px = 0.0;
+  };
+  // The direct alignment from the tracked pose, else the dots' pose (dots, may be null), else the hint's
+  // position; its face into match.
+  void alignFaceDirectly(const cv::Mat& gray, bool hint_fresh, const DotsPrior* dots, FaceMatch* match,
                          double* direct_sigma_px, MonoPoseResult* result);
-  // searchFace over the regions (and the full frame), its match and what it tells into result.
+  // searchFace over the regions (and the full frame), its match and what it tells into result. A match whose
+  // inliers span less than min_inlier_spread of the face is not found (the vet would refuse it; the search
+  // goes on to the dots and the direct alignment).
   bool findFaceByFeatures(const cv::Mat& gray, const std::vector<SearchRegion>& regions, bool full_frame,
                           FaceMatch* match, MonoPoseResult* result);
-  // The face from its five printed dots anywhere in the image, no prior needed: the dots' 5-point pattern,
-  // its pose, and the face refined where that pose puts it (as a tracked face is). False (why in *status)
-  // when no pattern gives a face; *first_solved is then the pose of the best pattern that gave one (the
-  // direct alignment's prior), if any.
-  bool findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
-                      std::optional<PoseWithCovariance>* first_solved, MonoPoseResult* result) const;
+  // The face from its five printed dots anywhere in the image, no prior needed: the dots' 5-point patterns,
+  // each one's pose, tried in the order of how much the face looks like the model there (the appearance
+  // score), the face refined where that pose puts it (as a tracked face is). False (why in *status) when no
+  // pattern gives a face; *best_looking is then the pose that looked most like the face, with the blur
+  // measured there (the direct alignment's prior), if any pattern solved.
+  bool findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status, std::optional<DotsPrior>* best_looking,
+                      MonoPoseResult* result) const;
   // The face's pose from a 5-point pattern (dots or LEDs): the closed form, then the least-squares pose it
   // starts; false (with the reason) when either fails or the fit's residual is over max_reprojection_px.
   bool patternPose(const MarkerPixels& pixels, PoseWithCovariance* pose, std::string* reason) const;
@@ -270,6 +279,9 @@ class MonoPoseEstimator {
   // direct alignment).
   StageOutcome vetVisiblePose(const cv::Mat& gray, const FaceMatch& match, const std::vector<Eigen::Vector3d>& model_points,
                               const PlanarPnpSolution* pnp, double pixel_sigma_px, MonoPoseResult* result) const;
+  // True when a feature match's inliers span at least min_inlier_spread of the face (their hull over the
+  // texture's area, into *spread): fewer, bunched, fix no homography (a wrong one fits them as well).
+  bool spansFace(const FaceMatch& match, double* spread) const;
   // The direct alignment from the tracked pose or the hint; found == false when no prior or no match.
   DirectAlignment alignDirect(const cv::Mat& gray, bool tracking_prior, bool hint_fresh, double stamp_s) const;
   // A hint's position: the position hint's, or one from the region hint's box.
