@@ -220,8 +220,11 @@ def effect(off, on):
     parts = []
     for suite, by_source in sorted(off.items()):
         base = on.get(suite) or {}
-        if suite == "campaign":
-            parts.append("docking %s (on %s)" % (num(by_source.get("success_rate"), 2), num(base.get("success_rate"), 2)))
+        if suite == "campaign":  # ablate.py's run_campaign: {"docking": {success_rate, tip_p95_mm}}
+            m, b = by_source.get("docking") or {}, base.get("docking") or {}
+            parts.append("campaign: docked %s, tip p95 %s mm (on %s, %s mm)" % (
+                num(m.get("success_rate"), 2), num(m.get("tip_p95_mm")), num(b.get("success_rate"), 2),
+                num(b.get("tip_p95_mm"))))
             continue
         for source, m in sorted(by_source.items()):
             b = base.get(source) or {}
