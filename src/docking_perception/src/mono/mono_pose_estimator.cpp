@@ -606,9 +606,7 @@ DirectAlignment MonoPoseEstimator::alignDirect(const cv::Mat& gray, bool trackin
   if (tracking_prior) {
     PoseWithCovariance predicted = last_pose_;
     if (stamp_s > last_stamp_s_ && stamp_s - last_stamp_s_ <= params_.filter.max_gap_s) filter_.predict(stamp_s, &predicted);
-    // As from the dots: the template blurred as the image is at the prediction.
-    const double blur_px = appearance_.score(gray, camera_, predicted).blur_sigma_px;
-    return direct_aligner_.align(gray, normalisedFaceHomography(predicted), /*coarse_only=*/false, blur_px);
+    return direct_aligner_.align(gray, camera_, predicted);
   }
   DirectAlignment best;
   if (!hint_fresh) {
