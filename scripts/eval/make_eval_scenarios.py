@@ -41,7 +41,8 @@ def scenario_yaml(comment, description, duration_s, seed, lighting, x, y, yaw_de
     """A scenario file's text (docking_sim's format): the chaser at the origin facing +x, the target
     robot at (x, y, yaw_deg) turning at yaw_rate_deg_s. `comment`: the header lines, without '#'.
     extra: the realistic camera's optional keys (chaser_motion, light_direction, extra_clutter,
-    camera_overrides), see RealisticExtras, and target_roll_deg (the target turned about its port's axis)."""
+    camera_overrides), see RealisticExtras, target_roll_deg (the target turned about its port's axis) and
+    camera_tilt ((roll_deg, pitch_deg): the chaser's camera head mounted tilted, unknown to the stack)."""
     header = "".join(f"# {line}\n" for line in comment.splitlines())
     extra = extra or {}
     chaser_motion = ""
@@ -49,6 +50,9 @@ def scenario_yaml(comment, description, duration_s, seed, lighting, x, y, yaw_de
     if extra.get("chaser_motion"):
         rate, reverse = extra["chaser_motion"]
         chaser_motion = f", motion: {{yaw_rate_deg_s: {rate:.3f}, reverse_every_s: {reverse:.3f}}}"
+    if extra.get("camera_tilt"):
+        tilt_roll, tilt_pitch = extra["camera_tilt"]
+        chaser_motion += f", camera_tilt: {{roll_deg: {tilt_roll:.1f}, pitch_deg: {tilt_pitch:.1f}}}"
     text = f"""{header}scenario:
   description: "{description}"
   duration_s: {duration_s}
@@ -242,6 +246,9 @@ def main():
     # Issue 57: a target not upright (a print glued at an angle, a ramp, orbit): rolled 20 deg, sharp, clean.
     names.append(write("eval_roll20_1m", "port 1 m ahead, the target rolled 20 deg about the port's axis",
                        1.0, 0.0, 10.0, seed=41, extra={"target_roll_deg": 20.0}))
+    # ... and a camera head mounted with a tilt the stack does not know (robot.yaml keeps the nominal mounts).
+    names.append(write("eval_tilt15_1p4m", "port 1.4 m ahead, the camera head mounted rolled 15 deg and pitched 3 deg",
+                       1.4, 0.0, 10.0, seed=42, extra={"camera_tilt": (15.0, 3.0)}))
     names += realistic()
     print("\n".join(names))
 

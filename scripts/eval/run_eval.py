@@ -23,7 +23,7 @@ from launch_runner import free_port  # noqa: E402  (one copy: masters outside th
 FAR = [(f"eval_far_{r}m_{p}", "nominal") for r in ("2", "3", "4", "6") for p in ("on", "off")]
 NEAR = [(f"eval_near_{r}m_{p}", "nominal") for r in ("0p4", "0p7", "1", "1p4", "2") for p in ("on", "off")]
 SPECIAL = [("eval_rotating_1m", "nominal"), ("eval_dark_1m", "dark"), ("eval_glare_1m", "glare"),
-           ("eval_roll20_1m", "nominal")]
+           ("eval_roll20_1m", "nominal"), ("eval_tilt15_1p4m", "nominal")]
 
 
 def realistic_scenarios():
