@@ -30,7 +30,7 @@ SCENARIOS = [
     "eval_near_1m_off",
     "eval_rotating_1m",
 ]
-METHODS = ["paper_5point", "pnp", "apriltag"]
+METHODS = ["paper_5point", "pnp", "pnp_cold", "apriltag"]  # pnp_cold: each frame alone (no track, no hint)
 
 
 def run(cmd):

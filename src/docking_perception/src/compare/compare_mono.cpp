@@ -1,5 +1,5 @@
 // compare_mono: on the same rendered frames, our monocular pose (paper_5point and pnp solvers, velocity
-// by frame difference and by the Kalman filter) beside AprilTag 3 (tag36h11, estimate_tag_pose) on the
+// by frame difference and by the Kalman filter; pnp_cold: pnp on each frame alone) beside AprilTag 3 (tag36h11, estimate_tag_pose) on the
 // tagged target variant rendered with the same poses, noise seed and camera. Writes one JSON.
 //
 //   compare_mono --sequence DIR --target config/target.yaml --mono-config config/mono_pose_visible.yaml
@@ -201,15 +201,17 @@ TruthSummary summarizeTruth(const std::vector<cmp::SequenceFrame>& truth) {
           cmp::percentile(true_w, 0.5)};
 }
 
-/// Our estimator with `solver` over the untagged frames, tracking as the node runs.
+/// Our estimator with `solver` over the untagged frames, tracking as the node runs; `cold`: each frame alone
+/// (reset before it: no track, no hint), the start the node makes when the stereo estimate is missing.
 std::vector<Outcome> runOurs(dp::mono::PoseSolverType solver, const dp::mono::TargetModel& model,
                              const cmp::Sequence& seq, const dp::mono::MonoPoseParams& params,
-                             const std::vector<cv::Mat>& images) {
+                             const std::vector<cv::Mat>& images, bool cold = false) {
   dp::mono::MonoPoseParams p = params;
   p.solver = dp::mono::toString(solver);
   dp::mono::MonoPoseEstimator estimator(model, seq.camera, p);
   std::vector<Outcome> out;
   for (std::size_t i = 0; i < seq.frames.size(); ++i) {
+    if (cold) estimator.reset();
     const dp::mono::MonoPoseResult r = estimator.process(images[i], seq.frames[i].stamp_s);
     Outcome o;
     o.valid = r.valid;
@@ -297,6 +299,8 @@ int main(int argc, char** argv) {
       methods << (first ? "" : ",\n") << methodJson(dp::mono::toString(solver), "untagged", out, truth, true, true);
       first = false;
     }
+    const std::vector<Outcome> cold = runOurs(dp::mono::PoseSolverType::kPnp, model, seq, params, images, true);
+    methods << ",\n" << methodJson("pnp_cold", "untagged, each frame alone", cold, truth, false, false);
     if (!a.tagged_dir.empty()) {
       const cmp::Sequence tagged = cmp::readSequence(a.tagged_dir);
       std::string error;
