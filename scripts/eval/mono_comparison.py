@@ -20,7 +20,7 @@ import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-# Ranges on axis, one off-axis view, and the rotating target (velocities).
+# Ranges on axis, one off-axis view, the rotating target (velocities), a rolled target and a tilted camera.
 SCENARIOS = [
     "eval_near_0p4m_on",
     "eval_near_0p7m_on",
@@ -29,6 +29,8 @@ SCENARIOS = [
     "eval_near_2m_on",
     "eval_near_1m_off",
     "eval_rotating_1m",
+    "eval_roll20_1m",
+    "eval_tilt15_1p4m",
 ]
 METHODS = ["paper_5point", "pnp", "pnp_cold", "apriltag"]  # pnp_cold: each frame alone (no track, no hint)
 
