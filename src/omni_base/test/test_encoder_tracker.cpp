@@ -44,6 +44,18 @@ TEST(EncoderTracker, RollOverOfA32BitCounterIsASmallStep) {
   EXPECT_NEAR(s.dt_s, 0.02, 1e-12);
 }
 
+TEST(EncoderTracker, WheelVelocitiesAreTheSampleDeltaOverItsBoardTime) {
+  EncoderTracker tracker(config());
+  const auto baseline = tracker.update(frame({0, 0, 0}, 1000, 10.0));
+  EXPECT_EQ(baseline.wheelVelocities(), std::vector<double>(3, 0.0));  // dt 0: no velocity yet
+  const auto s = tracker.update(frame({40, -20, 0}, 1020, 10.5));        // board time 20 ms, host time ignored
+  ASSERT_EQ(s.event, EncoderEvent::kAccepted) << s.reason;
+  const std::vector<double> v = s.wheelVelocities();
+  EXPECT_NEAR(v[0], 40 * kRadPerCount / 0.02, 1e-9);
+  EXPECT_NEAR(v[1], -20 * kRadPerCount / 0.02, 1e-9);
+  EXPECT_NEAR(v[2], 0.0, 1e-12);
+}
+
 TEST(EncoderTracker, RollOverOfA16BitCounter) {
   EncoderTracker tracker(config(16));
   ASSERT_TRUE(tracker.update(frame({65530, 3, 0}, 1000, 10.0)).accepted());

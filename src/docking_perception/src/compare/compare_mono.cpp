@@ -1,6 +1,7 @@
 // compare_mono: on the same rendered frames, our monocular pose (paper_5point and pnp solvers, velocity
-// by frame difference and by the Kalman filter; pnp_cold: pnp on each frame alone) beside AprilTag 3 (tag36h11, estimate_tag_pose) on the
-// tagged target variant rendered with the same poses, noise seed and camera. Writes one JSON.
+// by frame difference and by the Kalman filter; pnp_cold: pnp on each frame alone) beside AprilTag 3
+// (tag36h11, estimate_tag_pose) on the tagged target variant rendered with the same poses, noise seed and
+// camera. Writes one JSON.
 //
 //   compare_mono --sequence DIR --target config/target.yaml --mono-config config/mono_pose_visible.yaml
 //                [--tagged-sequence DIR --tagged-target config/target_tagged.yaml] [--apriltag-decimate 2]

@@ -442,12 +442,16 @@ bool MonoPoseEstimator::findFaceByDots(const cv::Mat& gray, FaceMatch* match, st
   std::vector<Solved> solved;
   for (const LedPatternCandidate& pattern : dotPatterns(gray, kMaxDotPatterns, status)) {
     PoseWithCovariance pose;
-    if (patternPose(pattern.pixels, &pose, status)) solved.push_back({pattern, pose, appearance_.score(gray, camera_, pose)});
+    if (!patternPose(pattern.pixels, &pose, status)) continue;
+    solved.push_back({pattern, pose, appearance_.score(gray, camera_, pose)});
   }
   std::stable_sort(solved.begin(), solved.end(), [](const Solved& a, const Solved& b) {
     return a.appearance.median_ncc > b.appearance.median_ncc;
   });
-  if (!solved.empty()) *best_looking = DotsPrior{solved.front().pose, solved.front().pattern.pixels, solved.front().appearance.blur_sigma_px};
+  if (!solved.empty()) {
+    const Solved& best = solved.front();
+    *best_looking = DotsPrior{best.pose, best.pattern.pixels, best.appearance.blur_sigma_px};
+  }
   for (const Solved& candidate : solved) {
     const LedPatternCandidate& pattern = candidate.pattern;
     const PoseWithCovariance& pose = candidate.pose;

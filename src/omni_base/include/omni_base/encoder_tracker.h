@@ -70,6 +70,8 @@ class EncoderTracker {
     std::vector<double> delta_rad;    ///< wheel angle change since the last accepted sample (counted ones)
     double dt_s{0.0};                 ///< board time the delta spans (0 for a baseline)
     std::string reason;               ///< for the log
+    /// Each wheel's mean velocity over the sample (rad/s): delta_rad / dt_s; zeros for a baseline (dt_s 0).
+    std::vector<double> wheelVelocities() const;
     bool accepted() const {
       return event == EncoderEvent::kAccepted || event == EncoderEvent::kBaseline ||
              event == EncoderEvent::kBoardRebooted || event == EncoderEvent::kRebootRefuted ||

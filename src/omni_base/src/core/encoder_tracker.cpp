@@ -12,6 +12,13 @@ constexpr double kQuantisationCounts = 2.0;  // counts allowed on top of the fas
 
 }  // namespace
 
+std::vector<double> EncoderTracker::Sample::wheelVelocities() const {
+  std::vector<double> velocity(delta_rad.size(), 0.0);
+  if (!(dt_s > 0.0)) return velocity;
+  for (std::size_t i = 0; i < velocity.size(); ++i) velocity[i] = delta_rad[i] / dt_s;
+  return velocity;
+}
+
 EncoderTracker::EncoderTracker(const EncoderTrackerConfig& config)
     : config_(config), positions_rad_(config.wheel_count, 0.0) {
   if (config_.wheel_count == 0) throw std::invalid_argument("encoder tracker needs at least one wheel");

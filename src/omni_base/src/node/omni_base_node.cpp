@@ -192,13 +192,8 @@ class OmniBaseNode {
       last_counted = std::move(sample);
     }
     if (!counted) return;
-    const double dt_s = last_counted.dt_s;
-    std::vector<double> wheel_velocity(last_counted.delta_rad.size(), 0.0);
-    Twist2D body_velocity;
-    if (dt_s > 0.0) {
-      for (std::size_t i = 0; i < wheel_velocity.size(); ++i) wheel_velocity[i] = last_counted.delta_rad[i] / dt_s;
-      body_velocity = kinematics_.forward(wheel_velocity);
-    }
+    const std::vector<double> wheel_velocity = last_counted.wheelVelocities();
+    const Twist2D body_velocity = last_counted.dt_s > 0.0 ? kinematics_.forward(wheel_velocity) : Twist2D{};
     publishOdometry(*counted, body_velocity);
     publishWheelState(*counted, wheel_velocity);
   }

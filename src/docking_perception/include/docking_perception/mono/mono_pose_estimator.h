@@ -215,8 +215,8 @@ class MonoPoseEstimator {
   // score), the face refined where that pose puts it (as a tracked face is). False (why in *status) when no
   // pattern gives a face; *best_looking is then the pose that looked most like the face, with the blur
   // measured there (the direct alignment's prior), if any pattern solved.
-  bool findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status, std::optional<DotsPrior>* best_looking,
-                      MonoPoseResult* result) const;
+  bool findFaceByDots(const cv::Mat& gray, FaceMatch* match, std::string* status,
+                      std::optional<DotsPrior>* best_looking, MonoPoseResult* result) const;
   // The face's pose from a 5-point pattern (dots or LEDs): the closed form, then the least-squares pose it
   // starts; false (with the reason) when either fails or the fit's residual is over max_reprojection_px.
   bool patternPose(const MarkerPixels& pixels, PoseWithCovariance* pose, std::string* reason) const;
